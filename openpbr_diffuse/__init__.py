@@ -1,0 +1,11 @@
+"""openpbr-diffuse: reference implementation and conformance validator for the rough
+diffuse lobe of OpenPBR (EON) and the Oren-Nayar family it replaces.
+
+Conventions: local shading frame with the normal +z; ``wi`` (to the light) and ``wo`` (to
+the viewer) point away from the surface; BRDF values exclude the cosine factor; arrays
+broadcast over leading axes with the colour channel axis last.
+"""
+from ._version import __version__
+from .models import COLOR_MODES, MODELS, average_albedo, directional_albedo, evaluate
+
+__all__ = ["__version__", "MODELS", "COLOR_MODES", "evaluate", "directional_albedo", "average_albedo"]

@@ -1,0 +1,1 @@
+"""Command-line interface: ``openpbr-diffuse <command>``; one module per command."""

@@ -1,0 +1,129 @@
+"""Public lobe-model verbs: ``evaluate``, ``directional_albedo``, ``average_albedo``."""
+import numpy as np
+
+from .. import _arrays as ar
+from .registry import COLOR_MODES, model_info
+
+
+def _roughness(info, roughness, dtype):
+    unit = "radians (sigma)" if info.roughness_name == "sigma" else "(r, a weight)"
+    return ar.in_range("roughness", roughness, dtype, 0.0, info.roughness_max,
+                       f" for model {info.name!r}, {unit}")
+
+
+def _color_mode(color_mode):
+    if color_mode not in COLOR_MODES:
+        raise ValueError(f"color_mode must be one of {', '.join(COLOR_MODES)}; got {color_mode!r}")
+    return color_mode == "white_tint"
+
+
+def evaluate(model, wi, wo, roughness, rho=1.0, *, color_mode="reference"):
+    """BRDF value f(wi, wo) of a lobe model, without the cosine factor.
+
+    Parameters
+    ----------
+    model : str
+        One of ``MODELS``.
+    wi, wo : array_like, shape (..., 3)
+        Unit directions towards the light and the viewer, local frame (normal +z), both
+        pointing away from the surface.  Either below the horizon (z <= 0) gives f = 0.
+    roughness : array_like, shape (...)
+        sigma in radians, [0, pi/2], for "qon*", "full_on", "gotanda"; r in [0, 1] for
+        "fon", "eon", "eon_approx"; ignored by "lambert".
+    rho : array_like, shape (..., C)
+        Single-scattering albedo per channel in [0, 1] (1, 3 or N spectral channels).
+    color_mode : {"reference", "white_tint"}
+        "reference" (default) evaluates with the chromatic rho (EON's rho_ms gives the
+        physical colour shift, Eq. 18); "white_tint" evaluates at rho = 1 and multiplies by
+        rho (no colour shift; identical for models linear in rho).
+
+    Returns
+    -------
+    ndarray, shape broadcast(leading axes) + (C,), dtype float32 or float64.
+
+    References
+    ----------
+    EON paper Eq. 1-4 (QON), 10-11 (FON), 16-19 (EON); Oren & Nayar 1994 (full model);
+    Fujii 2013; Gotanda 2012 Eq. 25.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> wi = np.array([0.0, 0.0, 1.0]); wo = np.array([0.6, 0.0, 0.8])
+    >>> float(evaluate("lambert", wi, wo, 0.0, 1.0)[0] * np.pi)
+    1.0
+    """
+    info = model_info(model)
+    tint = _color_mode(color_mode)
+    dtype = ar.result_dtype(wi, wo, roughness, rho)
+    wi = ar.directions("wi", wi, dtype)
+    wo = ar.directions("wo", wo, dtype)
+    r = _roughness(info, roughness, dtype)
+    rho = ar.rho_array("rho", rho, dtype)
+    lead = ar.broadcast_leading(wi=wi.shape[:-1], wo=wo.shape[:-1], roughness=r.shape, rho=rho.shape[:-1])
+    C = rho.shape[-1]
+    out = np.empty(lead + (C,), dtype=dtype)
+    from ._kernels import eval_kernel
+
+    eval_kernel(info.id, tint, ar.flat(wi, lead, 3), ar.flat(wo, lead, 3), ar.flat(r, lead),
+                ar.flat(rho, lead, C), out.reshape(-1, C))
+    return out
+
+
+def _albedo(model, mu, roughness, rho, color_mode, average):
+    info = model_info(model)
+    tint = _color_mode(color_mode)
+    if not info.closed_form_albedo:
+        from ..albedo.tables import table_albedo
+
+        return table_albedo(info.name, mu, roughness, rho, average=average, tint=tint)
+    dtype = ar.result_dtype(roughness, rho) if average else ar.result_dtype(mu, roughness, rho)
+    mu = np.zeros((), dtype) if average else ar.in_range("mu", mu, dtype, 0.0, 1.0, " (cosine of the view angle)")
+    r = _roughness(info, roughness, dtype)
+    rho = ar.rho_array("rho", rho, dtype)
+    lead = ar.broadcast_leading(mu=mu.shape, roughness=r.shape, rho=rho.shape[:-1])
+    C = rho.shape[-1]
+    out = np.empty(lead + (C,), dtype=dtype)
+    from ._kernels import albedo_kernel
+
+    albedo_kernel(info.id, tint, average, ar.flat(mu, lead), ar.flat(r, lead), ar.flat(rho, lead, C),
+                  out.reshape(-1, C))
+    return out
+
+
+def directional_albedo(model, mu, roughness, rho=1.0, *, color_mode="reference"):
+    """Directional albedo E(mu) = integral of f(wi, wo) mu_i dwi over the upper hemisphere.
+
+    Closed forms: Lambert E = rho; QON family Eq. 8 (E = A + B G(theta)/pi); FON Eq. 12-13;
+    EON Eq. 20; Gotanda and Fujii QON, whose lobes have FON's shape (A + B s/t)/pi, take
+    E = A + B G_F/pi.  "eon_approx" returns the exact albedo of its lobe (Eq. 20 with the
+    mean of the Eq. 14 fit in place of <E_F>; < 5e-4 from Eq. 20).  "full_on" has no closed
+    form: its albedo is interpolated from the shipped reference tables.
+
+    Parameters
+    ----------
+    mu : array_like, shape (...)
+        Cosine of the outgoing direction, in [0, 1] (mu = 0 gives the limit).
+    roughness, rho, color_mode : as in ``evaluate``.
+
+    Returns
+    -------
+    ndarray, shape broadcast(mu, roughness, rho leading axes) + (C,).
+
+    Examples
+    --------
+    >>> round(float(directional_albedo("fon", 1.0, 1.0)[0]), 6)   # EON paper: E_F(1, 1)
+    0.776522
+    """
+    return _albedo(model, mu, roughness, rho, color_mode, average=False)
+
+
+def average_albedo(model, roughness, rho=1.0, *, color_mode="reference"):
+    """Cosine-weighted average albedo <E> = 2 int_0^1 E(mu) mu dmu (QON Eq. 9, FON Eq. 15).
+
+    Examples
+    --------
+    >>> round(float(average_albedo("fon", 1.0)[0]), 6)   # EON paper: <E_F>(1)
+    0.832811
+    """
+    return _albedo(model, None, roughness, rho, color_mode, average=True)

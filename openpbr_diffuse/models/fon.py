@@ -1,0 +1,104 @@
+"""Fujii Oren-Nayar (FON), EON paper Eq. 10-15.
+
+``r`` in [0, 1] is an interpolation weight, not an angle.  ``s = wi.wo - mu_i mu_o``.
+
+References
+----------
+Portsmouth, Kutz, Hill, "EON: A practical energy-preserving rough diffuse BRDF",
+JCGT 14(1), 2025, Section 2.2 (Eq. 10-15) and Listing 1.
+"""
+import math
+
+from ._jit import INV_PI, PI, kernel
+
+#: Eq. 11/15 constants.
+C1 = 0.5 - 2.0 / (3.0 * PI)
+C2 = 2.0 / 3.0 - 28.0 / (15.0 * PI)
+#: Eq. 14 polynomial fit of G_F / pi in m = 1 - mu.
+G1, G2, G3, G4 = 0.0571085289, 0.491881867, -0.332181442, 0.0714429953
+
+
+@kernel
+def s_over_t(mu_i, mu_o, s):
+    """The FON ratio s/t (Eq. 10): s / max(mu_i, mu_o) for s > 0, else s."""
+    if s > 0.0:
+        return s / max(mu_i, mu_o)
+    return s
+
+
+@kernel
+def fon_A(r):
+    """A_F = 1 / (1 + c1 r) (Eq. 11); B_F = r A_F."""
+    return 1.0 / (1.0 + C1 * r)
+
+
+@kernel
+def fon_terms(mu_i, mu_o, s, r):
+    """f_FON / rho (Eq. 10): A_F (1 + r s/t) / pi."""
+    return fon_A(r) * (1.0 + r * s_over_t(mu_i, mu_o, s)) * INV_PI
+
+
+@kernel
+def G_qon(mu):
+    """G(theta) of the QON albedo (Eq. 5/8) as a function of mu = cos(theta).
+
+    ``sin(th)(th - sin cos) + (2/3) tan(th)(1 - sin^3)`` with ``tan(1 - S^3)`` rewritten as
+    ``S mu (1 + S + S^2) / (1 + S)`` (since ``1 - S = mu^2 / (1 + S)``): no division by mu,
+    no cancellation, and the limit pi/2 at mu = 0 comes out exactly.
+    """
+    mu = min(max(mu, 0.0), 1.0)
+    S = math.sqrt(max(0.0, 1.0 - mu * mu))
+    return S * (math.acos(mu) - S * mu) + (2.0 / 3.0) * S * mu * (1.0 + S + S * S) / (1.0 + S)
+
+
+@kernel
+def G_fon(mu):
+    """G_F of Eq. 13: G_QON - (2/3) S (negative s contributes with FON's t = 1).
+
+    Same stable form as ``G_qon``; G_F(0) = pi/2 - 2/3, so E_F(0) = 1 for every r.
+    """
+    mu = min(max(mu, 0.0), 1.0)
+    S = math.sqrt(max(0.0, 1.0 - mu * mu))
+    return G_qon(mu) - (2.0 / 3.0) * S
+
+
+@kernel
+def E_F_exact(mu, r):
+    """Exact FON directional albedo E_F(mu) at rho = 1 (Eq. 12-13)."""
+    A = fon_A(r)
+    return A + r * A * INV_PI * G_fon(mu)
+
+
+@kernel
+def E_F_approx(mu, r):
+    """Approximate FON albedo (Eq. 14): (1 + r G_F/pi) / (1 + c1 r), polynomial G_F/pi."""
+    m = 1.0 - min(max(mu, 0.0), 1.0)
+    g = m * (G1 + m * (G2 + m * (G3 + m * G4)))
+    return (1.0 + r * g) / (1.0 + C1 * r)
+
+
+#: 2 * int_0^1 (G_F/pi)_approx(mu) mu dmu: the cosine-weighted average of the Eq. 14 fit
+#: (the exact average of G_F/pi is c2).  Used for the exact albedo of "eon_approx".
+C2_APPROX = 2.0 * (G1 / 6.0 + G2 / 12.0 + G3 / 20.0 + G4 / 30.0)
+
+
+@kernel
+def E_F(mu, r, approx):
+    """E_F(mu): exact (Eq. 12) or the Eq. 14 fit."""
+    if approx:
+        return E_F_approx(mu, r)
+    return E_F_exact(mu, r)
+
+
+@kernel
+def E_F_avg(r):
+    """Average albedo <E_F> = A_F (1 + c2 r) (Eq. 15)."""
+    return fon_A(r) * (1.0 + C2 * r)
+
+
+@kernel
+def E_F_avg_of(r, approx):
+    """True cosine-weighted average of the E_F variant in use (c2 -> C2_APPROX for Eq. 14)."""
+    if approx:
+        return fon_A(r) * (1.0 + C2_APPROX * r)
+    return E_F_avg(r)
