@@ -21,7 +21,7 @@ UNIT_TOL = 1e-4
 
 def result_dtype(*values):
     """float64 unless every floating ndarray among ``values`` is float32 (or smaller)."""
-    kinds = [v.dtype for v in values if isinstance(v, np.ndarray) and v.dtype.kind == "f"]
+    kinds = [v.dtype for v in values if isinstance(v, (np.ndarray, np.generic)) and v.dtype.kind == "f"]
     if kinds and all(d.itemsize <= 4 for d in kinds):
         return np.dtype(np.float32)
     return np.dtype(np.float64)

@@ -22,7 +22,7 @@ class ModelInfo:
     roughness_max: float
     mix: int
     closed_form_albedo: bool
-    energy_conserving: bool    # albedo <= rho for every rho <= 1, mu, roughness
+    energy_conserving: bool    # albedo <= rho for every rho <= 1, mu, roughness (strictly)
     description: str
 
 
@@ -38,7 +38,7 @@ _MODELS = (
     ("full_on", "sigma", _HALF_PI, MIX_RHO2, False, False, "full Oren-Nayar with interreflection"),
     ("gotanda", "sigma", _HALF_PI, MIX_LINEAR, True, False, "Gotanda 2012 improved Oren-Nayar (Eq. 25)"),
     ("eon", "r", 1.0, MIX_RHO_MS, True, True, "energy-preserving Oren-Nayar, exact E_F (Eq. 16-20)"),
-    ("eon_approx", "r", 1.0, MIX_RHO_MS, True, True, "EON with the Eq. 14 fit of E_F in f_ms"),
+    ("eon_approx", "r", 1.0, MIX_RHO_MS, True, False, "EON with the Eq. 14 fit of E_F in f_ms"),
 )
 
 INFO = {m[0]: ModelInfo(m[0], i, *m[1:]) for i, m in enumerate(_MODELS)}
