@@ -1,0 +1,116 @@
+"""Linearly transformed cosines for EON (Section 3.1, Eq. 22-28, Listings 2-3).
+
+A direction ``wh`` drawn from the clamped cosine D_o(wh) = max(0, wh.z)/pi is mapped to
+``w = M wh / |M wh|`` with
+
+    M = [[a, 0, b], [0, c, 0], [d, 0, 1]],   det M = c (a - b d)           (Eq. 25)
+
+whose coefficients a, b, c, d(mu_o, r) are the fit of Listing 2.  The density of ``w`` is
+(Eq. 23-24, with M^-1 = adj(M)/det M and h = adj(M) w)
+
+    D(w) = D_o(M^-1 w / |M^-1 w|) |det M^-1| / |M^-1 w|^3 = (det M / |h|^2)^2 max(h.z, 0) / pi.
+
+The LTC frame (stated once here): X = normalize(wo.x, wo.y, 0), or (1, 0, 0) when wo is
+the normal; Y = (-X.y, X.x, 0); Z = (0, 0, 1).  M acts in that frame.
+
+Variants (all share ``ltc_sample_local`` / ``ltc_pdf_local``):
+
+- general LTC: s = 1; the lobe extends below the horizon when d != 0;
+- "non-negative" LTC: d = 0, the image of the upper hemisphere is the upper hemisphere;
+- clipped LTC (CLTC, Eq. 27-28): ``wh`` is drawn only from the part of the cosine lobe
+  that M maps above the horizon, the half-space d wh.x + wh.z > 0.  Its projection on the
+  disk is a half disk and a half ellipse of semi-axis vz = 1/sqrt(1 + d^2); its cosine
+  mass is s = (1 + vz)/2, so the density is D(w)/s.
+
+Deviation from Listing 3 (documented, measure ~1e-6): the paper states d <= 0 for all
+(mu_o, r), but the fit of Listing 2 gives 0 < d <= 3.5e-3 for mu_o > 0.99991 (r > 0).
+Listing 3 always keeps the half ellipse on the +x side (x <- -(...)), correct for d <= 0
+only; here the side follows the sign of d, so CLTC never samples below the horizon.  For
+d <= 0 (every mu_o < 0.9999) the mapping is exactly Listing 3's.
+"""
+import math
+
+from ..models._jit import INV_PI, kernel
+
+
+@kernel
+def ltc_coeffs(mu, r):
+    """Return (a, b, c, d) of the LTC matrix M (Eq. 25) for mu = mu_o, roughness r (Listing 2)."""
+    a = 1.0 + r * (0.303392 + (-0.518982 + 0.111709 * mu) * mu + (-0.276266 + 0.335918 * mu) * r)
+    b = r * (-1.16407 + 1.15859 * mu + (0.150815 - 0.150105 * mu) * r) / (mu * mu * mu - 1.43545)
+    c = 1.0 + (0.20013 + (-0.506373 + 0.261777 * mu) * mu) * r
+    d = (0.540852 + (-1.01625 + 0.475392 * mu) * mu) * r / (-1.0743 + mu * (0.0725628 + mu))
+    return a, b, c, d
+
+
+@kernel
+def ltc_frame(ox, oy):
+    """Return X = (X.x, X.y) of the LTC frame of wo (Y = (-X.y, X.x), Z = +z)."""
+    l2 = ox * ox + oy * oy
+    if l2 > 0.0:
+        il = 1.0 / math.sqrt(l2)
+        return ox * il, oy * il
+    return 1.0, 0.0  # wo at the normal: any azimuth will do, the lobe is isotropic there
+
+
+@kernel
+def to_frame(Xx, Xy, wx, wy):
+    """Local (x, y) -> LTC-frame (x, y) (z is shared)."""
+    return Xx * wx + Xy * wy, Xx * wy - Xy * wx
+
+
+@kernel
+def from_frame(Xx, Xy, lx, ly):
+    """LTC-frame (x, y) -> local (x, y): X lx + Y ly."""
+    return Xx * lx - Xy * ly, Xy * lx + Xx * ly
+
+
+@kernel
+def clip_fraction(d):
+    """s = (1 + vz)/2, vz = 1/sqrt(1 + d^2): cosine mass kept by the CLTC clipping (Eq. 28)."""
+    return 0.5 * (1.0 + 1.0 / math.sqrt(d * d + 1.0))
+
+
+@kernel
+def ltc_sample_local(a, b, c, d, s, u1, u2):
+    """Return (x, y, z, pdf) of an (optionally clipped) LTC sample in the LTC frame.
+
+    ``s`` = 1 gives the plain LTC, ``s = clip_fraction(d)`` the CLTC of Listing 3: Heitz's
+    (2018) map of the unit disk onto the half disk plus half ellipse (Nusselt analog of the
+    clipped lobe), then reprojection to the hemisphere and w = M wh (Eq. 22).  The pdf is
+    wh.z / (pi s) times the Jacobian |M wh|^3 / det M (Eq. 24, 28).
+    """
+    R = math.sqrt(u1)
+    phi = 2.0 * math.pi * u2
+    x = R * math.cos(phi)
+    y = R * math.sin(phi)
+    side = 1.0 if d > 0.0 else -1.0  # keep the removed lune on the side where d x + z < 0
+    x = side * ((1.0 - s) * math.sqrt(max(0.0, 1.0 - y * y)) + s * x)
+    hz = math.sqrt(max(0.0, 1.0 - (x * x + y * y)))
+    wx = a * x + b * hz
+    wy = c * y
+    wz = d * x + hz
+    l2 = wx * wx + wy * wy + wz * wz
+    inv = 1.0 / math.sqrt(l2)
+    pdf = hz * INV_PI / s * (l2 * l2 * inv) / (c * (a - b * d))
+    return wx * inv, wy * inv, wz * inv, pdf
+
+
+@kernel
+def ltc_pdf_local(a, b, c, d, s, wx, wy, wz):
+    """Density of the (clipped) LTC at the unit LTC-frame direction w: (det/|h|^2)^2 max(h.z, 0)/(pi s).
+
+    h = adj(M) w (the adjugate keeps M^-1 free of a division); h.z <= 0 means w is
+    outside the image of the upper hemisphere, where the lobe is zero.  The caller
+    applies the horizon (CLTC is zero for w.z <= 0 as well).
+    """
+    e = a - b * d
+    hx = c * (wx - b * wz)
+    hy = e * wy
+    hz = c * (a * wz - d * wx)
+    if hz <= 0.0:
+        return 0.0
+    det = c * e
+    l2 = hx * hx + hy * hy + hz * hz
+    q = det / (l2 * l2)
+    return q * det * hz * INV_PI / s
