@@ -9,10 +9,19 @@ Every error is a ``ValueError`` (or ``TypeError`` for wrong types) whose message
 argument and the allowed range.
 """
 import numbers
+import os
 
-import numba
-import numpy as np
-from numba import prange
+# The parallel kernels run on numba's OpenMP layer (GNU libgomp).  Its idle workers spin
+# for ~300k iterations between parallel regions; on a machine with other busy processes
+# the spinning workers take the cores the working ones need, and a 10^6-row call measured
+# 3-8x slower than with sleeping workers (and up to 100x for 10^5 rows), while on an idle
+# machine sleeping costs ~10%.  Set only when the user has not chosen, and only effective
+# when libgomp has not started yet (it reads the variable once).
+os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+
+import numba  # noqa: E402
+import numpy as np  # noqa: E402
+from numba import prange  # noqa: E402
 
 #: |w.w - 1| allowed for a "unit" direction.  Loose enough for float32-normalised input,
 #: tight enough to catch vectors that were never normalised.
@@ -43,14 +52,30 @@ def as_float(name, value, dtype):
     return np.asarray(arr, dtype=dtype)
 
 
-@numba.njit(cache=True, parallel=True)
+#: Below this many values the checks run in NumPy: a parallel kernel's start-up (~10 us)
+#: would dominate.  Above it, one fused parallel pass replaces NumPy's several passes and
+#: temporaries (the checks read every input once; at 10^6 rows that is most of the cost
+#: of a call after the kernel itself).
+_PARALLEL_MIN = 1 << 14
+_U = numba.uint64
+
+
+@numba.njit(cache=True, parallel=True, error_model="numpy")
 def _count_not_unit(w, tol):
+    """Number of rows of a flat C-contiguous (3n,) array that are not unit vectors (or not finite)."""
     bad = 0
-    for i in prange(w.shape[0]):
-        n2 = w[i, 0] * w[i, 0] + w[i, 1] * w[i, 1] + w[i, 2] * w[i, 2]
-        if not abs(n2 - 1.0) <= tol:  # NaN compares false: counted
-            bad += 1
+    for i in prange(w.shape[0] // 3):
+        j = _U(i) * _U(3)
+        x = 1.0 * w[j]
+        y = 1.0 * w[j + _U(1)]
+        z = 1.0 * w[j + _U(2)]
+        n2 = x * x + y * y + z * z  # in float64 for both dtypes, as the error report below
+        bad += 0 if abs(n2 - 1.0) <= tol else 1  # NaN compares false: counted
     return bad
+
+
+def _norms2(flat):
+    return np.einsum("ij,ij->i", flat, flat, dtype=np.float64)
 
 
 def directions(name, value, dtype):
@@ -58,20 +83,44 @@ def directions(name, value, dtype):
     w = as_float(name, value, dtype)
     if w.ndim == 0 or w.shape[-1] != 3:
         raise ValueError(f"{name} must have shape (..., 3) (unit direction vectors), got shape {w.shape}")
-    flat = w.reshape(-1, 3)
-    if flat.shape[0] and _count_not_unit(flat, UNIT_TOL):
-        n2 = np.einsum("ij,ij->i", flat, flat, dtype=np.float64)
+    if w.size >= _PARALLEL_MIN and w.flags.c_contiguous:
+        ok = not _count_not_unit(w.reshape(-1), UNIT_TOL)
+    else:
+        ok = bool((np.abs(_norms2(w.reshape(-1, 3)) - 1.0) <= UNIT_TOL).all())
+    if not ok:
+        flat = w.reshape(-1, 3)
+        n2 = _norms2(flat)
         i = int(np.flatnonzero(~(np.abs(n2 - 1.0) <= UNIT_TOL))[0])
-        idx = np.unravel_index(i, w.shape[:-1])
+        idx = [int(j) for j in np.unravel_index(i, w.shape[:-1])]
         what = "is not finite" if not np.isfinite(flat[i]).all() else f"has length {np.sqrt(n2[i]):.6g}"
-        raise ValueError(f"{name}{list(idx)} = {flat[i].tolist()} {what}; "
+        raise ValueError(f"{name}{idx} = {flat[i].tolist()} {what}; "
                          f"directions must be finite unit vectors (|w| = 1 within {UNIT_TOL:g})")
     return w
+
+
+@numba.njit(cache=True, parallel=True, error_model="numpy")
+def _count_outside(a, lo, hi, lo_open, hi_open):
+    """Number of values of a flat C-contiguous array that are not finite or not in the interval.
+
+    ``lo``, ``hi`` arrive in the array's dtype, so that the comparisons are those of NumPy
+    (a float32 array against a Python float compares in float32).
+    """
+    bad = 0
+    for i in prange(a.shape[0]):
+        x = a[i]
+        above = x > lo if lo_open else x >= lo
+        below = x < hi if hi_open else x <= hi
+        bad += 0 if (abs(x) < np.inf) & above & below else 1  # NaN fails every comparison
+    return bad
 
 
 def in_range(name, value, dtype, lo, hi, what="", lo_open=False, hi_open=False):
     """An array of finite values in [lo, hi] (open ends on request)."""
     a = as_float(name, value, dtype)
+    if a.size >= _PARALLEL_MIN and a.flags.c_contiguous:
+        t = a.dtype.type
+        if not _count_outside(a.reshape(-1), t(lo), t(hi), lo_open, hi_open):
+            return a
     if a.size:
         if not np.isfinite(a).all():
             raise ValueError(f"{name} must be finite{what}; got {a[~np.isfinite(a)].ravel()[0]}")

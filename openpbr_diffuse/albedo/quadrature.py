@@ -15,17 +15,22 @@ family, so that each panel integrand is analytic and the rule converges geometri
   sin(theta_o) (the s > 0 branch of QON/FON, cos(dphi) >= 0 and |cos dphi| in full ON).
 
 The [0, theta_o] panel is further split into sub-panels graded geometrically towards
-theta_o with a first width of 2 (pi/2 - theta_o): full Oren-Nayar's
-tan((alpha + beta)/2) has a pole at theta_i = pi - theta_o, just beyond that panel when wo
-is grazing, and the grading keeps every sub-panel at least one panel width away from it.
+theta_o, the first of width 2 (pi/2 - theta_o): full Oren-Nayar's tan((alpha + beta)/2)
+has a pole at theta_i = pi - theta_o, just beyond that panel when wo is grazing, and the
+grading keeps every sub-panel at least its own width away from it.
 
 For an isotropic BRDF (a function of theta_i, theta_o and cos(phi_i - phi_o) only) the
 integrand is even in phi and phi in [0, pi] suffices (``symmetric=True``).
 
-The error estimate of each value is |Q_n - Q_2n| with Q_2n the value returned (panel
-orders n and 2n in both angles).  mu_o = 0 (grazing) is the limit mu_o -> 0: a BRDF
-evaluated exactly at the horizon is 0 (single-sided), so it is Richardson-extrapolated
-from mu_o = delta and 2 delta (error O(delta^2), estimated from delta, 2 delta, 4 delta).
+Each value comes with the error estimate |Q_n - Q_2n| (Q_2n is the value returned; orders
+n and 2n per panel in both angles) plus a rounding floor of 64 ulp of the value.
+
+The grazing limit mu_o -> 0 cannot be evaluated directly (a single-sided BRDF is 0 at the
+horizon).  Full Oren-Nayar's albedo behaves like E0 + a mu ln(mu) + b mu + ... there (the
+tan((alpha + beta)/2) term), so the limit is extrapolated from mu_o = delta, 2 delta,
+4 delta, 8 delta by fitting E0 + a mu ln(mu) + b mu + c mu^2 (error O(delta^2 ln delta), or
+O(delta^3) for an albedo smooth in mu); the same fit on 2 delta .. 16 delta gives the error
+estimate.
 """
 import math
 
@@ -33,20 +38,28 @@ import numpy as np
 
 HALF_PI = 0.5 * math.pi
 
-#: Default Gauss-Legendre order per panel (theta and phi).
-DEFAULT_ORDER = 16
-#: mu_o used for the Richardson extrapolation of the grazing limit mu_o -> 0.
-GRAZING_DELTA = 1e-5
-#: Points per call of the BRDF (keeps memory bounded: ~ 100 MB of float64 work arrays).
-_CHUNK_POINTS = 1 << 20
+#: Default Gauss-Legendre order per panel (theta and phi): 8/16 already agree to ~1e-14 for
+#: every model of the library (see ``tests/test_reference_tables.py``).
+DEFAULT_ORDER = 8
+#: mu_o of the extrapolation of the grazing limit mu_o -> 0.
+GRAZING_DELTA = 1e-6
+#: Default number of quadrature points per BRDF call (bounds the memory of one call).
+MAX_POINTS = 1 << 18
+#: Rounding floor of the error estimates, relative to |E| (sums of ~1e4 terms in float64).
+ROUNDING = 64 * np.finfo(np.float64).eps
 #: Cap on the graded sub-panels (reached only for mu_o < 1e-15).
 _MAX_GRADING = 50
+#: Sub-panels of the theta_o integral of the average albedo, graded towards the horizon.
+_AVERAGE_GRADING = 12
 
 
 def gauss_legendre(a, b, n):
-    """Nodes and weights of the n-point Gauss-Legendre rule on [a, b] (arrays broadcast).
+    """Nodes and weights of the n-point Gauss-Legendre rule on [a, b] (a, b broadcast).
 
-    Returns arrays of shape broadcast(a, b) + (n,); a zero-width panel has zero weights.
+    Returns
+    -------
+    nodes, weights : ndarray, shape broadcast(a, b) + (n,)
+        A zero-width panel has zero weights.
     """
     x, w = np.polynomial.legendre.leggauss(n)
     a = np.asarray(a, dtype=np.float64)[..., None]
@@ -56,7 +69,7 @@ def gauss_legendre(a, b, n):
 
 
 def _graded_count(theta_o):
-    """Number of sub-panels of [0, theta_o]: 1 + #{k >= 1 : theta_o - d (2^k - 1) > 0}."""
+    """Number K of sub-panels of [0, theta_o]: 1 + #{k >= 1 : theta_o - d (2^k - 1) > 0}."""
     t = np.asarray(theta_o, dtype=np.float64)
     d = 2.0 * (HALF_PI - t)
     k = np.ones(t.shape, dtype=np.int64)
@@ -65,24 +78,26 @@ def _graded_count(theta_o):
     return k
 
 
-def _theta_breaks(theta_o):
-    """Panel edges in theta_i for a group of theta_o with the same sub-panel count K.
+def _theta_breaks(theta_o, kinks):
+    """Panel edges in theta_i, shape (G, K + 2 + len(kinks)), for theta_o (G,) sharing K.
 
     [0, theta_o] is split at theta_o - d (2^k - 1), k = 1 .. K - 1, d = 2 (pi/2 - theta_o);
-    [theta_o, pi/2] is one panel.  Returns shape (G, K + 2).
+    [theta_o, pi/2] is one panel; the fixed ``kinks`` are extra edges.
     """
     d = 2.0 * (HALF_PI - theta_o)
     K = int(_graded_count(theta_o[:1])[0])
     kk = np.arange(1, K, dtype=np.float64)
     inner = theta_o[:, None] - d[:, None] * (2.0 ** kk - 1.0)       # descending, all > 0
-    return np.concatenate([np.zeros_like(theta_o)[:, None], inner[:, ::-1], theta_o[:, None],
-                           np.full_like(theta_o, HALF_PI)[:, None]], axis=1)
+    edges = np.concatenate([np.zeros_like(theta_o)[:, None], inner[:, ::-1], theta_o[:, None],
+                            np.full_like(theta_o, HALF_PI)[:, None],
+                            np.broadcast_to(kinks, (len(theta_o), len(kinks)))], axis=1)
+    return np.sort(edges, axis=1)
 
 
-def _nodes(theta_o, n, symmetric):
-    """Quadrature points: wi (G, T, P, 3) and weights (G, T, P) for theta_o of shape (G,)."""
-    breaks = _theta_breaks(theta_o)                                  # (G, K + 2)
-    th, wt = gauss_legendre(breaks[:, :-1], breaks[:, 1:], n)         # (G, K + 1, n)
+def _nodes(theta_o, n, symmetric, kinks):
+    """Directions wi (G, T, P, 3) and weights (G, T, P) of the rule for theta_o (G,)."""
+    breaks = _theta_breaks(theta_o, kinks)
+    th, wt = gauss_legendre(breaks[:, :-1], breaks[:, 1:], n)        # (G, K + 1, n)
     th = th.reshape(len(theta_o), -1)
     wt = wt.reshape(len(theta_o), -1)
     phi_edges = np.arange(3 if symmetric else 5) * HALF_PI
@@ -96,26 +111,25 @@ def _nodes(theta_o, n, symmetric):
     wi[..., 1] = st[:, :, None] * np.sin(ph)
     wi[..., 2] = ct[:, :, None]
     # f mu_i dwi = f cos(theta) sin(theta) dtheta dphi
-    w = (wt * ct * st)[:, :, None] * wp
-    return wi, w
+    return wi, (wt * ct * st)[:, :, None] * wp
 
 
-def _integrate(brdf, theta_o, n, symmetric):
-    """Q_n(theta_o) for theta_o (M,), grouped by panel count and chunked for memory."""
+def _integrate(brdf, theta_o, n, symmetric, max_points, kinks):
+    """Q_n(theta_o) for theta_o (M,) in [0, pi/2): grouped by panel count, chunked."""
     keys = _graded_count(theta_o)
     out = None
     for key in np.unique(keys):
         idx = np.flatnonzero(keys == key)
-        per_row = (key + 1) * n * (2 if symmetric else 4) * n
-        step = max(1, _CHUNK_POINTS // per_row)
+        per_row = int(key + 1 + len(kinks)) * n * (2 if symmetric else 4) * n
+        step = max(1, max_points // per_row)
         for start in range(0, len(idx), step):
             rows = idx[start:start + step]
             t = theta_o[rows]
-            wi, w = _nodes(t, n, symmetric)
+            wi, w = _nodes(t, n, symmetric, kinks)
             wo = np.stack([np.sin(t), np.zeros_like(t), np.cos(t)], axis=-1)[:, None, None, :]
             f = np.asarray(brdf(wi, np.broadcast_to(wo, wi.shape)), dtype=np.float64)
             if f.shape[:3] != wi.shape[:3]:
-                raise ValueError(f"brdf returned shape {f.shape}; expected {wi.shape[:3]} (+ channels)")
+                raise ValueError(f"brdf returned shape {f.shape}; expected {wi.shape[:3]} + (...)")
             q = np.einsum("gtp,gtp...->g...", w, f)
             if out is None:
                 out = np.empty((len(theta_o),) + q.shape[1:])
@@ -123,46 +137,50 @@ def _integrate(brdf, theta_o, n, symmetric):
     return out
 
 
-def _albedo_theta(brdf, theta_o, n, symmetric):
-    """(Q_2n, |Q_n - Q_2n|) for theta_o strictly inside [0, pi/2)."""
-    lo = _integrate(brdf, theta_o, n, symmetric)
-    hi = _integrate(brdf, theta_o, 2 * n, symmetric)
-    return hi, np.abs(hi - lo)
+def _grazing_weights(mu):
+    """Weights w with E0 = sum w_k E(mu_k) for E = E0 + a mu ln(mu) + b mu + c mu^2 (4 points)."""
+    A = np.stack([np.ones_like(mu), mu * np.log(mu), mu, mu * mu], axis=1)
+    return np.linalg.solve(A.T, np.eye(4)[0])
 
 
 def hemisphere_albedo(brdf, mu_o, n=DEFAULT_ORDER, *, symmetric=True, error=False,
-                      delta=GRAZING_DELTA):
+                      delta=GRAZING_DELTA, max_points=MAX_POINTS, kinks=()):
     """Directional albedo E(mu_o) = int f(wi, wo) mu_i dwi of any vectorised BRDF.
 
     Parameters
     ----------
     brdf : callable
-        ``brdf(wi, wo)`` with wi, wo of shape (..., 3) (local frame, normal +z, both
-        pointing away from the surface, wo in the xz-plane) returning f without the cosine
-        factor, shape (...) or (..., C).  Must be vectorised (called with ~1e6 directions).
+        ``brdf(wi, wo)`` with wi, wo of shape (G, T, P, 3) (local frame, normal +z, both
+        pointing away from the surface, wo in the xz-plane with wo.x >= 0) returning f
+        without the cosine factor, shape (G, T, P) or (G, T, P, ...) (e.g. channels).
     mu_o : array_like
-        Cosines of the outgoing direction in [0, 1].  mu_o = 0 returns the grazing limit.
+        Cosines of the outgoing direction in [0, 1].  mu_o = 0 returns the limit mu_o -> 0.
     n : int
         Gauss-Legendre order per panel; the value uses 2n, the error estimate n vs 2n.
     symmetric : bool
-        The BRDF depends on the azimuth only through cos(phi_i - phi_o) (isotropic and
-        reciprocal in the plane of incidence): integrate phi over [0, pi] and double.
+        The BRDF depends on the azimuth only through cos(phi_i - phi_o): integrate phi over
+        [0, pi] and double.  Otherwise [0, 2 pi] in four panels.
     error : bool
         Also return the error estimate.
     delta : float
-        mu_o of the Richardson extrapolation of the grazing limit.
+        Smallest mu_o of the extrapolation of the grazing limit.
+    max_points : int
+        Directions per ``brdf`` call (memory bound; divide by any trailing size of f).
+    kinks : sequence of float
+        Further theta_i (radians) where the integrand has a kink independent of wo (e.g. a
+        clamp on a function of mu_i); they become panel edges.
 
     Returns
     -------
-    E : ndarray, shape mu_o.shape (+ (C,))
+    E : ndarray, shape mu_o.shape + trailing shape of f
     err : ndarray, same shape (only with ``error=True``)
-        |Q_n - Q_2n| (plus the extrapolation error estimate at mu_o = 0).
+        |Q_n - Q_2n| + 64 ulp; at mu_o = 0 plus the extrapolation error estimate.
 
     Examples
     --------
     >>> import numpy as np
     >>> lambert = lambda wi, wo: np.full(wi.shape[:-1], 1.0 / np.pi)
-    >>> float(hemisphere_albedo(lambert, 0.3))
+    >>> round(float(hemisphere_albedo(lambert, 0.3)), 12)
     1.0
     """
     mu = np.asarray(mu_o, dtype=np.float64)
@@ -172,34 +190,50 @@ def hemisphere_albedo(brdf, mu_o, n=DEFAULT_ORDER, *, symmetric=True, error=Fals
         raise ValueError(f"n must be a positive integer, got {n!r}")
     flat = mu.ravel()
     grazing = flat == 0.0
-    # Rows to integrate: every mu > 0, plus delta, 2 delta, 4 delta once if any mu = 0.
     mus = flat[~grazing]
+    ladder = delta * 2.0 ** np.arange(5)
     if grazing.any():
-        mus = np.concatenate([mus, [delta, 2.0 * delta, 4.0 * delta]])
-    val, err = _albedo_theta(brdf, np.arccos(np.clip(mus, 0.0, 1.0)), n, symmetric)
-    trail = val.shape[1:]
+        mus = np.concatenate([mus, ladder])
+    theta = np.arccos(mus)
+    kinks = np.asarray(kinks, dtype=np.float64).ravel()
+    if not np.all((kinks > 0.0) & (kinks < HALF_PI)):
+        raise ValueError("kinks must lie in (0, pi/2)")
+    hi = _integrate(brdf, theta, 2 * n, symmetric, max_points, kinks)
+    lo = _integrate(brdf, theta, n, symmetric, max_points, kinks)
+    err = np.abs(hi - lo) + ROUNDING * np.abs(hi)
+    trail = hi.shape[1:]
     E = np.empty((flat.size,) + trail)
     dE = np.empty((flat.size,) + trail)
     if grazing.any():
-        e1, e2, e4 = val[-3], val[-2], val[-1]
-        r1 = 2.0 * e1 - e2                    # E(0) + O(delta^2)
-        r2 = 2.0 * e2 - e4
+        w1 = _grazing_weights(ladder[:4])
+        r1 = np.tensordot(w1, hi[-5:-1], axes=(0, 0))
+        r2 = np.tensordot(_grazing_weights(ladder[1:]), hi[-4:], axes=(0, 0))
         E[grazing] = r1
-        dE[grazing] = np.abs(r1 - r2) / 3.0 + 3.0 * np.max(err[-3:], axis=0)
-        val, err = val[:-3], err[:-3]
-    E[~grazing] = val
+        # fit error estimate (second ladder) + the ladder's quadrature errors through the weights
+        dE[grazing] = np.abs(r1 - r2) + np.tensordot(np.abs(w1), err[-5:-1], axes=(0, 0))
+        hi, err = hi[:-5], err[:-5]
+    E[~grazing] = hi
     dE[~grazing] = err
     E = E.reshape(mu.shape + trail)
     dE = dE.reshape(mu.shape + trail)
     return (E, dE) if error else E
 
 
-def hemisphere_average_albedo(brdf, n_mu=32, n=DEFAULT_ORDER, *, symmetric=True, error=False):
-    """Average albedo <E> = 2 int_0^1 E(mu) mu dmu (= (1/pi) int int f mu_i mu_o dwi dwo).
+def hemisphere_average_albedo(brdf, n=DEFAULT_ORDER, *, n_mu=DEFAULT_ORDER, symmetric=True,
+                              error=False, max_points=MAX_POINTS, kinks=()):
+    """Average albedo <E> = 2 int_0^1 E(mu) mu dmu = (1/pi) int int f mu_i mu_o dwi dwo.
 
-    Gauss-Legendre in theta_o on [0, pi/2] (E is smooth in theta_o) with weight
-    2 cos(theta_o) sin(theta_o); value from 2 ``n_mu`` nodes, error estimate from n_mu vs
-    2 n_mu plus the propagated error of the inner integrals.
+    Gauss-Legendre in theta_o with weight 2 cos(theta_o) sin(theta_o), on panels graded
+    geometrically towards the horizon (pi/2 - theta_o in [0, 2^-12 pi/2], ..., [pi/4, pi/2]):
+    full Oren-Nayar's E has a mu ln(mu) term there, which the grading integrates at the
+    geometric rate.  Value from 2 ``n_mu`` nodes per panel, error estimate n_mu vs 2 n_mu plus
+    the propagated error of the inner integrals.  ``kinks`` (theta angles) are panel edges
+    of both the inner and the outer integral (a kink in mu_i is one in mu_o by reciprocity).
+
+    Returns
+    -------
+    avg : ndarray, trailing shape of f
+    err : ndarray (only with ``error=True``)
 
     Examples
     --------
@@ -208,11 +242,16 @@ def hemisphere_average_albedo(brdf, n_mu=32, n=DEFAULT_ORDER, *, symmetric=True,
     >>> round(float(hemisphere_average_albedo(lambert)), 12)
     1.0
     """
+    kinks = np.asarray(kinks, dtype=np.float64).ravel()
+    x_edges = np.unique(np.concatenate([[0.0], HALF_PI * 0.5 ** np.arange(_AVERAGE_GRADING, -1, -1),
+                                        HALF_PI - kinks]))
     results = []
     for m in (n_mu, 2 * n_mu):
-        t, w = gauss_legendre(0.0, HALF_PI, m)
-        E, dE = hemisphere_albedo(brdf, np.cos(t), n, symmetric=symmetric, error=True)
-        wt = 2.0 * w * np.cos(t) * np.sin(t)
+        x, w = gauss_legendre(x_edges[:-1], x_edges[1:], m)
+        t = HALF_PI - x.ravel()
+        E, dE = hemisphere_albedo(brdf, np.cos(t), n, symmetric=symmetric, error=True,
+                                  max_points=max_points, kinks=kinks)
+        wt = 2.0 * w.ravel() * np.cos(t) * np.sin(t)
         results.append((np.tensordot(wt, E, axes=(0, 0)), np.tensordot(wt, dE, axes=(0, 0))))
     (lo, _), (hi, inner) = results
     err = np.abs(hi - lo) + inner

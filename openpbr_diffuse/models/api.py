@@ -62,12 +62,9 @@ def evaluate(model, wi, wo, roughness, rho=1.0, *, color_mode="reference"):
     rho = ar.rho_array("rho", rho, dtype)
     lead = ar.broadcast_leading(wi=wi.shape[:-1], wo=wo.shape[:-1], roughness=r.shape, rho=rho.shape[:-1])
     C = rho.shape[-1]
-    out = np.empty(lead + (C,), dtype=dtype)
-    from ._kernels import eval_kernel
+    from ._kernels import evaluate_rows
 
-    eval_kernel(info.id, tint, ar.flat(wi, lead, 3), ar.flat(wo, lead, 3), ar.flat(r, lead),
-                ar.flat(rho, lead, C), out.reshape(-1, C))
-    return out
+    return evaluate_rows(info.id, tint, wi, wo, r, rho, lead, C, dtype).reshape(lead + (C,))
 
 
 def _albedo(model, mu, roughness, rho, color_mode, average):
@@ -83,12 +80,9 @@ def _albedo(model, mu, roughness, rho, color_mode, average):
     rho = ar.rho_array("rho", rho, dtype)
     lead = ar.broadcast_leading(mu=mu.shape, roughness=r.shape, rho=rho.shape[:-1])
     C = rho.shape[-1]
-    out = np.empty(lead + (C,), dtype=dtype)
-    from ._kernels import albedo_kernel
+    from ._kernels import albedo_rows
 
-    albedo_kernel(info.id, tint, average, ar.flat(mu, lead), ar.flat(r, lead), ar.flat(rho, lead, C),
-                  out.reshape(-1, C))
-    return out
+    return albedo_rows(info.id, tint, average, mu, r, rho, lead, C, dtype).reshape(lead + (C,))
 
 
 def directional_albedo(model, mu, roughness, rho=1.0, *, color_mode="reference"):

@@ -38,7 +38,9 @@ def eon_albedo_terms(mu, r, approx):
     gives (1 - E(mu)) (1 - <E>) / (1 - <E_F>) where E is the E_F variant used in f_ms:
     for "eon" that is Eq. 20 exactly; for "eon_approx" the cosine-weighted mean of the
     Eq. 14 fit is not exactly <E_F>, and this is the exact albedo of that lobe (it
-    differs from Eq. 20 by < 5e-4).  The eps guards change it by < 1e-7.
+    differs from Eq. 20 by < 5e-4).  The eps guards change it by < 1e-7; for "eon_approx"
+    the guard max(eps, 1 - E_F(mu_i)) is also active for mu_i < 1.39e-3, where the Eq. 14
+    fit exceeds 1, which this closed form ignores (4e-10, resolved in the reference tables).
     """
     avg = E_F_avg(r)
     e_used = E_F(mu, r, approx)

@@ -9,7 +9,7 @@ JCGT 14(1), 2025, Section 2.2 (Eq. 10-15) and Listing 1.
 """
 import math
 
-from ._jit import INV_PI, PI, kernel
+from ._jit import INV_PI, PI, acos, kernel
 
 #: Eq. 11/15 constants.
 C1 = 0.5 - 2.0 / (3.0 * PI)
@@ -48,7 +48,7 @@ def G_qon(mu):
     """
     mu = min(max(mu, 0.0), 1.0)
     S = math.sqrt(max(0.0, 1.0 - mu * mu))
-    return S * (math.acos(mu) - S * mu) + (2.0 / 3.0) * S * mu * (1.0 + S + S * S) / (1.0 + S)
+    return S * (acos(mu) - S * mu) + (2.0 / 3.0) * S * mu * (1.0 + S + S * S) / (1.0 + S)
 
 
 @kernel

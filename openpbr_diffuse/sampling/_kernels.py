@@ -1,97 +1,145 @@
-"""Batch drivers: one parallel loop per verb (``sample``, ``pdf``), dispatching on the strategy id.
+"""Batch drivers: one parallel loop per verb (``sample``, ``pdf``), specialised per strategy.
 
-The strategy id is loop-invariant, so the branch costs nothing measurable; the formulas
-are the scalar functions of ``simple``, ``ltc`` and ``mis``, inlined here.
-
-The drivers are compiled for explicit signatures (float32 and float64; inputs as
-read-only 'A'-layout views, outputs C-contiguous): the inputs arrive as broadcast views
-(``_arrays.flat``) that are C-contiguous or strided depending on the caller's shapes,
-and one specialisation per dtype accepts all of them (no recompilation per layout).
+The formulas are the scalar functions of ``simple``, ``ltc`` and ``mis``, inlined here.
+As for the lobe models (``models/_kernels.py``, whose ``compiled``, ``rows`` and chunking
+conventions are reused), a driver is compiled for one strategy id, a compile-time
+constant, over flat C-contiguous buffers; the scalar functions are branch-free (selects)
+and call no libm function, so LLVM vectorises the loop (AVX2/AVX-512).  Arithmetic is
+float64 for both dtypes (float32 results are the float64 ones rounded).
 """
-import numba
-from numba import prange, types
+import functools
 
-from ..models._jit import FASTMATH, kernel
+import numpy as np
+from numba import prange
+
+from ..models._kernels import CHUNK, _F, _U, compiled, rows
 from .ltc import clip_fraction, from_frame, ltc_coeffs, ltc_frame, ltc_pdf_local, ltc_sample_local, to_frame
 from .mis import eon_pdf, eon_sample
 from .registry import CLTC, COSINE, EON, LTC, LTC_NONNEG, UNIFORM
 from .simple import INV_2PI, cosine_pdf, cosine_sample_local, uniform_sample
 
 
-@kernel
-def sample_one(strategy, ox, oy, mu, r, u1, u2):
-    """Return (x, y, z, pdf) of one sample in the local frame; ``mu`` = wo.z clamped to [0, 1]."""
-    if strategy == UNIFORM:
-        return uniform_sample(u1, u2)
-    Xx, Xy = ltc_frame(ox, oy)
-    if strategy == EON:
-        return eon_sample(Xx, Xy, mu, r, u1, u2)
-    if strategy == COSINE:
-        lx, ly, lz, p = cosine_sample_local(u1, u2)
-    else:
-        a, b, c, d = ltc_coeffs(mu, r)
-        if strategy == LTC_NONNEG:
-            d = 0.0
-        s = clip_fraction(d) if strategy == CLTC else 1.0
-        lx, ly, lz, p = ltc_sample_local(a, b, c, d, s, u1, u2)
-    wx, wy = from_frame(Xx, Xy, lx, ly)
-    return wx, wy, lz, p
+@functools.cache
+def sample_driver(strategy):
+    """``drive(wo, r, u, wi, pdf)``: wo (3n,), r (n,), u (2n,) -> wi (3n,), pdf (n,).
+
+    pdf = 0 when wo is below the horizon (wo.z <= 0): nothing to sample, the direction is
+    that of wo.z = 0.
+    """
+
+    @compiled
+    def drive(wo, r, u, wi, pdf):
+        for i in prange(r.shape[0]):
+            j = _U(i) * _U(3)
+            k = _U(i) * _U(2)
+            ox = _F(wo[j])
+            oy = _F(wo[j + _U(1)])
+            oz = _F(wo[j + _U(2)])
+            mu = min(max(oz, 0.0), 1.0)  # unit vectors may exceed 1 by rounding; the fit needs [0, 1]
+            u1 = _F(u[k])
+            u2 = _F(u[k + _U(1)])
+            if strategy == UNIFORM:
+                x, y, z, p = uniform_sample(u1, u2)
+            else:
+                Xx, Xy = ltc_frame(ox, oy)
+                if strategy == EON:
+                    x, y, z, p = eon_sample(Xx, Xy, mu, _F(r[i]), u1, u2)
+                else:
+                    if strategy == COSINE:
+                        lx, ly, z, p = cosine_sample_local(u1, u2)
+                    else:
+                        a, b, c, d = ltc_coeffs(mu, _F(r[i]))
+                        if strategy == LTC_NONNEG:
+                            d = 0.0
+                        s = clip_fraction(d) if strategy == CLTC else 1.0
+                        lx, ly, z, p = ltc_sample_local(a, b, c, d, s, u1, u2)
+                    x, y = from_frame(Xx, Xy, lx, ly)
+            wi[j] = x
+            wi[j + _U(1)] = y
+            wi[j + _U(2)] = z
+            pdf[i] = p if oz > 0.0 else 0.0
+
+    return drive
 
 
-@kernel
-def pdf_one(strategy, ox, oy, mu, r, wx, wy, wz):
-    """Solid-angle pdf of wi = (wx, wy, wz); wz > 0 unless the strategy is the general LTC."""
-    if strategy == UNIFORM:
-        return INV_2PI
-    if strategy == COSINE:
-        return cosine_pdf(wz)
-    Xx, Xy = ltc_frame(ox, oy)
-    lx, ly = to_frame(Xx, Xy, wx, wy)
-    if strategy == EON:
-        return eon_pdf(lx, ly, wz, mu, r)
-    a, b, c, d = ltc_coeffs(mu, r)
-    if strategy == LTC_NONNEG:
-        d = 0.0
-    s = clip_fraction(d) if strategy == CLTC else 1.0
-    return ltc_pdf_local(a, b, c, d, s, lx, ly, wz)
+@functools.cache
+def pdf_driver(strategy):
+    """``drive(wo, wi, r, out)``: out (n,) = pdf of wi given wo; 0 when wo.z <= 0 and, except
+    for the general LTC (whose lobe extends below the horizon), when wi.z <= 0."""
+
+    @compiled
+    def drive(wo, wi, r, out):
+        for i in prange(r.shape[0]):
+            j = _U(i) * _U(3)
+            oz = _F(wo[j + _U(2)])
+            wx = _F(wi[j])
+            wy = _F(wi[j + _U(1)])
+            wz = _F(wi[j + _U(2)])
+            mu = min(oz, 1.0)
+            if strategy == UNIFORM:
+                p = INV_2PI
+            elif strategy == COSINE:
+                p = cosine_pdf(wz)
+            else:
+                Xx, Xy = ltc_frame(_F(wo[j]), _F(wo[j + _U(1)]))
+                lx, ly = to_frame(Xx, Xy, wx, wy)
+                if strategy == EON:
+                    p = eon_pdf(lx, ly, wz, mu, _F(r[i]))
+                else:
+                    a, b, c, d = ltc_coeffs(mu, _F(r[i]))
+                    if strategy == LTC_NONNEG:
+                        d = 0.0
+                    s = clip_fraction(d) if strategy == CLTC else 1.0
+                    p = ltc_pdf_local(a, b, c, d, s, lx, ly, wz)
+            ok = (oz > 0.0) & ((wz > 0.0) | (strategy == LTC))
+            out[i] = p if ok else 0.0
+
+    return drive
 
 
-def _signatures(verb):
-    sigs = []
-    for f in (types.float32, types.float64):
-        ro2 = types.Array(f, 2, "A", readonly=True)
-        ro1 = types.Array(f, 1, "A", readonly=True)
-        out2 = types.Array(f, 2, "C")
-        out1 = types.Array(f, 1, "C")
-        if verb == "sample":  # (strategy, wo, r, u, wi, pdf)
-            sigs.append(types.void(types.int64, ro2, ro1, ro2, out2, out1))
-        else:                 # (strategy, wo, wi, r, pdf)
-            sigs.append(types.void(types.int64, ro2, ro2, ro1, out1))
-    return sigs
+def _launch(drive, inputs, outputs, n):
+    """Run ``drive(*inputs, *outputs)`` over n rows; inputs = [(buffer, k, tiled)], outputs = [(flat, k)].
+
+    As ``models._kernels.launch``, for several outputs: tiled inputs (one row for all) are
+    repeated to min(n, CHUNK) rows and the driver runs chunk by chunk.
+    """
+    if n == 0:
+        return
+    if not any(t for _, _, t in inputs):
+        drive(*(b for b, _, _ in inputs), *(o for o, _ in outputs))
+        return
+    B = min(n, CHUNK)
+    reps = []
+    for b, k, t in inputs:
+        if t:
+            b = np.tile(b, B)
+            b.flags.writeable = False
+        reps.append(b)
+    for s in range(0, n, B):
+        e = min(n, s + B)
+        args = [b[:(e - s) * k] if t else b[s * k:e * k] for b, (_, k, t) in zip(reps, inputs)]
+        drive(*args, *(o[s * k:e * k] for o, k in outputs))
 
 
-@numba.njit(_signatures("sample"), parallel=True, cache=True, fastmath=FASTMATH)
-def sample_kernel(strategy, wo, r, u, wi, pdf):
-    """wi[i], pdf[i] = sample of ``strategy`` given wo[i], r[i], u[i]; pdf 0 when wo[i] is below the horizon."""
-    for i in prange(pdf.shape[0]):
-        oz = 1.0 * wo[i, 2]
-        mu = min(max(oz, 0.0), 1.0)  # unit vectors may exceed 1 by rounding; the fit needs [0, 1]
-        wx, wy, wz, p = sample_one(strategy, 1.0 * wo[i, 0], 1.0 * wo[i, 1], mu, 1.0 * r[i],
-                                   1.0 * u[i, 0], 1.0 * u[i, 1])
-        wi[i, 0] = wx
-        wi[i, 1] = wy
-        wi[i, 2] = wz
-        pdf[i] = p if oz > 0.0 else 0.0
+def sample_rows(strategy, wo, r, u, lead, dtype):
+    """(wi, pdf) for validated arrays broadcasting to ``lead``, shapes lead + (3,) and lead."""
+    n = int(np.prod(lead))
+    wi = np.empty(lead + (3,), dtype=dtype)
+    p = np.empty(lead, dtype=dtype)
+    wo, two = rows(wo, lead, 3)
+    r, tr = rows(r, lead)
+    u, tu = rows(u, lead, 2)
+    _launch(sample_driver(strategy), [(wo, 3, two), (r, 1, tr), (u, 2, tu)],
+            [(wi.reshape(-1), 3), (p.reshape(-1), 1)], n)
+    return wi, p
 
 
-@numba.njit(_signatures("pdf"), parallel=True, cache=True, fastmath=FASTMATH)
-def pdf_kernel(strategy, wo, wi, r, out):
-    """out[i] = pdf of sampling wi[i] given wo[i]; 0 below the horizon (except wi for the general LTC)."""
-    for i in prange(out.shape[0]):
-        oz = 1.0 * wo[i, 2]
-        wz = 1.0 * wi[i, 2]
-        if oz <= 0.0 or (wz <= 0.0 and strategy != LTC):
-            out[i] = 0.0
-            continue
-        out[i] = pdf_one(strategy, 1.0 * wo[i, 0], 1.0 * wo[i, 1], min(oz, 1.0), 1.0 * r[i],
-                         1.0 * wi[i, 0], 1.0 * wi[i, 1], wz)
+def pdf_rows(strategy, wo, wi, r, lead, dtype):
+    """pdf for validated arrays broadcasting to ``lead``, shape lead."""
+    n = int(np.prod(lead))
+    out = np.empty(lead, dtype=dtype)
+    wo, two = rows(wo, lead, 3)
+    wi, twi = rows(wi, lead, 3)
+    r, tr = rows(r, lead)
+    _launch(pdf_driver(strategy), [(wo, 3, two), (wi, 3, twi), (r, 1, tr)], [(out.reshape(-1), 1)], n)
+    return out

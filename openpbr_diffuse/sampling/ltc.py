@@ -30,7 +30,8 @@ d <= 0 (every mu_o < 0.9999) the mapping is exactly Listing 3's.
 """
 import math
 
-from ..models._jit import INV_PI, kernel
+from ..models._jit import PI, kernel
+from .simple import cos_sin_2pi
 
 
 @kernel
@@ -47,10 +48,9 @@ def ltc_coeffs(mu, r):
 def ltc_frame(ox, oy):
     """Return X = (X.x, X.y) of the LTC frame of wo (Y = (-X.y, X.x), Z = +z)."""
     l2 = ox * ox + oy * oy
-    if l2 > 0.0:
-        il = 1.0 / math.sqrt(l2)
-        return ox * il, oy * il
-    return 1.0, 0.0  # wo at the normal: any azimuth will do, the lobe is isotropic there
+    il = 1.0 / math.sqrt(l2)  # inf at the normal, discarded below (selects, not branches)
+    normal = not l2 > 0.0     # wo at the normal: any azimuth will do, the lobe is isotropic there
+    return (1.0 if normal else ox * il), (0.0 if normal else oy * il)
 
 
 @kernel
@@ -81,9 +81,9 @@ def ltc_sample_local(a, b, c, d, s, u1, u2):
     wh.z / (pi s) times the Jacobian |M wh|^3 / det M (Eq. 24, 28).
     """
     R = math.sqrt(u1)
-    phi = 2.0 * math.pi * u2
-    x = R * math.cos(phi)
-    y = R * math.sin(phi)
+    cp, sp = cos_sin_2pi(u2)  # phi = 2 pi u2
+    x = R * cp
+    y = R * sp
     side = 1.0 if d > 0.0 else -1.0  # keep the removed lune on the side where d x + z < 0
     x = side * ((1.0 - s) * math.sqrt(max(0.0, 1.0 - y * y)) + s * x)
     hz = math.sqrt(max(0.0, 1.0 - (x * x + y * y)))
@@ -92,7 +92,7 @@ def ltc_sample_local(a, b, c, d, s, u1, u2):
     wz = d * x + hz
     l2 = wx * wx + wy * wy + wz * wz
     inv = 1.0 / math.sqrt(l2)
-    pdf = hz * INV_PI / s * (l2 * l2 * inv) / (c * (a - b * d))
+    pdf = hz * (l2 * l2 * inv) / (PI * s * (c * (a - b * d)))  # one division: the costliest vector op
     return wx * inv, wy * inv, wz * inv, pdf
 
 
@@ -108,9 +108,7 @@ def ltc_pdf_local(a, b, c, d, s, wx, wy, wz):
     hx = c * (wx - b * wz)
     hy = e * wy
     hz = c * (a * wz - d * wx)
-    if hz <= 0.0:
-        return 0.0
     det = c * e
     l2 = hx * hx + hy * hy + hz * hz
-    q = det / (l2 * l2)
-    return q * det * hz * INV_PI / s
+    pdf = det * det * hz / (PI * s * l2 * l2)
+    return pdf if hz > 0.0 else 0.0

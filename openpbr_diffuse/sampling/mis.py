@@ -5,20 +5,86 @@ of the combined strategy is the mixture P_u/(2 pi) + P_c pdf_CLTC (P_c = 1 - P_u
 makes the estimator unbiased where CLTC misses a lune and bounds the throughput weight.
 At r = 0, P_u = 0 and M = I: the sampler is cosine sampling.
 """
-import math
-
 from ..models._jit import kernel
 from .ltc import clip_fraction, from_frame, ltc_coeffs, ltc_pdf_local, ltc_sample_local, to_frame
 from .simple import INV_2PI, uniform_sample
 
 
+def _binomial_series(a, n):
+    """Coefficients c_k of (1 - t)^a = sum_k c_k t^k: c_0 = 1, c_(k+1) = c_k (k - a)/(k + 1)."""
+    c = [1.0]
+    for k in range(n - 1):
+        c.append(c[-1] * (k - a) / (k + 1))
+    return tuple(c)
+
+
+#: (1 - t)^0.1 to t^13: for t <= 1 - 2^-1/8 the first omitted term is < 4e-18.
+_B0, _B1, _B2, _B3, _B4, _B5, _B6, _B7, _B8, _B9, _B10, _B11, _B12, _B13 = _binomial_series(0.1, 14)
+
+
+def _stage(k):
+    """(2^-k, 2^k, 2^(-k/10)): one step of the range reduction of ``pow_tenth``."""
+    return 2.0 ** -k, 2.0 ** k, 2.0 ** (-0.1 * k)
+
+
+_STAGES = tuple(_stage(k) for k in (1000.0, 512.0, 256.0, 128.0, 64.0, 32.0, 16.0, 8.0, 4.0, 2.0, 1.0,
+                                    0.5, 0.25, 0.125))
+(_S0, _S1, _S2, _S3, _S4, _S5, _S6, _S7, _S8, _S9, _S10, _S11, _S12, _S13) = _STAGES
+
+
+@kernel
+def _reduce(x, f, stage):
+    """If x < 2^-k: x <- x 2^k and f <- f 2^(-k/10), so that f x^0.1 is unchanged."""
+    lim, up, fac = stage
+    c = x < lim
+    return (x * up if c else x), (f * fac if c else f)
+
+
+@kernel
+def pow_tenth(r):
+    """r^0.1 for r in [0, 1], to 5e-15 relative, without a libm call (keeps loops vectorisable).
+
+    Range reduction by selects: r = 2^-e x with x in [2^-1/8, 1] (exponent stages 2^-1000
+    for subnormal r, then 2^-512, ..., 2^-1, 2^-1/2, 2^-1/4, 2^-1/8), r^0.1 = 2^(-e/10)
+    x^0.1, and x^0.1 = (1 - t)^0.1 by its binomial series in t = 1 - x <= 0.083.
+    r = 0 gives 0.
+    """
+    x, f = _reduce(r, 1.0, _S0)
+    x, f = _reduce(x, f, _S1)
+    x, f = _reduce(x, f, _S2)
+    x, f = _reduce(x, f, _S3)
+    x, f = _reduce(x, f, _S4)
+    x, f = _reduce(x, f, _S5)
+    x, f = _reduce(x, f, _S6)
+    x, f = _reduce(x, f, _S7)
+    x, f = _reduce(x, f, _S8)
+    x, f = _reduce(x, f, _S9)
+    x, f = _reduce(x, f, _S10)
+    x, f = _reduce(x, f, _S11)
+    x, f = _reduce(x, f, _S12)
+    x, f = _reduce(x, f, _S13)
+    t = 1.0 - x
+    p = _B13
+    p = p * t + _B12
+    p = p * t + _B11
+    p = p * t + _B10
+    p = p * t + _B9
+    p = p * t + _B8
+    p = p * t + _B7
+    p = p * t + _B6
+    p = p * t + _B5
+    p = p * t + _B4
+    p = p * t + _B3
+    p = p * t + _B2
+    p = p * t + _B1
+    p = p * t + _B0
+    return f * p if r > 0.0 else 0.0
+
+
 @kernel
 def uniform_probability(mu, r):
     """P_u = r^0.1 (0.162925 + mu (-0.372058 + (0.538233 - 0.290822 mu) mu)) (Listing 4)."""
-    if r <= 0.0:
-        return 0.0
-    rp = math.exp(0.1 * math.log(r))  # r^0.1; exp/log is cheaper than pow here
-    return rp * (0.162925 + mu * (-0.372058 + (0.538233 - 0.290822 * mu) * mu))
+    return pow_tenth(r) * (0.162925 + mu * (-0.372058 + (0.538233 - 0.290822 * mu) * mu))
 
 
 @kernel
@@ -27,19 +93,23 @@ def eon_sample(Xx, Xy, mu, r, u1, u2):
 
     The branch test is u1 < P_u (Listing 4 has <=; they differ only at u1 = P_u) so that
     P_u = 0 (r = 0) never selects the uniform lobe, and both rescaled u1 stay in [0, 1).
+    Both lobes are computed and one is selected: branch-free, the batch loop vectorises
+    (the uniform branch's division by P_u = 0 then gives a discarded inf).
     """
     a, b, c, d = ltc_coeffs(mu, r)
     s = clip_fraction(d)
     Pu = uniform_probability(mu, r)
     Pc = 1.0 - Pu
-    if u1 < Pu:
-        wx, wy, wz, _ = uniform_sample(u1 / Pu, u2)
-        lx, ly = to_frame(Xx, Xy, wx, wy)
-        pc = ltc_pdf_local(a, b, c, d, s, lx, ly, wz)
-    else:
-        lx, ly, wz, pc = ltc_sample_local(a, b, c, d, s, (u1 - Pu) / Pc, u2)
-        wx, wy = from_frame(Xx, Xy, lx, ly)
-    return wx, wy, wz, Pu * INV_2PI + Pc * pc
+    uniform = u1 < Pu
+    # uniform lobe, in the local frame as in Listing 4; its CLTC density for the mixture
+    ux, uy, uz, _ = uniform_sample(u1 / Pu, u2)
+    lx, ly = to_frame(Xx, Xy, ux, uy)
+    pu = ltc_pdf_local(a, b, c, d, s, lx, ly, uz)
+    # CLTC lobe
+    lx, ly, cz, pc = ltc_sample_local(a, b, c, d, s, (u1 - Pu) / Pc, u2)
+    cx, cy = from_frame(Xx, Xy, lx, ly)
+    p = Pu * INV_2PI + Pc * (pu if uniform else pc)
+    return (ux if uniform else cx), (uy if uniform else cy), (uz if uniform else cz), p
 
 
 @kernel

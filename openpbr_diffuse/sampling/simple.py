@@ -8,18 +8,55 @@ Listing 4.
 """
 import math
 
-from ..models._jit import INV_PI, PI, kernel
+import numpy as np
+
+from ..models._jit import INV_PI, kernel
 
 INV_2PI = 0.5 / math.pi
+_SQRT_HALF = math.sqrt(0.5)
+
+
+@kernel
+def cos_sin_2pi(u):
+    """Return (cos 2 pi u, sin 2 pi u) for u in [0, 1), to a few ulp (absolute).
+
+    Why not ``math.cos``/``math.sin``: a libm call keeps LLVM from vectorising the batch
+    loop (see ``models/_jit.py``), and in double precision the two calls alone cost about
+    40 ns per sample on the 2-core test machine.  This is a few multiply-adds, branch-free,
+    and accurate to 5e-16 (tested against long-double cos/sin).
+    The angle is reduced exactly in u (quadrant q = floor(4u)) and centred on the
+    quadrant's middle, x = (4u - q - 1/2) pi/2 in [-pi/4, pi/4); sin x and cos x come from
+    their Taylor series to x^15 and x^16 (truncation < 5e-17 at |x| = pi/4); then
+    cos/sin(pi/4 + x) = (cos x -/+ sin x)/sqrt(2), rotated by q quarter turns.
+    """
+    t = 4.0 * u
+    q = np.floor(t)
+    x = (t - q - 0.5) * (0.5 * math.pi)
+    x2 = x * x
+    s = x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0 * (1.0 - x2 / 72.0 * (
+        1.0 - x2 / 110.0 * (1.0 - x2 / 156.0 * (1.0 - x2 / 210.0)))))))
+    c = 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0 * (1.0 - x2 / 90.0 * (
+        1.0 - x2 / 132.0 * (1.0 - x2 / 182.0 * (1.0 - x2 / 240.0)))))))
+    C = (c - s) * _SQRT_HALF
+    S = (c + s) * _SQRT_HALF
+    # quarter turns q = 1, 2, 3: (-S, C), (-C, -S), (S, -C); selects keep the loop vectorisable
+    odd = (q == 1.0) | (q == 3.0)
+    cq = -S if odd else C
+    sq = C if odd else S
+    neg = q >= 2.0
+    return (-cq if neg else cq), (-sq if neg else sq)
 
 
 @kernel
 def cosine_sample_local(u1, u2):
-    """Return (x, y, z, pdf) of a cosine-weighted direction in the LTC frame; pdf = z/pi."""
+    """Return (x, y, z, pdf) of a cosine-weighted direction in the LTC frame; pdf = z/pi.
+
+    R = sqrt(u1), phi = 2 pi u2, (x, y) = (-R cos phi, R sin phi), z = sqrt(1 - u1).
+    """
     R = math.sqrt(u1)
-    phi = 2.0 * PI * u2
+    cp, sp = cos_sin_2pi(u2)
     z = math.sqrt(max(0.0, 1.0 - u1))
-    return -R * math.cos(phi), R * math.sin(phi), z, z * INV_PI
+    return -R * cp, R * sp, z, z * INV_PI
 
 
 @kernel
@@ -33,5 +70,5 @@ def uniform_sample(u1, u2):
     """Return (x, y, z, pdf) of a uniform hemisphere direction: z = u1, phi = 2 pi u2, pdf = 1/(2 pi)."""
     z = u1
     st = math.sqrt(max(0.0, 1.0 - z * z))
-    phi = 2.0 * PI * u2
-    return st * math.cos(phi), st * math.sin(phi), z, INV_2PI
+    cp, sp = cos_sin_2pi(u2)
+    return st * cp, st * sp, z, INV_2PI

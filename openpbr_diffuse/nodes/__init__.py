@@ -1,0 +1,17 @@
+"""Shading nodes: MaterialX ``oren_nayar_diffuse_bsdf`` and the OpenPBR Surface base.
+
+- ``OrenNayarDiffuseBSDF``: MaterialX ``ND_oren_nayar_diffuse_bsdf`` (QON or EON).
+- ``OpenPBRSurface``: the base substrate of OpenPBR Surface 1.1 (EON diffuse, dielectric
+  GGX specular with albedo scaling, F82-tint metal) with albedo-based lobe selection.
+
+Both read their interface (input names, types, defaults, ranges) from the MaterialX data
+library (``materialx_defs``) and share the verbs ``eval(wi, wo)``, ``albedo(wo)``,
+``sample(wo, u) -> (wi, pdf)`` and ``pdf(wo, wi)``.  Modules: ``frame`` (shading frames),
+``ggx`` (microfacet terms, Fresnel factors, GGX sampling, albedo quadrature),
+``specular_albedo`` (the shipped GGX albedo tables).
+"""
+from .materialx_defs import nodedef_inputs
+from .openpbr_surface import IgnoredInputWarning, Lobe, OpenPBRSurface
+from .oren_nayar import OrenNayarDiffuseBSDF
+
+__all__ = ["OrenNayarDiffuseBSDF", "OpenPBRSurface", "Lobe", "IgnoredInputWarning", "nodedef_inputs"]

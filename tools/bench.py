@@ -1,0 +1,417 @@
+"""Benchmark of the public batch calls against the scalar C yardstick (issue 6).
+
+Times ``evaluate`` for every model, ``directional_albedo`` for every model and
+``sample`` + ``evaluate("eon_approx")`` in the sampled direction for every strategy, in
+float32 and float64, through the public API (input checks and broadcasting included),
+best of several repetitions after a warm-up.  The scalar C port of the paper's listings
+(``shared/bench/eon_scalar.c``) is built with gcc into a temporary folder and run in the
+same process tree, before and after the Python timings (the best of both runs is kept),
+so that the ratios compare the two under the same machine load.
+
+Inputs follow the C program: directions with z uniform in [0.01, 1] and uniform azimuth,
+rho uniform in [0, 1]^3, roughness uniform in [0, 1] (radians for the sigma models),
+u uniform in [0, 1)^2.
+
+Usage::
+
+    python tools/bench.py                 # n = 10^6, table on stdout
+    python tools/bench.py --quick         # n = 10^5, fewer repetitions
+    python tools/bench.py --json bench.json
+
+From Python: ``run_bench(n=..., reps=...)`` returns ``{"rows": [...], "env": {...},
+"startup": {...}, "c": {...}}``; ``format_table(result)`` renders it.
+
+Columns: ns per call (per row of the batch), ratio to the C time of the same work (eval
+approx, eval exact, MIS sample + approx eval), the issue's target, and the peak extra
+memory of the call (tracemalloc peak, which sees NumPy's allocations, minus the returned
+arrays) in multiples of the returned arrays' size.
+"""
+import argparse
+import json
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+import tracemalloc
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+C_SOURCE_CANDIDATES = (ROOT.parent / "shared" / "bench" / "eon_scalar.c",
+                       ROOT / "shared" / "bench" / "eon_scalar.c")
+
+#: Issue 6 targets.
+TARGET_EVAL_RATIO = 0.5        # evaluate("eon_approx"/"eon") <= 0.5 x C (approx/exact)
+TARGET_SAMPLE_RATIO = 0.5      # sample("eon") + eval <= 0.5 x C sample
+TARGET_ALBEDO_APPROX = 100e6   # directional_albedo("eon_approx") queries per second
+TARGET_ALBEDO_EXACT = 30e6     # other closed forms
+TARGET_F64_RATIO = 2.0         # float64 time <= 2 x float32 time
+TARGET_MEM = 3.0               # peak extra memory <= 3 x output size
+TARGET_IMPORT_S = 1.0
+TARGET_FIRST_CALL_S = 2.0
+#: Models whose evaluation must be no slower than "eon_approx".
+AS_FAST_AS_EON_APPROX = ("qon", "fon", "lambert")
+
+
+# --------------------------------------------------------------------------- C yardstick
+
+def c_source():
+    for p in C_SOURCE_CANDIDATES:
+        if p.is_file():
+            return p
+    return None
+
+
+def run_c(n, reps=20, runs=1):
+    """Build and run the C yardstick; best ns per call over ``runs`` runs, or None.
+
+    Returns None (with the reason in ``"skipped"``) when there is no C compiler or source.
+    """
+    src = c_source()
+    cc = shutil.which(os.environ.get("CC", "gcc")) or shutil.which("cc")
+    if src is None or cc is None:
+        return {"skipped": "no C compiler" if src else "eon_scalar.c not found"}
+    with tempfile.TemporaryDirectory() as tmp:
+        exe = Path(tmp) / "eon_scalar"
+        build = [cc, "-O3", "-march=native", "-o", str(exe), str(src), "-lm"]
+        proc = subprocess.run(build, capture_output=True, text=True)
+        if proc.returncode:
+            return {"skipped": f"C build failed: {proc.stderr.strip()[:200]}"}
+        best = {}
+        for _ in range(runs):
+            out = subprocess.run([str(exe), str(n), str(reps)], capture_output=True, text=True,
+                                 check=True).stdout.split()
+            for k, v in zip(out[::2], out[1::2]):
+                if k.endswith("_ns"):
+                    best[k] = min(best.get(k, np.inf), float(v))
+        best["command"] = " ".join(build[:4] + ["eon_scalar.c", "-lm"])
+        return best
+
+
+def _merge_c(a, b):
+    if a is None or "skipped" in a:
+        return b
+    if b is None or "skipped" in b:
+        return a
+    return {k: (min(a[k], b[k]) if k.endswith("_ns") else a[k]) for k in a}
+
+
+# --------------------------------------------------------------------------- inputs
+
+def inputs(n, dtype, seed=1):
+    """Random inputs with the C program's distribution."""
+    rng = np.random.default_rng(seed)
+
+    def dirs():
+        z = 0.01 + 0.99 * rng.random(n)
+        phi = 2.0 * np.pi * rng.random(n)
+        s = np.sqrt(1.0 - z * z)
+        return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=-1).astype(dtype)
+
+    wi, wo = dirs(), dirs()
+    rho = rng.random((n, 3)).astype(dtype)
+    r = rng.random(n).astype(dtype)
+    u = np.minimum(rng.random((n, 2)), 1.0 - 2.0 ** -24).astype(dtype)
+    return {"wi": wi, "wo": wo, "rho": rho, "r": r, "u": u, "mu": wo[:, 2].copy()}
+
+
+# --------------------------------------------------------------------------- timing
+
+def best_time(fn, reps):
+    """Best wall time of ``reps`` calls after one warm-up call."""
+    fn()
+    best = np.inf
+    for _ in range(reps):
+        t = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t)
+    return best
+
+
+def _nbytes(result):
+    if isinstance(result, tuple):
+        return sum(a.nbytes for a in result)
+    return result.nbytes
+
+
+def peak_extra(fn):
+    """Peak traced memory of one call minus the returned arrays, in multiples of them."""
+    tracemalloc.start()
+    try:
+        tracemalloc.reset_peak()
+        base = tracemalloc.get_traced_memory()[0]
+        res = fn()
+        peak = tracemalloc.get_traced_memory()[1] - base
+    finally:
+        tracemalloc.stop()
+    size = _nbytes(res)
+    return max(peak - size, 0) / size
+
+
+def _row(kind, name, dtype, n, seconds, mem, ref_name=None, ref_ns=None, target=None, ok=None, **extra):
+    ns = seconds / n * 1e9
+    row = {"kind": kind, "name": name, "dtype": np.dtype(dtype).name, "n": n, "ns": ns,
+           "rate_per_s": n / seconds, "mem_extra_x": mem, "ref": ref_name,
+           "ratio": (ns / ref_ns) if ref_ns else None, "target": target, "ok": ok}
+    row.update(extra)
+    return row
+
+
+def _sampling():
+    try:
+        from openpbr_diffuse.sampling import STRATEGIES, sample
+    except ImportError:
+        return None, ()
+    return sample, STRATEGIES
+
+
+def python_rows(n, reps, c, dtypes=(np.float32, np.float64)):
+    """Timing rows of every public batch call (see module docstring)."""
+    import openpbr_diffuse as od
+    from openpbr_diffuse.models.registry import INFO
+
+    c_approx = c.get("eval_approx_ns") if c else None
+    c_exact = c.get("eval_exact_ns") if c else None
+    c_sample = c.get("sample_mis_ns") if c else None
+    sample, strategies = _sampling()
+    rows = []
+    for dtype in dtypes:
+        x = inputs(n, dtype)
+        # evaluate, every model
+        ev = {}
+        for model in od.MODELS:
+            def call(model=model):
+                return od.evaluate(model, x["wi"], x["wo"], x["r"], x["rho"])
+            t = best_time(call, reps)
+            ev[model] = t
+            ref = {"eon_approx": ("C eval approx", c_approx), "eon": ("C eval exact", c_exact)}.get(
+                model, ("C eval approx", c_approx))
+            target = ok = None
+            if model in ("eon_approx", "eon") and ref[1]:
+                target = f"<= {TARGET_EVAL_RATIO} x {ref[0]}"
+                ok = t / n * 1e9 <= TARGET_EVAL_RATIO * ref[1]
+            rows.append(_row("evaluate", model, dtype, n, t, peak_extra(call), *ref, target, ok))
+        for row in rows:
+            if row["kind"] == "evaluate" and row["dtype"] == np.dtype(dtype).name \
+                    and row["name"] in AS_FAST_AS_EON_APPROX:
+                row["target"] = "<= evaluate eon_approx"
+                row["ok"] = ev[row["name"]] <= ev["eon_approx"]
+                row["vs_eon_approx"] = ev[row["name"]] / ev["eon_approx"]
+        # directional albedo, every model
+        for model in od.MODELS:
+            def call(model=model):
+                return od.directional_albedo(model, x["mu"], x["r"], x["rho"])
+            try:
+                t = best_time(call, reps)
+            except (FileNotFoundError, ImportError) as exc:  # table-based albedo not available
+                rows.append({"kind": "albedo", "name": model, "dtype": np.dtype(dtype).name,
+                             "skipped": str(exc)[:120]})
+                continue
+            target = ok = None
+            if model == "eon_approx":
+                target, ok = f">= {TARGET_ALBEDO_APPROX / 1e6:g} M/s", n / t >= TARGET_ALBEDO_APPROX
+            elif INFO[model].closed_form_albedo:
+                target, ok = f">= {TARGET_ALBEDO_EXACT / 1e6:g} M/s", n / t >= TARGET_ALBEDO_EXACT
+            rows.append(_row("albedo", model, dtype, n, t, peak_extra(call), None, None, target, ok))
+        # sampling + evaluation of EON (the C program's approx eval) in the sampled direction
+        for strategy in strategies:
+            def call(strategy=strategy):
+                wi, pdf = sample(strategy, x["wo"], x["r"], x["u"])
+                return wi, pdf, od.evaluate("eon_approx", wi, x["wo"], x["r"], x["rho"])
+            t = best_time(call, reps)
+            target = ok = None
+            if strategy == "eon" and c_sample:
+                target = f"<= {TARGET_SAMPLE_RATIO} x C sample"
+                ok = t / n * 1e9 <= TARGET_SAMPLE_RATIO * c_sample
+            rows.append(_row("sample+eval", strategy, dtype, n, t, peak_extra(call),
+                             "C sample", c_sample, target, ok))
+    # float64 vs float32, and the memory bound
+    by = {(r["kind"], r["name"], r["dtype"]): r for r in rows if "ns" in r}
+    for (kind, name, dt), r in by.items():
+        if dt == "float64" and (kind, name, "float32") in by:
+            r["f64_over_f32"] = r["ns"] / by[(kind, name, "float32")]["ns"]
+    return rows
+
+
+# --------------------------------------------------------------------------- start-up
+
+_STARTUP_SCRIPT = r"""
+import time, sys
+t0 = time.perf_counter()
+import numpy as np
+t1 = time.perf_counter()
+import openpbr_diffuse as od
+t2 = time.perf_counter()
+rng = np.random.default_rng(0)
+w = rng.normal(size=(1000, 3)); w[:, 2] = np.abs(w[:, 2]); w /= np.linalg.norm(w, axis=1, keepdims=True)
+w = w.astype(np.float32)
+t3 = time.perf_counter()
+od.evaluate("eon", w, w[::-1].copy(), rng.random(1000).astype(np.float32), rng.random((1000, 3)).astype(np.float32))
+t4 = time.perf_counter()
+print(t2 - t1, t4 - t3)
+"""
+
+
+def startup(cold=True):
+    """Import time and first-call time of ``evaluate("eon", ...)`` in fresh processes.
+
+    "warm": the default numba cache (filled by this process's own calls);
+    "cold": an empty NUMBA_CACHE_DIR, i.e. the very first call, which compiles.
+    """
+    res = {}
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
+    runs = [("warm", env)]
+    tmp = None
+    if cold:
+        tmp = tempfile.mkdtemp(prefix="numba-cold-")
+        runs.insert(0, ("cold", dict(env, NUMBA_CACHE_DIR=tmp)))
+    try:
+        for label, e in runs:
+            best_imp = best_first = np.inf
+            for _ in range(1 if label == "cold" else 3):
+                out = subprocess.run([sys.executable, "-c", _STARTUP_SCRIPT], env=e, capture_output=True,
+                                     text=True, check=True).stdout.split()
+                best_imp, best_first = min(best_imp, float(out[0])), min(best_first, float(out[1]))
+            res[label] = {"import_s": best_imp, "first_call_s": best_first}
+    finally:
+        if tmp:
+            shutil.rmtree(tmp, ignore_errors=True)
+    w = res["warm"]
+    w["import_ok"] = w["import_s"] < TARGET_IMPORT_S
+    w["first_call_ok"] = w["first_call_s"] < TARGET_FIRST_CALL_S
+    return res
+
+
+# --------------------------------------------------------------------------- driver
+
+def environment():
+    import numba
+
+    import openpbr_diffuse as od
+
+    return {"python": platform.python_version(), "numpy": np.__version__, "numba": numba.__version__,
+            "openpbr_diffuse": od.__version__, "threads": numba.get_num_threads(),
+            "threading_layer": _threading_layer(), "cpu": _cpu_name(), "cores": os.cpu_count(),
+            "machine": platform.machine()}
+
+
+def _threading_layer():
+    import numba
+
+    try:
+        return numba.threading_layer()
+    except ValueError:  # no parallel region has run yet
+        return None
+
+
+def _cpu_name():
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor()
+
+
+def run_bench(n=1_000_000, reps=15, c_reps=20, dtypes=(np.float32, np.float64), with_c=True,
+              with_startup=True, cold_start=True):
+    """Run everything; returns a JSON-serialisable dict (``rows``, ``c``, ``startup``, ``env``)."""
+    c_before = run_c(n, c_reps) if with_c else {"skipped": "disabled"}
+    rows = python_rows(n, reps, c_before if "skipped" not in c_before else None, dtypes)
+    c = c_before
+    if with_c and "skipped" not in c_before:
+        c = _merge_c(c_before, run_c(n, c_reps))
+        # ratios against the best C time of both runs
+        for r in rows:
+            ref = {"C eval approx": c.get("eval_approx_ns"), "C eval exact": c.get("eval_exact_ns"),
+                   "C sample": c.get("sample_mis_ns")}.get(r.get("ref"))
+            if ref and "ns" in r:
+                r["ratio"] = r["ns"] / ref
+                if r["name"] in ("eon_approx", "eon") and r["kind"] == "evaluate":
+                    r["ok"] = r["ratio"] <= TARGET_EVAL_RATIO
+                if r["kind"] == "sample+eval" and r["name"] == "eon":
+                    r["ok"] = r["ratio"] <= TARGET_SAMPLE_RATIO
+    for r in rows:
+        if "f64_over_f32" in r:
+            r["f64_ok"] = r["f64_over_f32"] <= TARGET_F64_RATIO
+        if r.get("mem_extra_x") is not None:
+            r["mem_ok"] = r["mem_extra_x"] <= TARGET_MEM
+    result = {"n": n, "reps": reps, "c": c, "rows": rows, "env": environment()}
+    if with_startup:
+        result["startup"] = startup(cold=cold_start)
+    return result
+
+
+def _fmt(v, spec):
+    return "-" if v is None else format(v, spec)
+
+
+def format_table(result):
+    """The result as a plain-text table."""
+    c = result["c"]
+    lines = []
+    env = result["env"]
+    lines.append(f"openpbr-diffuse {env['openpbr_diffuse']}  numba {env['numba']}  numpy {env['numpy']}  "
+                 f"threads {env['threads']} ({env['threading_layer']})  cpu {env['cpu']}  n = {result['n']}")
+    if "skipped" in c:
+        lines.append(f"C yardstick: skipped ({c['skipped']})")
+    else:
+        lines.append(f"C yardstick ({c['command']}): eval approx {c['eval_approx_ns']:.2f} ns, "
+                     f"eval exact {c['eval_exact_ns']:.2f} ns, MIS sample + eval {c['sample_mis_ns']:.2f} ns")
+    head = f"{'call':<12} {'name':<18} {'dtype':<8} {'ns/call':>8} {'M/s':>8} {'xC':>6} {'f64/f32':>7} " \
+           f"{'mem':>5}  target"
+    lines += [head, "-" * len(head)]
+    for r in result["rows"]:
+        if "skipped" in r:
+            lines.append(f"{r['kind']:<12} {r['name']:<18} {r['dtype']:<8} skipped: {r['skipped']}")
+            continue
+        verdict = "" if r["target"] is None else f"{r['target']}: {'ok' if r['ok'] else 'MISSED'}"
+        if r.get("f64_ok") is False:
+            verdict += "  f64/f32 > 2: MISSED"
+        if r.get("mem_ok") is False:
+            verdict += "  memory > 3x: MISSED"
+        lines.append(f"{r['kind']:<12} {r['name']:<18} {r['dtype']:<8} {r['ns']:>8.2f} "
+                     f"{r['rate_per_s'] / 1e6:>8.1f} {_fmt(r['ratio'], '6.2f'):>6} "
+                     f"{_fmt(r.get('f64_over_f32'), '7.2f'):>7} {r['mem_extra_x']:>5.2f}  {verdict}")
+    s = result.get("startup")
+    if s:
+        w = s["warm"]
+        lines.append(f"import openpbr_diffuse: {w['import_s']:.3f} s (target < {TARGET_IMPORT_S:g} s: "
+                     f"{'ok' if w['import_ok'] else 'MISSED'}); first evaluate() in a fresh process, warm "
+                     f"cache: {w['first_call_s']:.3f} s (target < {TARGET_FIRST_CALL_S:g} s: "
+                     f"{'ok' if w['first_call_ok'] else 'MISSED'})")
+        if "cold" in s:
+            lines.append(f"first evaluate() with an empty numba cache (compiles): {s['cold']['first_call_s']:.1f} s "
+                         f"(import {s['cold']['import_s']:.2f} s)")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--n", type=int, default=None, help="batch size (default 10^6; 10^5 with --quick)")
+    p.add_argument("--reps", type=int, default=None, help="timed repetitions per call (best is kept)")
+    p.add_argument("--quick", action="store_true", help="small batch, few repetitions, no cold-start run")
+    p.add_argument("--json", metavar="PATH", help="also write the result as JSON")
+    p.add_argument("--no-c", action="store_true", help="skip the C yardstick")
+    p.add_argument("--no-startup", action="store_true", help="skip the fresh-process start-up timings")
+    p.add_argument("--dtype", choices=("float32", "float64", "both"), default="both")
+    a = p.parse_args(argv)
+    n = a.n or (100_000 if a.quick else 1_000_000)
+    reps = a.reps or (5 if a.quick else 15)
+    dtypes = (np.float32, np.float64) if a.dtype == "both" else (np.dtype(a.dtype).type,)
+    result = run_bench(n=n, reps=reps, c_reps=5 if a.quick else 20, dtypes=dtypes, with_c=not a.no_c,
+                       with_startup=not a.no_startup, cold_start=not a.quick)
+    print(format_table(result))
+    if a.json:
+        Path(a.json).write_text(json.dumps(result, indent=1, default=float) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
