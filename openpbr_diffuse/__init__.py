@@ -8,7 +8,9 @@ broadcast over leading axes with the colour channel axis last.
 from ._version import __version__
 from .albedo.tables import reference_albedo, reference_average_albedo
 from .models import COLOR_MODES, MODELS, average_albedo, directional_albedo, evaluate
+from .nodes import OpenPBRSurface, OrenNayarDiffuseBSDF
 from .sampling import STRATEGIES, pdf, sample, sample_rng
 
 __all__ = ["__version__", "MODELS", "COLOR_MODES", "evaluate", "directional_albedo", "average_albedo",
-           "reference_albedo", "reference_average_albedo", "STRATEGIES", "sample", "pdf", "sample_rng"]
+           "reference_albedo", "reference_average_albedo", "STRATEGIES", "sample", "pdf", "sample_rng",
+           "OrenNayarDiffuseBSDF", "OpenPBRSurface"]
