@@ -59,18 +59,37 @@ def as_float(name, value, dtype):
 _PARALLEL_MIN = 1 << 14
 _U = numba.uint64
 
+# The per-value predicates, written once: the check passes below use them, and so do the
+# batch kernels that fuse the checks into their own loop (``check=False`` below).
+_predicate = numba.njit(cache=True, error_model="numpy", forceinline=True)
+
+
+@_predicate
+def is_unit(x, y, z):
+    """|w|^2 within ``UNIT_TOL`` of 1, computed in float64; False for NaN or Inf."""
+    x, y, z = 1.0 * x, 1.0 * y, 1.0 * z
+    return abs(x * x + y * y + z * z - 1.0) <= UNIT_TOL  # NaN compares false
+
+
+@_predicate
+def is_within(x, lo, hi, lo_open, hi_open):
+    """x finite and in [lo, hi] (open ends on request); compares in the type of x, lo, hi.
+
+    Callers pass ``lo``, ``hi`` in the array's dtype, so that the comparisons are those of
+    NumPy (a float32 array against a Python float compares in float32).
+    """
+    above = x > lo if lo_open else x >= lo
+    below = x < hi if hi_open else x <= hi
+    return (abs(x) < np.inf) & above & below  # NaN fails every comparison
+
 
 @numba.njit(cache=True, parallel=True, error_model="numpy")
-def _count_not_unit(w, tol):
-    """Number of rows of a flat C-contiguous (3n,) array that are not unit vectors (or not finite)."""
+def _count_not_unit(w):
+    """Number of rows of a flat C-contiguous (3n,) array that are not finite unit vectors."""
     bad = 0
     for i in prange(w.shape[0] // 3):
         j = _U(i) * _U(3)
-        x = 1.0 * w[j]
-        y = 1.0 * w[j + _U(1)]
-        z = 1.0 * w[j + _U(2)]
-        n2 = x * x + y * y + z * z  # in float64 for both dtypes, as the error report below
-        bad += 0 if abs(n2 - 1.0) <= tol else 1  # NaN compares false: counted
+        bad += 0 if is_unit(w[j], w[j + _U(1)], w[j + _U(2)]) else 1
     return bad
 
 
@@ -78,13 +97,20 @@ def _norms2(flat):
     return np.einsum("ij,ij->i", flat, flat, dtype=np.float64)
 
 
-def directions(name, value, dtype):
-    """A (..., 3) array of finite unit vectors."""
+def directions(name, value, dtype, check=True):
+    """A (..., 3) array of finite unit vectors.
+
+    ``check=False`` checks type and shape only; the caller then owes the value check,
+    either by calling again with ``check=True`` or with ``is_unit`` fused into its own
+    loop (calling again to report when that fails).
+    """
     w = as_float(name, value, dtype)
     if w.ndim == 0 or w.shape[-1] != 3:
         raise ValueError(f"{name} must have shape (..., 3) (unit direction vectors), got shape {w.shape}")
+    if not check:
+        return w
     if w.size >= _PARALLEL_MIN and w.flags.c_contiguous:
-        ok = not _count_not_unit(w.reshape(-1), UNIT_TOL)
+        ok = not _count_not_unit(w.reshape(-1))
     else:
         ok = bool((np.abs(_norms2(w.reshape(-1, 3)) - 1.0) <= UNIT_TOL).all())
     if not ok:
@@ -100,23 +126,21 @@ def directions(name, value, dtype):
 
 @numba.njit(cache=True, parallel=True, error_model="numpy")
 def _count_outside(a, lo, hi, lo_open, hi_open):
-    """Number of values of a flat C-contiguous array that are not finite or not in the interval.
-
-    ``lo``, ``hi`` arrive in the array's dtype, so that the comparisons are those of NumPy
-    (a float32 array against a Python float compares in float32).
-    """
+    """Number of values of a flat C-contiguous array that fail ``is_within``."""
     bad = 0
     for i in prange(a.shape[0]):
-        x = a[i]
-        above = x > lo if lo_open else x >= lo
-        below = x < hi if hi_open else x <= hi
-        bad += 0 if (abs(x) < np.inf) & above & below else 1  # NaN fails every comparison
+        bad += 0 if is_within(a[i], lo, hi, lo_open, hi_open) else 1
     return bad
 
 
-def in_range(name, value, dtype, lo, hi, what="", lo_open=False, hi_open=False):
-    """An array of finite values in [lo, hi] (open ends on request)."""
+def in_range(name, value, dtype, lo, hi, what="", lo_open=False, hi_open=False, check=True):
+    """An array of finite values in [lo, hi] (open ends on request).
+
+    ``check=False``: type only; the value check is owed as for ``directions`` (``is_within``).
+    """
     a = as_float(name, value, dtype)
+    if not check:
+        return a
     if a.size >= _PARALLEL_MIN and a.flags.c_contiguous:
         t = a.dtype.type
         if not _count_outside(a.reshape(-1), t(lo), t(hi), lo_open, hi_open):
@@ -134,9 +158,12 @@ def in_range(name, value, dtype, lo, hi, what="", lo_open=False, hi_open=False):
     return a
 
 
-def rho_array(name, value, dtype):
-    """Colour / albedo with the channel axis last, values in [0, 1]; a scalar is grey (C = 1)."""
-    a = in_range(name, value, dtype, 0.0, 1.0, " (albedo per channel)")
+def rho_array(name, value, dtype, check=True):
+    """Colour / albedo with the channel axis last, values in [0, 1]; a scalar is grey (C = 1).
+
+    ``check=False``: type and shape only (see ``in_range``).
+    """
+    a = in_range(name, value, dtype, 0.0, 1.0, " (albedo per channel)", check=check)
     if a.ndim == 0:
         a = a.reshape(1)
     if a.shape[-1] == 0:

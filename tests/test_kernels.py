@@ -202,3 +202,20 @@ def test_bench_runs_and_reports_every_call():
     assert {("evaluate", m) for m in od.MODELS} <= names
     assert {("albedo", m) for m in od.MODELS} <= names
     assert "ns/call" in bench.format_table(res)
+
+
+def test_tiled_buffers_stay_below_the_output_size(rng):
+    """Grey output (C = 1) with one fixed wo, roughness and rho: the tiled rows are bounded."""
+    n = 100_000
+    wi = random_directions(rng, n)
+    args = (wi, np.array([0.0, 0.6, 0.8]), 0.5, 0.3)
+    od.evaluate("eon", *args)
+    tracemalloc.start()
+    try:
+        base = tracemalloc.get_traced_memory()[0]
+        out = od.evaluate("eon", *args)
+        peak = tracemalloc.get_traced_memory()[1] - base
+    finally:
+        tracemalloc.stop()
+    assert out.shape == (n, 1)
+    assert peak - out.nbytes <= 3 * out.nbytes

@@ -25,7 +25,19 @@ kernel = numba.njit(cache=True, fastmath=FASTMATH, error_model="numpy", forceinl
 PI = math.pi
 INV_PI = 1.0 / math.pi
 EPS = 1e-7  # the epsilon of Listing 1 (f_ms guards)
+
+#: Floor of the max(mu_i, mu_o) denominators (QON Eq. 1, FON Eq. 10, tan(beta) of full
+#: Oren-Nayar).  Directions as close to the horizon as a subnormal mu are valid input, but
+#: s / max(mu) overflows there (f = inf, or 0 * inf = NaN at zero roughness).  Below 1e-7
+#: f * mu_i is negligible, so the floor only keeps the result finite in float32 and float64.
+MU_FLOOR = 1e-7
 HALF_PI = 0.5 * math.pi
+
+
+@kernel
+def max_mu(mu_i, mu_o):
+    """max(mu_i, mu_o), floored at ``MU_FLOOR``: the denominator of QON's and FON's s/t."""
+    return max(max(mu_i, mu_o), MU_FLOOR)
 
 #: asin(y) = y + y^3 P(y^2) for 0 <= y <= 1/2: P is the degree-11 polynomial interpolating
 #: the Maclaurin series of (asin(sqrt z) - sqrt z) / z^(3/2) (evaluated in exact rational

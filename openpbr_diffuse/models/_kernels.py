@@ -10,6 +10,11 @@ run-time strides it does not, and the loop runs 4-10x slower.
 Rows are independent, so the loops are ``prange``; arithmetic is float64 for both input
 dtypes (loads are widened, stores rounded: float32 results are the float64 ones rounded).
 
+The value checks of ``_arrays`` (unit directions, parameter ranges, finiteness) run inside
+the same loop, through the same predicates (``is_unit``, ``is_within``): the inputs are
+read once instead of once more per argument.  A driver returns the number of failing
+rows; the public verbs then run the full checks, which raise with their usual message.
+
 Inputs whose rows are all the same (a scalar roughness, one rho for every row, a fixed
 direction) are tiled into a buffer of at most ``CHUNK`` rows and the driver is called
 chunk by chunk, so no input is ever expanded to the full batch.  Drivers are built on
@@ -21,6 +26,7 @@ import numba
 import numpy as np
 from numba import prange
 
+from .._arrays import is_unit, is_within
 from ._jit import FASTMATH, INV_PI, kernel
 from .eon import eon_albedo_terms, eon_average_terms, eon_terms, rho_ms
 from .fon import C2, G_fon, G_qon, fon_A, fon_terms
@@ -29,7 +35,7 @@ from .full_on import full_on_terms
 from .gotanda import gotanda_AB, gotanda_terms
 from .lambert import lambert_terms
 from .qon import QON_AVG_G, qon_AB, qon_terms
-from .registry import INFO, MIX_LINEAR, MIX_RHO2, MIX_RHO_MS
+from .registry import INFO, MIX_RHO2, MIX_RHO_MS
 from .van_ouwerkerk import van_ouwerkerk_terms
 
 LAMBERT, QON, QON_FOOTNOTE, QON_VO, QON_FUJII, FON, FULL_ON, GOTANDA, EON, EON_APPROX = (
@@ -94,16 +100,6 @@ def albedo_terms(model, mu, r, average):
 
 
 @kernel
-def mix_kind(model):
-    """The registry's MIX_* of a model id."""
-    if model == QON_FUJII or model == FULL_ON:
-        return MIX_RHO2
-    if model == EON or model == EON_APPROX:
-        return MIX_RHO_MS
-    return MIX_LINEAR
-
-
-@kernel
 def mix(kind, rho, g, h, avg):
     """rho g + m(rho) h for the model's rho dependence ``kind`` (registry MIX_*)."""
     if kind == MIX_RHO_MS:
@@ -132,8 +128,10 @@ compiled = numba.njit(parallel=True, cache=True, fastmath=FASTMATH, error_model=
 _U = numba.uint64   # unsigned row offsets: lets LLVM prove the accesses are affine
 _F = numba.float64
 _MIX = {info.id: info.mix for info in INFO.values()}
-#: Rows per driver call when an input is tiled (bounds the tiled buffers to ~3 MB).
+#: Rows per driver call when an input is tiled (bounds the tiled buffers to ~3 MB, and to
+#: the output's size when that is larger than MIN_CHUNK rows' worth).
 CHUNK = 1 << 16
+MIN_CHUNK = 1 << 12
 
 
 def _channels(C):
@@ -141,67 +139,104 @@ def _channels(C):
     return C if C in (1, 3) else 0
 
 
+@kernel
+def checked_rho(rho, c, ok):
+    """rho[c] widened to float64, and ``ok`` and-ed with its range check ([0, 1], finite)."""
+    p = _F(rho[c])
+    return p, ok & is_within(p, 0.0, 1.0, False, False)
+
+
 @functools.cache
 def eval_driver(model, C):
     """Parallel ``evaluate`` loop for one model id and channel count (see ``_channels``).
 
-    ``drive(tint, wi, wo, r, rho, out)``: wi, wo flat (N*3,), r (N,), rho (N*C,), out (N*C,).
+    ``drive(tint, rlo, rhi, wi, wo, r, rho, out) -> bad``: wi, wo flat (N*3,), r (N,),
+    rho (N*C,), out (N*C,); ``bad`` counts the rows whose inputs fail the ``_arrays``
+    checks (unit directions, roughness in [rlo, rhi], rho in [0, 1], all finite), which
+    are fused into the loop rather than run as separate passes over the inputs.
     """
     kind = _MIX[model]
     nc = _channels(C)
 
     @compiled
-    def drive(tint, wi, wo, r, rho, out):
+    def drive(tint, rlo, rhi, wi, wo, r, rho, out):
         n = r.shape[0]
+        bad = 0
         for i in prange(n):
             j = _U(i) * _U(3)
-            iz = _F(wi[j + _U(2)])
-            oz = _F(wo[j + _U(2)])
-            g, h, avg = lobe_terms(model, _F(wi[j]), _F(wi[j + _U(1)]), iz,
-                                   _F(wo[j]), _F(wo[j + _U(1)]), oz, _F(r[i]))
+            # float64 from here on; the range checks compare exactly as in the input dtype
+            # (rlo, rhi arrive rounded to it, and widening is exact)
+            ix, iy, iz = _F(wi[j]), _F(wi[j + _U(1)]), _F(wi[j + _U(2)])
+            ox, oy, oz = _F(wo[j]), _F(wo[j + _U(1)]), _F(wo[j + _U(2)])
+            ri = _F(r[i])
+            ok = is_unit(ix, iy, iz) & is_unit(ox, oy, oz) & is_within(ri, _F(rlo), _F(rhi), False, False)
+            g, h, avg = lobe_terms(model, ix, iy, iz, ox, oy, oz, ri)
             up = (iz > 0.0) & (oz > 0.0)  # f = 0 when either direction is below the horizon
             if nc == 3:
                 c = _U(i) * _U(3)
-                out[c] = shade(kind, tint, up, _F(rho[c]), g, h, avg)
-                out[c + _U(1)] = shade(kind, tint, up, _F(rho[c + _U(1)]), g, h, avg)
-                out[c + _U(2)] = shade(kind, tint, up, _F(rho[c + _U(2)]), g, h, avg)
+                p, ok = checked_rho(rho, c, ok)
+                out[c] = shade(kind, tint, up, p, g, h, avg)
+                p, ok = checked_rho(rho, c + _U(1), ok)
+                out[c + _U(1)] = shade(kind, tint, up, p, g, h, avg)
+                p, ok = checked_rho(rho, c + _U(2), ok)
+                out[c + _U(2)] = shade(kind, tint, up, p, g, h, avg)
             elif nc == 1:
-                out[i] = shade(kind, tint, up, _F(rho[i]), g, h, avg)
+                p, ok = checked_rho(rho, _U(i), ok)
+                out[i] = shade(kind, tint, up, p, g, h, avg)
             else:
                 m = rho.shape[0] // n
                 c = _U(i) * _U(m)
                 for k in range(m):
-                    out[c + _U(k)] = shade(kind, tint, up, _F(rho[c + _U(k)]), g, h, avg)
+                    p, ok = checked_rho(rho, c + _U(k), ok)
+                    out[c + _U(k)] = shade(kind, tint, up, p, g, h, avg)
+            bad += 0 if ok else 1
+        return bad
 
     return drive
 
 
 @functools.cache
 def albedo_driver(model, C, average):
-    """Parallel ``directional_albedo`` (or ``average_albedo``) loop; ``drive(tint, mu, r, rho, out)``.
+    """Parallel ``directional_albedo`` (or ``average_albedo``) loop.
 
-    E(mu) at mu = 0 is the limit mu -> 0; with ``average`` mu is not read.
+    ``drive(tint, rlo, rhi, mu, r, rho, out) -> bad`` with the input checks fused as in
+    ``eval_driver`` (mu in [0, 1]).  E(mu) at mu = 0 is the limit mu -> 0; with
+    ``average`` mu is neither read nor checked.
     """
     kind = _MIX[model]
-    nc = _channels(C)
+    nc = 0 if average else _channels(C)  # <E> is not a batch hot path: one variant per model
 
     @compiled
-    def drive(tint, mu, r, rho, out):
+    def drive(tint, rlo, rhi, mu, r, rho, out):
         n = r.shape[0]
+        bad = 0
         for i in prange(n):
-            eg, eh, avg = albedo_terms(model, _F(mu[i]), _F(r[i]), average)
+            ri = _F(r[i])
+            ok = is_within(ri, _F(rlo), _F(rhi), False, False)
+            m_i = 0.0
+            if not average:
+                m_i = _F(mu[i])
+                ok = ok & is_within(m_i, 0.0, 1.0, False, False)
+            eg, eh, avg = albedo_terms(model, m_i, ri, average)
             if nc == 3:
                 c = _U(i) * _U(3)
-                out[c] = shade(kind, tint, True, _F(rho[c]), eg, eh, avg)
-                out[c + _U(1)] = shade(kind, tint, True, _F(rho[c + _U(1)]), eg, eh, avg)
-                out[c + _U(2)] = shade(kind, tint, True, _F(rho[c + _U(2)]), eg, eh, avg)
+                p, ok = checked_rho(rho, c, ok)
+                out[c] = shade(kind, tint, True, p, eg, eh, avg)
+                p, ok = checked_rho(rho, c + _U(1), ok)
+                out[c + _U(1)] = shade(kind, tint, True, p, eg, eh, avg)
+                p, ok = checked_rho(rho, c + _U(2), ok)
+                out[c + _U(2)] = shade(kind, tint, True, p, eg, eh, avg)
             elif nc == 1:
-                out[i] = shade(kind, tint, True, _F(rho[i]), eg, eh, avg)
+                p, ok = checked_rho(rho, _U(i), ok)
+                out[i] = shade(kind, tint, True, p, eg, eh, avg)
             else:
                 m = rho.shape[0] // n
                 c = _U(i) * _U(m)
                 for k in range(m):
-                    out[c + _U(k)] = shade(kind, tint, True, _F(rho[c + _U(k)]), eg, eh, avg)
+                    p, ok = checked_rho(rho, c + _U(k), ok)
+                    out[c + _U(k)] = shade(kind, tint, True, p, eg, eh, avg)
+            bad += 0 if ok else 1
+        return bad
 
     return drive
 
@@ -229,46 +264,56 @@ def rows(a, lead, k=None):
 def launch(drive, head, inputs, n, out, C):
     """Run ``drive(*head, *buffers, out)`` over n rows; ``inputs`` = [(buffer, k, tiled)].
 
-    Tiled inputs are repeated to min(n, CHUNK) rows and the driver is called per chunk.
+    Tiled inputs are repeated to at most CHUNK rows and the driver is called per chunk.
+    Returns the drivers' total count of rows that failed the input checks.
     """
     if n == 0:
-        return
+        return 0
     if n == 1 or not any(t for _, _, t in inputs):  # every buffer already holds n rows
-        drive(*head, *(b for b, _, _ in inputs), out)
-        return
-    B = min(n, CHUNK)
+        return drive(*head, *(b for b, _, _ in inputs), out)
+    # rows per call: tiled buffers stay below the output's size (and below CHUNK rows)
+    B = min(n, CHUNK, max(MIN_CHUNK, n * C // sum(k for _, k, t in inputs if t)))
     reps = []
     for b, k, t in inputs:
         if t:
             b = np.tile(b, B)
             b.flags.writeable = False
         reps.append(b)
+    bad = 0
     for s in range(0, n, B):
         e = min(n, s + B)
         args = [b[:(e - s) * k] if t else b[s * k:e * k] for b, (_, k, t) in zip(reps, inputs)]
-        drive(*head, *args, out[s * C:e * C])
+        bad += drive(*head, *args, out[s * C:e * C])
+    return bad
 
 
-def evaluate_rows(model, tint, wi, wo, r, rho, lead, C, dtype):
-    """f for validated arrays broadcasting to ``lead``; returns the (prod(lead)*C,) output."""
+def evaluate_rows(model, tint, rlo, rhi, wi, wo, r, rho, lead, C, dtype):
+    """f for arrays broadcasting to ``lead`` (types and shapes checked, values not yet).
+
+    Returns the flat (prod(lead)*C,) output and the number of rows whose values fail the
+    ``_arrays`` checks (roughness in [rlo, rhi]); when that is not 0 the output is garbage
+    and the caller must raise (by running the full checks).
+    """
     n = int(np.prod(lead))
     out = np.empty(n * C, dtype=dtype)
     wi, twi = rows(wi, lead, 3)
     wo, two = rows(wo, lead, 3)
     r, tr = rows(r, lead)
     rho, trho = rows(rho, lead, C)
-    launch(eval_driver(model, C), (tint,), [(wi, 3, twi), (wo, 3, two), (r, 1, tr), (rho, C, trho)],
-           n, out, C)
-    return out
+    t = np.dtype(dtype).type
+    bad = launch(eval_driver(model, C), (tint, t(rlo), t(rhi)),
+                 [(wi, 3, twi), (wo, 3, two), (r, 1, tr), (rho, C, trho)], n, out, C)
+    return out, bad
 
 
-def albedo_rows(model, tint, average, mu, r, rho, lead, C, dtype):
-    """E(mu) (or <E>) for validated arrays broadcasting to ``lead``; flat (prod(lead)*C,) output."""
+def albedo_rows(model, tint, average, rlo, rhi, mu, r, rho, lead, C, dtype):
+    """E(mu) (or <E>) for arrays broadcasting to ``lead``; (flat output, failed rows) as ``evaluate_rows``."""
     n = int(np.prod(lead))
     out = np.empty(n * C, dtype=dtype)
     r, tr = rows(r, lead)
     mu, tmu = (r, tr) if average else rows(mu, lead)  # average: mu is not read
     rho, trho = rows(rho, lead, C)
-    launch(albedo_driver(model, C, average), (tint,), [(mu, 1, tmu), (r, 1, tr), (rho, C, trho)],
-           n, out, C)
-    return out
+    t = np.dtype(dtype).type
+    bad = launch(albedo_driver(model, C, average), (tint, t(rlo), t(rhi)),
+                 [(mu, 1, tmu), (r, 1, tr), (rho, C, trho)], n, out, C)
+    return out, bad

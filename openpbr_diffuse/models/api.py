@@ -5,10 +5,23 @@ from .. import _arrays as ar
 from .registry import COLOR_MODES, model_info
 
 
-def _roughness(info, roughness, dtype):
+def _roughness(info, roughness, dtype, check=True):
     unit = "radians (sigma)" if info.roughness_name == "sigma" else "(r, a weight)"
     return ar.in_range("roughness", roughness, dtype, 0.0, info.roughness_max,
-                       f" for model {info.name!r}, {unit}")
+                       f" for model {info.name!r}, {unit}", check=check)
+
+
+def _recheck(bad, size, checks):
+    """After a kernel with fused value checks: run the full checks to raise their message.
+
+    ``bad`` rows failed in the kernel (its output is then discarded); an empty batch ran
+    no kernel, so its (scalar) inputs are checked here.
+    """
+    if bad or not size:
+        for check in checks:
+            check()
+    if bad:  # the kernel and the checks use the same predicates: not reached
+        raise ValueError(f"{bad} rows failed the input checks")
 
 
 def _color_mode(color_mode):
@@ -56,15 +69,20 @@ def evaluate(model, wi, wo, roughness, rho=1.0, *, color_mode="reference"):
     info = model_info(model)
     tint = _color_mode(color_mode)
     dtype = ar.result_dtype(wi, wo, roughness, rho)
-    wi = ar.directions("wi", wi, dtype)
-    wo = ar.directions("wo", wo, dtype)
-    r = _roughness(info, roughness, dtype)
-    rho = ar.rho_array("rho", rho, dtype)
+    # types and shapes here; the value checks run inside the kernel's loop (one pass over
+    # the inputs instead of one per argument), and in full only if it reports a failure
+    wi = ar.directions("wi", wi, dtype, check=False)
+    wo = ar.directions("wo", wo, dtype, check=False)
+    r = _roughness(info, roughness, dtype, check=False)
+    rho = ar.rho_array("rho", rho, dtype, check=False)
     lead = ar.broadcast_leading(wi=wi.shape[:-1], wo=wo.shape[:-1], roughness=r.shape, rho=rho.shape[:-1])
     C = rho.shape[-1]
     from ._kernels import evaluate_rows
 
-    return evaluate_rows(info.id, tint, wi, wo, r, rho, lead, C, dtype).reshape(lead + (C,))
+    out, bad = evaluate_rows(info.id, tint, 0.0, info.roughness_max, wi, wo, r, rho, lead, C, dtype)
+    _recheck(bad, out.size, (lambda: ar.directions("wi", wi, dtype), lambda: ar.directions("wo", wo, dtype),
+                             lambda: _roughness(info, r, dtype), lambda: ar.rho_array("rho", rho, dtype)))
+    return out.reshape(lead + (C,))
 
 
 def _albedo(model, mu, roughness, rho, color_mode, average):
@@ -75,14 +93,18 @@ def _albedo(model, mu, roughness, rho, color_mode, average):
 
         return table_albedo(info.name, mu, roughness, rho, average=average, tint=tint)
     dtype = ar.result_dtype(roughness, rho) if average else ar.result_dtype(mu, roughness, rho)
-    mu = np.zeros((), dtype) if average else ar.in_range("mu", mu, dtype, 0.0, 1.0, " (cosine of the view angle)")
-    r = _roughness(info, roughness, dtype)
-    rho = ar.rho_array("rho", rho, dtype)
+    mu_what = " (cosine of the view angle)"
+    mu = np.zeros((), dtype) if average else ar.in_range("mu", mu, dtype, 0.0, 1.0, mu_what, check=False)
+    r = _roughness(info, roughness, dtype, check=False)
+    rho = ar.rho_array("rho", rho, dtype, check=False)
     lead = ar.broadcast_leading(mu=mu.shape, roughness=r.shape, rho=rho.shape[:-1])
     C = rho.shape[-1]
     from ._kernels import albedo_rows
 
-    return albedo_rows(info.id, tint, average, mu, r, rho, lead, C, dtype).reshape(lead + (C,))
+    out, bad = albedo_rows(info.id, tint, average, 0.0, info.roughness_max, mu, r, rho, lead, C, dtype)
+    _recheck(bad, out.size, (lambda: ar.in_range("mu", mu, dtype, 0.0, 1.0, mu_what),
+                             lambda: _roughness(info, r, dtype), lambda: ar.rho_array("rho", rho, dtype)))
+    return out.reshape(lead + (C,))
 
 
 def directional_albedo(model, mu, roughness, rho=1.0, *, color_mode="reference"):

@@ -9,7 +9,7 @@ JCGT 14(1), 2025, Section 2.2 (Eq. 10-15) and Listing 1.
 """
 import math
 
-from ._jit import INV_PI, PI, acos, kernel
+from ._jit import INV_PI, PI, acos, kernel, max_mu
 
 #: Eq. 11/15 constants.
 C1 = 0.5 - 2.0 / (3.0 * PI)
@@ -20,9 +20,9 @@ G1, G2, G3, G4 = 0.0571085289, 0.491881867, -0.332181442, 0.0714429953
 
 @kernel
 def s_over_t(mu_i, mu_o, s):
-    """The FON ratio s/t (Eq. 10): s / max(mu_i, mu_o) for s > 0, else s."""
+    """The FON ratio s/t (Eq. 10): s / max(mu_i, mu_o) for s > 0, else s (see ``max_mu``)."""
     if s > 0.0:
-        return s / max(mu_i, mu_o)
+        return s / max_mu(mu_i, mu_o)
     return s
 
 

@@ -15,11 +15,8 @@ grazing angles (albedo 1.0047 at rho = 1, sigma = 0.5, mu = 0.05).
 """
 import math
 
-from ._jit import INV_PI, PI, kernel
+from ._jit import INV_PI, PI, kernel, max_mu
 
-# tan(beta) = sin/cos with cos(beta) = max(mu_i, mu_o) floored here: below 1e-7 the product
-# f * mu is negligible and the floor keeps float32 finite (1/mu overflows for subnormal mu).
-_MU_FLOOR = 1e-7
 
 
 @kernel
@@ -36,7 +33,7 @@ def full_on_terms(mu_i, mu_o, s, sigma):
     beta = min(ti, to)
     sin_alpha = max(si, so)
     # beta = min(theta) <-> cos(beta) = max(mu); exact ratio rather than tan(acos(.)).
-    tan_beta = min(si, so) / max(max(mi, mo), _MU_FLOOR)
+    tan_beta = min(si, so) / max_mu(mi, mo)  # floored: see _jit.MU_FLOOR
     denom = si * so
     cos_dphi = 0.0
     if denom > 0.0:

@@ -3,7 +3,7 @@
 sigma is the slope angle in radians.  f = rho/pi (A + B max(0, s) / max(mu_i, mu_o)).
 The "footnote" variant uses 0.57 instead of 0.33 in A (Oren & Nayar's footnote).
 """
-from ._jit import INV_PI, PI, kernel
+from ._jit import INV_PI, PI, kernel, max_mu
 
 #: <G/pi> weighted by 2 mu: the constant of the QON average albedo (Eq. 9).
 QON_AVG_G = 2.0 / 3.0 - 64.0 / (45.0 * PI)
@@ -19,4 +19,4 @@ def qon_AB(sigma, a_const):
 @kernel
 def qon_terms(mu_i, mu_o, s, A, B):
     """f_QON / rho (Eq. 1): (A + B max(0, s) / max(mu_i, mu_o)) / pi."""
-    return (A + B * max(0.0, s) / max(mu_i, mu_o)) * INV_PI
+    return (A + B * max(0.0, s) / max_mu(mu_i, mu_o)) * INV_PI

@@ -7,7 +7,7 @@ cosines, in-plane projections normalised, cos(phi) saturated, and
 """
 import math
 
-from ._jit import INV_PI, kernel
+from ._jit import INV_PI, kernel, max_mu
 
 
 @kernel
@@ -25,4 +25,4 @@ def van_ouwerkerk_terms(lx, ly, lz, vx, vy, vz, sigma):
     cos_phi = 0.0
     if pl > 0.0 and pv > 0.0:  # at the normal the azimuth is undefined and sin_theta = 0
         cos_phi = min(max((lx * vx + ly * vy) / (pl * pv), 0.0), 1.0)
-    return (A + B * cos_phi * sin_theta / max(cl, cv)) * INV_PI
+    return (A + B * cos_phi * sin_theta / max_mu(cl, cv)) * INV_PI
