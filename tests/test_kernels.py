@@ -10,7 +10,7 @@ import pytest
 import openpbr_diffuse as od
 from conftest import random_directions, roughness_max
 from openpbr_diffuse import _arrays as ar
-from openpbr_diffuse.models import _kernels
+from openpbr_diffuse import _launch
 from openpbr_diffuse.models._jit import acos
 
 
@@ -63,7 +63,7 @@ def test_layouts_give_the_rowwise_result(model, rng):
 
 def test_tiled_inputs_across_chunks(rng):
     """More rows than one driver call takes: scalar roughness and a single rho are tiled per chunk."""
-    n = 2 * _kernels.CHUNK + 123
+    n = 2 * _launch.CHUNK + 123
     wi = random_directions(rng, n)
     wo = random_directions(rng, n)
     rho = np.array([0.2, 0.5, 0.9])

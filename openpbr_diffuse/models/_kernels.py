@@ -22,12 +22,12 @@ first use (``functools.cache``) and compiled lazily per dtype; numba caches them
 """
 import functools
 
-import numba
 import numpy as np
 from numba import prange
 
 from .._arrays import is_unit, is_within
-from ._jit import FASTMATH, INV_PI, kernel
+from .._launch import _F, _U, compiled, launch, rows
+from ._jit import INV_PI, kernel
 from .eon import eon_albedo_terms, eon_average_terms, eon_terms, rho_ms
 from .fon import C2, G_fon, G_qon, fon_A, fon_terms
 from .fujii import fujii_coeffs, fujii_terms
@@ -121,17 +121,7 @@ def shade(kind, tint, up, p, g, h, avg):
     return v if up else 0.0
 
 
-#: Batch drivers: parallel, cached; numpy's error model (x/0 gives inf, not an exception)
-#: so that rows below the horizon can be computed and then discarded without a branch.
-compiled = numba.njit(parallel=True, cache=True, fastmath=FASTMATH, error_model="numpy")
-
-_U = numba.uint64   # unsigned row offsets: lets LLVM prove the accesses are affine
-_F = numba.float64
 _MIX = {info.id: info.mix for info in INFO.values()}
-#: Rows per driver call when an input is tiled (bounds the tiled buffers to ~3 MB, and to
-#: the output's size when that is larger than MIN_CHUNK rows' worth).
-CHUNK = 1 << 16
-MIN_CHUNK = 1 << 12
 
 
 def _channels(C):
@@ -241,52 +231,6 @@ def albedo_driver(model, C, average):
     return drive
 
 
-def rows(a, lead, k=None):
-    """``a`` (leading shape broadcasting to ``lead``; trailing axis of length k, if any) as a flat buffer.
-
-    Returns ``(buffer, tiled)``: the C-contiguous (n*k,) data when ``a`` already has every
-    row (no copy); its single row with ``tiled`` True when all rows are equal; otherwise a
-    copy expanded to every row.  Buffers are read-only views so that each driver has one
-    signature per dtype whatever the caller's flags.
-    """
-    full, width = (lead, 1) if k is None else (lead + (k,), k)
-    if a.size == width:
-        buf, tiled = np.ascontiguousarray(a).reshape(-1), True
-    elif a.size == int(np.prod(full)) and a.flags.c_contiguous:  # same size: nothing to broadcast
-        buf, tiled = a.reshape(-1), False
-    else:
-        buf, tiled = np.ascontiguousarray(np.broadcast_to(a, full)).reshape(-1), False
-    buf = buf.view()
-    buf.flags.writeable = False
-    return buf, tiled
-
-
-def launch(drive, head, inputs, n, out, C):
-    """Run ``drive(*head, *buffers, out)`` over n rows; ``inputs`` = [(buffer, k, tiled)].
-
-    Tiled inputs are repeated to at most CHUNK rows and the driver is called per chunk.
-    Returns the drivers' total count of rows that failed the input checks.
-    """
-    if n == 0:
-        return 0
-    if n == 1 or not any(t for _, _, t in inputs):  # every buffer already holds n rows
-        return drive(*head, *(b for b, _, _ in inputs), out)
-    # rows per call: tiled buffers stay below the output's size (and below CHUNK rows)
-    B = min(n, CHUNK, max(MIN_CHUNK, n * C // sum(k for _, k, t in inputs if t)))
-    reps = []
-    for b, k, t in inputs:
-        if t:
-            b = np.tile(b, B)
-            b.flags.writeable = False
-        reps.append(b)
-    bad = 0
-    for s in range(0, n, B):
-        e = min(n, s + B)
-        args = [b[:(e - s) * k] if t else b[s * k:e * k] for b, (_, k, t) in zip(reps, inputs)]
-        bad += drive(*head, *args, out[s * C:e * C])
-    return bad
-
-
 def evaluate_rows(model, tint, rlo, rhi, wi, wo, r, rho, lead, C, dtype):
     """f for arrays broadcasting to ``lead`` (types and shapes checked, values not yet).
 
@@ -302,7 +246,7 @@ def evaluate_rows(model, tint, rlo, rhi, wi, wo, r, rho, lead, C, dtype):
     rho, trho = rows(rho, lead, C)
     t = np.dtype(dtype).type
     bad = launch(eval_driver(model, C), (tint, t(rlo), t(rhi)),
-                 [(wi, 3, twi), (wo, 3, two), (r, 1, tr), (rho, C, trho)], n, out, C)
+                 [(wi, 3, twi), (wo, 3, two), (r, 1, tr), (rho, C, trho)], [(out, C)], n)
     return out, bad
 
 
@@ -315,5 +259,5 @@ def albedo_rows(model, tint, average, rlo, rhi, mu, r, rho, lead, C, dtype):
     rho, trho = rows(rho, lead, C)
     t = np.dtype(dtype).type
     bad = launch(albedo_driver(model, C, average), (tint, t(rlo), t(rhi)),
-                 [(mu, 1, tmu), (r, 1, tr), (rho, C, trho)], n, out, C)
+                 [(mu, 1, tmu), (r, 1, tr), (rho, C, trho)], [(out, C)], n)
     return out, bad

@@ -1,8 +1,8 @@
 """Batch drivers: one parallel loop per verb (``sample``, ``pdf``), specialised per strategy.
 
 The formulas are the scalar functions of ``simple``, ``ltc`` and ``mis``, inlined here.
-As for the lobe models (``models/_kernels.py``, whose ``compiled``, ``rows`` and chunking
-conventions are reused), a driver is compiled for one strategy id, a compile-time
+As for the lobe models (``models/_kernels.py``; ``compiled``, ``rows`` and ``launch`` come
+from ``_launch``), a driver is compiled for one strategy id, a compile-time
 constant, over flat C-contiguous buffers; the scalar functions are branch-free (selects)
 and call no libm function, so LLVM vectorises the loop (AVX2/AVX-512).  Arithmetic is
 float64 for both dtypes (float32 results are the float64 ones rounded).
@@ -12,7 +12,7 @@ import functools
 import numpy as np
 from numba import prange
 
-from ..models._kernels import CHUNK, _F, _U, compiled, rows
+from .._launch import _F, _U, compiled, launch, rows
 from .ltc import clip_fraction, from_frame, ltc_coeffs, ltc_frame, ltc_pdf_local, ltc_sample_local, to_frame
 from .mis import eon_pdf, eon_sample
 from .registry import CLTC, COSINE, EON, LTC, LTC_NONNEG, UNIFORM
@@ -97,30 +97,6 @@ def pdf_driver(strategy):
     return drive
 
 
-def _launch(drive, inputs, outputs, n):
-    """Run ``drive(*inputs, *outputs)`` over n rows; inputs = [(buffer, k, tiled)], outputs = [(flat, k)].
-
-    As ``models._kernels.launch``, for several outputs: tiled inputs (one row for all) are
-    repeated to min(n, CHUNK) rows and the driver runs chunk by chunk.
-    """
-    if n == 0:
-        return
-    if not any(t for _, _, t in inputs):
-        drive(*(b for b, _, _ in inputs), *(o for o, _ in outputs))
-        return
-    B = min(n, CHUNK)
-    reps = []
-    for b, k, t in inputs:
-        if t:
-            b = np.tile(b, B)
-            b.flags.writeable = False
-        reps.append(b)
-    for s in range(0, n, B):
-        e = min(n, s + B)
-        args = [b[:(e - s) * k] if t else b[s * k:e * k] for b, (_, k, t) in zip(reps, inputs)]
-        drive(*args, *(o[s * k:e * k] for o, k in outputs))
-
-
 def sample_rows(strategy, wo, r, u, lead, dtype):
     """(wi, pdf) for validated arrays broadcasting to ``lead``, shapes lead + (3,) and lead."""
     n = int(np.prod(lead))
@@ -129,8 +105,8 @@ def sample_rows(strategy, wo, r, u, lead, dtype):
     wo, two = rows(wo, lead, 3)
     r, tr = rows(r, lead)
     u, tu = rows(u, lead, 2)
-    _launch(sample_driver(strategy), [(wo, 3, two), (r, 1, tr), (u, 2, tu)],
-            [(wi.reshape(-1), 3), (p.reshape(-1), 1)], n)
+    launch(sample_driver(strategy), (), [(wo, 3, two), (r, 1, tr), (u, 2, tu)],
+           [(wi.reshape(-1), 3), (p.reshape(-1), 1)], n)
     return wi, p
 
 
@@ -141,5 +117,5 @@ def pdf_rows(strategy, wo, wi, r, lead, dtype):
     wo, two = rows(wo, lead, 3)
     wi, twi = rows(wi, lead, 3)
     r, tr = rows(r, lead)
-    _launch(pdf_driver(strategy), [(wo, 3, two), (wi, 3, twi), (r, 1, tr)], [(out.reshape(-1), 1)], n)
+    launch(pdf_driver(strategy), (), [(wo, 3, two), (wi, 3, twi), (r, 1, tr)], [(out.reshape(-1), 1)], n)
     return out
