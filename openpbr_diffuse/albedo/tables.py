@@ -596,19 +596,32 @@ def table_albedo(name, mu, roughness, rho, average=False, tint=False):
     table = load_table(info.name)
     if average:
         lead = ar.broadcast_leading(roughness=r.shape, rho=rho.shape[:-1])
-        r64 = r.astype(np.float64)
-        e_g, e_h = table.average_terms(r64)
+        mu = r  # not read
     else:
         lead = ar.broadcast_leading(mu=mu.shape, roughness=r.shape, rho=rho.shape[:-1])
-        r64 = np.broadcast_to(r.astype(np.float64), np.broadcast_shapes(mu.shape, r.shape))
-        e_g, e_h = table.directional_terms(mu.astype(np.float64), r64)
-    e_g, e_h, r64 = e_g[..., None], e_h[..., None], np.asarray(r64)[..., None]
-    rho64 = rho.astype(np.float64)
-    if tint:
-        E = rho64 * (e_g + mix_weight(info.name, 1.0, r64) * e_h)
-    else:
-        E = rho64 * e_g + mix_weight(info.name, rho64, r64) * e_h
-    return np.ascontiguousarray(np.broadcast_to(E, lead + (rho.shape[-1],)), dtype=dtype)
+    C = rho.shape[-1]
+    out = np.empty(lead + (C,), dtype=dtype)
+    flat_out = out.reshape(-1, C)
+    mu, r, rho = ar.flat(mu, lead), ar.flat(r, lead), ar.flat(rho, lead, C)
+    # in chunks: the float64 interpolation temporaries stay a fixed size (speed issue:
+    # peak extra memory <= 3x the output)
+    for s in range(0, flat_out.shape[0], _CHUNK):
+        e = s + _CHUNK
+        r64 = r[s:e].astype(np.float64)
+        if average:
+            e_g, e_h = table.average_terms(r64)
+        else:
+            e_g, e_h = table.directional_terms(mu[s:e].astype(np.float64), r64)
+        e_g, e_h, r64 = e_g[:, None], e_h[:, None], r64[:, None]
+        rho64 = rho[s:e].astype(np.float64)
+        if tint:
+            flat_out[s:e] = rho64 * (e_g + mix_weight(info.name, 1.0, r64) * e_h)
+        else:
+            flat_out[s:e] = rho64 * e_g + mix_weight(info.name, rho64, r64) * e_h
+    return out
+
+
+_CHUNK = 1 << 14
 
 
 def _color_mode(color_mode):
