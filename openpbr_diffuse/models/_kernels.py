@@ -136,6 +136,33 @@ def checked_rho(rho, c, ok):
     return p, ok & is_within(p, 0.0, 1.0, False, False)
 
 
+@kernel
+def write_row(nc, kind, tint, up, rho, out, i, n, g, h, avg, ok):
+    """Shade row i into ``out`` for every channel; returns ``ok`` and-ed with the rho checks.
+
+    ``nc`` is the driver's compile-time channel variant (3, 1, or 0 = any count), so after
+    inlining only one branch is left and the RGB and grey loops are straight-line code.
+    """
+    if nc == 3:
+        c = _U(i) * _U(3)
+        p, ok = checked_rho(rho, c, ok)
+        out[c] = shade(kind, tint, up, p, g, h, avg)
+        p, ok = checked_rho(rho, c + _U(1), ok)
+        out[c + _U(1)] = shade(kind, tint, up, p, g, h, avg)
+        p, ok = checked_rho(rho, c + _U(2), ok)
+        out[c + _U(2)] = shade(kind, tint, up, p, g, h, avg)
+    elif nc == 1:
+        p, ok = checked_rho(rho, _U(i), ok)
+        out[i] = shade(kind, tint, up, p, g, h, avg)
+    else:
+        m = rho.shape[0] // n
+        c = _U(i) * _U(m)
+        for k in range(m):
+            p, ok = checked_rho(rho, c + _U(k), ok)
+            out[c + _U(k)] = shade(kind, tint, up, p, g, h, avg)
+    return ok
+
+
 @functools.cache
 def eval_driver(model, C):
     """Parallel ``evaluate`` loop for one model id and channel count (see ``_channels``).
@@ -162,23 +189,7 @@ def eval_driver(model, C):
             ok = is_unit(ix, iy, iz) & is_unit(ox, oy, oz) & is_within(ri, _F(rlo), _F(rhi), False, False)
             g, h, avg = lobe_terms(model, ix, iy, iz, ox, oy, oz, ri)
             up = (iz > 0.0) & (oz > 0.0)  # f = 0 when either direction is below the horizon
-            if nc == 3:
-                c = _U(i) * _U(3)
-                p, ok = checked_rho(rho, c, ok)
-                out[c] = shade(kind, tint, up, p, g, h, avg)
-                p, ok = checked_rho(rho, c + _U(1), ok)
-                out[c + _U(1)] = shade(kind, tint, up, p, g, h, avg)
-                p, ok = checked_rho(rho, c + _U(2), ok)
-                out[c + _U(2)] = shade(kind, tint, up, p, g, h, avg)
-            elif nc == 1:
-                p, ok = checked_rho(rho, _U(i), ok)
-                out[i] = shade(kind, tint, up, p, g, h, avg)
-            else:
-                m = rho.shape[0] // n
-                c = _U(i) * _U(m)
-                for k in range(m):
-                    p, ok = checked_rho(rho, c + _U(k), ok)
-                    out[c + _U(k)] = shade(kind, tint, up, p, g, h, avg)
+            ok = write_row(nc, kind, tint, up, rho, out, i, n, g, h, avg, ok)
             bad += 0 if ok else 1
         return bad
 
@@ -208,23 +219,7 @@ def albedo_driver(model, C, average):
                 m_i = _F(mu[i])
                 ok = ok & is_within(m_i, 0.0, 1.0, False, False)
             eg, eh, avg = albedo_terms(model, m_i, ri, average)
-            if nc == 3:
-                c = _U(i) * _U(3)
-                p, ok = checked_rho(rho, c, ok)
-                out[c] = shade(kind, tint, True, p, eg, eh, avg)
-                p, ok = checked_rho(rho, c + _U(1), ok)
-                out[c + _U(1)] = shade(kind, tint, True, p, eg, eh, avg)
-                p, ok = checked_rho(rho, c + _U(2), ok)
-                out[c + _U(2)] = shade(kind, tint, True, p, eg, eh, avg)
-            elif nc == 1:
-                p, ok = checked_rho(rho, _U(i), ok)
-                out[i] = shade(kind, tint, True, p, eg, eh, avg)
-            else:
-                m = rho.shape[0] // n
-                c = _U(i) * _U(m)
-                for k in range(m):
-                    p, ok = checked_rho(rho, c + _U(k), ok)
-                    out[c + _U(k)] = shade(kind, tint, True, p, eg, eh, avg)
+            ok = write_row(nc, kind, tint, True, rho, out, i, n, eg, eh, avg, ok)
             bad += 0 if ok else 1
         return bad
 
