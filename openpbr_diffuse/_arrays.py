@@ -158,6 +158,27 @@ def in_range(name, value, dtype, lo, hi, what="", lo_open=False, hi_open=False, 
     return a
 
 
+def model_roughness(info, roughness, dtype, check=True):
+    """Roughness in a lobe model's domain: sigma in [0, max] radians or r in [0, max].
+
+    ``info`` is the model's ``models.registry.ModelInfo`` (name, roughness_name, roughness_max).
+    """
+    unit = "radians (sigma)" if info.roughness_name == "sigma" else "(r, a weight)"
+    return in_range("roughness", roughness, dtype, 0.0, info.roughness_max,
+                    f" for model {info.name!r}, {unit}", check=check)
+
+
+#: EON colour modes: "reference" (chromatic rho inside rho_ms) and "white_tint".
+COLOR_MODES = ("reference", "white_tint")
+
+
+def white_tint(color_mode):
+    """True for ``color_mode="white_tint"``, False for "reference"; ValueError otherwise."""
+    if color_mode not in COLOR_MODES:
+        raise ValueError(f"color_mode must be one of {', '.join(COLOR_MODES)}; got {color_mode!r}")
+    return color_mode == "white_tint"
+
+
 def rho_array(name, value, dtype, check=True):
     """Colour / albedo with the channel axis last, values in [0, 1]; a scalar is grey (C = 1).
 

@@ -177,14 +177,7 @@ def test_peak_extra_memory_is_below_three_outputs(case, rng):
     r = rng.uniform(0.0, 1.0, n).astype(np.float32)
     rho = rng.uniform(0.0, 1.0, (n, 3)).astype(np.float32)
     args = (wi, wo, r, rho) if case == "dense" else (wi, wo[0], np.float32(0.5), rho[0])
-    od.evaluate("eon", *args)  # compile outside the measurement
-    tracemalloc.start()
-    try:
-        base = tracemalloc.get_traced_memory()[0]
-        out = od.evaluate("eon", *args)
-        peak = tracemalloc.get_traced_memory()[1] - base
-    finally:
-        tracemalloc.stop()
+    out, peak = _eval_peak_memory(args)
     assert peak - out.nbytes <= 3 * out.nbytes
 
 
@@ -209,7 +202,14 @@ def test_tiled_buffers_stay_below_the_output_size(rng):
     n = 100_000
     wi = random_directions(rng, n)
     args = (wi, np.array([0.0, 0.6, 0.8]), 0.5, 0.3)
-    od.evaluate("eon", *args)
+    out, peak = _eval_peak_memory(args)
+    assert out.shape == (n, 1)
+    assert peak - out.nbytes <= 3 * out.nbytes
+
+
+def _eval_peak_memory(args):
+    """(result, peak traced bytes) of ``evaluate("eon", *args)``, compiled beforehand."""
+    od.evaluate("eon", *args)  # compile outside the measurement
     tracemalloc.start()
     try:
         base = tracemalloc.get_traced_memory()[0]
@@ -217,5 +217,4 @@ def test_tiled_buffers_stay_below_the_output_size(rng):
         peak = tracemalloc.get_traced_memory()[1] - base
     finally:
         tracemalloc.stop()
-    assert out.shape == (n, 1)
-    assert peak - out.nbytes <= 3 * out.nbytes
+    return out, peak

@@ -560,10 +560,8 @@ def held_out_error(model, table_values, n=ORDER, rows=None, columns=None):
 # --------------------------------------------------------------------------- queries
 
 
-def _roughness(info, roughness, dtype):
-    unit = "radians (sigma)" if info.roughness_name == "sigma" else "(r, a weight)"
-    return ar.in_range("roughness", roughness, dtype, 0.0, info.roughness_max,
-                       f" for model {info.name!r}, {unit}")
+#: rows per interpolation pass of ``table_albedo`` (bounds its float64 temporaries)
+_CHUNK = 1 << 14
 
 
 def table_albedo(name, mu, roughness, rho, average=False, tint=False):
@@ -591,7 +589,7 @@ def table_albedo(name, mu, roughness, rho, average=False, tint=False):
     dtype = ar.result_dtype(roughness, rho) if average else ar.result_dtype(mu, roughness, rho)
     if not average:
         mu = ar.in_range("mu", mu, dtype, 0.0, 1.0, " (cosine of the view angle)")
-    r = _roughness(info, roughness, dtype)
+    r = ar.model_roughness(info, roughness, dtype)
     rho = ar.rho_array("rho", rho, dtype)
     table = load_table(info.name)
     if average:
@@ -620,16 +618,6 @@ def table_albedo(name, mu, roughness, rho, average=False, tint=False):
             flat_out[s:e] = rho64 * e_g + mix_weight(info.name, rho64, r64) * e_h
     return out
 
-
-_CHUNK = 1 << 14
-
-
-def _color_mode(color_mode):
-    from ..models.registry import COLOR_MODES
-
-    if color_mode not in COLOR_MODES:
-        raise ValueError(f"color_mode must be one of {', '.join(COLOR_MODES)}; got {color_mode!r}")
-    return color_mode == "white_tint"
 
 
 def reference_albedo(model, mu, roughness, rho=1.0, *, color_mode="reference"):
@@ -663,7 +651,7 @@ def reference_albedo(model, mu, roughness, rho=1.0, *, color_mode="reference"):
     >>> round(float(reference_albedo("full_on", 0.05, 0.5)[0]), 4)  # fullON gains energy
     1.0047
     """
-    return table_albedo(model, mu, roughness, rho, average=False, tint=_color_mode(color_mode))
+    return table_albedo(model, mu, roughness, rho, average=False, tint=ar.white_tint(color_mode))
 
 
 def reference_average_albedo(model, roughness, rho=1.0, *, color_mode="reference"):
@@ -677,7 +665,7 @@ def reference_average_albedo(model, roughness, rho=1.0, *, color_mode="reference
     >>> round(float(reference_average_albedo("fon", 1.0)[0]), 6)   # EON paper: <E_F>(1)
     0.832811
     """
-    return table_albedo(model, None, roughness, rho, average=True, tint=_color_mode(color_mode))
+    return table_albedo(model, None, roughness, rho, average=True, tint=ar.white_tint(color_mode))
 
 
 def write_table(model, res, interpolation_error, directory=None):

@@ -2,13 +2,7 @@
 import numpy as np
 
 from .. import _arrays as ar
-from .registry import COLOR_MODES, model_info
-
-
-def _roughness(info, roughness, dtype, check=True):
-    unit = "radians (sigma)" if info.roughness_name == "sigma" else "(r, a weight)"
-    return ar.in_range("roughness", roughness, dtype, 0.0, info.roughness_max,
-                       f" for model {info.name!r}, {unit}", check=check)
+from .registry import model_info
 
 
 def _recheck(bad, size, checks):
@@ -22,12 +16,6 @@ def _recheck(bad, size, checks):
             check()
     if bad:  # the kernel and the checks use the same predicates: not reached
         raise ValueError(f"{bad} rows failed the input checks")
-
-
-def _color_mode(color_mode):
-    if color_mode not in COLOR_MODES:
-        raise ValueError(f"color_mode must be one of {', '.join(COLOR_MODES)}; got {color_mode!r}")
-    return color_mode == "white_tint"
 
 
 def evaluate(model, wi, wo, roughness, rho=1.0, *, color_mode="reference"):
@@ -67,13 +55,13 @@ def evaluate(model, wi, wo, roughness, rho=1.0, *, color_mode="reference"):
     1.0
     """
     info = model_info(model)
-    tint = _color_mode(color_mode)
+    tint = ar.white_tint(color_mode)
     dtype = ar.result_dtype(wi, wo, roughness, rho)
     # types and shapes here; the value checks run inside the kernel's loop (one pass over
     # the inputs instead of one per argument), and in full only if it reports a failure
     wi = ar.directions("wi", wi, dtype, check=False)
     wo = ar.directions("wo", wo, dtype, check=False)
-    r = _roughness(info, roughness, dtype, check=False)
+    r = ar.model_roughness(info, roughness, dtype, check=False)
     rho = ar.rho_array("rho", rho, dtype, check=False)
     lead = ar.broadcast_leading(wi=wi.shape[:-1], wo=wo.shape[:-1], roughness=r.shape, rho=rho.shape[:-1])
     C = rho.shape[-1]
@@ -81,13 +69,13 @@ def evaluate(model, wi, wo, roughness, rho=1.0, *, color_mode="reference"):
 
     out, bad = evaluate_rows(info.id, tint, 0.0, info.roughness_max, wi, wo, r, rho, lead, C, dtype)
     _recheck(bad, out.size, (lambda: ar.directions("wi", wi, dtype), lambda: ar.directions("wo", wo, dtype),
-                             lambda: _roughness(info, r, dtype), lambda: ar.rho_array("rho", rho, dtype)))
+                             lambda: ar.model_roughness(info, r, dtype), lambda: ar.rho_array("rho", rho, dtype)))
     return out.reshape(lead + (C,))
 
 
 def _albedo(model, mu, roughness, rho, color_mode, average):
     info = model_info(model)
-    tint = _color_mode(color_mode)
+    tint = ar.white_tint(color_mode)
     if not info.closed_form_albedo:
         from ..albedo.tables import table_albedo
 
@@ -95,7 +83,7 @@ def _albedo(model, mu, roughness, rho, color_mode, average):
     dtype = ar.result_dtype(roughness, rho) if average else ar.result_dtype(mu, roughness, rho)
     mu_what = " (cosine of the view angle)"
     mu = np.zeros((), dtype) if average else ar.in_range("mu", mu, dtype, 0.0, 1.0, mu_what, check=False)
-    r = _roughness(info, roughness, dtype, check=False)
+    r = ar.model_roughness(info, roughness, dtype, check=False)
     rho = ar.rho_array("rho", rho, dtype, check=False)
     lead = ar.broadcast_leading(mu=mu.shape, roughness=r.shape, rho=rho.shape[:-1])
     C = rho.shape[-1]
@@ -103,7 +91,7 @@ def _albedo(model, mu, roughness, rho, color_mode, average):
 
     out, bad = albedo_rows(info.id, tint, average, 0.0, info.roughness_max, mu, r, rho, lead, C, dtype)
     _recheck(bad, out.size, (lambda: ar.in_range("mu", mu, dtype, 0.0, 1.0, mu_what),
-                             lambda: _roughness(info, r, dtype), lambda: ar.rho_array("rho", rho, dtype)))
+                             lambda: ar.model_roughness(info, r, dtype), lambda: ar.rho_array("rho", rho, dtype)))
     return out.reshape(lead + (C,))
 
 

@@ -11,6 +11,8 @@ so an albedo table of g and h at rho = 1 gives the albedo at any rho exactly.
 import math
 from dataclasses import dataclass
 
+from .._arrays import COLOR_MODES  # noqa: F401  (public name, defined with its check)
+
 MIX_LINEAR, MIX_RHO2, MIX_RHO_MS = 0, 1, 2
 
 
@@ -46,7 +48,6 @@ INFO = {m[0]: ModelInfo(m[0], i, *m[1:]) for i, m in enumerate(_MODELS)}
 #: The public tuple of model names.
 MODELS = tuple(INFO)
 
-COLOR_MODES = ("reference", "white_tint")
 
 
 def model_info(model):
