@@ -1,0 +1,104 @@
+"""The data a report section produces: checks, tables, figures and notes.
+
+A section module (``openpbr_diffuse.report.sections.<key>``) defines ``TITLE`` (str) and
+``build(ctx: Context) -> SectionResult``.  It computes its numbers with the library, writes
+its images into ``ctx.image_dir`` (file names prefixed with the section key) and returns
+plain data; the runner turns that into ``report.json`` and ``index.html`` (escaping every
+string), so a section never writes HTML itself.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+
+@dataclass
+class Check:
+    """One pass/fail check: ``measured`` compared with ``threshold``.
+
+    ``comparison`` says how: ``"<="`` (measured must not exceed threshold, e.g. an error),
+    ``">="`` (e.g. a variance ratio), or ``"=="`` with the tolerance in ``threshold``
+    against ``expected``.  ``reference`` is the provenance of what was compared against
+    (e.g. "Gauss-Legendre quadrature of evaluate, order 16", "data/albedo_eon.csv",
+    "paper Table 1").
+    """
+
+    name: str
+    measured: float
+    threshold: float
+    comparison: str = "<="
+    reference: str = ""
+    expected: float | None = None
+    unit: str = ""
+    detail: str = ""
+    section: str = ""
+
+    @property
+    def passed(self) -> bool:
+        m = self.measured
+        if m is None or (isinstance(m, float) and math.isnan(m)):
+            return False
+        if self.comparison == "<=":
+            return m <= self.threshold
+        if self.comparison == ">=":
+            return m >= self.threshold
+        if self.comparison == "==":
+            return abs(m - self.expected) <= self.threshold
+        raise ValueError(f"comparison must be '<=', '>=' or '==', got {self.comparison!r}")
+
+    def to_dict(self) -> dict[str, Any]:
+        d = asdict(self)
+        d["passed"] = self.passed
+        return d
+
+
+@dataclass
+class Table:
+    """A table shown in the page and stored in the JSON (cells: str, int or float)."""
+
+    caption: str
+    columns: list[str]
+    rows: list[list[Any]]
+
+
+@dataclass
+class Figure:
+    """An image written by the section into ``ctx.image_dir`` (``file`` is its name there)."""
+
+    file: str
+    caption: str
+
+
+@dataclass
+class SectionResult:
+    """What a section returns; ``notes`` are plain-text paragraphs (escaped when shown)."""
+
+    key: str
+    title: str
+    checks: list[Check] = field(default_factory=list)
+    tables: list[Table] = field(default_factory=list)
+    figures: list[Figure] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+
+    def __post_init__(self):
+        for c in self.checks:
+            c.section = c.section or self.key
+
+
+@dataclass
+class Context:
+    """What a section gets: where to put images, the material files, and the run mode.
+
+    ``paths``: the material files (USD / MaterialX) the user gave, or the bundled
+    ``materials/``; ``quick``: smaller grids for a fast run; ``progress(message)``: call
+    it between long steps (the runner shows a progress bar).
+    """
+
+    image_dir: Path
+    paths: list[Path] = field(default_factory=list)
+    quick: bool = False
+    progress: Callable[[str], None] = lambda message: None
+    extra: dict[str, Any] = field(default_factory=dict)
