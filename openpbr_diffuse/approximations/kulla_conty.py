@@ -95,7 +95,8 @@ def exact_rho_factor(rho, average_albedo):
 
     rho = ar.rho_array("rho", rho, np.float64)
     avg = ar.in_range("average_albedo", average_albedo, np.float64, 0.0, 1.0, " (<E>)", lo_open=True)
-    return rho_ms(rho, np.asarray(avg)[..., None])
+    rho_b, avg_b = np.broadcast_arrays(rho, np.asarray(avg)[..., None])
+    return rho_ms(np.ascontiguousarray(rho_b), np.ascontiguousarray(avg_b))
 
 
 def _factor(kind, rho, avg):
