@@ -52,7 +52,7 @@ def _row(id, approximation, equation, approximates, reference, domain, metric, e
 
 
 def _fmt(**kw):
-    return ", ".join(f"{k}={v:.4g}" for k, v in kw.items())
+    return ", ".join(f"{k}={v:.12g}" for k, v in kw.items())
 
 
 # --------------------------------------------------------------------------- grids
@@ -60,7 +60,7 @@ def _fmt(**kw):
 
 def brdf_grid(quick=False):
     """Directions (mu_i, mu_o, phi) on Gauss-Legendre nodes and sigma values; arrays and wi, wo."""
-    n_mu, n_phi, n_sig = (8, 12, 7) if quick else (12, 24, 13)
+    n_mu, n_phi, n_sig = (8, 12, 7) if quick else (16, 32, 17)
     x, _ = np.polynomial.legendre.leggauss(n_mu)
     mu = 0.5 * (x + 1.0)
     xp, _ = np.polynomial.legendre.leggauss(n_phi)
@@ -325,6 +325,7 @@ def rectangles(k=12, seed=1414):
 
 def grade_kc_ltc(quick=False):
     a = np.linspace(0.05, 1.0, 6 if quick else 20)
+    a = np.union1d(a, [0.25])
     sig = kc.sigma_of_alpha(a)
     rects = rectangles(4 if quick else 12)
     exact = np.stack([kc.polygon_integral_exact("qon", q, sig, n=24 if quick else 48) for q in rects])  # (k, A)
@@ -346,6 +347,11 @@ def grade_kc_ltc(quick=False):
              "int_P (1 - E(mu)) mu dw of QON, sigma = alpha pi/2", "Gauss-Legendre on the rectangle (48 x 48)",
              "alpha in [0.05, 1], 12 seeded rectangles above the horizon",
              "|mag int_P D_LTC - exact| / (pi - E_avg)", (mag * ltc - exact) / total, where),
+        _row("kc_ltc_rect_rough", "LTC (m33, magnitude fits), alpha >= 0.25", "post Pt. 2 (area lights)",
+             "int_P (1 - E(mu)) mu dw of QON, sigma = alpha pi/2", "Gauss-Legendre on the rectangle (48 x 48)",
+             "alpha in [0.25, 1] (perceptual roughness >= 0.5), 12 seeded rectangles",
+             "|mag int_P D_LTC - exact| / (pi - E_avg)", ((mag * ltc - exact) / total)[:, a >= 0.25],
+             lambda idx: _fmt(rect=idx[0], alpha=a[a >= 0.25][idx[1]])),
         _row("kc_ltc_rect_shape", "LTC shape only (m33 fit, exact magnitude)", "post Pt. 2 (area lights)",
              "int_P (1 - E(mu)) mu dw of QON, sigma = alpha pi/2", "Gauss-Legendre on the rectangle (48 x 48)",
              "alpha in [0.05, 1], 12 seeded rectangles above the horizon",
