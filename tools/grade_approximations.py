@@ -47,8 +47,8 @@ def to_csv(rows, quick, seconds):
     w.writeheader()
     for r in rows:
         d = r.to_dict()
-        d["max_error"] = f"{d['max_error']:.6e}"
-        d["rms_error"] = f"{d['rms_error']:.6e}"
+        d["max_error"] = f"{d['max_error']:.8e}"
+        d["rms_error"] = f"{d['rms_error']:.8e}"
         w.writerow(d)
     return buf.getvalue()
 
