@@ -21,6 +21,8 @@ from . import sh
 HALF_PI = 0.5 * math.pi
 #: rho used when comparing BRDFs with fullON (Gotanda's Fig. 6 plots rho = 0.9).
 RHO_FULL = 0.9
+#: EON Listing 1's guard of 1 - <E_F> (eps = 1e-7) in the post's pi - E_avg units.
+EON_GUARD = math.pi * 1e-7
 
 
 @dataclass
@@ -205,7 +207,7 @@ def grade_kc_vs_eon(quick=False):
     axes, wi, wo, SG, MI = brdf_grid(True if quick else False)
     r = SG / HALF_PI
     rho = np.array([0.9, 0.5, 0.2])
-    f_kc = kc.compensated("fon", wi, wo, r, rho, factor="exact")
+    f_kc = kc.compensated("fon", wi, wo, r, rho, factor="exact", guard=EON_GUARD)
     f_eon = evaluate("eon", wi, wo, r, rho)
     err = (f_kc - f_eon) * math.pi * MI[..., None]
     mi, mo, ph, sg = axes
@@ -242,7 +244,7 @@ def grade_kc_factor(quick=False):
 
 
 def alpha_grid(quick=False):
-    return np.linspace(0.0, 1.0, 21 if quick else 101)
+    return np.linspace(0.0, 1.0, 21 if quick else 401)
 
 
 def grade_kc_zh(quick=False):

@@ -129,7 +129,7 @@ def view_term(model, mu_o, roughness):
     return (1.0 - E) / np.maximum(VIEW_GUARD, math.pi - average_term(model, roughness))
 
 
-def ms_lobe(model, wi, wo, roughness, rho=1.0, *, factor="tau"):
+def ms_lobe(model, wi, wo, roughness, rho=1.0, *, factor="tau", guard=VIEW_GUARD):
     """The multiple-scattering lobe f_ms = F(rho) (1 - E(mu_o)) (1 - E(mu_i)) / (pi - E_avg).
 
     Kulla-Conty 2017 / the post's ``MSBRDF``, with E and E_avg of ``model`` from the project's
@@ -145,6 +145,10 @@ def ms_lobe(model, wi, wo, roughness, rho=1.0, *, factor="tau"):
     rho : array_like, shape (..., C)
     factor : {"tau", "exact", "none"}
         F(rho): the post's tau fit, the lobe's own series (``exact_rho_factor``), or 1.
+    guard : float
+        Denominator floor max(guard, pi - E_avg): the listing's 0.001 by default (it makes the
+        lobe lose energy where pi - E_avg < 0.001, QON sigma < 0.04, FON r < 0.001; the loss
+        is below 1e-3 (1 - E(mu_o)) there); EON's Listing 1 uses pi * 1e-7.
 
     Returns
     -------
@@ -172,7 +176,7 @@ def ms_lobe(model, wi, wo, roughness, rho=1.0, *, factor="tau"):
     avg = average_term(model, r)
     F = _factor(factor, rho, avg / math.pi)
     up = (wi[..., 2] > 0.0) & (wo[..., 2] > 0.0)
-    h = np.where(up, (1.0 - Eo) * (1.0 - Ei) / np.maximum(VIEW_GUARD, math.pi - avg), 0.0)
+    h = np.where(up, (1.0 - Eo) * (1.0 - Ei) / np.maximum(guard, math.pi - avg), 0.0)
     return np.broadcast_to(h, lead)[..., None] * F
 
 
@@ -184,12 +188,12 @@ def _table_E(model, mu, r):
     return E[inv.reshape(-1)].reshape(mu.shape)
 
 
-def compensated(model, wi, wo, roughness, rho=1.0, *, factor="tau", color_mode="reference"):
+def compensated(model, wi, wo, roughness, rho=1.0, *, factor="tau", guard=VIEW_GUARD, color_mode="reference"):
     """f = f_ss + f_ms: the single-scattering lobe (``od.evaluate``) plus ``ms_lobe``."""
     from ..models import evaluate
 
     return evaluate(model, wi, wo, roughness, rho, color_mode=color_mode) + ms_lobe(
-        model, wi, wo, roughness, rho, factor=factor)
+        model, wi, wo, roughness, rho, factor=factor, guard=guard)
 
 
 def compensated_albedo(model, mu, roughness, rho=1.0, *, factor="tau"):
