@@ -172,3 +172,25 @@ def test_vectorised_shapes():
     assert gt.dc_scale_eq27(mu, sig).shape == (5, 3)
     wi = np.tile([0.0, 0.6, 0.8], (4, 1, 1))
     assert gt.simplified_qon(wi, [0.0, 0.0, 1.0], np.zeros((4, 1)), [0.5, 0.5, 0.5]).shape == (4, 1, 3)
+
+
+def test_seed_errata_eq11_eq17_eq18(dirs):
+    """Evidence for the errata of the extraction: Eq. 18 needs E.L - (N.E)(N.L) (printed '+'),
+    Eq. 17's right side is E.L (printed cos(theta_r - theta_i)), and Eq. 11's root needs
+    (1 - Max^2), not (1 - Max)^2."""
+    wi, wo, sig = dirs
+    wi, wo = wi[:500], wo[:500]
+    NL, NE, EL = wi[:, 2], wo[:, 2], np.sum(wi * wo, axis=1)
+    pi_, po = wi[:, :2], wo[:, :2]
+    cos_dphi = np.sum(pi_ * po, 1) / np.linalg.norm(pi_, axis=1) / np.linalg.norm(po, axis=1)
+    root = np.sqrt((1 - NE ** 2) * (1 - NL ** 2))
+    assert np.allclose((EL - NE * NL) / root, cos_dphi, atol=1e-9)                  # corrected Eq. 18
+    assert np.abs((EL + NE * NL) / root - cos_dphi).max() > 0.5                     # as printed
+    th_r, th_i = np.arccos(NE), np.arccos(NL)
+    lhs17 = NE * NL + np.sin(th_r) * np.sin(th_i) * cos_dphi
+    assert np.allclose(lhs17, EL, atol=1e-12)                                        # law of cosines
+    assert np.abs(lhs17 - np.cos(th_r - th_i)).max() > 0.5                           # Eq. 17 as printed
+    mx, mn = np.maximum(NL, NE), np.minimum(NL, NE)
+    sin_a_tan_b = np.sin(np.maximum(th_r, th_i)) * np.tan(np.minimum(th_r, th_i))
+    assert np.allclose(np.sqrt((1 - mx ** 2) * (1 - mn ** 2)) / mx, sin_a_tan_b, rtol=1e-9)
+    assert np.abs(np.sqrt((1 - mx) ** 2 * (1 - mn ** 2)) / mx - sin_a_tan_b).max() > 0.1

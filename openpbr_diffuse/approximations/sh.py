@@ -217,9 +217,51 @@ def lobe_transfer(model, mu_o, roughness, rho=1.0, *, n=24, color_mode="referenc
             f = models.evaluate(model, wi, wo, r, rr, color_mode=color_mode)
         else:
             f = brdf(wi, np.broadcast_to(wo, wi.shape), r, rr)
-        g = f * (weight * wi[..., 2])[..., None]
-        out[s:e] = np.einsum("ntpk,ntpc->nkc", basis(wi), g)
+        out[s:e] = _project_rows(np.ascontiguousarray(wi.reshape(len(wi), -1, 3)),
+                                 np.ascontiguousarray((weight * wi[..., 2]).reshape(len(wi), -1)),
+                                 np.ascontiguousarray(np.asarray(f, np.float64).reshape(len(wi), -1, C)))
     return out.reshape(lead + (9, C))
+
+
+def _project_kernel():
+    import numba
+
+    @numba.njit(cache=True, fastmath=True)
+    def project(wi, weight, f):
+        """sum_q Y_k(wi_q) weight_q f_qc per row: the hot loop of ``lobe_transfer``."""
+        N, Q, C = f.shape
+        out = np.zeros((N, 9, C))
+        for n in range(N):
+            for q in range(Q):
+                x, y, z = wi[n, q, 0], wi[n, q, 1], wi[n, q, 2]
+                w = weight[n, q]
+                y0, y1, y2, y3 = C0 * w, C1 * y * w, C1 * z * w, C1 * x * w
+                y4, y5, y6 = C2 * x * y * w, C2 * y * z * w, C3 * (3.0 * z * z - 1.0) * w
+                y7, y8 = C2 * x * z * w, 0.5 * C2 * (x * x - y * y) * w
+                for c in range(C):
+                    v = f[n, q, c]
+                    out[n, 0, c] += y0 * v
+                    out[n, 1, c] += y1 * v
+                    out[n, 2, c] += y2 * v
+                    out[n, 3, c] += y3 * v
+                    out[n, 4, c] += y4 * v
+                    out[n, 5, c] += y5 * v
+                    out[n, 6, c] += y6 * v
+                    out[n, 7, c] += y7 * v
+                    out[n, 8, c] += y8 * v
+        return out
+    return project
+
+
+_PROJECT = None
+
+
+def _project_rows(wi, weight, f):
+    """Compiled (numba) weighted SH projection; compiled on first use and cached on disk."""
+    global _PROJECT
+    if _PROJECT is None:
+        _PROJECT = _project_kernel()
+    return _PROJECT(wi, weight, f)
 
 
 #: Fixed directions for exact SH rotation by least squares (64 Fibonacci points).
