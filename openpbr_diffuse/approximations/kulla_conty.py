@@ -366,32 +366,37 @@ def ltc_polygon_integral(corners, m33):
 
 
 def polygon_integral_exact(model, corners, roughness, *, n=48):
-    """Brute force: int_P (1 - E(mu)) mu dw over a planar quadrilateral, Gauss-Legendre on its area.
+    """Brute force: int_P (1 - E(mu)) mu dw over planar parallelograms, Gauss-Legendre on their area.
 
     Parameters
     ----------
-    corners : array_like, shape (4, 3)
-        A parallelogram's corners in order (the post's rectangle lights), above the horizon.
+    corners : array_like, shape (..., 4, 3)
+        Parallelogram corners in order (the post's rectangle lights), above the horizon.
     roughness : array_like, shape (R,)
         Roughness values (in the model's domain).
+    n : int
+        Gauss-Legendre nodes per side.
 
     Returns
     -------
-    ndarray, shape (R,)
+    ndarray, shape (...) + (R,)
     """
     c = _check_corners(corners)
-    if c.shape != (4, 3):
-        raise ValueError(f"corners must have shape (4, 3) (a parallelogram), got {c.shape}")
+    if c.shape[-2:] != (4, 3):
+        raise ValueError(f"corners must have shape (..., 4, 3) (parallelograms), got {c.shape}")
+    if not isinstance(n, int) or n < 2:
+        raise ValueError(f"n must be an integer >= 2, got {n!r}")
     x, w = sh._gauss(n)
-    e1, e2 = c[1] - c[0], c[3] - c[0]
-    p = c[0] + x[:, None, None] * e1 + x[None, :, None] * e2         # (n, n, 3)
+    c0 = c[..., 0, None, None, :]
+    e1, e2 = c[..., 1, :] - c[..., 0, :], c[..., 3, :] - c[..., 0, :]
+    p = c0 + x[:, None, None] * e1[..., None, None, :] + x[None, :, None] * e2[..., None, None, :]   # (..., n, n, 3)
     d = np.linalg.norm(p, axis=-1)
     wdir = p / d[..., None]
     normal = np.cross(e1, e2)
-    area = np.linalg.norm(normal)
-    cos_l = np.abs(wdir @ (normal / area))
-    dw = np.outer(w, w) * area * cos_l / (d * d)
+    area = np.linalg.norm(normal, axis=-1)
+    cos_l = np.abs(np.einsum("...abk,...k->...ab", wdir, normal / area[..., None]))
+    dw = np.outer(w, w) * area[..., None, None] * cos_l / (d * d)
     mu = wdir[..., 2]
     r = np.atleast_1d(np.asarray(roughness, dtype=np.float64))
-    E = single_scattering_albedo(model, mu.reshape(-1)[:, None], r[None, :])   # (n*n, R)
-    return np.einsum("q,qr->r", (dw * mu).reshape(-1), 1.0 - E)
+    E = single_scattering_albedo(model, mu.reshape(-1)[:, None], r[None, :]).reshape(mu.shape + r.shape)
+    return np.einsum("...ab,...abr->...r", dw * mu, 1.0 - E)

@@ -71,7 +71,7 @@ def basis(w):
 
 def zonal_basis(mu):
     """Y_00, Y_10, Y_20 at cos(theta) = mu; shape (..., 3)."""
-    mu = np.asarray(mu, dtype=np.float64)
+    mu = ar.in_range("mu", mu, np.float64, -1.0, 1.0, " (cosine to the lobe axis)")
     return np.stack([np.full_like(mu, C0), C1 * mu, C3 * (3.0 * mu * mu - 1.0)], axis=-1)
 
 
@@ -117,6 +117,10 @@ def zh_project(h, n=64):
     >>> bool(np.allclose(zh * ZH_ROTATION, LAMBERT_BAND_SCALE))
     True
     """
+    if not callable(h):
+        raise TypeError(f"h must be a callable of mu, got {type(h).__name__}")
+    if not isinstance(n, int) or n < 2:
+        raise ValueError(f"n must be an integer >= 2 (Gauss-Legendre nodes), got {n!r}")
     mu, w = _gauss(n)
     v = np.asarray(h(mu), dtype=np.float64)
     Y = zonal_basis(mu)  # (n, 3)
