@@ -147,7 +147,7 @@ def ms_lobe(model, wi, wo, roughness, rho=1.0, *, factor="tau", guard=VIEW_GUARD
         F(rho): the post's tau fit, the lobe's own series (``exact_rho_factor``), or 1.
     guard : float
         Denominator floor max(guard, pi - E_avg): the listing's 0.001 by default (it makes the
-        lobe lose energy where pi - E_avg < 0.001, QON sigma < 0.04, FON r < 0.001; the loss
+        lobe lose energy where pi - E_avg < 0.001, QON sigma < 0.027, FON r < 0.0015; the loss
         is below 1e-3 (1 - E(mu_o)) there); EON's Listing 1 uses pi * 1e-7.
 
     Returns
