@@ -226,3 +226,11 @@ def test_colour_shift_of_both():
 def test_bad_input_names_the_argument(call, name):
     with pytest.raises(ValueError, match=name):
         call()
+
+
+def test_ms_lobe_negative_where_qon_albedo_exceeds_one():
+    """QON's E(0) = A + B/2 > 1 for small sigma, so 1 - E < 0 and f_ms < 0 at grazing pairs."""
+    g = np.array([math.sqrt(1 - 0.01 ** 2), 0.0, 0.01])
+    assert od.directional_albedo("qon", 0.01, 0.2)[0] > 1.0
+    assert kc.ms_lobe("qon", g, g, 0.2)[0] < 0.0
+    assert kc.ms_lobe("qon", [0, 0, 1.0], [0, 0, 1.0], 0.2)[0] > 0.0

@@ -148,11 +148,17 @@ def ms_lobe(model, wi, wo, roughness, rho=1.0, *, factor="tau", guard=VIEW_GUARD
     guard : float
         Denominator floor max(guard, pi - E_avg): the listing's 0.001 by default (it makes the
         lobe lose energy where pi - E_avg < 0.001, QON sigma < 0.027, FON r < 0.0015; the loss
-        is below 1e-3 (1 - E(mu_o)) there); EON's Listing 1 uses pi * 1e-7.
+        is at most |1 - E(mu_o)| < 0.02 there); EON's Listing 1 uses pi * 1e-7.
 
     Returns
     -------
     ndarray, shape broadcast(...) + (C,)
+
+    Notes
+    -----
+    Where the single-scattering albedo exceeds 1 (QON at grazing view for small sigma: up to
+    1.0152) the factor 1 - E is negative and so is f_ms for those directions; the white
+    furnace still holds (the integral of (1 - E) mu over H+ is pi - E_avg).
 
     Examples
     --------
