@@ -260,6 +260,16 @@ def grade_kc_zh(quick=False):
                              "Gauss-Legendre (64) of the QON reference table", "alpha in [0, 1]",
                              "|fit - exact|", fit[:, l] - exact[:, l],
                              lambda idx: _fmt(alpha=a[idx[0]]), note))
+    exact = kc.zh_exact(kc.GGX, a)
+    for form, tag in (("code", ""), ("text", "_text")):
+        fit = kc.zh_fit_ggx(a, form=form)
+        for l in range(3):
+            rows.append(_row(f"kc_ggx_zh_E{l}{tag}", f"ZH fit E{l}(beta), GGX ({form} form)",
+                             "post Pt. 2 SH fits", f"E_{l} of the GGX (F = 1) MS lobe, alpha = GGX alpha",
+                             "Gauss-Legendre (64) of the GGX albedo table (nodes.specular_albedo, E1)",
+                             "alpha in [0, 1]", "|fit - exact|", fit[:, l] - exact[:, l],
+                             lambda idx: _fmt(alpha=a[idx[0]]),
+                             "GGX table accuracy <= 6e-4 (3e-3 for alpha < 0.04)"))
     return rows
 
 
@@ -358,6 +368,24 @@ def grade_kc_ltc(quick=False):
              "int_P (1 - E(mu)) mu dw of QON, sigma = alpha pi/2", "Gauss-Legendre on the rectangle (48 x 48)",
              "alpha in [0.05, 1], 12 seeded rectangles above the horizon",
              "|(pi - E_avg) int_P D_LTC - exact| / (pi - E_avg)", (total * ltc - exact) / total, where),
+    ]
+    # GGX (F = 1): magnitude and rectangles for alpha >= 0.25
+    ag = a[a >= 0.25]
+    exact_g = np.stack([kc.polygon_integral_exact(kc.GGX, q, ag, n=24 if quick else 48) for q in rects])
+    ltc_g = np.stack([kc.ltc_polygon_integral(np.broadcast_to(q, (len(ag), 4, 3)), kc.ltc_m33_fit(ag, "ggx"))
+                      for q in rects])
+    total_g = math.pi - kc.average_term(kc.GGX, ag)
+    rows += [
+        _row("kc_ggx_ltc_magnitude", "LTC magnitude fit mag(beta), GGX", "post Pt. 2 (area lights)",
+             "int (1 - E(mu)) mu dw = pi - E_avg of GGX (F = 1), alpha = GGX alpha", "GGX albedo table",
+             "alpha in [0, 1]", "|mag - (pi - E_avg)|",
+             kc.ltc_magnitude_fit(a_all, "ggx") - (math.pi - kc.average_term(kc.GGX, a_all)),
+             lambda idx: _fmt(alpha=a_all[idx[0]])),
+        _row("kc_ggx_ltc_rect_rough", "LTC (m33, magnitude fits), GGX, alpha >= 0.25", "post Pt. 2 (area lights)",
+             "int_P (1 - E(mu)) mu dw of GGX (F = 1)", "Gauss-Legendre on the rectangle (48 x 48)",
+             "alpha in [0.25, 1], 12 seeded rectangles", "|mag int_P D_LTC - exact| / (pi - E_avg)",
+             (kc.ltc_magnitude_fit(ag, "ggx") * ltc_g - exact_g) / total_g,
+             lambda idx: _fmt(rect=idx[0], alpha=ag[idx[1]])),
     ]
     return rows
 

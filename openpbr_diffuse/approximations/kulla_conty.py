@@ -46,6 +46,16 @@ ZH_FIT_OREN_NAYAR = np.array([
     [-0.0919559140506979, 1.467037714315657, -1.673544888379740, 0.607800523815945],
     [-0.1136684128860008, 1.901273744271233, -2.322322430339633, 0.909815621695672],
     [-0.0412482175221291, 1.093354950053632, -1.417191923789875, 0.581084435989362]])
+# The post's fits for GGX (coefficients of beta, beta^3, beta^5 as coded; beta, beta^2, beta^3 as printed).
+ZH_FIT_GGX = np.array([
+    [-0.01792303243636725, 1.0561278339405598, -0.4865495717038784],
+    [-0.06127443169094851, 1.3380225947779523, -0.6195823982255909],
+    [-0.10732852337149004, 0.8686198207608287, -0.3980009298364805]])
+GGX_M33 = (21.342911007109528, 93.01620773161568, 0.4814723396401988, 143.39682026031764, 15.2)
+GGX_MAG = (0.09791431592022058, -1.4272852958071647, 7.768226052923069, -4.475643330561517)
+#: Pseudo-model name of the GGX lobe with F = 1 (table ``nodes.specular_albedo.ggx_albedo``),
+#: roughness = GGX alpha in [0, 1] (beta = sqrt(alpha) = OpenPBR specular_roughness).
+GGX = "ggx"
 # LTC fits for Oren-Nayar, polynomials in beta (m33 rational quadratic, magnitude cubic).
 LTC_M33_NUM = (0.005048402287040277, -0.014928238738260345, 0.027930492034822143)
 LTC_M33_DEN = (0.008420878564907999, -0.022349996757079705, 0.034343673853208634)
@@ -109,15 +119,43 @@ def _factor(kind, rho, avg):
     raise ValueError(f"factor must be one of {', '.join(FACTORS)}; got {kind!r}")
 
 
+def _roughness(model, roughness):
+    """Roughness checked in ``model``'s domain (GGX: alpha in [0, 1])."""
+    if model == GGX:
+        return ar.in_range("roughness", roughness, np.float64, 0.0, 1.0, " for 'ggx' (GGX alpha)")
+    from ..models.registry import model_info
+
+    return ar.model_roughness(model_info(model), roughness, np.float64)
+
+
 def single_scattering_albedo(model, mu, roughness):
-    """E(mu) of ``model`` at rho = 1 from the reference tables (``od.reference_albedo``)."""
+    """E(mu) of ``model`` at rho = 1 from the reference tables (``od.reference_albedo``).
+
+    ``model="ggx"``: the GGX lobe with F = 1 (height-correlated Smith), from the specular
+    tables of ``nodes.specular_albedo`` (E1 at specular_roughness = sqrt(alpha)).
+    """
+    if model == GGX:
+        from ..nodes.specular_albedo import ggx_albedo
+
+        mu = ar.in_range("mu", mu, np.float64, 0.0, 1.0, " (cosine of the view angle)")
+        return ggx_albedo(mu, np.sqrt(_roughness(model, roughness)))
     from ..albedo.tables import reference_albedo
 
     return reference_albedo(model, mu, roughness, 1.0)[..., 0]
 
 
 def average_term(model, roughness):
-    """E_avg = pi <E> of ``model`` at rho = 1 (the post's convention), from the reference tables."""
+    """E_avg = pi <E> of ``model`` at rho = 1 (the post's convention), from the reference tables.
+
+    ``model="ggx"``: 2 pi int E mu dmu by Gauss-Legendre (96 nodes in theta) of the GGX table.
+    """
+    if model == GGX:
+        r = _roughness(model, roughness)
+        x, w = np.polynomial.legendre.leggauss(96)
+        th = 0.25 * math.pi * (x + 1.0)
+        wt = 0.25 * math.pi * w * np.sin(th) * np.cos(th)
+        E = single_scattering_albedo(GGX, np.cos(th), r[..., None])
+        return 2.0 * math.pi * np.sum(wt * E, axis=-1)
     from ..albedo.tables import reference_average_albedo
 
     return math.pi * reference_average_albedo(model, roughness, 1.0)[..., 0]
@@ -157,7 +195,8 @@ def ms_lobe(model, wi, wo, roughness, rho=1.0, *, factor="tau", guard=VIEW_GUARD
     Notes
     -----
     Where the single-scattering albedo exceeds 1 (QON at grazing view for small sigma: up to
-    1.0152) the factor 1 - E is negative and so is f_ms for those directions; the white
+    1.0152) the factor 1 - E is negative, and f_ms < 0 when one direction is grazing and the
+    other steep; the white
     furnace still holds (the integral of (1 - E) mu over H+ is pi - E_avg).
 
     Examples
@@ -170,9 +209,7 @@ def ms_lobe(model, wi, wo, roughness, rho=1.0, *, factor="tau", guard=VIEW_GUARD
     wi = ar.directions("wi", wi, np.float64)
     wo = ar.directions("wo", wo, np.float64)
     rho = ar.rho_array("rho", rho, np.float64)
-    from ..models.registry import model_info
-
-    r = ar.model_roughness(model_info(model), roughness, np.float64)
+    r = _roughness(model, roughness)
     lead = ar.broadcast_leading(wi=wi.shape[:-1], wo=wo.shape[:-1], roughness=r.shape, rho=rho.shape[:-1])
     mu_i = np.clip(wi[..., 2], 0.0, 1.0)
     mu_o = np.clip(wo[..., 2], 0.0, 1.0)
@@ -232,9 +269,7 @@ def zh_exact(model, roughness, *, n=64):
     -------
     ndarray, shape (..., 3)
     """
-    from ..models.registry import model_info
-
-    r = ar.model_roughness(model_info(model), roughness, np.float64)
+    r = _roughness(model, roughness)
     rf = r.reshape(-1)
 
     def h(mu):
@@ -268,6 +303,23 @@ def zh_fit_oren_nayar(alpha, *, form="code"):
     else:
         raise ValueError(f"form must be 'code' or 'text'; got {form!r}")
     return np.clip(powers @ ZH_FIT_OREN_NAYAR.T, 0.0, 1.0)
+
+
+def zh_fit_ggx(alpha, *, form="code"):
+    """The post's fits E0, E1, E2 for GGX, clamped to [0, 1] as its listing does.
+
+    ``form="code"``: beta (c0 + c1 alpha + c2 alpha^2) as its HLSL evaluates them;
+    ``form="text"``: c0 beta + c1 beta^2 + c2 beta^3 as printed.  beta = sqrt(alpha).
+    """
+    a = _alpha(alpha)
+    b = np.sqrt(a)
+    if form == "code":
+        powers = np.stack([b, b * a, b * a * a], axis=-1)
+    elif form == "text":
+        powers = np.stack([b, b ** 2, b ** 3], axis=-1)
+    else:
+        raise ValueError(f"form must be 'code' or 'text'; got {form!r}")
+    return np.clip(powers @ ZH_FIT_GGX.T, 0.0, 1.0)
 
 
 def sh_response(model, env, normal, mu_o, roughness, rho=1.0, *, zh=None, factor="tau", clamp=True):
@@ -310,20 +362,32 @@ def sh_response(model, env, normal, mu_o, roughness, rho=1.0, *, zh=None, factor
 # --------------------------------------------------------------------------- area lights (LTC)
 
 
-def ltc_m33_fit(alpha):
-    """The post's m33(beta) for Oren-Nayar: (a0 + a1 beta + a2 beta^2) / (b0 + b1 beta + b2 beta^2)."""
+def ltc_m33_fit(alpha, lobe="oren_nayar"):
+    """The post's m33(beta): Oren-Nayar (a0 + a1 beta + a2 beta^2) / (b0 + b1 beta + b2 beta^2);
+    ``lobe="ggx"``: min(15.2, (a0 + a1 beta^2) / (b0 + b1 beta^2))."""
     b = np.sqrt(_alpha(alpha))
+    if lobe == "ggx":
+        a0, a1, b0, b1, cap = GGX_M33
+        return np.minimum(cap, (a0 + a1 * b * b) / (b0 + b1 * b * b))
+    if lobe != "oren_nayar":
+        raise ValueError(f"lobe must be 'oren_nayar' or 'ggx'; got {lobe!r}")
     n0, n1, n2 = LTC_M33_NUM
     d0, d1, d2 = LTC_M33_DEN
     return (n0 + b * (n1 + b * n2)) / (d0 + b * (d1 + b * d2))
 
 
-def ltc_magnitude_fit(alpha):
-    """The post's magnitude(beta) for Oren-Nayar: max(0, c0 + c1 beta + c2 beta^2 + c3 beta^3).
+def ltc_magnitude_fit(alpha, lobe="oren_nayar"):
+    """The post's magnitude(beta): Oren-Nayar max(0, c0 + c1 beta + c2 beta^2 + c3 beta^3);
+    ``lobe="ggx"``: c1 beta + c2 beta^2 + c3 beta^3 + c4 beta^4.
 
     Approximates int (1 - E(mu)) mu dw = pi - E_avg (the LTC integrates to 1).
     """
     b = np.sqrt(_alpha(alpha))
+    if lobe == "ggx":
+        c1, c2, c3, c4 = GGX_MAG
+        return b * (c1 + b * (c2 + b * (c3 + b * c4)))
+    if lobe != "oren_nayar":
+        raise ValueError(f"lobe must be 'oren_nayar' or 'ggx'; got {lobe!r}")
     c0, c1, c2, c3 = LTC_MAG
     return np.maximum(0.0, c0 + b * (c1 + b * (c2 + b * c3)))
 
