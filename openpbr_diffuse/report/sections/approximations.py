@@ -33,7 +33,8 @@ ERRATA = [
     ("Gotanda Eq. 23-25", "2.22222", "1/0.45 = 2.2222...; relative 1e-6 in B (table row gotanda_eq23_vs_qon)"),
     ("post, SH fits E0-E2", "polynomials c0 b + c1 b^2 + c2 b^3 + c3 b^4 in beta = sqrt(alpha)",
      "the post's own HLSL evaluates beta (c0 + c1 alpha + c2 alpha^2 + c3 alpha^3) = c0 b + c1 b^3 + c2 b^5 + c3 b^7; "
-     "only that reading fits the exact ZH (max 0.0073 vs 0.084 for the printed one); the same holds for its GGX fits"),
+     "only that reading fits the exact ZH (max 0.0073 vs 0.084 for the printed one); the same holds for its GGX fits "
+     "(0.029 as coded vs 0.115 as printed)"),
     ("post, Oren-Nayar roughness", "alpha in [0, 1] (not stated how it maps to sigma)",
      "the fits match QON only with sigma = alpha pi/2 (its BRDF_OrenNayar takes sigma in [0, pi/2]); with sigma = alpha "
      "the E0 fit is off by > 0.05"),
