@@ -120,11 +120,11 @@ def shininess_qon(wi, wo, shininess, rho=1.0):
     Parameters
     ----------
     shininess : array_like, shape (...)
-        Blinn-Phong exponent (> 0; sigma = sqrt(2/shi) <= pi/2 needs shi >= 8/pi^2).
+        Blinn-Phong exponent, > 0 (sigma = sqrt(2/shi); sigma <= pi/2 for shi >= 8/pi^2).
     """
-    sigma = sigma_from_shininess(shininess)
-    lead, mu_i, mu_o, el, _, rho = _dirs_sigma_rho(wi, wo, np.minimum(sigma, SIGMA_MAX), rho)
     shi = np.asarray(shininess, dtype=np.float64)
+    sigma = sigma_from_shininess(shi)          # checks shininess > 0 (any value is valid here)
+    lead, mu_i, mu_o, el, _, rho = _dirs_sigma_rho(wi, wo, np.zeros_like(sigma), rho)
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.minimum(1.0, mu_i / mu_o) / mu_i
     value = 1.0 - 1.0 / (2.0 + 0.33 * shi) + np.maximum(0.0, el - mu_o * mu_i) * ratio / (2.22222 + 0.1 * shi)
