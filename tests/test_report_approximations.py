@@ -1,0 +1,22 @@
+"""The report section "approximations": builds from the shipped table, its live checks pass."""
+import pytest
+
+from openpbr_diffuse.report.model import Context, SectionResult
+from openpbr_diffuse.report.sections import approximations
+
+
+def test_section_builds_and_passes(tmp_path):
+    res = approximations.build(Context(image_dir=tmp_path, quick=True))
+    assert isinstance(res, SectionResult) and res.key == "approximations"
+    assert res.checks and all(c.passed for c in res.checks), [c.name for c in res.checks if not c.passed]
+    table = res.tables[0]
+    assert len(table.rows) >= 25
+    assert {"Gotanda Eq. 27 (DC scale)", "ZH fit E0(beta), Oren-Nayar (code form)"} <= {r[0] for r in table.rows}
+
+
+@pytest.mark.slow
+def test_section_plots(tmp_path):
+    res = approximations.build(Context(image_dir=tmp_path))
+    assert len(res.figures) == 2
+    for f in res.figures:
+        assert (tmp_path / f.file).stat().st_size > 10_000 and f.file.startswith("approximations_")
