@@ -92,6 +92,6 @@ def build(ctx):
         ax.set_xlabel("mu")
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7)
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.07, right=0.98, bottom=0.15, top=0.85, wspace=0.28, hspace=0.5)
     res.figures.append(Figure(save(fig, ctx, "albedo_fit.png"), "FON albedo E_F and the Eq. 14 fit (Fig. 6)"))
     return res

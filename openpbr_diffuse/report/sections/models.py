@@ -48,12 +48,12 @@ def _slices(ctx, models):
             f = od.evaluate(m, wi, wo, rough, 0.8)[:, 0]
             ax.plot(x, f, label=m, lw=1.2, ls="--" if m.startswith("qon_") or m == "gotanda" else "-")
         ax.set_title(f"theta_o = {to:g} deg")
-        ax.set_xlabel("theta_i (deg), < 0: forward, > 0: back (plane of incidence)")
+        ax.set_xlabel("theta_i (deg); < 0 forward, > 0 back")
         ax.grid(True, alpha=0.3)
     axes[0].set_ylabel("f (no cosine), rho = 0.8")
     axes[-1].legend(fontsize=7)
     fig.suptitle("BRDF slices (EON paper Fig. 2): rho = 0.8, 50 % roughness (r = 0.5; sigma = pi/4)", fontsize=10)
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.07, right=0.98, bottom=0.15, top=0.85, wspace=0.28, hspace=0.5)
     return save(fig, ctx, "models_slices.png")
 
 
@@ -79,7 +79,7 @@ def _albedo_curves(ctx):
         ax.legend(fontsize=7)
     axes[0].set_ylabel("directional albedo")
     fig.suptitle("Albedo curves (EON paper Fig. 5): closed forms (full ON: reference tables)", fontsize=10)
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.07, right=0.98, bottom=0.15, top=0.85, wspace=0.28, hspace=0.5)
     return save(fig, ctx, "models_albedo.png")
 
 

@@ -104,6 +104,6 @@ def build(ctx):
     ax.grid(True, axis="y", alpha=0.3)
     ax.legend(fontsize=8)
     ax.set_title("BRDF evaluation time: this machine vs EON paper Table 1")
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.07, right=0.98, bottom=0.15, top=0.85, wspace=0.28, hspace=0.5)
     res.figures.append(Figure(save(fig, ctx, "timings_table1.png"), "Evaluation time per BRDF (log scale)"))
     return res
