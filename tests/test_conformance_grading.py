@@ -164,6 +164,15 @@ def test_unusable_file_exits_2(tmp_path, capsys, case, vectors):
         read_results(path)
 
 
+def test_nan_result_in_file_does_not_conform(tmp_path, capsys, vectors):
+    out = reference(vectors)
+    out[3, 0] = math.nan
+    path, status = _check(tmp_path, out)
+    assert status == 1
+    d = json.loads(capsys.readouterr().out)
+    assert d["passed"] is False and d["worst"][0]["id"] == vectors.id[3]
+
+
 def test_missing_file_exits_2(tmp_path):
     assert main(["check", str(tmp_path / "nope.csv")]) == 2
 
