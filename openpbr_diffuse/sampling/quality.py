@@ -15,9 +15,12 @@ the white furnace) and its variance the noise per sample (EON paper Fig. 10-12).
 
 Examples
 --------
->>> mean, var = exact_weight_moments("cosine", 1.0, 0.0)     # Lambert, cosine sampling
->>> round(mean, 9), round(var, 9)
+>>> mean, var = exact_weight_moments("cosine", 1.0, 0.0)     # r = 0 (Lambert), cosine sampling
+>>> round(mean, 6), round(var, 6)
 (1.0, 0.0)
+>>> mean, var = exact_weight_moments("cosine", 0.02, 1.0)    # grazing, r = 1 (README: 1.2055)
+>>> round(mean, 6), round(var, 4)
+(1.0, 1.2055)
 """
 from __future__ import annotations
 
