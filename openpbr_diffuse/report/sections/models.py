@@ -93,8 +93,8 @@ def build(ctx):
     n = 500 if ctx.quick else 4000
     wi, wo = _random_dirs(rng, n), _random_dirs(rng, n)
     rho = rng.uniform(0.0, 1.0, (n, 3))
-    mus = np.array([0.0, 0.05, 0.3, 0.7, 1.0] if ctx.quick else [0.0, 0.01, 0.05, 0.1, 0.2, 0.35, 0.5, 0.7, 0.85, 1.0])
-    order = 6 if ctx.quick else 8
+    mus = np.array([0.0, 0.3, 1.0] if ctx.quick else [0.0, 0.01, 0.05, 0.1, 0.2, 0.35, 0.5, 0.7, 0.85, 1.0])
+    order = 5 if ctx.quick else 8
     rows = []
     for m, info in INFO.items():
         ctx.progress(f"model {m}")
