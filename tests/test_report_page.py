@@ -83,6 +83,7 @@ def test_report_json_schema(quick_report):
     assert any(n.startswith("chi-square") for n in names)
     assert "Eq. 14 fit of E_F: max fractional error" in names
     assert any(n.startswith("rho_ms_extra_rho") for n in names)
+    assert "stated value E_F(mu = 1, r = 1)" in names
 
 
 def _fake_section(monkeypatch, key, build):

@@ -94,7 +94,7 @@ def build(ctx):
     wi, wo = _random_dirs(rng, n), _random_dirs(rng, n)
     rho = rng.uniform(0.0, 1.0, (n, 3))
     mus = np.array([0.0, 0.3, 1.0] if ctx.quick else [0.0, 0.01, 0.05, 0.1, 0.2, 0.35, 0.5, 0.7, 0.85, 1.0])
-    order = 5 if ctx.quick else 8
+    order = 5 if ctx.quick else 6
     rows = []
     for m, info in INFO.items():
         ctx.progress(f"model {m}")

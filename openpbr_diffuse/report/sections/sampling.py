@@ -27,7 +27,7 @@ def _chi2(ctx, res):
     points = ((0.02, 1.0),) if ctx.quick else ((0.02, 1.0), (0.3, 1.0), (0.9, 1.0), (0.3, 0.3))
     cases = [(s, mu, r) for s in STRATEGIES for mu, r in points]
     sidak = 1.0 - (1.0 - ALPHA) ** (1.0 / len(cases))
-    n = 20_000 if ctx.quick else 60_000
+    n = 20_000 if ctx.quick else 40_000
     rows = []
     for k, (s, mu, r) in enumerate(cases):
         ctx.progress(f"chi2 {s} mu={mu} r={r}")
@@ -62,7 +62,7 @@ def _curves(ctx, res):
     from ...sampling import STRATEGIES
     from ...sampling.quality import weight_stats
 
-    n = 4_000 if ctx.quick else 25_000
+    n = 4_000 if ctx.quick else 15_000
     rs = (1.0,) if ctx.quick else (0.25, 0.5, 1.0)
     thetas = tuple(sorted(set(CURVE_THETA[::2] + (CURVE_THETA[-1],)))) if ctx.quick else CURVE_THETA
     data = {}
@@ -102,7 +102,7 @@ def _claim(ctx, res, mc, n_mc):
     from ...sampling.quality import exact_weight_moments
 
     theta = AUTHORS_THETA[::8].tolist() + [AUTHORS_THETA[-1]] if ctx.quick else AUTHORS_THETA.tolist()
-    order = 6 if ctx.quick else 8
+    order = 5 if ctx.quick else 6
     vc, ve, me = [], [], []
     for k, th in enumerate(theta):
         if k % 8 == 0:
