@@ -216,3 +216,13 @@ def test_vectors_cli_writes_csv_columns_in_order(tmp_path):
             k += 1
     path.write_text("\n".join(new) + "\n")
     assert main(["check", str(path)]) == 0
+
+
+def test_cli_as_a_module_exits_2_without_traceback(tmp_path):
+    """`python -m openpbr_diffuse.cli.main check` (how the CLI runs from a worktree)."""
+    import subprocess
+    import sys
+
+    for argv in (["check"], ["check", str(tmp_path / "missing.csv")]):
+        p = subprocess.run([sys.executable, "-m", "openpbr_diffuse.cli.main", *argv], capture_output=True, text=True)
+        assert p.returncode == 2 and "Traceback" not in p.stderr and p.stderr.count("\n") == 1

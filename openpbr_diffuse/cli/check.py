@@ -62,10 +62,8 @@ def run(args):
             return status
     from ..conformance.grade import grade
     from ..conformance.vectors import read_results
-    from .main import UsageError
-
-    if args.file is None:
-        raise UsageError("check: FILE is required")
+    if args.file is None:  # ValueError, not main.UsageError: the same exit 2 under `python -m`
+        raise ValueError("check: FILE is required (the vectors file with out_r, out_g, out_b appended)")
     vectors, out = read_results(args.file)
     g = grade(vectors, out, model=args.model)
     if args.json:
