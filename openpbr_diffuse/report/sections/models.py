@@ -58,7 +58,8 @@ def _slices(ctx, models):
 
 
 def _albedo_curves(ctx):
-    """Fig. 5: directional albedo against theta_o at rho = 1 for QON, FON, EON, full ON."""
+    """Fig. 5: directional albedo against theta_o at rho = 1 for QON, FON, full ON (EON at
+    rho = 0.8: at rho = 1 it is 1 everywhere)."""
     import openpbr_diffuse as od
     from ...models.registry import INFO
 
@@ -71,9 +72,10 @@ def _albedo_curves(ctx):
         info = INFO[m]
         for frac in (0.25, 0.5, 0.75, 1.0):
             rough = frac * _rmax(info)
-            E = od.directional_albedo(m, mu, rough, 1.0)[:, 0]
+            rho = 0.8 if m == "eon" else 1.0  # at rho = 1 EON is flat at 1 (white furnace)
+            E = od.directional_albedo(m, mu, rough, rho)[:, 0]
             ax.plot(th, E, label=f"{info.roughness_name} = {rough:.3g}")
-        ax.set_title(f"{m}: E(theta_o), rho = 1")
+        ax.set_title(f"{m}: E(theta_o), rho = {0.8 if m == 'eon' else 1}")
         ax.set_xlabel("theta_o (deg)")
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7)
@@ -145,5 +147,5 @@ def build(ctx):
     res.figures.append(Figure(_slices(ctx, tuple(INFO)),
                               "BRDF slices in the plane of incidence, all models (EON paper Fig. 2): rho = 0.8, "
                               "r = 0.5 for FON/EON, sigma = pi/4 for the sigma models"))
-    res.figures.append(Figure(_albedo_curves(ctx), "Directional albedo curves at rho = 1 (EON paper Fig. 5)"))
+    res.figures.append(Figure(_albedo_curves(ctx), "Directional albedo curves (EON paper Fig. 5): rho = 1, EON at rho = 0.8"))
     return res
