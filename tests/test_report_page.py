@@ -172,6 +172,8 @@ def test_unusable_input_exits_2(tmp_path, capsys):
     assert not (tmp_path / "r").exists()
     (tmp_path / "file").write_text("x")
     assert main(["report", "--out", str(tmp_path / "file"), "--quick"]) == 2
+    assert main(["report", str(tmp_path / "file"), "--out", str(tmp_path / "r"), "--quick"]) == 2  # not USD/MaterialX
+    assert not (tmp_path / "r").exists()
 
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"

@@ -79,12 +79,19 @@ def default_paths():
     return [Path(BUNDLED_MATERIALS)] if Path(BUNDLED_MATERIALS).exists() else []
 
 
+#: File types the report reads (USD, MaterialX); folders are searched by the materials section.
+MATERIAL_SUFFIXES = (".usd", ".usda", ".usdc", ".usdz", ".mtlx")
+
+
 def _check_paths(paths):
     out = []
     for p in paths:
         p = Path(p)
         if not p.exists():
             raise FileNotFoundError(f"report: no such file or directory: {p}")
+        if p.is_file() and p.suffix.lower() not in MATERIAL_SUFFIXES:
+            raise ValueError(f"report: {p} is not a USD or MaterialX file "
+                             f"(expected one of {', '.join(MATERIAL_SUFFIXES)}, or a folder)")
         if p.is_file():
             try:
                 with open(p, "rb") as fh:
