@@ -1,0 +1,118 @@
+"""Blender Cycles (PyPI ``bpy``): the Diffuse BSDF's Oren–Nayar closure, measured by rendering.
+
+Cycles' ``bsdf_oren_nayar`` (Diffuse BSDF node with roughness > 0) is FON plus an energy
+compensation term.  It is graded by rendering (see :mod:`._cycles_scene`): BRDF values from a
+plane lit by a zero-angle sun of strength 1 (pixel = f cos(theta_i); deterministic: a delta
+light, a black world, one path vertex), directional albedo from the plane under a uniform white
+world (pixel = E(mu_o); Monte Carlo, so its standard error is measured from the pixels).  The
+render runs in a child process of the same Python, so a crash in Blender cannot take the
+grader down and ``bpy`` is imported only there.
+
+Render budget (defaults): BRDF 2x2 px at 1 sample (exact up to float32), albedo 32x32 px at
+256 samples per pixel (262 144 paths per row).
+"""
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import json
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from .errors import GraderUnavailable
+from .subject import Subject
+
+BUDGET = {"brdf_resolution": 2, "brdf_samples": 1, "albedo_resolution": 32, "albedo_samples": 256,
+          "threads": 2, "seed": 0}
+MU_MIN = 1e-3  # a plane cannot be seen edge-on: albedo rows with mu below this render at MU_MIN
+TOLERANCE = 1e-4
+TOLERANCE_REASON = ("Cycles renders: BRDF values exact to float32 (delta sun, one vertex); albedo "
+                    "rows carry Monte Carlo noise, standard error <= ~2e-4 at the default budget")
+
+
+def bpy_version() -> str:
+    if importlib.util.find_spec("bpy") is None:
+        raise GraderUnavailable("bpy (Blender as a Python module) is not installed: pip install bpy "
+                                "(CPython 3.11, ~0.8 GB)")
+    run = subprocess.run([sys.executable, "-c", "import bpy, sys; sys.stdout.write(bpy.app.version_string)"],
+                         capture_output=True, text=True, check=False)
+    if run.returncode != 0:
+        raise GraderUnavailable("bpy does not import: " + (run.stderr.strip().splitlines() or ["?"])[-1])
+    return run.stdout.strip().splitlines()[-1]
+
+
+def kernel_source() -> Path | None:
+    """Cycles' bsdf_oren_nayar.h shipped inside the bpy wheel (hashed into the version)."""
+    spec = importlib.util.find_spec("bpy")
+    if spec is None or not spec.submodule_search_locations:
+        return None
+    for folder in spec.submodule_search_locations:
+        hits = sorted(Path(folder).glob("*/scripts/addons_core/cycles/source/kernel/closure/bsdf_oren_nayar.h"))
+        if hits:
+            return hits[0]
+    return None
+
+
+def render(rows: list[dict], budget: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Render job rows in a child Python with bpy; returns (mean (n,3), standard error (n,3))."""
+    job = {**BUDGET, **(budget or {}), "rows": rows}
+    with tempfile.TemporaryDirectory() as tmp:
+        job_path, out_path = Path(tmp) / "job.json", Path(tmp) / "out"
+        job_path.write_text(json.dumps(job))
+        run = subprocess.run([sys.executable, "-m", "openpbr_diffuse.graders._cycles_scene", str(job_path),
+                              str(out_path)], capture_output=True, text=True, check=False,
+                             cwd=str(Path(__file__).resolve().parents[2]))
+        if run.returncode != 0:
+            tail = (run.stderr.strip().splitlines() or ["no output"])[-1]
+            raise GraderUnavailable(f"the Cycles render failed: {tail}")
+        data = np.load(f"{out_path}.npz")
+        return data["mean"], data["stderr"]
+
+
+def subject(source: Path | None = None, budget: dict | None = None) -> Subject:
+    """Cycles from the installed ``bpy`` (``source`` is not used: the kernel ships in the wheel)."""
+    version = bpy_version()
+    kernel = kernel_source()
+    last = {}
+
+    def brdf(wi, wo, roughness, rho):
+        wi, wo = np.asarray(wi, float).reshape(-1, 3), np.asarray(wo, float).reshape(-1, 3)
+        n = wi.shape[0]
+        roughness = np.broadcast_to(np.asarray(roughness, float), (n,))
+        rho = np.broadcast_to(np.asarray(rho, float), (n, 3))
+        out = np.zeros((n, 3))
+        # a one-sided surface cannot be lit or seen from below: f = 0 there, as in the reference
+        ok = (wi[:, 2] > 0) & (wo[:, 2] > 0)
+        rows = [{"kind": "brdf", "wi": wi[k].tolist(), "wo": wo[k].tolist(), "roughness": float(roughness[k]),
+                 "rho": rho[k].tolist()} for k in np.flatnonzero(ok)]
+        if rows:
+            mean, _ = render(rows, budget)
+            out[ok] = mean / wi[ok, 2:3]   # pixel = f cos(theta_i) for a sun of strength 1
+        return out
+
+    def albedo(mu, roughness, rho):
+        mu = np.asarray(mu, float).reshape(-1)
+        n = mu.shape[0]
+        roughness = np.broadcast_to(np.asarray(roughness, float), (n,))
+        rho = np.broadcast_to(np.asarray(rho, float), (n, 3))
+        rows = [{"kind": "albedo", "mu": float(max(mu[k], MU_MIN)), "roughness": float(roughness[k]),
+                 "rho": rho[k].tolist()} for k in range(n)]
+        mean, err = render(rows, budget)
+        last["albedo_stderr"] = err
+        return mean
+
+    sha = hashlib.sha256(kernel.read_bytes()).hexdigest() if kernel else None
+    s = Subject(
+        name="cycles", model="eon", tolerance=TOLERANCE, tolerance_reason=TOLERANCE_REASON,
+        version={"blender": version, "source": str(kernel) if kernel else None,
+                 "files": ["kernel/closure/bsdf_oren_nayar.h"], "sha256": sha,
+                 "budget": {**BUDGET, **(budget or {})}},
+        brdf=brdf, albedo=albedo,
+        notes=["Diffuse BSDF node (Cycles bsdf_oren_nayar) rendered: sun of angle 0 for f, white world for E",
+               f"albedo rows with mu < {MU_MIN} are rendered at mu = {MU_MIN} (a plane cannot be seen edge-on)"])
+    s.noise = last
+    return s
