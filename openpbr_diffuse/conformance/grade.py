@@ -1,0 +1,237 @@
+"""Grading another implementation's results against the reference, with a diagnosis.
+
+``grade(vectors, out)`` compares the submitted (n, 3) values with the library's float64
+reference (:func:`.deviations.reference`) at the tolerance
+
+    |out - ref| <= ABS_TOL + REL_TOL |ref|      (every row, every channel)
+
+and, when that fails, fits every known deviation of :data:`.deviations.DEVIATIONS` (each
+variant) to the submitted values and names the one that explains them.
+
+Why this tolerance (:data:`TOLERANCE_REASON`): an implementation that is right but works in
+float32 differs from the float64 reference by the rounding of its inputs and output and
+by float32 arithmetic.  Rounding the default vectors' inputs to float32, evaluating, and
+rounding the result to float32 moves the values by at most 6.4e-6 relative (measured, the
+largest at the grazing rows, mu = 0.001, where f ~ 1/mu amplifies the input rounding) and
+2.4e-5 absolute (on f = 247); a float32 evaluation of the paper's Listing 1 (cancellation in
+1 - S^3 of E_F at mu = 0.001) adds ~2e-6 absolute.  REL_TOL = 1e-4 leaves a 15x margin over
+the rounding; ABS_TOL = 1e-6 covers values near 0 (f = 0 below the horizon; 1e-6 is 8
+float32 ulp of 1).  The smallest deviation to catch, the extra rho on f_ms (Cycles),
+moves the albedo by 2 % (0.4689 vs 0.4780): 200x the tolerance.
+
+Examples
+--------
+>>> from openpbr_diffuse.conformance.vectors import default_vectors
+>>> from openpbr_diffuse.conformance.deviations import DEVIATIONS, reference
+>>> v = default_vectors()
+>>> grade(v, reference(v).astype("float32")).passed
+True
+>>> g = grade(v, DEVIATIONS["rho_ms_extra_rho"](v))
+>>> g.passed, g.diagnosis
+(False, 'rho_ms_extra_rho')
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+REL_TOL = 1e-4
+ABS_TOL = 1e-6
+TOLERANCE_REASON = (
+    "|out - ref| <= 1e-6 + 1e-4 |ref| per value. Float32 rounding of the vectors' inputs and of "
+    "the result moves the reference by at most 6.4e-6 relative / 2.4e-5 absolute on f = 247 "
+    "(measured on this vector set); 1e-4 relative leaves a 15x margin for float32 arithmetic, "
+    "1e-6 absolute covers values near 0. The smallest known deviation (extra rho on f_ms) is 2 %.")
+#: A deviation is diagnosed when it matches (within the tolerance) at least this fraction
+#: of the values that fail against the reference, and of all graded values.
+EXPLAIN_FRACTION = 0.9
+#: How many of the worst rows are listed.
+N_WORST = 10
+
+
+@dataclass
+class Grade:
+    """The result of :func:`grade` (see the module docstring; ``to_dict()`` for JSON)."""
+
+    passed: bool
+    max_abs_error: float
+    rms_error: float
+    tolerance: dict
+    tolerance_reason: str
+    worst: list = field(default_factory=list)
+    diagnosis: str | None = None
+    diagnosis_detail: str = ""
+    candidates: dict = field(default_factory=dict)
+    candidate_details: dict = field(default_factory=dict)
+    n_rows: int = 0
+    n_failed_rows: int = 0
+    max_rel_error: float = 0.0
+    max_normalised_error: float = 0.0
+    models: list = field(default_factory=list)
+    version: str = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        def clean(x):
+            if isinstance(x, float) and not math.isfinite(x):
+                return None if math.isnan(x) else ("inf" if x > 0 else "-inf")
+            if isinstance(x, dict):
+                return {k: clean(v) for k, v in x.items()}
+            if isinstance(x, (list, tuple)):
+                return [clean(v) for v in x]
+            return x
+
+        return clean({
+            "passed": self.passed, "version": self.version, "models": self.models,
+            "n_rows": self.n_rows, "n_failed_rows": self.n_failed_rows,
+            "max_abs_error": self.max_abs_error, "max_rel_error": self.max_rel_error,
+            "rms_error": self.rms_error, "max_normalised_error": self.max_normalised_error,
+            "tolerance": self.tolerance, "tolerance_reason": self.tolerance_reason,
+            "worst": self.worst, "diagnosis": self.diagnosis, "diagnosis_detail": self.diagnosis_detail,
+            "candidates": self.candidates, "candidate_details": self.candidate_details})
+
+
+def _tolerance(tolerance):
+    if tolerance is None:
+        return REL_TOL, ABS_TOL
+    if isinstance(tolerance, (tuple, list)) and len(tolerance) == 2:
+        rel, ab = (float(t) for t in tolerance)
+    elif isinstance(tolerance, (int, float)) and not isinstance(tolerance, bool):
+        rel, ab = float(tolerance), ABS_TOL
+    else:
+        raise TypeError("tolerance must be None, a relative tolerance (float) or (relative, absolute)")
+    if not (math.isfinite(rel) and math.isfinite(ab) and rel >= 0 and ab >= 0 and rel + ab > 0):
+        raise ValueError(f"tolerance must be finite, >= 0 and not both 0; got relative {rel}, absolute {ab}")
+    return rel, ab
+
+
+def _normalised(out, pred, rel, ab):
+    with np.errstate(invalid="ignore", over="ignore"):
+        e = np.abs(out - pred) / (ab + rel * np.abs(pred))
+    return np.where(np.isfinite(e), e, np.inf)
+
+
+def _row(vectors, i, ref, out, e):
+    def vec(a):
+        return None if np.isnan(a).all() else [float(x) for x in a]
+
+    def num(x):
+        return None if math.isnan(float(x)) else float(x)
+
+    return {"id": str(vectors.id[i]), "kind": str(vectors.kind[i]), "model": str(vectors.model[i]),
+            "wi": vec(vectors.wi[i]), "wo": vec(vectors.wo[i]), "mu": num(vectors.mu[i]),
+            "roughness": num(vectors.roughness[i]), "rho": vec(vectors.rho[i]),
+            "expected": [float(x) for x in ref[i]], "got": [float(x) for x in out[i]],
+            "abs_error": float(np.max(np.abs(out[i] - ref[i]))) if np.isfinite(out[i]).all() else math.inf,
+            "normalised_error": float(e[i].max())}
+
+
+def _diagnose(vectors, out, ref, e_ref, rel, ab):
+    """Fit every deviation variant; (name, detail, {name: residual}, {name: details})."""
+    from .deviations import DEVIATIONS
+
+    failing = e_ref > 1.0
+    n_fail = int(failing.sum())
+    candidates, details = {}, {}
+    best = None
+    for name, dev in DEVIATIONS.items():
+        best_v = None
+        for label, predictor in dev.variants:
+            pred = predictor(vectors)
+            known = np.isfinite(pred)  # NaN: the deviation makes no prediction there
+            if known.mean() < 0.5 or not (_normalised(pred, ref, rel, ab)[known] > 1.0).any():
+                continue  # indistinguishable from the reference on these rows
+            e = _normalised(out, pred, rel, ab)
+            fk = failing & known
+            explained = float((e[fk] <= 1.0).mean()) if fk.any() else 0.0
+            overall = float((e[known] <= 1.0).mean())
+            residual = float(np.sqrt(np.mean(np.minimum(e[known], 1e6) ** 2)))
+            key = (explained, overall, -residual)
+            if best_v is None or key > best_v[0]:
+                best_v = (key, label, explained, overall, residual)
+        if best_v is None:
+            details[name] = {"distinguishable": False}
+            continue
+        key, label, explained, overall, residual = best_v
+        candidates[name] = residual
+        details[name] = {"distinguishable": True, "variant": label, "explained_fraction": explained,
+                         "matching_fraction": overall, "residual": residual}
+        if best is None or key > best[0]:
+            best = (key, name, label, explained, overall)
+    if best is None:
+        return None, "no known deviation is distinguishable from the reference on these rows", candidates, details
+    _, name, label, explained, overall = best
+    text = (f"{name} ({label}): matches {explained:.0%} of the {n_fail} failing values and "
+            f"{overall:.0%} of all values within the tolerance")
+    if explained >= EXPLAIN_FRACTION and overall >= EXPLAIN_FRACTION:
+        return name, f"{DEVIATIONS[name].description} [{DEVIATIONS[name].source}]: {text}", candidates, details
+    return None, f"no known deviation explains the failure; closest: {text}", candidates, details
+
+
+def grade(vectors, out, *, model=None, tolerance=None) -> Grade:
+    """Grade submitted values ``out`` (n, 3) for the rows of ``vectors``.
+
+    Parameters
+    ----------
+    vectors : VectorSet
+        The rows the values answer (e.g. from :func:`.vectors.read_results`).
+    out : array_like, shape (n, 3)
+        The implementation's BRDF values (no cosine) / directional albedos.
+    model : str, optional
+        Grade only the rows of this model (a name of :data:`.vectors.VECTOR_MODELS`).
+    tolerance : None, float or (float, float)
+        None: the stated default (``REL_TOL``, ``ABS_TOL``); a float: relative tolerance
+        (absolute stays ``ABS_TOL``); a pair: (relative, absolute).
+
+    Returns
+    -------
+    Grade
+        ``passed`` when every value is within the tolerance; ``diagnosis`` names the known
+        deviation that explains a failure (None when it conforms or nothing fits).
+    """
+    from .deviations import reference
+
+    rel, ab = _tolerance(tolerance)
+    try:
+        out = np.asarray(out, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError("out must be an (n, 3) array of numbers") from None
+    if out.shape != (len(vectors), 3):
+        raise ValueError(f"out must have shape ({len(vectors)}, 3) (one RGB value per vector), got {out.shape}")
+    if model is not None:
+        keep = vectors.model == model
+        if not keep.any():
+            raise ValueError(f"model: no rows of model {model!r} (rows have {', '.join(sorted(set(vectors.model)))})")
+        vectors, out = vectors.subset(keep), out[keep]
+    if len(vectors) == 0:
+        raise ValueError("vectors: nothing to grade (0 rows)")
+    ref = reference(vectors)
+    e = _normalised(out, ref, rel, ab)
+    with np.errstate(invalid="ignore", over="ignore"):
+        diff = np.abs(out - ref)
+        rel_err = diff / np.maximum(np.abs(ref), 1e-300)
+    finite = np.isfinite(out).all()
+    row_e = e.max(axis=1)
+    passed = bool(finite and row_e.max() <= 1.0)
+    order = np.argsort(-row_e, kind="stable")[:N_WORST]
+    worst = [_row(vectors, int(i), ref, out, e) for i in order if row_e[i] > 0]
+    g = Grade(
+        passed=passed,
+        max_abs_error=float(np.max(diff)) if finite else math.inf,
+        rms_error=float(np.sqrt(np.mean(diff ** 2))) if finite else math.inf,
+        tolerance={"relative": rel, "absolute": ab, "rule": "|out - ref| <= absolute + relative |ref|"},
+        tolerance_reason=TOLERANCE_REASON if tolerance is None else "tolerance given by the caller",
+        worst=worst, n_rows=len(vectors), n_failed_rows=int((row_e > 1.0).sum()),
+        max_rel_error=float(np.max(np.where(np.abs(ref) > 0, rel_err, np.where(diff > 0, math.inf, 0.0)))),
+        max_normalised_error=float(row_e.max()), models=sorted(set(map(str, vectors.model))),
+        version=vectors.version)
+    if not passed:
+        g.diagnosis, g.diagnosis_detail, g.candidates, g.candidate_details = _diagnose(vectors, out, ref, e, rel, ab)
+    else:
+        g.diagnosis_detail = "conforms: every value within the tolerance"
+    return g
+
+
+__all__ = ["grade", "Grade", "REL_TOL", "ABS_TOL", "TOLERANCE_REASON"]

@@ -1,0 +1,357 @@
+"""The conformance test vectors: inputs for another implementation, and its results read back.
+
+A vector is one query: ``kind == "brdf"`` asks for f(wi, wo) without the cosine factor,
+``kind == "albedo"`` for the directional albedo E(mu).  The default set
+(:func:`default_vectors`) covers the models "lambert", "qon", "fon", "eon" and
+"eon_approx" at the edges where implementations disagree: grazing directions (mu = 0.01,
+0.001), backscatter (wi = wo), s = 0 (perpendicular azimuths, and one direction along the
+normal), L.V < 0 (opposite azimuths: FON/EON's s <= 0 branch), directions below the horizon
+(f = 0), roughness r = 0 and r = 1 (sigma = 0 and pi/2 for QON), white, chromatic and dark
+colours, and mu = 0 (the grazing limit) for the albedo.
+
+File format (CSV; JSON when the name ends in ``.json``): the columns :data:`COLUMNS` in that
+order, blank where a column does not apply (mu for BRDF rows, directions for albedo rows,
+roughness for Lambert); ``#`` lines on top carry the version.  The implementer appends
+:data:`OUT_COLUMNS` (``out_r, out_g, out_b``) to each row; :func:`read_results` reads such a
+file back and matches its rows to the vectors by id (a subset of the rows is allowed).
+
+Examples
+--------
+>>> v = default_vectors()
+>>> v.version, len(v) > 1000, sorted(set(v.kind))
+('1', True, ['albedo', 'brdf'])
+>>> bool(((v.wi[:, 2] < 0.002) & (v.kind == "brdf")).any())   # grazing rows
+True
+"""
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+#: Version of the default vector set; bump when its rows change.
+VERSION = "1"
+#: Input columns, in file order.
+COLUMNS = ("id", "kind", "model", "wi_x", "wi_y", "wi_z", "wo_x", "wo_y", "wo_z", "mu",
+           "roughness", "rho_r", "rho_g", "rho_b")
+#: Result columns the implementer appends.
+OUT_COLUMNS = ("out_r", "out_g", "out_b")
+FORMAT_NAME = "openpbr-diffuse conformance vectors"
+#: Models covered by the default set.
+VECTOR_MODELS = ("lambert", "qon", "fon", "eon", "eon_approx")
+#: Models with albedo rows.  Not "eon_approx": the paper's Listing 1 (E_EON with
+#: exact = false) returns rho E_F~ + rho_ms (1 - E_F~) with the Eq. 14 fit E_F~, which
+#: differs from the true albedo of the approximate lobe (``directional_albedo``) by up to
+#: 5e-4 -- both are legitimate answers, so neither is graded.
+ALBEDO_MODELS = ("lambert", "qon", "fon", "eon")
+#: How far a submitted file's inputs may differ from the vectors' (float32 rounding of the
+#: printed inputs passes, a different row does not).
+INPUT_MATCH_TOL = 1e-5
+
+_NUMERIC = COLUMNS[3:]
+
+
+@dataclass
+class VectorSet:
+    """Test vectors as arrays (NaN where a column does not apply).
+
+    Attributes: ``id``, ``kind`` ("brdf"/"albedo"), ``model`` (n,) str arrays; ``wi``,
+    ``wo`` (n, 3); ``mu``, ``roughness`` (n,); ``rho`` (n, 3); ``version`` str.
+    """
+
+    id: np.ndarray
+    kind: np.ndarray
+    model: np.ndarray
+    wi: np.ndarray
+    wo: np.ndarray
+    mu: np.ndarray
+    roughness: np.ndarray
+    rho: np.ndarray
+    version: str = VERSION
+
+    def __len__(self):
+        return int(self.id.shape[0])
+
+    def subset(self, index):
+        """The rows selected by a boolean mask or an index array."""
+        return VectorSet(self.id[index], self.kind[index], self.model[index], self.wi[index],
+                         self.wo[index], self.mu[index], self.roughness[index], self.rho[index],
+                         self.version)
+
+    def columns(self):
+        """{column name: (n,) array} in :data:`COLUMNS` order."""
+        cols = {"id": self.id, "kind": self.kind, "model": self.model}
+        for k, axis in enumerate("xyz"):
+            cols[f"wi_{axis}"] = self.wi[:, k]
+        for k, axis in enumerate("xyz"):
+            cols[f"wo_{axis}"] = self.wo[:, k]
+        cols["mu"] = self.mu
+        cols["roughness"] = self.roughness
+        for k, c in enumerate("rgb"):
+            cols[f"rho_{c}"] = self.rho[:, k]
+        return cols
+
+
+def _direction(theta_deg, phi_deg):
+    t, p = math.radians(theta_deg), math.radians(phi_deg)
+    return (math.sin(t) * math.cos(p), math.sin(t) * math.sin(p), math.cos(t))
+
+
+#: theta (degrees) of mu = 0.01 and mu = 0.001.
+_G1 = math.degrees(math.acos(0.01))
+_G2 = math.degrees(math.acos(0.001))
+
+#: (theta_i, theta_o, phi_i - phi_o) in degrees, and what the pair is there for.
+_PAIRS = (
+    (0.0, 0.0, 0.0, "both along the normal"),
+    (0.0, 60.0, 0.0, "wi along the normal: s = 0"),
+    (45.0, 0.0, 0.0, "wo along the normal: s = 0"),
+    (30.0, 30.0, 0.0, "backscatter wi = wo"),
+    (60.0, 60.0, 0.0, "backscatter wi = wo"),
+    (80.0, 80.0, 0.0, "backscatter wi = wo"),
+    (_G1, _G1, 0.0, "grazing backscatter, mu = 0.01"),
+    (_G2, _G2, 0.0, "grazing backscatter, mu = 0.001"),
+    (40.0, 70.0, 90.0, "perpendicular azimuths: s = 0"),
+    (85.0, 30.0, 90.0, "perpendicular azimuths: s = 0"),
+    (60.0, 60.0, 180.0, "forward: L.V = -0.5 < 0"),
+    (70.0, 50.0, 180.0, "forward: L.V < 0"),
+    (85.0, 85.0, 180.0, "forward grazing: L.V < 0"),
+    (_G1, _G1, 180.0, "forward grazing, mu = 0.01: L.V = -1 + 2e-4"),
+    (50.0, 50.0, 120.0, "L.V < 0, s < 0"),
+    (20.0, 75.0, 135.0, "s < 0, L.V > 0"),
+    (_G1, 30.0, 0.0, "wi grazing, mu_i = 0.01"),
+    (30.0, _G2, 45.0, "wo grazing, mu_o = 0.001"),
+    (_G2, 70.0, 160.0, "wi grazing, s < 0"),
+    (-1.0, 40.0, 0.0, "wi below the horizon: f = 0"),
+    (35.0, -1.0, 0.0, "wo below the horizon: f = 0"),
+)
+_N_RANDOM_PAIRS = 12
+_RHOS = ((1.0, 1.0, 1.0), (0.8, 0.5, 0.2), (0.05, 0.3, 0.9))
+_ROUGHNESS = {"r": (0.0, 0.25, 0.5, 1.0), "sigma": (0.0, 0.3, 0.8, 0.5 * math.pi)}
+_ALBEDO_MU = (0.0, 0.001, 0.01, 0.1, 0.3, 0.5, 0.8, 1.0)
+
+
+def _pairs():
+    """Direction pairs (wi, wo) of the BRDF rows: the edge cases, then seeded random ones."""
+    pairs = []
+    for k, (ti, to, dphi, _) in enumerate(_PAIRS):
+        phi_o = 17.0 * k  # rotate each pair: implementations must not assume the xz-plane
+        wi = _direction(abs(ti), phi_o + dphi)
+        wo = _direction(abs(to), phi_o)
+        if ti < 0:  # below the horizon: reflect a direction at 100 degrees
+            wi = _direction(100.0, phi_o + 30.0)
+        if to < 0:
+            wo = _direction(95.0, phi_o)
+        pairs.append((wi, wo))
+    rng = np.random.default_rng(16)
+    for _ in range(_N_RANDOM_PAIRS):
+        mu = rng.uniform(0.02, 1.0, 2)
+        phi = rng.uniform(0.0, 360.0, 2)
+        pairs.append((_direction(math.degrees(math.acos(mu[0])), phi[0]),
+                      _direction(math.degrees(math.acos(mu[1])), phi[1])))
+    return pairs
+
+
+def default_vectors() -> VectorSet:
+    """The versioned default vector set (version :data:`VERSION`), built deterministically.
+
+    BRDF rows: every direction pair × roughness × colour for each model of
+    :data:`VECTOR_MODELS` (Lambert: no roughness); albedo rows (models of
+    :data:`ALBEDO_MODELS`): mu in {0, 0.001, 0.01, 0.1, 0.3, 0.5, 0.8, 1} × roughness ×
+    colour.
+    """
+    from ..models.registry import model_info
+
+    rows = []
+    pairs = _pairs()
+    nan = math.nan
+    for model in VECTOR_MODELS:
+        info = model_info(model)
+        roughs = (nan,) if model == "lambert" else _ROUGHNESS[info.roughness_name]
+        k = 0
+        for wi, wo in pairs:
+            for r in roughs:
+                for rho in _RHOS:
+                    rows.append((f"{model}-brdf-{k:04d}", "brdf", model, wi, wo, nan, r, rho))
+                    k += 1
+        if model not in ALBEDO_MODELS:
+            continue
+        k = 0
+        for mu in _ALBEDO_MU:
+            for r in roughs:
+                for rho in _RHOS:
+                    rows.append((f"{model}-albedo-{k:03d}", "albedo", model, (nan,) * 3, (nan,) * 3, mu, r, rho))
+                    k += 1
+    return VectorSet(
+        id=np.array([r[0] for r in rows]), kind=np.array([r[1] for r in rows]),
+        model=np.array([r[2] for r in rows]), wi=np.array([r[3] for r in rows], dtype=np.float64),
+        wo=np.array([r[4] for r in rows], dtype=np.float64), mu=np.array([r[5] for r in rows]),
+        roughness=np.array([r[6] for r in rows]), rho=np.array([r[7] for r in rows], dtype=np.float64),
+        version=VERSION)
+
+
+# ----------------------------------------------------------------------------- writing
+
+def _cell(v):
+    if isinstance(v, (str, np.str_)):
+        return str(v)
+    v = float(v)
+    return "" if math.isnan(v) else repr(v)
+
+
+def _header_lines(vectors):
+    return [f"{FORMAT_NAME}, version {vectors.version}",
+            "kind brdf: f(wi, wo) without the cosine factor; kind albedo: directional albedo E(mu)",
+            "directions in the local frame (normal +z), both pointing away from the surface; blank = not applicable",
+            "roughness: r in [0, 1] for fon/eon/eon_approx, sigma in radians for qon; append out_r,out_g,out_b"]
+
+
+def write_vectors(vectors: VectorSet, path, *, out=None) -> Path:
+    """Write ``vectors`` to ``path`` (CSV, or JSON if the name ends in ``.json``).
+
+    ``out`` (n, 3), if given, is appended as ``out_r, out_g, out_b`` (a results file).
+    """
+    path = Path(path)
+    cols = vectors.columns()
+    names = list(COLUMNS) + (list(OUT_COLUMNS) if out is not None else [])
+    if out is not None:
+        out = np.asarray(out, dtype=np.float64).reshape(len(vectors), 3)
+        for k, name in enumerate(OUT_COLUMNS):
+            cols[name] = out[:, k]
+    n = len(vectors)
+    if path.suffix.lower() == ".json":
+        def value(name, i):
+            v = cols[name][i]
+            if isinstance(v, (str, np.str_)):
+                return str(v)
+            return None if math.isnan(float(v)) else float(v)
+
+        doc = {"format": FORMAT_NAME, "version": vectors.version, "notes": _header_lines(vectors)[1:],
+               "columns": names, "rows": [{name: value(name, i) for name in names} for i in range(n)]}
+        path.write_text(json.dumps(doc, indent=1) + "\n")
+        return path
+    buf = io.StringIO()
+    for line in _header_lines(vectors):
+        buf.write(f"# {line}\n")
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(names)
+    text_cols = [cols[name] for name in names]
+    for i in range(n):
+        w.writerow([_cell(c[i]) for c in text_cols])
+    path.write_text(buf.getvalue())
+    return path
+
+
+# ----------------------------------------------------------------------------- reading
+
+def _parse_number(text, column, row_label):
+    if text is None:
+        return math.nan
+    if isinstance(text, bool):
+        raise ValueError(f"{row_label}: column {column} must be a number, got {text!r}")
+    if isinstance(text, (int, float)):
+        return float(text)
+    text = str(text).strip()
+    if text == "":
+        return math.nan
+    try:
+        v = float(text)
+    except ValueError:
+        raise ValueError(f"{row_label}: column {column} is not a number: {text[:40]!r}") from None
+    if math.isnan(v) or math.isinf(v):
+        raise ValueError(f"{row_label}: column {column} is not a finite number: {text[:40]!r}")
+    return v
+
+
+def _read_records(path):
+    """(column names, list of {column: raw value}) of a CSV or JSON file."""
+    path = Path(path)
+    text = path.read_text(encoding="utf-8-sig")
+    if path.suffix.lower() == ".json":
+        try:
+            doc = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise ValueError(f"{path}: not valid JSON ({exc.msg} at line {exc.lineno})") from None
+        rows = doc.get("rows") if isinstance(doc, dict) else doc
+        if not isinstance(rows, list) or not all(isinstance(r, dict) for r in rows):
+            raise ValueError(f"{path}: expected a JSON object with a 'rows' list of objects")
+        names = list(doc.get("columns") or (rows[0].keys() if rows else [])) if isinstance(doc, dict) else \
+            list(rows[0].keys() if rows else [])
+        return names, rows
+    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    reader = csv.reader(lines)
+    try:
+        header = [h.strip() for h in next(reader)]
+    except StopIteration:
+        raise ValueError(f"{path}: empty file (no header row)") from None
+    rows = []
+    for lineno, cells in enumerate(reader, start=2):
+        if len(cells) != len(header):
+            raise ValueError(f"{path}: data row {lineno - 1} has {len(cells)} cells, the header has {len(header)}")
+        rows.append(dict(zip(header, cells)))
+    return header, rows
+
+
+def read_results(path, vectors: VectorSet | None = None):
+    """Read a submitted results file; return ``(vectors_subset, out)`` matched by id.
+
+    ``vectors`` defaults to :func:`default_vectors`.  Every row must carry the columns
+    :data:`COLUMNS` and :data:`OUT_COLUMNS`; its id must name a vector and its inputs must
+    equal that vector's (to :data:`INPUT_MATCH_TOL`, so float32-printed inputs pass);
+    every ``out_*`` must be a finite number.  Rows are returned in the file's order.
+
+    Raises
+    ------
+    ValueError
+        Missing columns, non-numeric values, unknown or duplicated ids, or inputs that do not
+        match the vectors (the message names the row and the column).
+    """
+    vectors = default_vectors() if vectors is None else vectors
+    names, records = _read_records(path)
+    missing = [c for c in COLUMNS + OUT_COLUMNS if c not in names]
+    if missing:
+        raise ValueError(f"{path}: missing column(s) {', '.join(missing)} "
+                         f"(expected {', '.join(COLUMNS + OUT_COLUMNS)})")
+    if not records:
+        raise ValueError(f"{path}: no data rows")
+    index = {str(v): i for i, v in enumerate(vectors.id)}
+    ref_cols = vectors.columns()
+    take = np.empty(len(records), dtype=np.int64)
+    out = np.empty((len(records), 3))
+    seen = set()
+    for n, rec in enumerate(records):
+        rid = str(rec.get("id", "")).strip()
+        label = f"{path}: row {n + 1} (id {rid[:40]!r})"
+        if rid not in index:
+            raise ValueError(f"{label}: no such vector in set version {vectors.version}")
+        if rid in seen:
+            raise ValueError(f"{label}: duplicated id")
+        seen.add(rid)
+        i = index[rid]
+        for col in ("kind", "model"):
+            if str(rec.get(col, "")).strip() != str(ref_cols[col][i]):
+                raise ValueError(f"{label}: column {col} is {str(rec.get(col))[:40]!r}, "
+                                 f"the vector has {ref_cols[col][i]!r}")
+        for col in _NUMERIC:
+            got = _parse_number(rec.get(col), col, label)
+            want = float(ref_cols[col][i])
+            if math.isnan(want) != math.isnan(got) or (
+                    not math.isnan(want) and abs(got - want) > INPUT_MATCH_TOL * (1.0 + abs(want))):
+                raise ValueError(f"{label}: column {col} is {got!r}, the vector has "
+                                 f"{'blank' if math.isnan(want) else repr(want)}: rows do not match the vectors")
+        for k, col in enumerate(OUT_COLUMNS):
+            v = _parse_number(rec.get(col), col, label)
+            if math.isnan(v):
+                raise ValueError(f"{label}: column {col} is blank; every submitted row needs a result")
+            out[n, k] = v
+        take[n] = i
+    return vectors.subset(take), out
+
+
+__all__ = ["VERSION", "COLUMNS", "OUT_COLUMNS", "VECTOR_MODELS", "ALBEDO_MODELS", "VectorSet", "default_vectors",
+           "write_vectors", "read_results"]
