@@ -2,9 +2,13 @@
 
 Graded, by calling its own functions:
 
-* BRDF: ``openpbr_f_EON(rho, roughness, wi, wo, exact)`` with ``exact = false``, the value its
-  diffuse lobe uses (``openpbr_diffuse_brdf_value_adjusted_for_specular`` hard-codes
-  ``Exact = false``: the Eq. 14 fit of E_F), so the reference model is ``eon_approx``.
+* BRDF: its diffuse lobe ``OpenPBR_EnergyConservingRoughDiffuseLobe`` (``openpbr_initialize_lobe``
+  + ``openpbr_calculate_lobe_value``), set up with an index-matched specular layer (eta = 1,
+  alpha = 1), where its specular energy-compensation factors are exactly 1, and divided by the
+  cosine its value includes.  The lobe calls ``openpbr_f_EON(..., Exact = false)`` (the Eq. 14
+  fit of E_F), so the reference model is ``eon_approx``.  The lobe requires a view direction
+  face-forwarded to the normal (``OPENPBR_ASSERT(cos_in >= 0)``): rows with wo below the horizon
+  are outside its input domain and are not graded.
 * Sampler: its diffuse lobe's ``openpbr_sample_lobe`` / ``openpbr_calculate_lobe_pdf``.
 * Surface: for a material given as OpenPBR inputs and a view direction, the diffuse part of
   ``openpbr_eval`` integrated over light directions (the diffuse lobe's weight x albedo) and the
@@ -24,8 +28,9 @@ from .errors import GraderUnavailable
 from .subject import Subject
 
 HEADER = "openpbr.h"
-TOLERANCE = 1e-5
-TOLERANCE_REASON = "compiled C++ in float32 (GLM, libm acos): float32 rounding of values of order 1"
+TOLERANCE = None
+TOLERANCE_REASON = ("compiled C++ in float32 with libm acos: the same float32 rounding that "
+                    "conformance.grade's default tolerance is derived for")
 MATERIAL_INPUTS = ("base_color", "base_diffuse_roughness", "base_metalness", "specular_roughness",
                    "specular_ior")
 
@@ -48,10 +53,16 @@ _MATERIAL = """
     const OpenPBR_AggregateLobe& base = prepared.fuzz_lobe.coating_lobe.base_lobe;
 """
 ENTRIES = {
-    "brdf": cpp.Entry(10, 3, """
-    const vec3 f = openpbr_f_EON(vec3(in[7], in[8], in[9]), in[6], vec3(in[0], in[1], in[2]),
-                                 vec3(in[3], in[4], in[5]), false);
-    out[0] = f.x; out[1] = f.y; out[2] = f.z;"""),
+    # wi (3), wo (3), roughness, rho (3) -> f (3), the specular compensation factors (2)
+    "brdf": cpp.Entry(10, 5, """
+    OpenPBR_EnergyConservingRoughDiffuseLobe lobe;
+    const vec3 light = vec3(in[0], in[1], in[2]), view = vec3(in[3], in[4], in[5]);
+    openpbr_initialize_lobe(lobe, vec3(0.0f, 0.0f, 1.0f), view, vec3(in[7], in[8], in[9]), in[6], 1.0f, 1.0f);
+    const OpenPBR_DiffuseSpecular v = openpbr_calculate_lobe_value(lobe, view, light);
+    const vec3 f = light.z > 0.0f ? v.diffuse / light.z : v.diffuse;
+    out[0] = f.x; out[1] = f.y; out[2] = f.z;
+    out[3] = lobe.cached_specular_energy_compensation;
+    out[4] = openpbr_look_up_opaque_dielectric_energy_complement(1.0f, 1.0f, max(light.z, 0.0f));"""),
     # diffuse lobe on its own: wo (3), roughness, u (2) -> wi (3), pdf
     "sample": cpp.Entry(6, 4, """
     OpenPBR_EnergyConservingRoughDiffuseLobe lobe;
@@ -105,7 +116,14 @@ def subject(source: Path, include_dirs=()) -> Subject:
     h.binary()  # compile now: a missing compiler / GLM is reported before any grading starts
 
     def brdf(wi, wo, roughness, rho):
-        return h.run("brdf", rows(wi, wo, roughness, rho))
+        out = h.run("brdf", rows(wi, wo, roughness, rho))
+        if not np.all(out[:, 3:] == 1.0):  # the set-up must make the specular factors vanish
+            raise GraderUnavailable("adobe-openpbr-bsdf: the specular compensation at eta = 1 is not 1 "
+                                    "in this version; the diffuse lobe cannot be isolated")
+        return out[:, :3]
+
+    def brdf_domain(wi, wo):
+        return np.asarray(wo)[:, 2] >= 0.0
 
     def sample(wo, roughness, u):
         out = h.run("sample", rows(wo, roughness, u))
@@ -131,11 +149,13 @@ def subject(source: Path, include_dirs=()) -> Subject:
 
     src = Path(source)
     return Subject(
+        selection="max",
         name="adobe-openpbr-bsdf", model="eon_approx", tolerance=TOLERANCE, tolerance_reason=TOLERANCE_REASON,
         version={"source": str(src.resolve()), "files": len(h.sources),
                  "sha256": _tree_hash(h.sources, src), "compiler": cpp.compiler_version()},
-        brdf=brdf, sample=sample, pdf=pdf, surface=surface,
+        brdf=brdf, sample=sample, pdf=pdf, surface=surface, brdf_domain=brdf_domain,
         notes=["BRDF graded against eon_approx: the diffuse lobe calls openpbr_f_EON with Exact = false",
+               "rows with wo below the horizon are outside the lobe's domain (face-forwarded view)",
                "no directional-albedo function for the diffuse lobe; surface selection uses max component "
                "(selection='max')"])
 

@@ -29,9 +29,7 @@ from .subject import Subject
 
 NODE_FILE = "pbrlib/genglsl/mx_oren_nayar_diffuse_bsdf.glsl"
 MATH_FILE = "stdlib/genglsl/lib/mx_math.glsl"
-TOLERANCE = 2e-4
-TOLERANCE_REASON = ("GLSL on llvmpipe: float32 and llvmpipe's acos approximation (max abs error "
-                    "1.6e-4 in the angle); MaterialX's own M_FLOAT_EPS = 1e-8 guards")
+TOLERANCE, TOLERANCE_REASON = glsl.TOLERANCE, glsl.TOLERANCE_REASON
 _TOKEN = re.compile(r"\$[A-Za-z_][A-Za-z0-9_]*")
 # The closure context of the wrapper: a uniform white environment (irradiance 1 from every
 # normal), so the CLOSURE_TYPE_INDIRECT response is the directional albedo itself.

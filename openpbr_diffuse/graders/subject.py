@@ -22,8 +22,9 @@ class Subject:
         Registry name (``"materialx-glsl"``, ...) or ``"glsl:FILE:FUNCTION"`` for the adapters.
     model : str
         The reference model its code claims to implement (``"eon"``).
-    tolerance : float
-        Absolute tolerance used when grading its values, and ``tolerance_reason`` why.
+    tolerance : (float, float)
+        (relative, absolute) tolerance passed to ``conformance.grade.grade``, and
+        ``tolerance_reason`` why.
     version : dict
         What was run: library versions, source path, SHA-256 of the sources.
     brdf : callable or None
@@ -37,11 +38,17 @@ class Subject:
     surface : callable or None
         ``surface(inputs: dict, wo (n,3)) -> {"weight": (n,3), "probability": (n,)}``: the
         diffuse lobe's weight and selection probability inside the implementation's surface.
+    selection : str or None
+        How the surface picks a lobe (``"length"`` or ``"max"`` of |w E|), for ``OpenPBRSurface``.
+    brdf_domain : callable or None
+        ``brdf_domain(wi, wo) -> (n,) bool``: the rows inside the implementation's documented
+        input domain (e.g. a view direction face-forwarded to the normal); rows outside it are
+        not graded and are reported as such.
     """
 
     name: str
     model: str
-    tolerance: float
+    tolerance: tuple
     tolerance_reason: str
     version: dict = field(default_factory=dict)
     brdf: Callable | None = None
@@ -49,4 +56,7 @@ class Subject:
     sample: Callable | None = None
     pdf: Callable | None = None
     surface: Callable | None = None
+    brdf_domain: Callable | None = None
+    selection: str | None = None
     notes: list = field(default_factory=list)
+    noise: dict = field(default_factory=dict)

@@ -35,9 +35,7 @@ FILES = ("main.glsl", "thin-film.glsl", "specular_brdf.glsl", "specular_btdf.gls
          "coat_brdf.glsl", "fuzz_brdf.glsl", "diffuse_brdf.glsl", "diffuse_btdf.glsl",
          "openpbr_surface.glsl")
 _WEBGL_ONLY = re.compile(r"^\s*(#include\s*<[^>]*>|uniform\s+BVH\s+\w+\s*;|varying\s+.*;)\s*$", re.M)
-TOLERANCE = 2e-4
-TOLERANCE_REASON = ("GLSL on llvmpipe: float32 and llvmpipe's acos approximation (max abs error "
-                    "1.6e-4 in the angle, entering E_F through G_F)")
+TOLERANCE, TOLERANCE_REASON = glsl.TOLERANCE, glsl.TOLERANCE_REASON
 SURFACE_SEEDS = 256
 MATERIAL_DEFAULTS = {  # the viewer's uniforms left at OpenPBR defaults for a plain dielectric
     "base_weight": 1.0, "base_color": (0.8, 0.8, 0.8), "base_diffuse_roughness": 0.0, "base_metalness": 0.0,
@@ -130,6 +128,7 @@ def subject(source: Path) -> Subject:
         return {"weight_albedo": out[:, :3], "probability": out[:, 3]}
 
     return Subject(
+        selection="length",
         name="openpbr-viewer-glsl", model="eon", tolerance=TOLERANCE, tolerance_reason=TOLERANCE_REASON,
         version={"source": str(path.resolve()), "files": list(FILES),
                  "sha256": glsl.sources_hash([path / f for f in FILES]), "gl": glsl.gl_version()},
