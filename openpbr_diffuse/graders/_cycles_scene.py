@@ -1,7 +1,8 @@
 """Runs inside a Python that has ``bpy``: renders the rows of a job file with Cycles.
 
-Invoked by :mod:`openpbr_diffuse.graders.cycles` as ``python -m
-openpbr_diffuse.graders._cycles_scene JOB.json OUT.npz``.  Each row is one render of a large
+Invoked by :mod:`openpbr_diffuse.graders.cycles` as ``PYTHON _cycles_scene.py JOB.json OUT``
+with a Python that has ``bpy`` (it needs nothing else: numpy comes with bpy, the EXR is read
+back through Blender's own image loader).  Each row is one render of a large
 plane carrying a Diffuse BSDF node (colour rho, roughness r, i.e. Cycles' ``bsdf_oren_nayar``),
 seen by an orthographic camera looking down world -z, so every pixel sees the plane along the
 same direction wo:
@@ -40,8 +41,9 @@ def look_along(direction):
 
 
 def main(job_path, out_path):
+    import os
+
     import bpy
-    import OpenImageIO as oiio
     from mathutils import Matrix
 
     job = json.loads(open(job_path).read())
@@ -133,10 +135,12 @@ def main(job_path, out_path):
         cy.samples = int(spp)
         scene.render.filepath = f"{out_path}.{k}.exr"
         bpy.ops.render.render(write_still=True)
-        pixels = oiio.ImageBuf(scene.render.filepath).get_pixels(oiio.FLOAT)[..., :3].reshape(-1, 3)
-        import os
+        image = bpy.data.images.load(scene.render.filepath)
+        pixels = np.empty(len(image.pixels), dtype=np.float32)
+        image.pixels.foreach_get(pixels)  # float EXR, linear, RGBA
+        bpy.data.images.remove(image)
         os.remove(scene.render.filepath)
-        pixels = pixels.astype(np.float64)
+        pixels = pixels.reshape(-1, 4)[:, :3].astype(np.float64)
         means.append(pixels.mean(axis=0))
         errors.append(pixels.std(axis=0, ddof=1) / np.sqrt(pixels.shape[0]) if pixels.shape[0] > 1
                       else np.zeros(3))

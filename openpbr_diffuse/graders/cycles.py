@@ -5,8 +5,8 @@ compensation term.  It is graded by rendering (see :mod:`._cycles_scene`): BRDF 
 plane lit by a zero-angle sun of strength 1 (pixel = f cos(theta_i); deterministic: a delta
 light, a black world, one path vertex), directional albedo from the plane under a uniform white
 world (pixel = E(mu_o); Monte Carlo, so its standard error is measured from the pixels).  The
-render runs in a child process of the same Python, so a crash in Blender cannot take the
-grader down and ``bpy`` is imported only there.
+render runs in a child Python (this one, or ``$OPENPBR_DIFFUSE_BPY_PYTHON``), so a crash in
+Blender cannot take the grader down and ``bpy`` (which pins its own numpy) is imported only there.
 
 Render budget (defaults): BRDF 2x2 px at 1 sample (exact up to float32), albedo 32x32 px at
 256 samples per pixel (262 144 paths per row).
@@ -14,8 +14,8 @@ Render budget (defaults): BRDF 2x2 px at 1 sample (exact up to float32), albedo 
 from __future__ import annotations
 
 import hashlib
-import importlib.util
 import json
+import os
 import subprocess
 import sys
 import tempfile
@@ -34,27 +34,43 @@ TOLERANCE_REASON = ("Cycles renders: BRDF values exact to float32 (delta sun, on
                     "rows carry Monte Carlo noise, standard error <= ~2e-4 at the default budget")
 
 
-def bpy_version() -> str:
-    if importlib.util.find_spec("bpy") is None:
-        raise GraderUnavailable("bpy (Blender as a Python module) is not installed: pip install bpy "
-                                "(CPython 3.11, ~0.8 GB)")
-    run = subprocess.run([sys.executable, "-c", "import bpy, sys; sys.stdout.write(bpy.app.version_string)"],
-                         capture_output=True, text=True, check=False)
+SCENE_SCRIPT = Path(__file__).with_name("_cycles_scene.py")
+#: environment variable naming a Python interpreter that has bpy (bpy pins its own numpy and
+#: CPython 3.11, so it often lives in a virtual environment of its own)
+PYTHON_VARIABLE = "OPENPBR_DIFFUSE_BPY_PYTHON"
+_INSTALL = (f"pip install bpy (CPython 3.11, ~0.8 GB), or set {PYTHON_VARIABLE} to a Python that has it")
+
+
+def bpy_python() -> str:
+    """The interpreter the renders run in: $OPENPBR_DIFFUSE_BPY_PYTHON, else this Python."""
+    return os.environ.get(PYTHON_VARIABLE) or sys.executable
+
+
+def _probe():
+    code = ("import bpy, sys, glob, os; d = os.path.dirname(bpy.__file__); "
+            "h = glob.glob(os.path.join(d, '*', 'scripts', 'addons_core', 'cycles', 'source', 'kernel', "
+            "'closure', 'bsdf_oren_nayar.h')); sys.stdout.write(bpy.app.version_string + '\\n' + (h[0] if h else ''))")
+    try:
+        run = subprocess.run([bpy_python(), "-c", code], capture_output=True, text=True, check=False)
+    except OSError as exc:
+        raise GraderUnavailable(f"cannot run {bpy_python()} ({exc.strerror}): {_INSTALL}") from exc
     if run.returncode != 0:
-        raise GraderUnavailable("bpy does not import: " + (run.stderr.strip().splitlines() or ["?"])[-1])
-    return run.stdout.strip().splitlines()[-1]
+        last = (run.stderr.strip().splitlines() or ["?"])[-1]
+        if "No module named 'bpy'" in last:
+            raise GraderUnavailable(f"bpy (Blender as a Python module) is not installed in {bpy_python()}: {_INSTALL}")
+        raise GraderUnavailable(f"bpy does not import in {bpy_python()}: {last}")
+    lines = run.stdout.strip().splitlines()
+    return lines[0], (Path(lines[1]) if len(lines) > 1 and lines[1] else None)
+
+
+def bpy_version() -> str:
+    """Blender version of the bpy the renders use (GraderUnavailable when there is none)."""
+    return _probe()[0]
 
 
 def kernel_source() -> Path | None:
     """Cycles' bsdf_oren_nayar.h shipped inside the bpy wheel (hashed into the version)."""
-    spec = importlib.util.find_spec("bpy")
-    if spec is None or not spec.submodule_search_locations:
-        return None
-    for folder in spec.submodule_search_locations:
-        hits = sorted(Path(folder).glob("*/scripts/addons_core/cycles/source/kernel/closure/bsdf_oren_nayar.h"))
-        if hits:
-            return hits[0]
-    return None
+    return _probe()[1]
 
 
 def render(rows: list[dict], budget: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -63,9 +79,8 @@ def render(rows: list[dict], budget: dict | None = None) -> tuple[np.ndarray, np
     with tempfile.TemporaryDirectory() as tmp:
         job_path, out_path = Path(tmp) / "job.json", Path(tmp) / "out"
         job_path.write_text(json.dumps(job))
-        run = subprocess.run([sys.executable, "-m", "openpbr_diffuse.graders._cycles_scene", str(job_path),
-                              str(out_path)], capture_output=True, text=True, check=False,
-                             cwd=str(Path(__file__).resolve().parents[2]))
+        run = subprocess.run([bpy_python(), str(SCENE_SCRIPT), str(job_path), str(out_path)],
+                             capture_output=True, text=True, check=False)
         if run.returncode != 0:
             tail = (run.stderr.strip().splitlines() or ["no output"])[-1]
             raise GraderUnavailable(f"the Cycles render failed: {tail}")
@@ -75,8 +90,7 @@ def render(rows: list[dict], budget: dict | None = None) -> tuple[np.ndarray, np
 
 def subject(source: Path | None = None, budget: dict | None = None) -> Subject:
     """Cycles from the installed ``bpy`` (``source`` is not used: the kernel ships in the wheel)."""
-    version = bpy_version()
-    kernel = kernel_source()
+    version, kernel = _probe()
     last = {}
 
     def brdf(wi, wo, roughness, rho):
