@@ -15,6 +15,7 @@ Returns, per row, the mean over the image's pixels and its standard error (pixel
 independent estimates: different sample sequences per pixel).
 """
 import json
+import os
 import sys
 
 import numpy as np
@@ -41,8 +42,6 @@ def look_along(direction):
 
 
 def main(job_path, out_path):
-    import os
-
     import bpy
     from mathutils import Matrix
 
@@ -95,7 +94,7 @@ def main(job_path, out_path):
     cam_data.type = "ORTHO"
     cam_data.ortho_scale = 1.0
     cam_data.clip_start = 1e-3
-    cam_data.clip_end = 1e6
+    cam_data.clip_end = 1e7
     camera = bpy.data.objects.new("grader_camera", cam_data)
     scene.collection.objects.link(camera)
     scene.camera = camera
@@ -127,8 +126,12 @@ def main(job_path, out_path):
             background.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
             background.inputs["Strength"].default_value = 1.0
             sun.hide_render = True
-        # the plane, rotated by R and stretched along its tilt so that it fills the frame
-        scale = 4.0 / max(float(wo[2]), 1e-3)
+        # the plane, rotated by R and stretched along its tilt so that it fills the frame; the
+        # camera sits far enough above it that every pixel's ray meets the plane in front of it
+        # (a ray at lateral offset d meets a plane seen at mu_o at depth ~ d / mu_o)
+        mu_o = max(float(wo[2]), 1e-3)
+        scale = 4.0 / mu_o
+        camera.location = (0.0, 0.0, 2.0 / mu_o + 10.0)
         plane.matrix_world = Matrix([list(R[0]) + [0.0], list(R[1]) + [0.0], list(R[2]) + [0.0],
                                      [0.0, 0.0, 0.0, 1.0]]) @ Matrix.Diagonal((scale, scale, 1.0, 1.0))
         scene.render.resolution_x = scene.render.resolution_y = int(res)
@@ -149,4 +152,8 @@ def main(job_path, out_path):
 
 
 if __name__ == "__main__":
+    # run as a script, this file's folder is sys.path[0]: its cycles.py would shadow Blender's
+    # "cycles" add-on (the render engine would then not register)
+    here = os.path.dirname(os.path.abspath(__file__))
+    sys.path[:] = [p for p in sys.path if os.path.abspath(p or os.curdir) != here]
     main(sys.argv[1], sys.argv[2])

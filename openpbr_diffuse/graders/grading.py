@@ -115,8 +115,9 @@ def grade_values(subject, vectors=None, kinds=("brdf", "albedo")) -> list[Quanti
         if fn is None or len(rows) == 0:
             continue
         excluded = 0
-        if kind == "brdf" and subject.brdf_domain is not None:
-            inside = np.asarray(subject.brdf_domain(rows.wi, rows.wo), bool)
+        domain = subject.brdf_domain if kind == "brdf" else subject.albedo_domain
+        if domain is not None:
+            inside = np.asarray(domain(rows.wi, rows.wo) if kind == "brdf" else domain(rows.mu), bool)
             excluded = int((~inside).sum())
             rows = rows.subset(inside)
         if kind == "brdf":

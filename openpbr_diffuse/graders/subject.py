@@ -43,7 +43,7 @@ class Subject:
     brdf_domain : callable or None
         ``brdf_domain(wi, wo) -> (n,) bool``: the rows inside the implementation's documented
         input domain (e.g. a view direction face-forwarded to the normal); rows outside it are
-        not graded and are reported as such.
+        not graded and are reported as such.  ``albedo_domain(mu) -> (n,) bool`` likewise.
     """
 
     name: str
@@ -57,6 +57,7 @@ class Subject:
     pdf: Callable | None = None
     surface: Callable | None = None
     brdf_domain: Callable | None = None
+    albedo_domain: Callable | None = None
     selection: str | None = None
     notes: list = field(default_factory=list)
     noise: dict = field(default_factory=dict)
