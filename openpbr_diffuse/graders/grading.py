@@ -102,6 +102,20 @@ def _tolerance_pair(tolerance):
     return (REL_TOL, ABS_TOL) if tolerance is None else tuple(tolerance)
 
 
+def _failing_rows(rows, out, g):
+    """Where the failing rows are: their count and, for albedo rows, their mu values."""
+    from ..conformance.deviations import reference
+
+    ref = reference(rows)
+    with np.errstate(invalid="ignore"):
+        e = np.abs(out - ref) / (g.tolerance["absolute"] + g.tolerance["relative"] * np.abs(ref))
+    bad = ~(np.nan_to_num(e, nan=np.inf).max(axis=1) <= 1.0)
+    text = f"{int(bad.sum())} of {len(rows)} rows outside the tolerance"
+    if np.all(rows.kind == "albedo") and bad.any():
+        text += " (mu = " + ", ".join(f"{m:g}" for m in np.unique(rows.mu[bad])) + ")"
+    return text
+
+
 def grade_values(subject, vectors=None, kinds=("brdf", "albedo")) -> list[QuantityGrade]:
     """BRDF / albedo of ``subject`` on the vectors of its model, graded by conformance.grade."""
     from ..conformance.grade import grade
@@ -132,9 +146,12 @@ def grade_values(subject, vectors=None, kinds=("brdf", "albedo")) -> list[Quanti
             tolerance = (rel, max(ab, 4.0 * se))
             reason = (f"rendered albedo: Monte Carlo standard error <= {se:.2g} (measured from the pixels); "
                       f"tolerance 4 standard errors = {4 * se:.2g} absolute")
-        g = grade(rows, np.asarray(out, dtype=np.float64), model=subject.model, tolerance=tolerance)
-        results.append(QuantityGrade.from_grade(kind, g, excluded,
-                                                None if tolerance is None and kind != "albedo" else reason))
+        out = np.asarray(out, dtype=np.float64)
+        g = grade(rows, out, model=subject.model, tolerance=tolerance)
+        q = QuantityGrade.from_grade(kind, g, excluded, None if tolerance is None else reason)
+        if not g.passed:
+            q.detail += "; " + _failing_rows(rows, out, g)
+        results.append(q)
     return results
 
 
@@ -173,7 +190,7 @@ def grade_sampler(subject, quick=False, seed=12) -> list[QuantityGrade]:
     best = min(worst, key=worst.get)
     q_pdf = QuantityGrade(
         "sampler pdf", bool(worst[best] <= SAMPLER_PDF_TOL and self_err <= SAMPLER_PDF_TOL),
-        float(worst.get("eon", math.nan)), float("nan"), f"relative {SAMPLER_PDF_TOL:g}",
+        float(worst[best]), float("nan"), f"relative {SAMPLER_PDF_TOL:g}",
         "float32 / llvmpipe pdf arithmetic; the strategies differ by > 10 % somewhere",
         None if best == "eon" else f"strategy_{best}",
         f"reported pdf matches the reference strategy '{best}' to {worst[best]:.2g} relative "
