@@ -89,6 +89,9 @@ def token_values(library_text: str, generated: str, context: int = 3) -> dict[st
     ``context`` preceding non-blank lines followed by a line with the same text around the
     tokens (the generator substitutes tokens in place, line by line); the text it has where the
     library has the token is the token's value.
+
+    >>> token_values("a\\nb\\nreturn $x;", "a\\nreturn y;\\na\\nb\\nreturn Data(1, 2);")
+    {'$x': 'Data(1, 2)'}
     """
     values: dict[str, str] = {}
     gen = [line.strip() for line in generated.splitlines() if line.strip()]
