@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from . import glsl
-from ._arrays import direction, rows
+from ._arrays import rows
 from .errors import GraderUnavailable
 from .subject import Subject
 
