@@ -90,6 +90,22 @@ def test_deviation_is_failed_and_diagnosed(name, dtype, vectors):
     assert g.diagnosis == name, (g.diagnosis, g.diagnosis_detail)
 
 
+@pytest.mark.parametrize("name", sorted(DEVIATION_IMPLEMENTATIONS))
+def test_deviation_diagnosed_from_eon_rows_only(name, vectors):
+    """An EON-only implementation submits only the eon rows (check --model eon)."""
+    eon = vectors.subset(vectors.model == "eon")
+    g = grade(eon, hand.answer(eon, np.float32, **DEVIATION_IMPLEMENTATIONS[name]))
+    assert not g.passed and g.diagnosis == name, g.diagnosis_detail
+
+
+def test_deviation_also_in_albedo_rows_is_diagnosed(vectors):
+    """times cos applied to the albedo queries as well (E mu) is still the same deviation."""
+    out = hand.answer(vectors, np.float64, times_cos=True)
+    alb = vectors.kind == "albedo"
+    out[alb] *= vectors.mu[alb, None]
+    assert grade(vectors, out).diagnosis == "times_cos_theta_i"
+
+
 @pytest.mark.parametrize("name", ["rho_ms_extra_rho", "ldotv_clamped", "times_cos_theta_i"])
 def test_check_cli_diagnoses(tmp_path, capsys, name, vectors):
     out = hand.answer(vectors, np.float32, **DEVIATION_IMPLEMENTATIONS[name])
@@ -162,6 +178,15 @@ def test_unusable_file_exits_2(tmp_path, capsys, case, vectors):
     assert err.count("\n") == 1 and "Traceback" not in err
     with pytest.raises(ValueError):
         read_results(path)
+
+
+def test_nan_result_in_file_does_not_conform(tmp_path, capsys, vectors):
+    out = reference(vectors)
+    out[3, 0] = math.nan
+    path, status = _check(tmp_path, out)
+    assert status == 1
+    d = json.loads(capsys.readouterr().out)
+    assert d["passed"] is False and d["worst"][0]["id"] == vectors.id[3]
 
 
 def test_missing_file_exits_2(tmp_path):

@@ -5,6 +5,7 @@ import importlib
 import pytest
 
 MODULES = ["openpbr_diffuse.conformance.vectors", "openpbr_diffuse.conformance.deviations",
+           "openpbr_diffuse.sampling.quality", "openpbr_diffuse.report.render",
            "openpbr_diffuse.conformance.grade"]
 
 

@@ -31,24 +31,14 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 
 import openpbr_diffuse as od  # noqa: E402
-from openpbr_diffuse.sampling import STRATEGIES, sample_rng  # noqa: E402
+from openpbr_diffuse.sampling import STRATEGIES  # noqa: E402
+from openpbr_diffuse.sampling.quality import weight_stats  # noqa: E402  (the computation lives in the library)
 
 #: theta_o in degrees: dense towards grazing, where the strategies differ (88.854 deg is
 #: mu_o = 0.02, 89.427 deg is mu_o = 0.01).
 THETA_DEFAULT = (0, 15, 30, 45, 60, 70, 75, 80, 84, 86, 87, 88, 88.854, 89.427)
 ROUGHNESS_DEFAULT = (0.25, 0.5, 1.0)
 QUANTITIES = ("variance", "max_weight", "mean_weight")
-
-
-def weight_stats(strategy, mu_o, r, n, seed):
-    """(variance, max, mean, standard error of the mean) of the throughput weight."""
-    wo = np.array([math.sqrt(max(0.0, 1.0 - mu_o * mu_o)), 0.0, mu_o])
-    wi, p = sample_rng(strategy, wo, r, seed, shape=(n,))
-    f = od.evaluate("eon", wi, wo, r, 1.0)[:, 0]
-    ok = p > 0.0
-    w = np.where(ok, f * np.maximum(wi[:, 2], 0.0) / np.where(ok, p, 1.0), 0.0)
-    var = float(w.var())
-    return var, float(w.max()), float(w.mean()), math.sqrt(var / n)
 
 
 def compute(roughness, thetas, strategies, n, seed):

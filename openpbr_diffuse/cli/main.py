@@ -15,6 +15,7 @@ COMMANDS = {
     "albedo": "albedo",
     "vectors": "vectors",
     "check": "check",
+    "report": "report",
 }
 
 

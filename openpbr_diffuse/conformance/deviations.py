@@ -26,7 +26,7 @@ The deviations (``models.md``, "Known deviations"):
 - ``white_tint``: evaluated at rho = 1 and multiplied by rho (OpenPBR-viewer): no colour
   shift;
 - ``times_cos_theta_i``: the BRDF multiplied by cos(theta_i) (a radiance response instead
-  of f); albedo queries unaffected;
+  of f); albedo queries unaffected (variant: also multiplied by their mu);
 - ``roughness_sigma_vs_r``: the roughness read in the other parameterisation, converted
   linearly between r in [0, 1] and sigma in [0, pi/2] (either direction: two variants);
 - ``roughness_squared``: the roughness squared (or its square root) before use.
@@ -158,6 +158,14 @@ def _times_cos(vectors):
     return out
 
 
+def _times_cos_albedo_too(vectors):
+    """Also the albedo queries multiplied by their cosine mu."""
+    out = _times_cos(vectors)
+    alb = vectors.kind == "albedo"
+    out[alb] *= vectors.mu[alb, None]
+    return out
+
+
 def _rough(mapping):
     def predict(vectors):
         return _predict(vectors, roughness_map=mapping)
@@ -218,7 +226,7 @@ _TABLE = (
     ("white_tint", "evaluated at rho = 1 then multiplied by rho (no colour shift)",
      "OpenPBR-viewer", (("rho f(rho = 1)", _white_tint),)),
     ("times_cos_theta_i", "the BRDF multiplied by cos(theta_i) (a radiance response, not f)",
-     "common integration mistake", (("f mu_i", _times_cos),)),
+     "common integration mistake", (("f mu_i", _times_cos), ("f mu_i, albedo E mu", _times_cos_albedo_too))),
     ("roughness_sigma_vs_r", "roughness read in the other parameterisation (sigma in [0, pi/2] vs r in [0, 1])",
      "parameter mix-up between QON (sigma) and FON/EON (r)",
      (("r' = 2r/pi, sigma' = sigma pi/2", _rough(_read_as_other)),

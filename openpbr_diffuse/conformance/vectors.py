@@ -18,7 +18,7 @@ file back and matches its rows to the vectors by id (a subset of the rows is all
 Examples
 --------
 >>> v = default_vectors()
->>> v.version, len(v) > 1000, sorted(set(v.kind))
+>>> v.version, len(v) > 1000, sorted(map(str, set(v.kind)))
 ('1', True, ['albedo', 'brdf'])
 >>> bool(((v.wi[:, 2] < 0.002) & (v.kind == "brdf")).any())   # grazing rows
 True
@@ -229,7 +229,9 @@ def write_vectors(vectors: VectorSet, path, *, out=None) -> Path:
             v = cols[name][i]
             if isinstance(v, (str, np.str_)):
                 return str(v)
-            return None if math.isnan(float(v)) else float(v)
+            if not math.isfinite(float(v)):
+                return None if name not in OUT_COLUMNS else str(float(v))  # a result NaN stays "nan"
+            return float(v)
 
         doc = {"format": FORMAT_NAME, "version": vectors.version, "notes": _header_lines(vectors)[1:],
                "columns": names, "rows": [{name: value(name, i) for name in names} for i in range(n)]}
@@ -241,15 +243,16 @@ def write_vectors(vectors: VectorSet, path, *, out=None) -> Path:
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(names)
     text_cols = [cols[name] for name in names]
+    n_in = len(COLUMNS)
     for i in range(n):
-        w.writerow([_cell(c[i]) for c in text_cols])
+        w.writerow([_cell(c[i]) for c in text_cols[:n_in]] + [repr(float(c[i])) for c in text_cols[n_in:]])
     path.write_text(buf.getvalue())
     return path
 
 
 # ----------------------------------------------------------------------------- reading
 
-def _parse_number(text, column, row_label):
+def _parse_number(text, column, row_label, allow_nonfinite=False):
     if text is None:
         return math.nan
     if isinstance(text, bool):
@@ -263,7 +266,7 @@ def _parse_number(text, column, row_label):
         v = float(text)
     except ValueError:
         raise ValueError(f"{row_label}: column {column} is not a number: {text[:40]!r}") from None
-    if math.isnan(v) or math.isinf(v):
+    if (math.isnan(v) or math.isinf(v)) and not allow_nonfinite:
         raise ValueError(f"{row_label}: column {column} is not a finite number: {text[:40]!r}")
     return v
 
@@ -303,7 +306,8 @@ def read_results(path, vectors: VectorSet | None = None):
     ``vectors`` defaults to :func:`default_vectors`.  Every row must carry the columns
     :data:`COLUMNS` and :data:`OUT_COLUMNS`; its id must name a vector and its inputs must
     equal that vector's (to :data:`INPUT_MATCH_TOL`, so float32-printed inputs pass);
-    every ``out_*`` must be a finite number.  Rows are returned in the file's order.
+    every ``out_*`` must be a number ("nan" and "inf" are read as such: they fail the grade,
+    they do not make the file unusable).  Rows are returned in the file's order.
 
     Raises
     ------
@@ -345,10 +349,11 @@ def read_results(path, vectors: VectorSet | None = None):
                 raise ValueError(f"{label}: column {col} is {got!r}, the vector has "
                                  f"{'blank' if math.isnan(want) else repr(want)}: rows do not match the vectors")
         for k, col in enumerate(OUT_COLUMNS):
-            v = _parse_number(rec.get(col), col, label)
-            if math.isnan(v):
+            raw = rec.get(col)
+            if raw is None or (isinstance(raw, str) and not raw.strip()):
                 raise ValueError(f"{label}: column {col} is blank; every submitted row needs a result")
-            out[n, k] = v
+            # "nan"/"inf" results are read (and fail the grade): a NaN is the implementation's bug
+            out[n, k] = _parse_number(raw, col, label, allow_nonfinite=True)
         take[n] = i
     return vectors.subset(take), out
 

@@ -5,10 +5,11 @@
 - sampling: chi-square, pdf normalisation, variance curves (Fig. 10-12)
 - colorshift: spectral versus RGB, the EON colour shift
 - materials: each material of the given files
-- implementations: test vectors and graded implementations
+- implementations: the test vectors, the grader and its self-test on the known deviations
+- graders: real implementations graded by running their own code (issue 12)
 - approximations: the seeds' real-time approximations (Gotanda, table compensation, SH)
 - simulation: the microsurface ground truth
 - timings: the paper's Table 1 on this machine
 """
-SECTIONS = ("models", "albedo", "sampling", "colorshift", "materials", "implementations",
+SECTIONS = ("models", "albedo", "sampling", "colorshift", "materials", "implementations", "graders",
             "approximations", "simulation", "timings")

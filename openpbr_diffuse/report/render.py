@@ -1,0 +1,133 @@
+"""The report page: ``report.json``'s document rendered to one offline HTML file.
+
+Rendered with Jinja2 with autoescaping on for every value: material names, file paths,
+documentation strings and any other text that can come from a user's file reach the page
+only escaped.  The page loads nothing from the network (inline CSS, no scripts; the images
+are files in ``images/`` beside it) and forbids scripts by its Content-Security-Policy.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+_TEMPLATE = """<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<meta http-equiv="Content-Security-Policy" content="default-src 'none'; img-src 'self' data: file:; style-src 'unsafe-inline'">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<title>openpbr-diffuse conformance report</title>
+<style>
+body { font-family: system-ui, sans-serif; margin: 1.5em auto; max-width: 1200px; color: #222; line-height: 1.4; padding: 0 1em; }
+h1 { font-size: 1.6em; } h2 { border-bottom: 1px solid #ccc; padding-bottom: .2em; margin-top: 2em; }
+table { border-collapse: collapse; margin: .6em 0 1.2em; font-size: .85em; }
+th, td { border: 1px solid #ccc; padding: .2em .5em; text-align: left; vertical-align: top; }
+th { background: #f3f3f3; } td.num { text-align: right; font-variant-numeric: tabular-nums; }
+.pass { color: #17692b; font-weight: 600; } .fail, .error { color: #b00020; font-weight: 600; }
+.na { color: #777; font-weight: 600; }
+.badge { display: inline-block; padding: 0 .5em; border-radius: .3em; font-size: .8em; vertical-align: middle; border: 1px solid currentColor; }
+figure { margin: 1em 0; } figure img { max-width: 100%; border: 1px solid #ddd; }
+figcaption { font-size: .85em; color: #444; }
+.warn { background: #fff6d6; border-left: 4px solid #e0a800; padding: .3em .6em; margin: .3em 0; }
+.meta { color: #555; font-size: .9em; }
+caption { text-align: left; font-weight: 600; padding: .2em 0; }
+</style>
+</head>
+<body>
+<h1>openpbr-diffuse conformance report</h1>
+<p class="meta">openpbr-diffuse {{ doc.version }} &middot; generated {{ doc.generated }} &middot;
+{{ "quick run" if doc.quick else "full run" }} &middot; {{ doc.elapsed_s | num }} s &middot;
+materials: {% for p in doc.paths %}<code>{{ p }}</code>{% if not loop.last %}, {% endif %}{% else %}none{% endfor %}</p>
+<p id="overall" class="{{ 'pass' if doc.passed else 'fail' }}">{{ "ALL CHECKS PASS" if doc.passed else "SOME CHECKS FAIL" }}:
+{{ doc.n_checks - doc.n_failed }} of {{ doc.n_checks }} checks pass.</p>
+<table id="summary"><caption>Sections</caption>
+<tr><th>section</th><th>status</th><th>checks passed</th><th>time (s)</th></tr>
+{% for s in doc.sections %}<tr><td><a href="#section-{{ s.key }}">{{ s.title }}</a></td>
+<td class="{{ status_class(s.status) }}">{{ s.status }}</td>
+<td class="num">{{ s.checks | selectattr('passed') | list | length }} / {{ s.checks | length }}</td>
+<td class="num">{{ s.elapsed_s | num }}</td></tr>
+{% endfor %}</table>
+{% for s in doc.sections %}
+<section id="section-{{ s.key }}" class="report-section" data-key="{{ s.key }}" data-status="{{ s.status }}">
+<h2>{{ s.title }} <span class="badge {{ status_class(s.status) }}">{{ s.status }}</span></h2>
+{% if s.error %}<p class="warn">Section failed: {{ s.error }}</p>{% endif %}
+{% for n in s.notes %}<p>{{ n }}</p>{% endfor %}
+{% for w in s.warnings %}<p class="warn">{{ w }}</p>{% endfor %}
+{% if s.checks %}<table class="checks"><caption>Checks</caption>
+<tr><th>check</th><th>measured</th><th>threshold</th><th>result</th><th>reference</th><th>detail</th></tr>
+{% for c in s.checks %}<tr><td>{{ c.name }}</td><td class="num">{{ c.measured | num }}{% if c.unit %} {{ c.unit }}{% endif %}</td>
+<td class="num">{% if c.comparison == '==' %}{{ c.expected | num }} &plusmn; {{ c.threshold | num }}{% else %}{{ c.comparison }} {{ c.threshold | num }}{% endif %}</td>
+<td class="{{ 'pass' if c.passed else 'fail' }}">{{ "pass" if c.passed else "FAIL" }}</td>
+<td>{{ c.reference }}</td><td>{{ c.detail }}</td></tr>
+{% endfor %}</table>{% endif %}
+{% for t in s.tables %}<table class="data"><caption>{{ t.caption }}</caption>
+<tr>{% for c in t.columns %}<th>{{ c }}</th>{% endfor %}</tr>
+{% for row in t.rows %}<tr>{% for v in row %}<td{% if v is number %} class="num"{% endif %}>{{ v | num }}</td>{% endfor %}</tr>
+{% endfor %}</table>{% endfor %}
+{% for f in s.figures %}<figure><img src="{{ f.file }}" alt="{{ f.caption }}" loading="eager">
+<figcaption>{{ f.caption }}</figcaption></figure>{% endfor %}
+</section>
+{% endfor %}
+</body>
+</html>
+"""
+
+
+def _num(v):
+    if v is None:
+        return "—"
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        if not math.isfinite(v):
+            return str(v)
+        if v == 0.0:
+            return "0"
+        a = abs(v)
+        return f"{v:.4g}" if 1e-3 <= a < 1e5 else f"{v:.3e}"
+    return v
+
+
+def _status_class(status):
+    return {"pass": "pass", "fail": "fail", "error": "error"}.get(status, "na")
+
+
+def render_html(doc: dict, image_dir: Path | None = None) -> str:
+    """The page for a report document (as in ``report.json``), every string escaped.
+
+    Figures whose file is missing from ``image_dir`` are dropped with a warning on their
+    section (the page never shows a broken image).
+
+    Examples
+    --------
+    >>> doc = {"version": "x", "generated": "now", "quick": True, "elapsed_s": 1.0, "paths": [],
+    ...        "passed": True, "n_checks": 0, "n_failed": 0,
+    ...        "sections": [{"key": "k", "title": "<b>T</b>", "status": "pass", "elapsed_s": 0.0,
+    ...                      "error": None, "notes": [], "warnings": [], "checks": [],
+    ...                      "tables": [], "figures": []}]}
+    >>> "&lt;b&gt;T&lt;/b&gt;" in render_html(doc), "<b>T</b>" in render_html(doc)
+    (True, False)
+    """
+    from jinja2 import Environment
+
+    doc = dict(doc)
+    if image_dir is not None:
+        sections = []
+        for s in doc.get("sections", []):
+            s = dict(s)
+            keep, missing = [], []
+            for f in s.get("figures", []):
+                (keep if (Path(image_dir) / Path(f["file"]).name).is_file() else missing).append(f)
+            s["figures"] = keep
+            s["warnings"] = list(s.get("warnings", [])) + [f"image not written: {f['file']}" for f in missing]
+            sections.append(s)
+        doc["sections"] = sections
+    env = Environment(autoescape=True, trim_blocks=False, lstrip_blocks=False)
+    env.filters["num"] = _num
+    template = env.from_string(_TEMPLATE)
+    return template.render(doc=doc, status_class=_status_class)
+
+
+__all__ = ["render_html"]
