@@ -54,9 +54,10 @@ def _plan(ctx):
 
 
 def _fmt(x):
-    if x is None or (isinstance(x, float) and math.isnan(x)):
-        return "—"
-    return f"{x:.3g}"
+    """A number to 3 significant digits (kept numeric for report.json); '—' where undefined."""
+    if x is None or not math.isfinite(x):
+        return "—" if x is None or math.isnan(x) else "inf"
+    return float(f"{x:.3g}")
 
 
 def _version(v: dict) -> str:
