@@ -163,3 +163,14 @@ def test_repositories_need_a_source(name):
 def test_a_source_without_the_files_is_named(name, tmp_path):
     with pytest.raises(GraderUnavailable, match=str(tmp_path)):
         load(name, tmp_path)
+
+
+@needs_gl
+def test_materialx_glsl_qon_mode(graded):
+    """energy_compensation = false: QON f conforms; its albedo is MaterialX's rational fit."""
+    r = graded("materialx-glsl-qon")
+    q = quantities(r)
+    assert r.model == "qon"
+    assert q["brdf"].passed
+    assert not q["albedo"].passed and q["albedo"].diagnosis is None
+    assert 0.03 < q["albedo"].max_abs_error < 0.1

@@ -11,6 +11,7 @@ selection probability.
 name                   code run                                                    --source
 =====================  ==========================================================  =========
 materialx-glsl         MaterialX wheel: pbrlib/genglsl/mx_oren_nayar_diffuse_bsdf   optional
+materialx-glsl-qon     the same node with energy_compensation = false (QON)         optional
 eon-diffuse-glsl       portsmouth/EON-diffuse main.glsl (paper listings)            required
 openpbr-viewer-glsl    OpenPBR-viewer glsl/pathtracing/                             required
 adobe-openpbr-bsdf     adobe/openpbr-bsdf openpbr.h (C++17 + GLM)                   required
@@ -35,15 +36,19 @@ class Implementation:
     needs_source: bool
     corpus_folder: str | None   # its folder under shared/corpus/implementations (tests)
     upstream: str
+    options: tuple = ()         # (keyword, value) pairs for the module's subject()
 
     def factory(self) -> Callable:
+        import functools
         import importlib
 
-        return importlib.import_module(f"{__name__}.{self.module}").subject
+        return functools.partial(importlib.import_module(f"{__name__}.{self.module}").subject, **dict(self.options))
 
 
 IMPLEMENTATIONS = {i.name: i for i in (
     Implementation("materialx-glsl", "materialx", False, None, "pip install MaterialX"),
+    Implementation("materialx-glsl-qon", "materialx", False, None, "pip install MaterialX",
+                   (("energy_compensation", False),)),
     Implementation("eon-diffuse-glsl", "eon_glsl", True, "eon-diffuse", "github.com/portsmouth/EON-diffuse"),
     Implementation("openpbr-viewer-glsl", "viewer_glsl", True, "openpbr-viewer",
                    "github.com/AcademySoftwareFoundation/OpenPBR-viewer"),

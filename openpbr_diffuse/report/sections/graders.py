@@ -7,7 +7,8 @@ verdict is a finding, not a failure of this report: the section adds no pass/fai
 them; an implementation that cannot run here (no GL driver, compiler, bpy, sources) is listed
 as a warning naming the missing piece.
 
-Which implementations run: ``materialx-glsl`` always (its code ships in the MaterialX wheel);
+Which implementations run: ``materialx-glsl`` always and ``materialx-glsl-qon`` unless quick
+(their code ships in the MaterialX wheel);
 the three repositories when their checkouts are known — ``ctx.extra["grader_sources"]``
 ({name: path}) or the folder in ``$OPENPBR_DIFFUSE_IMPLEMENTATIONS`` holding ``eon-diffuse/``,
 ``openpbr-viewer/`` and ``adobe-openpbr-bsdf/``; ``cycles`` only when asked
@@ -45,6 +46,7 @@ def _plan(ctx):
     plan = [("materialx-glsl", None)]
     if ctx.quick:
         return plan
+    plan.append(("materialx-glsl-qon", None))
     for name, impl in IMPLEMENTATIONS.items():
         if impl.needs_source and name in sources:
             plan.append((name, sources[name]))
