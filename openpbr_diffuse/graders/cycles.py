@@ -96,14 +96,14 @@ def render(rows: list[dict], budget: dict | None = None) -> tuple[np.ndarray, np
 def subject(source: Path | None = None, budget: dict | None = None) -> Subject:
     """Cycles from the installed ``bpy`` (``source`` is not used: the kernel ships in the wheel)."""
     version, kernel = _probe()
-    last = {}
+    last = {}  # the standard errors of the latest albedo render ("albedo_stderr"), read by grading
 
     def brdf(wi, wo, roughness, rho):
         wi, wo = np.asarray(wi, float).reshape(-1, 3), np.asarray(wo, float).reshape(-1, 3)
         n = wi.shape[0]
         roughness = np.broadcast_to(np.asarray(roughness, float), (n,))
         rho = np.broadcast_to(np.asarray(rho, float), (n, 3))
-        out = np.full((n, 3), np.nan)
+        out = np.full((n, 3), np.nan)  # NaN outside brdf_domain: not measurable by a render
         ok = brdf_domain(wi, wo)
         rows = [{"kind": "brdf", "wi": wi[k].tolist(), "wo": wo[k].tolist(), "roughness": float(roughness[k]),
                  "rho": rho[k].tolist()} for k in np.flatnonzero(ok)]
@@ -132,15 +132,13 @@ def subject(source: Path | None = None, budget: dict | None = None) -> Subject:
         return np.asarray(mu) >= ALBEDO_MU_MIN
 
     sha = hashlib.sha256(kernel.read_bytes()).hexdigest() if kernel else None
-    s = Subject(
+    return Subject(
         name="cycles", model="eon", tolerance=TOLERANCE, tolerance_reason=TOLERANCE_REASON,
         version={"blender": version, "source": str(kernel) if kernel else None,
                  "files": ["kernel/closure/bsdf_oren_nayar.h"], "sha256": sha,
                  "budget": {**BUDGET, **(budget or {})}},
-        brdf=brdf, albedo=albedo, brdf_domain=brdf_domain, albedo_domain=albedo_domain,
+        brdf=brdf, albedo=albedo, brdf_domain=brdf_domain, albedo_domain=albedo_domain, noise=last,
         notes=["Diffuse BSDF node (Cycles bsdf_oren_nayar) rendered: sun of angle 0 for f, white world for E",
                "BRDF rows with a direction below the horizon cannot be rendered and are not graded",
                f"albedo rows with mu < {ALBEDO_MU_MIN} are not graded (cosine-sampling noise at grazing view, "
                "where every candidate tends to E = rho)"])
-    s.noise = last
-    return s
