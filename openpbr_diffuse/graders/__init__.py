@@ -1,0 +1,93 @@
+"""Grade real implementations by running their own code, and name their deviation.
+
+Each implementation is wrapped as a :class:`~.subject.Subject` whose callables run its own
+code: GLSL on Mesa's llvmpipe (:mod:`.glsl`), C++ through a harness compiled at run time
+(:mod:`.cpp`), Blender Cycles through renders (:mod:`.cycles`).  :func:`grade_implementation`
+grades BRDF values and albedos exactly as ``check FILE`` does (``conformance.grade.grade`` on the
+default vectors), plus samplers and, for surface implementations, the diffuse lobe's weight and
+selection probability.
+
+=====================  ==========================================================  =========
+name                   code run                                                    --source
+=====================  ==========================================================  =========
+materialx-glsl         MaterialX wheel: pbrlib/genglsl/mx_oren_nayar_diffuse_bsdf   optional
+materialx-glsl-qon     the same node with energy_compensation = false (QON)         optional
+eon-diffuse-glsl       portsmouth/EON-diffuse main.glsl (paper listings)            required
+openpbr-viewer-glsl    OpenPBR-viewer glsl/pathtracing/                             required
+adobe-openpbr-bsdf     adobe/openpbr-bsdf openpbr.h (C++17 + GLM)                   required
+cycles                 bpy (Blender) Cycles Diffuse BSDF, rendered                  unused
+=====================  ==========================================================  =========
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from .errors import GraderUnavailable
+
+
+@dataclass(frozen=True)
+class Implementation:
+    """A registered implementation: how to build its subject and where its code lives."""
+
+    name: str
+    module: str
+    needs_source: bool
+    corpus_folder: str | None   # its folder under shared/corpus/implementations (tests)
+    upstream: str
+    options: tuple = ()         # (keyword, value) pairs for the module's subject()
+
+    def factory(self) -> Callable:
+        import functools
+        import importlib
+
+        return functools.partial(importlib.import_module(f"{__name__}.{self.module}").subject, **dict(self.options))
+
+
+IMPLEMENTATIONS = {i.name: i for i in (
+    Implementation("materialx-glsl", "materialx", False, None, "pip install MaterialX"),
+    Implementation("materialx-glsl-qon", "materialx", False, None, "pip install MaterialX",
+                   (("energy_compensation", False),)),
+    Implementation("eon-diffuse-glsl", "eon_glsl", True, "eon-diffuse", "github.com/portsmouth/EON-diffuse"),
+    Implementation("openpbr-viewer-glsl", "viewer_glsl", True, "openpbr-viewer",
+                   "github.com/AcademySoftwareFoundation/OpenPBR-viewer"),
+    Implementation("adobe-openpbr-bsdf", "adobe", True, "adobe-openpbr-bsdf", "github.com/adobe/openpbr-bsdf"),
+    Implementation("cycles", "cycles", False, None, "pip install bpy"),
+)}
+
+
+def load(name: str, source: Path | str | None = None):
+    """The :class:`~.subject.Subject` of a registered implementation.
+
+    Raises
+    ------
+    ValueError
+        ``name`` is not registered.
+    GraderUnavailable
+        A piece it needs is missing (its source, a GL driver, a compiler, bpy).
+    """
+    if name not in IMPLEMENTATIONS:
+        raise ValueError(f"implementation: {name!r} is not one of {', '.join(IMPLEMENTATIONS)}")
+    impl = IMPLEMENTATIONS[name]
+    if impl.needs_source and source is None:
+        raise GraderUnavailable(f"{name}: its source is not bundled with a package: pass --source PATH "
+                                f"(a checkout of {impl.upstream})")
+    return impl.factory()(Path(source) if source is not None else None)
+
+
+def corpus_source(name: str, shared: Path) -> Path | None:
+    """Where ``name``'s code sits in the project's sibling ``shared/corpus/implementations``."""
+    folder = IMPLEMENTATIONS[name].corpus_folder
+    return None if folder is None else Path(shared) / "corpus" / "implementations" / folder
+
+
+def grade_implementation(name: str, source=None, *, quick: bool = False, vectors=None):
+    """Run implementation ``name``'s own code and grade it: an :class:`~.grading.ImplementationGrade`."""
+    from .grading import grade_subject
+
+    return grade_subject(load(name, source), quick=quick, vectors=vectors)
+
+
+__all__ = ["IMPLEMENTATIONS", "Implementation", "GraderUnavailable", "load", "corpus_source",
+           "grade_implementation"]

@@ -1,0 +1,108 @@
+"""Generic adapters: grade any GLSL or C++ function with the documented signature.
+
+GLSL (run on llvmpipe in a compute shader)::
+
+    vec3 NAME(vec3 wi, vec3 wo, float roughness, vec3 rho)   // BRDF f, no cosine, local frame
+    vec3 NAME(float mu, float roughness, vec3 rho)           // directional albedo E(mu)
+
+C++ (compiled with g++ -std=c++17 against GLM)::
+
+    glm::vec3 NAME(glm::vec3 wi, glm::vec3 wo, float roughness, glm::vec3 rho);
+    glm::vec3 NAME(float mu, float roughness, glm::vec3 rho);
+
+(any types constructible from those arguments and indexable with ``[0..2]`` work in C++).
+The file is included unchanged; ``#include`` paths and preprocessor defines come from the
+command line (``--include DIR``, ``--define NAME=VALUE``).  Directions point away from the
+surface in the local frame whose normal is +z; ``mu`` is cos(theta_o).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from . import cpp, glsl
+from ._arrays import rows
+from .errors import GraderUnavailable
+from .subject import Subject
+
+
+def _check_file(path, what):
+    path = Path(path)
+    if not path.is_file():
+        raise GraderUnavailable(f"{what} file {path} does not exist")
+    return path
+
+
+def _defines(defines):
+    out = {}
+    for d in defines or ():
+        name, _, value = str(d).partition("=")
+        if not name.isidentifier():
+            raise ValueError(f"--define: {d!r} is not NAME or NAME=VALUE")
+        out[name] = value or "1"
+    return out
+
+
+def glsl_subject(path, function=None, albedo_function=None, *, includes=(), defines=(), model="eon") -> Subject:
+    """A GLSL file's BRDF function ``function`` and/or albedo function ``albedo_function``."""
+    path = _check_file(path, "GLSL")
+    if not function and not albedo_function:
+        raise ValueError("--function or --albedo-function is required with --glsl")
+    code = glsl.resolve_includes(path, tuple(Path(i) for i in includes))
+    defs = _defines(defines)
+    brdf = albedo = None
+    label = str(path)
+    if function:
+        k_brdf = glsl.Kernel(code=code, n_in=10, n_out=3, defines=defs, body=f"""
+    vec3 f = {function}(vec3(IN(0), IN(1), IN(2)), vec3(IN(3), IN(4), IN(5)), IN(6), vec3(IN(7), IN(8), IN(9)));
+    OUT(0) = f.x; OUT(1) = f.y; OUT(2) = f.z;""")
+
+        def brdf(wi, wo, roughness, rho):
+            return k_brdf.run(rows(wi, wo, roughness, rho), label)
+
+    if albedo_function:
+        k_albedo = glsl.Kernel(code=code, n_in=5, n_out=3, defines=defs, body=f"""
+    vec3 E = {albedo_function}(IN(0), IN(1), vec3(IN(2), IN(3), IN(4)));
+    OUT(0) = E.x; OUT(1) = E.y; OUT(2) = E.z;""")
+
+        def albedo(mu, roughness, rho):
+            return k_albedo.run(rows(mu, roughness, rho), label)
+
+    return Subject(name=f"glsl:{path.name}:{function or albedo_function}", model=model,
+                   tolerance=glsl.TOLERANCE, tolerance_reason=glsl.TOLERANCE_REASON,
+                   version={"source": str(path.resolve()), "sha256": glsl.sources_hash([path]),
+                            "gl": glsl.gl_version(), "defines": defs},
+                   brdf=brdf, albedo=albedo)
+
+
+def cpp_subject(path, function=None, albedo_function=None, *, includes=(), defines=(), model="eon") -> Subject:
+    """A C++ file's BRDF function ``function`` and/or albedo function ``albedo_function``."""
+    path = _check_file(path, "C++")
+    if not function and not albedo_function:
+        raise ValueError("--function or --albedo-function is required with --cpp")
+    entries = {}
+    if function:
+        entries["brdf"] = cpp.Entry(10, 3, f"""
+    const auto f = {function}(glm::vec3(in[0], in[1], in[2]), glm::vec3(in[3], in[4], in[5]), in[6],
+                              glm::vec3(in[7], in[8], in[9]));
+    out[0] = f[0]; out[1] = f[1]; out[2] = f[2];""")
+    if albedo_function:
+        entries["albedo"] = cpp.Entry(5, 3, f"""
+    const auto E = {albedo_function}(in[0], in[1], glm::vec3(in[2], in[3], in[4]));
+    out[0] = E[0]; out[1] = E[1]; out[2] = E[2];""")
+    prelude = f'#include <glm/glm.hpp>\n#include "{path.resolve()}"\n'
+    h = cpp.Harness(prelude=prelude, entries=entries,
+                    include_dirs=[str(path.parent.resolve()), *map(str, includes)],
+                    defines=_defines(defines), sources=[path], label=str(path))
+    h.binary()
+    brdf = albedo = None
+    if function:
+        def brdf(wi, wo, roughness, rho):
+            return h.run("brdf", rows(wi, wo, roughness, rho))
+    if albedo_function:
+        def albedo(mu, roughness, rho):
+            return h.run("albedo", rows(mu, roughness, rho))
+    return Subject(name=f"cpp:{path.name}:{function or albedo_function}", model=model, tolerance=None,
+                   tolerance_reason="compiled C++: the float32 tolerance of check FILE",
+                   version={"source": str(path.resolve()), "sha256": glsl.sources_hash([path]),
+                            "compiler": cpp.compiler_version(), "defines": _defines(defines)},
+                   brdf=brdf, albedo=albedo)

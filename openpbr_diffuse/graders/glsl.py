@@ -1,0 +1,198 @@
+"""Run GLSL functions on the CPU: Mesa's llvmpipe through a headless moderngl EGL context.
+
+A test subject's own GLSL source is wrapped, unchanged, in a compute shader (GLSL 4.30) that
+reads one row of inputs per invocation from a storage buffer, calls the subject's function and
+writes the result to a second buffer.  ``#include "file"`` lines are resolved relative to the
+including file, then against the given search folders (MaterialX's ``libraries/``).
+
+llvmpipe evaluates ``acos`` and friends with polynomial approximations (max abs error about
+1.6e-4 on acos), so values computed in GLSL carry that error on top of float32 rounding.
+"""
+from __future__ import annotations
+
+import hashlib
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .errors import GraderUnavailable
+
+#: (relative, absolute) tolerance for values computed in GLSL on llvmpipe.  acos's absolute
+#: error (<= 1.6e-4, measured over [-1, 1]) enters E_F through G_F scaled by B_F/pi <= 0.25,
+#: i.e. <= 4e-5 on E_F, and f_ms through (1 - E_F) / (1 - <E_F>): <= ~5e-5 on f.  On the default
+#: vectors the listings need only 5.4e-7 absolute on top of 1e-4 relative; 5e-5 covers the bound
+#: and stays 400x below the smallest known deviation (2 %, extra rho on f_ms).
+TOLERANCE = (1e-4, 5e-5)
+TOLERANCE_REASON = ("GLSL on llvmpipe: float32 arithmetic (1e-4 relative, as check FILE) plus llvmpipe's "
+                    "acos approximation (<= 1.6e-4 in the angle, <= ~5e-5 on f through E_F): 5e-5 absolute")
+_INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$', re.M)
+_CONTEXT = None
+LOCAL_SIZE = 64
+FRAGMENT_WIDTH = 256
+_VERTEX = """#version 430
+in vec2 grader_xy;
+void main() { gl_Position = vec4(grader_xy, 0.0, 1.0); }
+"""
+
+
+def gl_context():
+    """The process's standalone moderngl context (EGL, OpenGL >= 4.3), created once."""
+    global _CONTEXT
+    if _CONTEXT is None:
+        try:
+            import moderngl
+        except ImportError as exc:
+            raise GraderUnavailable("moderngl is not installed: pip install moderngl") from exc
+        try:
+            _CONTEXT = moderngl.create_standalone_context(backend="egl", require=430)
+        except Exception as exc:  # moderngl raises plain Exception for a missing driver
+            raise GraderUnavailable(
+                "no OpenGL 4.3 context through EGL (" + str(exc).splitlines()[0] + "): install Mesa's "
+                "software driver, e.g. apt-get install libgl1-mesa-dri libegl1 libegl-mesa0") from exc
+    return _CONTEXT
+
+
+def gl_version() -> str:
+    """``GL_RENDERER / GL_VERSION`` of the context the GLSL runs on."""
+    info = gl_context().info
+    return f"{info['GL_RENDERER']} / {info['GL_VERSION']}"
+
+
+def resolve_includes(path: Path, search: tuple[Path, ...] = (), _seen: set | None = None) -> str:
+    """Return the text of ``path`` with its ``#include "…"`` lines replaced by the files.
+
+    Each file is included once (MaterialX's library files rely on that, like include guards).
+    """
+    path = Path(path)
+    seen = set() if _seen is None else _seen
+    key = path.resolve()
+    if key in seen:
+        return ""
+    seen.add(key)
+    text = path.read_text()
+
+    def sub(match):
+        name = match.group(1)
+        for folder in (path.parent, *search):
+            candidate = Path(folder) / name
+            if candidate.is_file():
+                return resolve_includes(candidate, search, seen)
+        raise GraderUnavailable(f'{path}: #include "{name}" not found next to the file or in '
+                                f'{", ".join(str(s) for s in search) or "no search path"} (pass --include DIR)')
+
+    return _INCLUDE.sub(sub, text)
+
+
+def sources_hash(paths) -> str:
+    """SHA-256 over the given files' bytes, in the given order (the version of a source tree)."""
+    h = hashlib.sha256()
+    for p in paths:
+        h.update(Path(p).name.encode())
+        h.update(Path(p).read_bytes())
+    return h.hexdigest()
+
+
+@dataclass
+class Kernel:
+    """A compute shader around a subject's code: ``n_in`` floats in, ``n_out`` floats out per row.
+
+    ``code`` is the subject's source (includes resolved), ``body`` the GLSL statements of the
+    per-row call: they read ``float x[n_in]`` (``IN(k)``) and assign ``OUT(k)``.
+    """
+
+    code: str
+    body: str
+    n_in: int
+    n_out: int
+    preamble: str = ""
+    defines: dict = field(default_factory=dict)
+    uniforms: dict = field(default_factory=dict)
+    stage: str = "compute"
+    _program: object = field(default=None, repr=False, compare=False)
+
+    def source(self) -> str:
+        """The shader text: ``compute``, or ``fragment`` for code that uses fragment-only
+        built-ins (``fwidth`` in MaterialX's mx_math.glsl); both read and write the same
+        storage buffers, one row per invocation / fragment."""
+        defines = "".join(f"#define {k} {v}\n" for k, v in self.defines.items())
+        if self.stage == "compute":
+            head = f"#version 430\nlayout(local_size_x={LOCAL_SIZE}) in;\n"
+            row = "gl_GlobalInvocationID.x"
+        else:
+            head = "#version 430\nout vec4 grader_colour;\n"
+            row = f"uint(gl_FragCoord.y) * {FRAGMENT_WIDTH}u + uint(gl_FragCoord.x)"
+        return (
+            head +
+            f"{defines}{self.preamble}\n"
+            "#line 1 1\n"
+            f"{self.code}\n"
+            "#line 1 2\n"
+            "layout(std430, binding=0) readonly buffer GraderIn { float grader_in[]; };\n"
+            "layout(std430, binding=1) writeonly buffer GraderOut { float grader_out[]; };\n"
+            "uniform int grader_rows;\n"
+            f"#define IN(k) grader_in[grader_row * {self.n_in}u + uint(k)]\n"
+            f"#define OUT(k) grader_out[grader_row * {self.n_out}u + uint(k)]\n"
+            "void main() {\n"
+            f"    uint grader_row = {row};\n"
+            "    if (grader_row >= uint(grader_rows)) return;\n"
+            f"{self.body}\n"
+            "}\n")
+
+    def run(self, inputs: np.ndarray, label: str = "shader") -> np.ndarray:
+        """Run on ``inputs`` (rows, n_in) and return (rows, n_out) float32 results."""
+        ctx = gl_context()
+        inputs = np.ascontiguousarray(inputs, dtype=np.float32).reshape(-1, self.n_in)
+        rows = inputs.shape[0]
+        try:
+            if self._program is None:
+                if self.stage == "compute":
+                    self._program = ctx.compute_shader(self.source())
+                else:
+                    self._program = ctx.program(vertex_shader=_VERTEX, fragment_shader=self.source())
+            shader = self._program
+        except Exception as exc:
+            log = str(exc).strip().splitlines()
+            first = next((line for line in log if "error" in line.lower()), log[0] if log else "")
+            raise GraderUnavailable(f"{label} does not compile on {gl_version()}: {first.strip()} "
+                                    "(file 1 = the subject's code, 2 = the grader's wrapper)") from exc
+        for name, value in self.uniforms.items():
+            if name in shader:
+                shader[name].value = value
+        if rows == 0:
+            return np.zeros((0, self.n_out), np.float32)
+        buf_in = ctx.buffer(inputs.tobytes())
+        buf_out = ctx.buffer(reserve=max(4, rows * self.n_out * 4))
+        try:
+            buf_in.bind_to_storage_buffer(0)
+            buf_out.bind_to_storage_buffer(1)
+            shader["grader_rows"] = rows
+            if self.stage == "compute":
+                shader.run(group_x=(rows + LOCAL_SIZE - 1) // LOCAL_SIZE)
+            else:
+                _draw_rows(ctx, shader, rows)
+            ctx.memory_barrier()
+            out = np.frombuffer(buf_out.read(), dtype=np.float32).reshape(rows, self.n_out).copy()
+        finally:
+            buf_in.release()
+            buf_out.release()
+        return out
+
+
+def _draw_rows(ctx, program, rows):
+    """One fragment per row: a full-screen quad over a FRAGMENT_WIDTH x ceil(rows/width) target."""
+    height = (rows + FRAGMENT_WIDTH - 1) // FRAGMENT_WIDTH
+    target = ctx.renderbuffer((FRAGMENT_WIDTH, height), components=4, dtype="f1")
+    fbo = ctx.framebuffer(color_attachments=[target])
+    quad = ctx.buffer(np.array([-1, -1, 1, -1, -1, 1, 1, 1], dtype=np.float32).tobytes())
+    vao = ctx.vertex_array(program, [(quad, "2f", "grader_xy")])
+    try:
+        fbo.use()
+        vao.render(mode=ctx.TRIANGLE_STRIP)
+        ctx.finish()
+    finally:
+        vao.release()
+        quad.release()
+        fbo.release()
+        target.release()

@@ -1,0 +1,106 @@
+"""Report section ``graders``: real implementations graded by running their own code.
+
+One table row per implementation x quantity (BRDF, albedo, sampler pdf, sampler chi-square,
+surface weight x albedo, surface probability) with the max and RMS error, the tolerance, the
+verdict and the diagnosis, plus what was run (versions, source hashes).  A third party's
+verdict is a finding, not a failure of this report: the section adds no pass/fail checks for
+them; an implementation that cannot run here (no GL driver, compiler, bpy, sources) is listed
+as a warning naming the missing piece.
+
+Which implementations run: ``materialx-glsl`` always and ``materialx-glsl-qon`` unless quick
+(their code ships in the MaterialX wheel);
+the three repositories when their checkouts are known — ``ctx.extra["grader_sources"]``
+({name: path}) or the folder in ``$OPENPBR_DIFFUSE_IMPLEMENTATIONS`` holding ``eon-diffuse/``,
+``openpbr-viewer/`` and ``adobe-openpbr-bsdf/``; ``cycles`` only when asked
+(``ctx.extra["cycles"] = True`` or ``$OPENPBR_DIFFUSE_REPORT_CYCLES=1``: its renders take about
+80 s).  ``ctx.quick``: MaterialX only.
+"""
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+
+from ..model import SectionResult, Table
+
+TITLE = "Graded implementations (their own code)"
+KEY = "graders"
+
+
+def _sources(ctx) -> dict:
+    from ...graders import IMPLEMENTATIONS
+
+    given = dict(ctx.extra.get("grader_sources") or {})
+    root = os.environ.get("OPENPBR_DIFFUSE_IMPLEMENTATIONS")
+    for name, impl in IMPLEMENTATIONS.items():
+        if name not in given and root and impl.corpus_folder and (Path(root) / impl.corpus_folder).is_dir():
+            given[name] = Path(root) / impl.corpus_folder
+    return given
+
+
+def _plan(ctx):
+    """[(name, source or None)] in registry order."""
+    from ...graders import IMPLEMENTATIONS
+
+    sources = _sources(ctx)
+    plan = [("materialx-glsl", None)]
+    if ctx.quick:
+        return plan
+    plan.append(("materialx-glsl-qon", None))
+    for name, impl in IMPLEMENTATIONS.items():
+        if impl.needs_source and name in sources:
+            plan.append((name, sources[name]))
+    if ctx.extra.get("cycles") or os.environ.get("OPENPBR_DIFFUSE_REPORT_CYCLES") == "1":
+        plan.append(("cycles", None))
+    return plan
+
+
+def _fmt(x):
+    """A number to 3 significant digits (kept numeric for report.json); '—' where undefined."""
+    if x is None or not math.isfinite(x):
+        return "—" if x is None or math.isnan(x) else "inf"
+    return float(f"{x:.3g}")
+
+
+def _version(v: dict) -> str:
+    parts = []
+    for key in ("materialx", "blender"):
+        if v.get(key):
+            parts.append(f"{'MaterialX' if key == 'materialx' else 'Blender'} {v[key]}")
+    if v.get("sha256"):
+        parts.append(f"sha256 {v['sha256'][:12]}")
+    return ", ".join(parts) or "—"
+
+
+def build(ctx) -> SectionResult:
+    from ...graders import grade_implementation
+    from ...graders.errors import GraderUnavailable
+
+    result = SectionResult(key=KEY, title=TITLE)
+    rows, run = [], []
+    for name, source in _plan(ctx):
+        ctx.progress(f"grading {name}")
+        try:
+            g = grade_implementation(name, source, quick=True)
+        except GraderUnavailable as exc:
+            result.warnings.append(f"{name}: not graded: {exc}")
+            continue
+        run.append(g.to_dict())
+        for q in g.quantities:
+            rows.append([name, _version(g.version), q.quantity, _fmt(q.max_abs_error), _fmt(q.rms_error),
+                         q.tolerance, "pass" if q.passed else "FAIL", q.diagnosis or "—"])
+        result.notes.append(f"{name}: " + "; ".join(f"{k} = {v}" for k, v in g.version.items() if v)
+                            + (". " + " ".join(g.notes) if g.notes else ""))
+    result.tables.append(Table(
+        caption="Implementations run on this machine and graded against the reference (conformance.grade on "
+                "the default vectors for BRDF and albedo; sampler: reported pdf against the reference "
+                "strategies and chi-square of its samples against its own pdf; surface: diffuse weight x "
+                "albedo and selection probability against OpenPBRSurface)",
+        columns=["implementation", "version", "quantity", "max abs error", "RMS error", "tolerance", "verdict",
+                 "diagnosis"],
+        rows=rows))
+    ctx.extra.setdefault("graders", run)
+    if not any(s for n, s in _plan(ctx) if s is not None) and not ctx.quick:
+        result.notes.append("Only MaterialX's GLSL ran: point $OPENPBR_DIFFUSE_IMPLEMENTATIONS at a folder holding "
+                            "eon-diffuse/, openpbr-viewer/ and adobe-openpbr-bsdf/ checkouts to grade those too.")
+    return result
