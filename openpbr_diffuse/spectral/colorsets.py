@@ -1,0 +1,192 @@
+"""Colour sets for the validation: measured ColorChecker spectra, user RGB, material files.
+
+A ``ColourSet`` holds, per colour, a reflectance spectrum on the pipeline's wavelengths,
+its working-space RGB (``rho_rgb``) and where both came from:
+
+- ``checker(cm)``: the 24 measured spectra of colour-science's
+  ``SDS_COLOURCHECKERS['BabelColor Average']`` (380-730 nm / 10 nm, aligned to the pipeline's
+  shape by colour-science: Sprague interpolation, constant extrapolation above 730 nm);
+  ``rho_rgb`` is the colour of the measured spectrum;
+- ``from_rgb(rgb, cm, method)``: user colours (working-space linear RGB in [0, 1]),
+  upsampled by ``recovery.rgb_to_spectra``; ``rho_rgb`` is the user's RGB;
+- ``from_spectra_csv(path, cm)``: measured spectra in a CSV file (first column the
+  wavelength in nm, one column per named spectrum, reflectance in [0, 1]);
+- ``from_materials(paths, cm, method)``: the diffuse colour of each supported material of
+  USD / MaterialX files, read by ``openpbr_diffuse.readers.load_materials``, upsampled.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .colorimetry import _colour
+from .recovery import check_rgb, resolve_method, rgb_to_spectra
+
+CHECKER = "BabelColor Average"
+#: diffuse-colour parameter names by material shader (first present wins).
+DIFFUSE_COLOR_INPUTS = ("base_color", "color", "diffuseColor")
+#: diffuse-roughness parameter by shader id (UsdPreviewSurface's roughness is specular: none).
+DIFFUSE_ROUGHNESS_INPUTS = {"ND_open_pbr_surface_surfaceshader": "base_diffuse_roughness",
+                            "ND_oren_nayar_diffuse_bsdf": "roughness"}
+MATERIAL_SUFFIXES = (".usd", ".usda", ".usdc", ".usdz", ".mtlx")
+
+
+@dataclass
+class ColourSet:
+    """Named reflectance spectra with their working-space RGB.
+
+    Attributes
+    ----------
+    names : list of str
+    spectra : ndarray, shape (P, N), reflectance in [0, 1] on the pipeline's wavelengths
+    rho_rgb : ndarray, shape (P, 3), working-space linear RGB of each colour
+    source : list of str
+        "measured: ..." or "rgb (upsampled: METHOD)" or "material FILE:PATH (upsampled: METHOD)".
+    roundtrip_delta_e : ndarray, shape (P,)
+        CIEDE2000 between ``rho_rgb`` and the colour of the spectrum; NaN for measured
+        spectra (their ``rho_rgb`` is computed from the spectrum: no round trip).
+    extra : list of dict
+        Per colour, fields added to the output rows (e.g. a material's own roughness).
+    """
+
+    names: list
+    spectra: np.ndarray
+    rho_rgb: np.ndarray
+    source: list
+    roundtrip_delta_e: np.ndarray
+    extra: list = field(default_factory=list)
+
+    def __post_init__(self):
+        if not self.extra:
+            self.extra = [{} for _ in self.names]
+
+    def __len__(self):
+        return len(self.names)
+
+    @staticmethod
+    def concat(sets):
+        sets = [s for s in sets if len(s)]
+        if not sets:
+            raise ValueError("colors: no colours to evaluate")
+        return ColourSet(sum((s.names for s in sets), []), np.concatenate([s.spectra for s in sets]),
+                         np.concatenate([s.rho_rgb for s in sets]), sum((s.source for s in sets), []),
+                         np.concatenate([s.roundtrip_delta_e for s in sets]), sum((s.extra for s in sets), []))
+
+
+def _measured(names, spectra, cm, source):
+    spectra = np.asarray(spectra, np.float64)
+    bad = ~np.isfinite(spectra) | (spectra < 0.0) | (spectra > 1.0)
+    if np.any(bad):
+        i = int(np.argmax(bad.any(axis=1)))
+        raise ValueError(f"spectrum {names[i]!r} ({source}) must be a reflectance in [0, 1] on "
+                         f"{cm.shape[0]:g}-{cm.shape[1]:g} nm")
+    rgb = cm.XYZ_to_RGB(cm.spectra_to_XYZ(spectra))
+    return ColourSet(list(names), spectra, rgb, [f"measured: {source}"] * len(names),
+                     np.full(len(names), np.nan))
+
+
+def checker(cm):
+    """The 24 measured ColorChecker spectra ('BabelColor Average' of colour-science).
+
+    Examples
+    --------
+    >>> from openpbr_diffuse.spectral.colorimetry import colorimetry
+    >>> cs = checker(colorimetry())
+    >>> len(cs), cs.names[0], cs.spectra.shape
+    (24, 'dark skin', (24, 81))
+    """
+    colour = _colour()
+    sds = colour.SDS_COLOURCHECKERS[CHECKER]
+    names = list(sds)
+    spectra = np.array([sds[n].copy().align(cm.colour_shape).values for n in names])
+    return _measured(names, spectra, cm, f"colour.SDS_COLOURCHECKERS['{CHECKER}']")
+
+
+def from_rgb(rgb, cm, method="auto", names=None, source="rgb"):
+    """User colours (working-space linear RGB in [0, 1]) upsampled with ``method``."""
+    rgb = check_rgb("colors", np.atleast_2d(rgb))
+    name = resolve_method(method, cm)
+    spectra, de = rgb_to_spectra(rgb, cm, name)
+    if names is None:
+        names = [",".join(f"{v:g}" for v in c) for c in rgb]
+    return ColourSet(list(names), spectra, rgb, [f"{source} (upsampled: {name})"] * len(rgb), de)
+
+
+def from_spectra_csv(path, cm):
+    """Measured reflectance spectra from a CSV file: wavelength (nm), then one column per spectrum.
+
+    The first row names the columns; lines starting with ``#`` are comments.  Each spectrum
+    is aligned to the pipeline's shape by colour-science (interpolation; constant
+    extrapolation outside the measured range).
+    """
+    colour = _colour()
+    path = Path(path)
+    with open(path, encoding="utf-8") as f:
+        lines = [ln for ln in f if ln.strip() and not ln.lstrip().startswith("#")]
+    if len(lines) < 3:
+        raise ValueError(f"{path}: a spectra CSV needs a header and at least two wavelength rows")
+    header = [h.strip() for h in lines[0].split(",")]
+    try:
+        data = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])
+    except ValueError:
+        raise ValueError(f"{path}: every row after the header must be numbers") from None
+    if data.ndim != 2 or data.shape[1] != len(header) or len(header) < 2:
+        raise ValueError(f"{path}: rows must have {len(header)} columns (wavelength + spectra)")
+    wl = data[:, 0]
+    if not (np.all(np.diff(wl) > 0) and wl[0] >= 300 and wl[-1] <= 830):
+        raise ValueError(f"{path}: wavelengths must increase, within 300-830 nm")
+    spectra = [colour.SpectralDistribution(dict(zip(wl, data[:, j])), name=header[j])
+               .align(cm.colour_shape).values for j in range(1, len(header))]
+    return _measured(header[1:], spectra, cm, str(path))
+
+
+def _material_rgb(material):
+    for key in DIFFUSE_COLOR_INPUTS:
+        p = material.parameters.get(key)
+        if p is not None:
+            return key, np.asarray(p.value, np.float64).reshape(-1)
+    return None, None
+
+
+def from_materials(paths, cm, method="auto"):
+    """The diffuse colours of the supported materials of USD / MaterialX files.
+
+    Colour values are taken as working-space linear RGB (OpenPBR colour inputs are ACEScg
+    unless the document says otherwise: pass ``--working-space acescg`` for OpenPBR
+    files); unsupported materials or ones without a diffuse colour are skipped with a
+    warning in ``extra``.
+
+    Returns
+    -------
+    (ColourSet, warnings) : warnings is a list of str.
+    """
+    try:
+        from ..readers import load_materials
+    except ImportError as exc:
+        raise ValueError(f"reading material files needs openpbr_diffuse.readers ({exc})") from None
+    names, rgbs, sources, extra, warnings = [], [], [], [], []
+    for path in paths:
+        for m in load_materials(path):
+            warnings += [f"{m.file}:{m.path}: {w}" for w in m.warnings]
+            key, rgb = _material_rgb(m)
+            if not m.supported or rgb is None or rgb.size != 3:
+                warnings.append(f"{m.file}:{m.path}: skipped ({'unsupported shader ' + str(m.shader_id) if not m.supported else 'no diffuse colour'})")
+                continue
+            clipped = np.clip(rgb, 0.0, 1.0)
+            if np.any(clipped != rgb):
+                warnings.append(f"{m.file}:{m.path}: {key} {rgb.tolist()} clipped to [0, 1]")
+            names.append(m.name)
+            rgbs.append(clipped)
+            sources.append(f"material {m.file}:{m.path} {key}")
+            rkey = DIFFUSE_ROUGHNESS_INPUTS.get(m.shader_id)
+            r = m.parameters.get(rkey) if rkey else None
+            extra.append({"material_file": str(m.file), "material_path": str(m.path),
+                          "material_diffuse_roughness": None if r is None else float(np.asarray(r.value).reshape(-1)[0])})
+    if not names:
+        return ColourSet([], np.zeros((0, cm.wavelengths.size)), np.zeros((0, 3)), [], np.zeros(0)), warnings
+    cs = from_rgb(np.array(rgbs), cm, method, names=names, source="material")
+    cs.source = [f"{s} (upsampled: {resolve_method(method, cm)})" for s in sources]
+    cs.extra = extra
+    return cs, warnings
