@@ -53,9 +53,12 @@ def _per_colour(method):
         colour = _colour()
         XYZ = cm.RGB_to_XYZ(rgb) / 100.0
         out = np.empty(rgb.shape[:-1] + (cm.wavelengths.size,))
-        for i in np.ndindex(rgb.shape[:-1]):  # the colour.recovery solvers take one colour at a time
-            sd = colour.XYZ_to_sd(XYZ[i], method=method, illuminant=cm._illuminant_sd, cmfs=cm._cmfs)
-            out[i] = sd.copy().align(cm.colour_shape).values
+        # the colour.recovery solvers take one colour at a time; their notices about
+        # trimming / re-shaping to their native shapes are expected (see the module notes)
+        with colour.utilities.suppress_warnings(colour_runtime_warnings=True):
+            for i in np.ndindex(rgb.shape[:-1]):
+                sd = colour.XYZ_to_sd(XYZ[i], method=method, illuminant=cm._illuminant_sd, cmfs=cm._cmfs)
+                out[i] = sd.copy().align(cm.colour_shape).values
         return np.clip(out, 0.0, 1.0)
 
     return recover
