@@ -100,6 +100,16 @@ def test_white_tint_keeps_chromaticity_of_rho(checker_result):
     assert np.abs(xy(res.XYZ["spectral"])[:, -1] - ref[:, None]).max() > 1e-3
 
 
+def test_white_tint_equals_library_white_tint_mode(cm):
+    """albedo_white_tint is directional_albedo(..., color_mode="white_tint") per wavelength."""
+    cs = sp.checker(cm)
+    r, mu = np.array([0.3, 1.0]), np.array([0.2, 1.0])
+    res = sp.colour_shift(cs, r, mu, cm)
+    E = od.directional_albedo("eon", mu[None, None, :], r[None, :, None], cs.spectra[:, None, None, :],
+                              color_mode="white_tint")
+    np.testing.assert_allclose(res.albedo_white_tint, cm.XYZ_to_RGB(cm.spectra_to_XYZ(E)), rtol=0, atol=1e-12)
+
+
 def test_shift_saturates_monotonically_with_roughness(checker_result):
     """For chromatic patches (C*ab > 2) and mu > 0, CIE saturation C*/L*, the distance of xy
     from the white point and the HSV saturation of albedo_rgb all grow strictly with r."""

@@ -177,9 +177,13 @@ def colour_shift(colours, roughness=DEFAULT_ROUGHNESS, mu=DEFAULT_MU, cm=None):
     clipped = np.any(rgb_eval != rgb, axis=-1)
     lead = (slice(None), None, None)
     rr, mm = r[None, :, None], mu[None, None, :]
-    E_spec = directional_albedo(MODEL, mm, rr, S[lead], color_mode="reference")
-    E_tint = directional_albedo(MODEL, mm, rr, S[lead], color_mode="white_tint")
-    E_rgb = directional_albedo(MODEL, mm, rr, rgb_eval[lead], color_mode="reference")
+    # one albedo call (one compiled kernel variant to load): the N spectral samples, the 3 RGB
+    # channels and a white channel rho = 1, whose albedo times rho(lambda) is white then tint
+    # (the definition of color_mode="white_tint")
+    n = S.shape[-1]
+    channels = np.concatenate([S, rgb_eval, np.ones((len(S), 1))], axis=-1)
+    E = directional_albedo(MODEL, mm, rr, channels[lead], color_mode="reference")
+    E_spec, E_rgb, E_tint = E[..., :n], E[..., n:n + 3], S[lead] * E[..., n + 3:]
     XYZ = {"spectral": cm.spectra_to_XYZ(E_spec), "white_tint": cm.spectra_to_XYZ(E_tint),
            "rgb": cm.RGB_to_XYZ(E_rgb)}
     Lab = {k: cm.XYZ_to_Lab(v) for k, v in XYZ.items()}
