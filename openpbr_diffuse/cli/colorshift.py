@@ -61,12 +61,12 @@ def _method(name):
 
 def _parse_rgb(token):
     parts = token.split(",")
-    if len(parts) != 3:
-        return None
     try:
         rgb = [float(v) for v in parts]
     except ValueError:
-        raise _usage(f"--colors: {token!r} is not R,G,B (three numbers)") from None
+        rgb = []
+    if len(rgb) != 3:
+        raise _usage(f"--colors: {token!r} is not R,G,B (three numbers), 'checker' or an existing file")
     if not all(math.isfinite(v) and 0.0 <= v <= 1.0 for v in rgb):
         raise _usage(f"--colors: {token!r}: R,G,B must be linear working-space values in [0, 1]")
     return rgb
@@ -86,7 +86,7 @@ def colour_set(tokens, cm, method):
             rgbs.clear()
 
     for token in tokens:
-        rgb = _parse_rgb(token) if "," in token else None
+        rgb = _parse_rgb(token) if "," in token and not Path(token).is_file() else None
         if rgb is not None:
             rgbs.append(rgb)
             continue
