@@ -51,7 +51,7 @@ def test_table_output_and_summary(capsys):
     assert code == 0 and not err
     assert "illuminant D65" in out and "380-780 nm / 5 nm" in out and "Bradford" in out
     assert "cyan*" in out                                     # out of the Rec.709 gamut, flagged
-    assert "r = 1, mu = 1: dE rgb/spec max 2.8468 (cyan)" in out
+    assert "r = 1, mu = 1: dE rgb/spec max 2.8468 (cyan), in gamut 1.4845 (orange yellow)" in out
     assert out.count("\n") > 48
 
 

@@ -175,22 +175,32 @@ def test_other_illuminant_uses_its_own_white():
     assert cm.describe()["illuminant"] == "A"
 
 
-# ColorChecker at r = 1, mu = 1, D65: (max patch, max, median) of each dE, per working space.
-# Values: README notes (issue 11); regenerate with the CLI:
-#   openpbr-diffuse colorshift --roughness 1 --mu 1 [--working-space acescg]
+# ColorChecker at r = 1, D65: per working space and mu, per field:
+# (max, max patch, max over in-gamut patches, its patch, median, median patches).
+# The numbers in the README notes (issue 11); print them with
+#   openpbr-diffuse colorshift --roughness 1 --mu 1 0.5 [--working-space acescg]
 HEADLINE = {
-    "lin_rec709": {"delta_e_rgb_vs_spectral": ("cyan", 2.8468, 0.1081),
-                   "delta_e_shift": ("neutral 5 (.70 D)", 4.4218, 3.3723)},
+    ("lin_rec709", 1.0): {
+        "delta_e_rgb_vs_spectral": (2.8468, "cyan", 1.4845, "orange yellow", 0.1081, "purplish blue / purple"),
+        "delta_e_shift": (4.4218, "neutral 5 (.70 D)", 4.4218, "neutral 5 (.70 D)", 3.3723, "dark skin / orange")},
+    ("lin_rec709", 0.5): {
+        "delta_e_rgb_vs_spectral": (2.5150, "cyan", 0.8630, "orange yellow", 0.0611, "purplish blue / purple"),
+        "delta_e_shift": (2.6052, "neutral 5 (.70 D)", 2.6052, "neutral 5 (.70 D)", 1.9812, "dark skin / orange")},
+    ("acescg", 1.0): {
+        "delta_e_rgb_vs_spectral": (0.7167, "red", 0.7167, "red", 0.1261, "blue flower / purple"),
+        "delta_e_shift": (4.4218, "neutral 5 (.70 D)", 4.4218, "neutral 5 (.70 D)", 3.3723, "dark skin / orange")},
 }
 
 
-@pytest.mark.parametrize("working_space", list(HEADLINE))
-def test_checker_headline_numbers(working_space):
+@pytest.mark.parametrize("working_space,mu", list(HEADLINE))
+def test_checker_headline_numbers(working_space, mu):
     cm = sp.colorimetry("D65", working_space)
-    s = sp.colour_shift(sp.checker(cm), [1.0], [1.0], cm).summary(1.0)[1.0]
-    for name, (patch, largest, median) in HEADLINE[working_space].items():
-        assert s[name]["max"][1] == patch
-        assert s[name]["max"][0] == pytest.approx(largest, abs=1e-4)
+    s = sp.colour_shift(sp.checker(cm), [1.0], [mu], cm).summary(1.0)[mu]
+    for name, (largest, patch, largest_in, patch_in, median, median_patches) in HEADLINE[working_space, mu].items():
+        assert s[name]["max"][1] == patch and s[name]["max"][0] == pytest.approx(largest, abs=1e-4)
+        assert s[name]["max_in_gamut"][1] == patch_in
+        assert s[name]["max_in_gamut"][0] == pytest.approx(largest_in, abs=1e-4)
+        assert s[name]["median"][1] == median_patches
         assert s[name]["median"][0] == pytest.approx(median, abs=1e-4)
 
 

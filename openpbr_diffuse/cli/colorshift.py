@@ -142,8 +142,11 @@ def _table(result, settings, warnings):
     r_max = float(result.roughness.max())
     for mu, s in result.summary(r_max).items():
         a, b = s["delta_e_rgb_vs_spectral"], s["delta_e_shift"]
-        lines.append(f"r = {r_max:g}, mu = {mu:g}: dE rgb/spec max {a['max'][0]:.4f} ({a['max'][1]}), median "
-                     f"{a['median'][0]:.4f}; dE shift max {b['max'][0]:.4f} ({b['max'][1]}), median {b['median'][0]:.4f}")
+        inside = (f", in gamut {a['max_in_gamut'][0]:.4f} ({a['max_in_gamut'][1]})"
+                  if a["max_in_gamut"][1] not in (None, a["max"][1]) else "")
+        lines.append(f"r = {r_max:g}, mu = {mu:g}: dE rgb/spec max {a['max'][0]:.4f} ({a['max'][1]}){inside}, "
+                     f"median {a['median'][0]:.4f} ({a['median'][1]}); dE shift max {b['max'][0]:.4f} "
+                     f"({b['max'][1]}), median {b['median'][0]:.4f} ({b['median'][1]})")
     lines += [f"warning: {w}" for w in warnings]
     return "\n".join(lines)
 

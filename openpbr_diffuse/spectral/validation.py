@@ -105,20 +105,30 @@ class ColourShift:
         return out
 
     def summary(self, roughness=1.0):
-        """Largest and median ``delta_e_rgb_vs_spectral`` and ``delta_e_shift`` at ``roughness``,
-        per mu, with the patch names: {mu: {field: {"max": (value, patch), "median": (value, patch)}}}."""
+        """Largest and median ``delta_e_rgb_vs_spectral`` and ``delta_e_shift`` at ``roughness``, per mu.
+
+        Returns {mu: {field: {"max": (value, patch), "max_in_gamut": (value, patch),
+        "median": (value, "patch / patch")}}}: "max_in_gamut" leaves out colours whose
+        ``rho_rgb`` was clipped; for an even count the median is the mean of the two middle
+        values, and both patches are named.
+        """
         k = int(np.argmin(abs(self.roughness - roughness)))
         if abs(self.roughness[k] - roughness) > 1e-12:
             raise ValueError(f"roughness {roughness} is not on the grid {self.roughness.tolist()}")
+        names = self.colours.names
+        inside = np.flatnonzero(~self.rho_rgb_clipped)
         out = {}
         for m, mu in enumerate(self.mu):
             out[float(mu)] = {}
             for name in ("delta_e_rgb_vs_spectral", "delta_e_shift"):
                 v = getattr(self, name)[:, k, m]
                 order = np.argsort(v, kind="stable")
-                mid = order[(len(v) - 1) // 2]  # lower median: a patch's own value
-                out[float(mu)][name] = {"max": (float(v[order[-1]]), self.colours.names[order[-1]]),
-                                        "median": (float(np.median(v)), self.colours.names[mid])}
+                mid = sorted({order[(len(v) - 1) // 2], order[len(v) // 2]})
+                best_in = inside[int(np.argmax(v[inside]))] if inside.size else None
+                out[float(mu)][name] = {
+                    "max": (float(v[order[-1]]), names[order[-1]]),
+                    "max_in_gamut": (None, None) if best_in is None else (float(v[best_in]), names[best_in]),
+                    "median": (float(np.median(v)), " / ".join(names[i] for i in mid))}
         return out
 
 
