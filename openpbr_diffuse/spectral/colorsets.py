@@ -12,7 +12,8 @@ its working-space RGB (``rho_rgb``) and where both came from:
 - ``from_spectra_csv(path, cm)``: measured spectra in a CSV file (first column the
   wavelength in nm, one column per named spectrum, reflectance in [0, 1]);
 - ``from_materials(paths, cm, method)``: the diffuse colour of each supported material of
-  USD / MaterialX files, read by ``openpbr_diffuse.readers.load_materials``, upsampled.
+  USD / MaterialX files, read by ``openpbr_diffuse.readers.load_materials`` (colours in
+  ACEScg, converted to the working space), upsampled.
 """
 from __future__ import annotations
 
@@ -27,9 +28,8 @@ from .recovery import check_rgb, resolve_method, rgb_to_spectra
 CHECKER = "BabelColor Average"
 #: diffuse-colour parameter names by material shader (first present wins).
 DIFFUSE_COLOR_INPUTS = ("base_color", "color", "diffuseColor")
-#: diffuse-roughness parameter by shader id (UsdPreviewSurface's roughness is specular: none).
-DIFFUSE_ROUGHNESS_INPUTS = {"ND_open_pbr_surface_surfaceshader": "base_diffuse_roughness",
-                            "ND_oren_nayar_diffuse_bsdf": "roughness"}
+#: diffuse-roughness inputs of the library nodes (OpenPBRSurface, OrenNayarDiffuseBSDF).
+DIFFUSE_ROUGHNESS_INPUTS = ("base_diffuse_roughness", "roughness")
 MATERIAL_SUFFIXES = (".usd", ".usda", ".usdc", ".usdz", ".mtlx")
 
 
@@ -142,21 +142,38 @@ def from_spectra_csv(path, cm):
     return _measured(header[1:], spectra, cm, str(path))
 
 
+def _material_inputs(material):
+    # the library node's inputs after the reader's mapping (issue 10), else the shader's own
+    return getattr(material, "node_inputs", None) or material.parameters
+
+
 def _material_rgb(material):
+    inputs = _material_inputs(material)
     for key in DIFFUSE_COLOR_INPUTS:
-        p = material.parameters.get(key)
+        p = inputs.get(key)
         if p is not None:
             return key, np.asarray(p.value, np.float64).reshape(-1)
     return None, None
 
 
+def _material_roughness(material):
+    inputs = _material_inputs(material)
+    for key in DIFFUSE_ROUGHNESS_INPUTS:
+        p = inputs.get(key)
+        if p is not None:
+            return float(np.asarray(p.value, np.float64).reshape(-1)[0])
+    return None
+
+
 def from_materials(paths, cm, method="auto"):
     """The diffuse colours of the supported materials of USD / MaterialX files.
 
-    Colour values are taken as working-space linear RGB (OpenPBR colour inputs are ACEScg
-    unless the document says otherwise: pass ``--working-space acescg`` for OpenPBR
-    files); unsupported materials or ones without a diffuse colour are skipped with a
-    warning in ``extra``.
+    ``openpbr_diffuse.readers.load_materials`` resolves every colour into its working space,
+    ACEScg (``readers.WORKING_SPACE``); it is converted here to ``cm``'s working space
+    (Bradford), clipped to [0, 1] (with a warning) and upsampled with ``method``.  Unsupported
+    materials and ones without a diffuse colour are skipped with a warning.  The validation
+    evaluates EON whatever the material's own diffuse model (``material_diffuse_model`` in
+    the rows says which it is).
 
     Returns
     -------
@@ -166,27 +183,49 @@ def from_materials(paths, cm, method="auto"):
         from ..readers import load_materials
     except ImportError as exc:
         raise ValueError(f"reading material files needs openpbr_diffuse.readers ({exc})") from None
+    from .. import readers
+
+    source_space = getattr(readers, "WORKING_SPACE", "acescg")
     names, rgbs, sources, extra, warnings = [], [], [], [], []
     for path in paths:
         for m in load_materials(path):
             warnings += [f"{m.file}:{m.path}: {w}" for w in m.warnings]
             key, rgb = _material_rgb(m)
             if not m.supported or rgb is None or rgb.size != 3:
-                warnings.append(f"{m.file}:{m.path}: skipped ({'unsupported shader ' + str(m.shader_id) if not m.supported else 'no diffuse colour'})")
+                why = f"unsupported shader {m.shader_id}" if not m.supported else "no diffuse colour"
+                warnings.append(f"{m.file}:{m.path}: skipped ({why})")
                 continue
+            rgb = _to_working_space(rgb, source_space, cm)
             clipped = np.clip(rgb, 0.0, 1.0)
-            if np.any(clipped != rgb):
-                warnings.append(f"{m.file}:{m.path}: {key} {rgb.tolist()} clipped to [0, 1]")
+            if np.any(abs(clipped - rgb) > 1e-9):
+                warnings.append(f"{m.file}:{m.path}: {key} {np.round(rgb, 6).tolist()} ({cm.working_space}) "
+                                f"clipped to [0, 1]")
             names.append(m.name)
             rgbs.append(clipped)
             sources.append(f"material {m.file}:{m.path} {key}")
-            rkey = DIFFUSE_ROUGHNESS_INPUTS.get(m.shader_id)
-            r = m.parameters.get(rkey) if rkey else None
             extra.append({"material_file": str(m.file), "material_path": str(m.path),
-                          "material_diffuse_roughness": None if r is None else float(np.asarray(r.value).reshape(-1)[0])})
+                          "material_shader": str(m.shader_id),
+                          "material_diffuse_model": getattr(m, "diffuse_model", "") or None,
+                          "material_diffuse_roughness": _material_roughness(m)})
     if not names:
         return ColourSet([], np.zeros((0, cm.wavelengths.size)), np.zeros((0, 3)), [], np.zeros(0)), warnings
-    cs = from_rgb(np.array(rgbs), cm, method, names=names, source="material")
-    cs.source = [f"{s} (upsampled: {resolve_method(method, cm)})" for s in sources]
+    name = resolve_method(method, cm)
+    cs = from_rgb(np.array(rgbs), cm, name, names=names, source="material")
+    cs.source = [f"{s} ({source_space} -> {cm.working_space}; upsampled: {name})" for s in sources]
     cs.extra = extra
     return cs, warnings
+
+
+def _to_working_space(rgb, source_space, cm):
+    """A colour in the readers' working space (MaterialX name) as ``cm``'s working-space RGB."""
+    from .colorimetry import WORKING_SPACES
+
+    if source_space == cm.working_space:
+        return rgb
+    colour = _colour()
+    names = {"acescg": "ACEScg", **WORKING_SPACES}
+    if source_space not in names:
+        raise ValueError(f"material colours in {source_space!r}: no conversion to {cm.working_space}")
+    XYZ = 100.0 * colour.RGB_to_XYZ(rgb, colour.RGB_COLOURSPACES[names[source_space]], illuminant=cm.white_xy,
+                                    chromatic_adaptation_transform="Bradford")
+    return cm.XYZ_to_RGB(XYZ)
