@@ -68,8 +68,22 @@ def _fmt(v):
     return str(v)
 
 
+#: An OpenPBR lobe's inputs matter only when its weight is non-zero (prefix -> weight input).
+_GATES = {"coat_": "coat_weight", "fuzz_": "fuzz_weight", "subsurface_": "subsurface_weight",
+          "transmission_": "transmission_weight", "thin_film_": "thin_film_weight",
+          "emission_": "emission_luminance"}
+
+
+def _gated_off(name, inputs):
+    for prefix, weight in _GATES.items():
+        if name.startswith(prefix) and name != weight and weight in inputs:
+            return inputs[weight].value == 0
+    return False
+
+
 def _openpbr_inputs(inputs, m):
-    """Keep the OpenPBR inputs (no geometry props); list the set-but-unmodelled ones."""
+    """Keep the OpenPBR inputs (no geometry props); list the set-but-unmodelled ones (a
+    lobe's colour, roughness, ... only when its weight is non-zero)."""
     modelled = _modelled()
     defs = mxlib.inputs(OPENPBR)
     out = {}
@@ -78,7 +92,7 @@ def _openpbr_inputs(inputs, m):
             continue
         p = inputs[name]
         out[name] = p
-        if name not in modelled and _differs(p.value, default):
+        if name not in modelled and _differs(p.value, default) and not _gated_off(name, inputs):
             m.unsupported.append(f"{name} = {_fmt(p.value)} (not modelled by OpenPBRSurface)")
     return out
 

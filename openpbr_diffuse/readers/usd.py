@@ -132,7 +132,9 @@ def _f32(x):
     the shortest decimal that rounds to the same float32 gives back the authored text."""
     x = float(x)
     f = np.float32(x)
-    return float(repr(f)) if float(f) == x and np.isfinite(f) else x
+    if float(f) != x or not np.isfinite(f):
+        return x
+    return float(np.format_float_positional(f, unique=True))
 
 
 class _UsdResolver:
@@ -227,8 +229,9 @@ class _UsdResolver:
             p = self.port(nxt, mx_type, trail)
             if p is None:
                 return None
-            return Parameter(p.value, f"interface {nxt.GetAttr().GetPath()} <- {p.provenance}", _kind(p),
-                             p.authored)
+            if s.sourceType == UsdShade.AttributeType.Output:
+                return p
+            return Parameter(p.value, f"interface {p.provenance}", _kind(p), p.authored)
         if invalid:
             self._note(f"{attr.GetPath()}: connected to {invalid[0]}, which does not exist; default used")
             return None
