@@ -13,6 +13,8 @@ from .._version import __version__
 #: sub-command name -> module in this package (added as the commands are built).
 COMMANDS = {
     "albedo": "albedo",
+    "eval": "eval",
+    "render": "render",
 }
 
 
