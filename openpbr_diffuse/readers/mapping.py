@@ -88,7 +88,10 @@ def _openpbr_inputs(inputs, m):
     defs = mxlib.inputs(OPENPBR)
     out = {}
     for name, (t, default, geomprop) in defs.items():
-        if geomprop or name not in inputs:
+        if geomprop:
+            continue
+        if name not in inputs:   # a mapped shader without this input: OpenPBR's default
+            out[name] = Parameter(default, f"default of {OPENPBR} (no counterpart in {m.shader_id})", "default")
             continue
         p = inputs[name]
         out[name] = p

@@ -345,6 +345,12 @@ class _MxShader:
         if self.node is None:
             return ""
         nd = self.node.getNodeDef()
+        if nd is None:
+            # no exact match (e.g. an input of the wrong type): the library's nodedef of this
+            # category and output type, so that resolve() names the offending input
+            for cand in mxlib.library().getMatchingNodeDefs(self.node.getCategory()):
+                if cand.getType() == self.node.getType() and cand.getNodeString() == self.node.getCategory():
+                    return cand.getName()
         return nd.getName() if nd is not None else f"{self.node.getCategory()} ({self.node.getType()}, no nodedef)"
 
     def unwrap_surface(self):
