@@ -75,7 +75,11 @@ MODELLED = ("base_weight", "base_color", "base_diffuse_roughness", "base_metalne
 
 SELECTIONS = ("length", "max", "uniform")
 LOBE_NAMES = ("diffuse", "specular", "metal")
-_OPTIONS = (("selection", "length"), ("specular_sampling", "vndf"), ("multiscatter", True))
+#: diffuse_model -> energy_compensation of the MaterialX Oren-Nayar node, and whether its
+#: roughness is base_diffuse_roughness ("lambert": QON at sigma = 0 is exactly Lambert).
+DIFFUSE_MODELS = {"eon": (True, True), "qon": (False, True), "lambert": (False, False)}
+_OPTIONS = (("selection", "length"), ("specular_sampling", "vndf"), ("multiscatter", True),
+            ("diffuse_model", "eon"))
 
 
 class IgnoredInputWarning(UserWarning):
@@ -111,6 +115,10 @@ class OpenPBRSurface(metaclass=NodeMeta):
         GGX sampling: visible normals (Heitz 2018) or the plain NDF.
     multiscatter : bool
         Multiple-scattering compensation of the GGX lobes (default True).
+    diffuse_model : {"eon", "qon", "lambert"}
+        The diffuse lobe: "eon" (OpenPBR: EON with r = base_diffuse_roughness, EON
+        sampler), "qon" (Standard Surface's graph: QON with sigma = base_diffuse_roughness
+        in radians, cosine sampling) or "lambert" (UsdPreviewSurface; cosine sampling).
 
     Raises
     ------
@@ -144,6 +152,9 @@ class OpenPBRSurface(metaclass=NodeMeta):
         self.selection = values.pop("selection")
         self.specular_sampling = values.pop("specular_sampling")
         self.multiscatter = values.pop("multiscatter")
+        self.diffuse_model = values.pop("diffuse_model")
+        if self.diffuse_model not in DIFFUSE_MODELS:
+            raise ValueError(f"diffuse_model must be one of {', '.join(DIFFUSE_MODELS)}; got {self.diffuse_model!r}")
         if self.selection not in SELECTIONS:
             raise ValueError(f"selection must be one of {', '.join(SELECTIONS)}; got {self.selection!r}")
         if self.specular_sampling not in ggx.SAMPLING_METHODS:
@@ -174,7 +185,7 @@ class OpenPBRSurface(metaclass=NodeMeta):
         self.x = np.abs(x)                       # sqrt(F0) of the modulated index, eta' >= 1
         self.eta = fresnel.eta_of_parameter(self.x)
         self.metal_f0 = p["base_weight"][..., None] * p["base_color"]
-        self.diffuse = OrenNayarDiffuseBSDF(1.0, p["base_color"], p["base_diffuse_roughness"], True)
+        self.diffuse = self._diffuse_node(p["base_color"], p["base_diffuse_roughness"])
         dielectric = np.any(self.metalness < 1.0)
         self.active = tuple(name for name, on in (
             ("diffuse", dielectric and np.any(p["base_weight"] > 0.0)),
@@ -410,8 +421,11 @@ class OpenPBRSurface(metaclass=NodeMeta):
     def _diffuse_at(self, idx, lead):
         """The diffuse lobe restricted to flat indices idx of the broadcast shape lead."""
         p = self.inputs
-        return OrenNayarDiffuseBSDF(1.0, ar.flat(p["base_color"], lead, 3)[idx],
-                                    ar.flat(p["base_diffuse_roughness"], lead)[idx], True)
+        return self._diffuse_node(ar.flat(p["base_color"], lead, 3)[idx], ar.flat(p["base_diffuse_roughness"], lead)[idx])
+
+    def _diffuse_node(self, color, roughness):
+        ec, rough = DIFFUSE_MODELS[self.diffuse_model]
+        return OrenNayarDiffuseBSDF(1.0, color, roughness if rough else 0.0, ec)
 
     def __repr__(self):
         set_ = {n: v for n, v in self.inputs.items()
