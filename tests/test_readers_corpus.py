@@ -93,7 +93,8 @@ def test_shaderball_gives_seven_materials(variant):
     assert sorted(by) == sorted(["mtlx/plastic", "mtlx/gold", "mtlx/glass", "mtlx/bubblegum",
                                  "usdpreview/plastic", "usdpreview/copper", "usdpreview/glass"])
     preview = [m for m in mats if m.shader_id == "UsdPreviewSurface"]
-    assert len(preview) == 3
+    assert len(preview) == 3 and all(m.diffuse_model == "lambert" for m in preview)
+    assert all(m.supported and m.node() is not None for m in mats)
     mtlx_id = "ND_standard_surface_surfaceshader" if variant == "material_model=standard_surface" \
         else "ND_open_pbr_surface_surfaceshader"
     assert [m.shader_id for m in mats if m.path.split("/")[-2] == "mtlx"] == [mtlx_id] * 4

@@ -134,10 +134,23 @@ def to_working(rgb, space):
     return lin @ _matrix(space).T
 
 
+def decode(values, space):
+    """Remove the transfer function of ``space`` (values stay in its primaries).
+
+    Examples
+    --------
+    >>> round(float(decode(0.5, "srgb_texture")), 6)
+    0.214041
+    """
+    space = canonical(space)
+    v = np.asarray(values, dtype=np.float64)
+    return v if space == "raw" else _decode(v, _SPACES[space][1])
+
+
 def is_linear(space):
     """True when ``space`` has no transfer function (raw counts as linear)."""
     space = canonical(space)
     return space == "raw" or _SPACES[space][1] is None
 
 
-__all__ = ["WORKING_SPACE", "WORKING_SPACE_USD", "canonical", "to_working", "is_linear"]
+__all__ = ["WORKING_SPACE", "WORKING_SPACE_USD", "canonical", "to_working", "decode", "is_linear"]

@@ -25,7 +25,7 @@ from typing import Callable
 
 import numpy as np
 
-from . import colorspace, mxlib
+from . import mxlib
 from .material import Material, Parameter, diffuse_model_available
 
 OPENPBR = "ND_open_pbr_surface_surfaceshader"
@@ -105,7 +105,7 @@ def _map_openpbr(m):
 
 
 def _map_standard_surface(m):
-    from .materialx import Resolver, to_python
+    from .graph import Resolver, to_python
 
     graph = next(g for g in mxlib.library().getNodeGraphs() if g.getNodeDefString() == TRANSLATION)
     iface = {n: Parameter(np.asarray(p.value, dtype=np.float64) if isinstance(p.value, tuple) else p.value,

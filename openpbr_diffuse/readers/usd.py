@@ -34,7 +34,7 @@ import numpy as np
 from . import colorspace, mxlib, ops, textures
 from .mapping import build_material
 from .material import Parameter
-from .materialx import Resolver, convert_color, to_python
+from .graph import Resolver, convert_color, to_python
 
 _MX_TYPES = {
     "color3f": "color3", "color3d": "color3", "color3h": "color3", "color4f": "color4", "color4d": "color4",
@@ -396,13 +396,7 @@ def _raw(shader, name, default, res):
 
 
 def _srgb_decode(v):
-    return colorspace.to_working(np.asarray(v, dtype=np.float64), "srgb_texture") if False else _srgb_curve(v)
-
-
-def _srgb_curve(v):
-    import colour
-
-    return np.asarray(colour.cctf_decoding(np.asarray(v, dtype=np.float64), function="sRGB"), dtype=np.float64)
+    return colorspace.decode(v, "srgb_texture")
 
 
 def _fmt4(a):
