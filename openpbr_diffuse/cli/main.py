@@ -14,6 +14,8 @@ from .._version import __version__
 COMMANDS = {
     "albedo": "albedo",
     "colorshift": "colorshift",
+    "eval": "eval",
+    "render": "render",
 }
 
 

@@ -61,8 +61,8 @@ from typing import NamedTuple
 import numpy as np
 
 from .. import _arrays as ar
-from . import ggx
-from . import specular_albedo as tables
+from ..microfacet import fresnel, ggx
+from ..microfacet import tables
 from ._node import NodeMeta, bind_inputs, convert_input, is_default, node_signature
 from .frame import Frame
 from .materialx_defs import nodedef_inputs
@@ -75,7 +75,11 @@ MODELLED = ("base_weight", "base_color", "base_diffuse_roughness", "base_metalne
 
 SELECTIONS = ("length", "max", "uniform")
 LOBE_NAMES = ("diffuse", "specular", "metal")
-_OPTIONS = (("selection", "length"), ("specular_sampling", "vndf"), ("multiscatter", True))
+#: diffuse_model -> energy_compensation of the MaterialX Oren-Nayar node, and whether its
+#: roughness is base_diffuse_roughness ("lambert": QON at sigma = 0 is exactly Lambert).
+DIFFUSE_MODELS = {"eon": (True, True), "qon": (False, True), "lambert": (False, False)}
+_OPTIONS = (("selection", "length"), ("specular_sampling", "vndf"), ("multiscatter", True),
+            ("diffuse_model", "eon"))
 
 
 class IgnoredInputWarning(UserWarning):
@@ -111,6 +115,10 @@ class OpenPBRSurface(metaclass=NodeMeta):
         GGX sampling: visible normals (Heitz 2018) or the plain NDF.
     multiscatter : bool
         Multiple-scattering compensation of the GGX lobes (default True).
+    diffuse_model : {"eon", "qon", "lambert"}
+        The diffuse lobe: "eon" (OpenPBR: EON with r = base_diffuse_roughness, EON
+        sampler), "qon" (Standard Surface's graph: QON with sigma = base_diffuse_roughness
+        in radians, cosine sampling) or "lambert" (UsdPreviewSurface; cosine sampling).
 
     Raises
     ------
@@ -144,6 +152,9 @@ class OpenPBRSurface(metaclass=NodeMeta):
         self.selection = values.pop("selection")
         self.specular_sampling = values.pop("specular_sampling")
         self.multiscatter = values.pop("multiscatter")
+        self.diffuse_model = values.pop("diffuse_model")
+        if self.diffuse_model not in DIFFUSE_MODELS:
+            raise ValueError(f"diffuse_model must be one of {', '.join(DIFFUSE_MODELS)}; got {self.diffuse_model!r}")
         if self.selection not in SELECTIONS:
             raise ValueError(f"selection must be one of {', '.join(SELECTIONS)}; got {self.selection!r}")
         if self.specular_sampling not in ggx.SAMPLING_METHODS:
@@ -167,14 +178,14 @@ class OpenPBRSurface(metaclass=NodeMeta):
         self.metalness = p["base_metalness"]
         self.roughness = p["specular_roughness"]
         self.alpha = ggx.alpha_of(self.roughness)
-        x = ggx.modulated_ior_parameter(p["specular_weight"], p["specular_ior"])
+        x = fresnel.modulated_ior_parameter(p["specular_weight"], p["specular_ior"])
         if np.any(x < 0.0):
             warnings.warn("specular_ior < 1: total internal reflection is not modelled; the Fresnel "
                           "factor of the reciprocal index (same F0) is used", UserWarning, stacklevel=3)
         self.x = np.abs(x)                       # sqrt(F0) of the modulated index, eta' >= 1
-        self.eta = ggx.eta_of_parameter(self.x)
+        self.eta = fresnel.eta_of_parameter(self.x)
         self.metal_f0 = p["base_weight"][..., None] * p["base_color"]
-        self.diffuse = OrenNayarDiffuseBSDF(1.0, p["base_color"], p["base_diffuse_roughness"], True)
+        self.diffuse = self._diffuse_node(p["base_color"], p["base_diffuse_roughness"])
         dielectric = np.any(self.metalness < 1.0)
         self.active = tuple(name for name, on in (
             ("diffuse", dielectric and np.any(p["base_weight"] > 0.0)),
@@ -183,7 +194,7 @@ class OpenPBRSurface(metaclass=NodeMeta):
         ) if on) or ("diffuse",)
         if "metal" in self.active:
             c = np.linspace(0.0, 1.0, 257).reshape((257,) + (1,) * self.metal_f0.ndim)
-            if np.any(ggx.fresnel_f82_tint(c, self.metal_f0, p["specular_color"]) < 0.0):
+            if np.any(fresnel.fresnel_f82_tint(c, self.metal_f0, p["specular_color"]) < 0.0):
                 warnings.warn("the F82-tint Fresnel of this metal is negative at some angles (dark "
                               "base_color with a dark specular_color): the published formula is used "
                               "unclamped, so the metal lobe and its albedo can be negative", UserWarning,
@@ -274,9 +285,9 @@ class OpenPBRSurface(metaclass=NodeMeta):
         m, c = ggx.microfacet_terms(wi, wo, self.alpha)
         mu_o = np.clip(wo[..., 2], 0.0, 1.0)
         if name == "specular":
-            F = ggx.fresnel_dielectric(c, self.eta) * self._ms(mu_o, np.square(self.x))
+            F = fresnel.fresnel_dielectric(c, self.eta) * self._ms(mu_o, np.square(self.x))
             return np.broadcast_to((F * m)[..., None], np.shape(m) + (3,))
-        F = ggx.fresnel_f82_tint(c, self.metal_f0, self.inputs["specular_color"])
+        F = fresnel.fresnel_f82_tint(c, self.metal_f0, self.inputs["specular_color"])
         return F * self._ms(mu_o, self.metal_f0, channels=True) * m[..., None]
 
     def _lobe_pdf(self, name, wi, wo):
@@ -410,8 +421,11 @@ class OpenPBRSurface(metaclass=NodeMeta):
     def _diffuse_at(self, idx, lead):
         """The diffuse lobe restricted to flat indices idx of the broadcast shape lead."""
         p = self.inputs
-        return OrenNayarDiffuseBSDF(1.0, ar.flat(p["base_color"], lead, 3)[idx],
-                                    ar.flat(p["base_diffuse_roughness"], lead)[idx], True)
+        return self._diffuse_node(ar.flat(p["base_color"], lead, 3)[idx], ar.flat(p["base_diffuse_roughness"], lead)[idx])
+
+    def _diffuse_node(self, color, roughness):
+        ec, rough = DIFFUSE_MODELS[self.diffuse_model]
+        return OrenNayarDiffuseBSDF(1.0, color, roughness if rough else 0.0, ec)
 
     def __repr__(self):
         set_ = {n: v for n, v in self.inputs.items()

@@ -1,0 +1,261 @@
+"""Which library node a shader maps onto, and how its inputs become the node's inputs.
+
+A table (shader id -> ``Family``), not an if-chain:
+
+- ``ND_open_pbr_surface_surfaceshader`` -> ``OpenPBRSurface`` (diffuse EON), inputs as they are;
+- ``ND_standard_surface_surfaceshader`` -> ``OpenPBRSurface(diffuse_model="qon")``: the
+  inputs go through MaterialX's own translation graph ``ND_standard_surface_to_open_pbr_surface``
+  (evaluated by ``materialx.Resolver``; base_diffuse_roughness = diffuse_roughness, used as
+  QON's sigma in radians, as MaterialX's standard_surface graph does);
+- ``UsdPreviewSurface`` -> ``OpenPBRSurface(diffuse_model="lambert")``: diffuseColor ->
+  base_color, metallic -> base_metalness, roughness -> specular_roughness (it is the specular
+  roughness), ior -> specular_ior, clearcoat -> coat_weight, clearcoatRoughness ->
+  coat_roughness, opacity -> geometry_opacity;
+- ``ND_oren_nayar_diffuse_bsdf`` (bare, or as the bsdf of a ``surface`` node) ->
+  ``OrenNayarDiffuseBSDF``.
+
+Anything else is ``supported = False`` with its shader id.  Values outside the node's
+nodedef range are clamped to it with a warning (OpenPBR's reference graph clamps base_color
+with max(base_color, 0) and the scaled specular F0 to [0, 0.99999]; the library's nodes
+accept only the nodedef's [uimin, uimax]).
+"""
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from . import mxlib
+from .material import Material, Parameter, diffuse_model_available
+
+OPENPBR = "ND_open_pbr_surface_surfaceshader"
+STANDARD_SURFACE = "ND_standard_surface_surfaceshader"
+PREVIEW = "ND_UsdPreviewSurface_surfaceshader"
+OREN_NAYAR = "ND_oren_nayar_diffuse_bsdf"
+TRANSLATION = "ND_standard_surface_to_open_pbr_surface"
+
+#: Shader ids written in USD files that name the same nodedefs.
+ALIASES = {"UsdPreviewSurface": PREVIEW, "ND_standard_surface_surfaceshader_100": STANDARD_SURFACE}
+
+
+@dataclass(frozen=True)
+class Family:
+    node_class: str
+    diffuse_model: str
+    default_space: str
+    map: Callable
+
+
+def _modelled():
+    from ..nodes import openpbr_surface
+
+    return set(getattr(openpbr_surface, "MODELLED", ()))
+
+
+def _differs(value, default):
+    if default is None:
+        return value is not None
+    if isinstance(default, tuple):
+        return not np.allclose(np.asarray(value, dtype=np.float64), np.asarray(default, dtype=np.float64))
+    return value != default
+
+
+def _fmt(v):
+    if isinstance(v, tuple):
+        return "(" + ", ".join(f"{x:.6g}" for x in v) + ")"
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    return str(v)
+
+
+#: An OpenPBR lobe's inputs matter only when its weight is non-zero (prefix -> weight input).
+_GATES = {"coat_": "coat_weight", "fuzz_": "fuzz_weight", "subsurface_": "subsurface_weight",
+          "transmission_": "transmission_weight", "thin_film_": "thin_film_weight",
+          "emission_": "emission_luminance"}
+
+
+def _gated_off(name, inputs):
+    for prefix, weight in _GATES.items():
+        if name.startswith(prefix) and name != weight and weight in inputs:
+            return inputs[weight].value == 0
+    return False
+
+
+def _openpbr_inputs(inputs, m):
+    """Keep the OpenPBR inputs (no geometry props); list the set-but-unmodelled ones (a
+    lobe's colour, roughness, ... only when its weight is non-zero)."""
+    modelled = _modelled()
+    defs = mxlib.inputs(OPENPBR)
+    out = {}
+    for name, (t, default, geomprop) in defs.items():
+        if geomprop:
+            continue
+        if name not in inputs:   # a mapped shader without this input: OpenPBR's default
+            out[name] = Parameter(default, f"default of {OPENPBR} (no counterpart in {m.shader_id})", "default")
+            continue
+        p = inputs[name]
+        out[name] = p
+        if name not in modelled and _differs(p.value, default) and not _gated_off(name, inputs):
+            m.unsupported.append(f"{name} = {_fmt(p.value)} (not modelled by OpenPBRSurface)")
+    return out
+
+
+def _map_openpbr(m):
+    return _openpbr_inputs(m.parameters, m)
+
+
+def _map_standard_surface(m):
+    from .graph import Resolver, to_python
+
+    graph = next(g for g in mxlib.library().getNodeGraphs() if g.getNodeDefString() == TRANSLATION)
+    iface = {n: Parameter(np.asarray(p.value, dtype=np.float64) if isinstance(p.value, tuple) else p.value,
+                          p.provenance, p.kind) for n, p in m.parameters.items()}
+    ev = Resolver(m.file, m.uv, "raw", m)
+    mapped = {}
+    for out in graph.getOutputs():
+        name = out.getName()
+        target = name[:-4] if name.endswith("_out") else name
+        p = ev.port(out, (), iface, True)
+        if p is None:
+            continue
+        mapped[target] = Parameter(to_python(p.value), f"{graph.getName()}.{name} (Standard Surface -> OpenPBR)",
+                                   "mapped")
+    trans_inputs = mxlib.inputs(TRANSLATION)
+    for name, p in m.parameters.items():
+        t, default, _ = mxlib.inputs(STANDARD_SURFACE)[name]
+        if name not in trans_inputs and _differs(p.value, default):
+            m.unsupported.append(f"{name} = {_fmt(p.value)} (Standard Surface input without an OpenPBR counterpart)")
+    m.approximations += [
+        "diffuse: Standard Surface's Oren-Nayar (QON, sigma = diffuse_roughness in radians, as MaterialX's "
+        "standard_surface graph) evaluated as OpenPBRSurface(diffuse_model='qon')",
+        f"other inputs mapped to OpenPBR by MaterialX's translation graph {TRANSLATION}: base_color is "
+        "multiplied by the coat colour, specular_color is dropped for metals (specular_weight 1), "
+        "thin-film thickness rescaled",
+        "the specular/metal Fresnel and the layering are OpenPBR's (exact dielectric Fresnel, F82-tint metal, "
+        "albedo scaling), not Standard Surface's own (Schlick-based metal with edge colour)",
+    ]
+    return _openpbr_inputs(mapped, m)
+
+
+_PREVIEW_MAP = {"diffuseColor": "base_color", "metallic": "base_metalness", "roughness": "specular_roughness",
+                "ior": "specular_ior", "clearcoat": "coat_weight", "clearcoatRoughness": "coat_roughness",
+                "opacity": "geometry_opacity"}
+
+
+def _map_preview(m):
+    defs = mxlib.inputs(PREVIEW)
+    mapped = {}
+    for src, dst in _PREVIEW_MAP.items():
+        p = m.parameters[src]
+        mapped[dst] = Parameter(p.value, f"UsdPreviewSurface {src} -> {dst}: {p.provenance}", "mapped", p.authored)
+    spec_workflow = int(m.parameters["useSpecularWorkflow"].value) == 1
+    if spec_workflow:
+        p = m.parameters["specularColor"]
+        mapped["specular_color"] = Parameter(p.value, f"UsdPreviewSurface specularColor -> specular_color "
+                                             f"(specular workflow): {p.provenance}", "mapped", p.authored)
+        m.approximations.append("useSpecularWorkflow = 1: specularColor (the preview surface's F0 colour) is used "
+                                "as OpenPBR's specular_color tint; F0 still comes from ior; metallic is ignored")
+        mapped["base_metalness"] = Parameter(0.0, "specular workflow: metallic ignored", "mapped")
+    for name in ("emissiveColor", "normal", "displacement", "occlusion", "opacityThreshold"):
+        t, default, _ = defs[name]
+        if name in m.parameters and _differs(m.parameters[name].value, default):
+            m.unsupported.append(f"{name} = {_fmt(m.parameters[name].value)} (UsdPreviewSurface input not modelled)")
+    m.approximations += [
+        "diffuse: Lambertian, as UsdPreviewSurface defines it: OpenPBRSurface(diffuse_model='lambert')",
+        "roughness is the preview surface's specular roughness (-> specular_roughness); the GGX lobe uses "
+        "OpenPBR's exact dielectric Fresnel of ior instead of the preview surface's Schlick form",
+        "clearcoat maps onto OpenPBR's coat (IOR 1.6 default rather than the preview surface's 1.5)",
+    ]
+    return _openpbr_inputs(mapped, m)
+
+
+def _map_oren_nayar(m):
+    out = {n: p for n, p in m.parameters.items() if n != "normal"}
+    m.diffuse_model = "eon" if out["energy_compensation"].value else "qon"
+    return out
+
+
+FAMILIES = {
+    OPENPBR: Family("OpenPBRSurface", "eon", "acescg", _map_openpbr),
+    STANDARD_SURFACE: Family("OpenPBRSurface", "qon", "lin_rec709", _map_standard_surface),
+    PREVIEW: Family("OpenPBRSurface", "lambert", "lin_rec709", _map_preview),
+    OREN_NAYAR: Family("OrenNayarDiffuseBSDF", "", "lin_rec709", _map_oren_nayar),
+}
+
+
+def family(shader_id):
+    """The Family of a shader id (after ALIASES), or None."""
+    return FAMILIES.get(ALIASES.get(shader_id, shader_id))
+
+
+# ----------------------------------------------------------------------- clamping
+def _ranges(node_class, m):
+    from ..nodes.materialx_defs import nodedef_inputs
+
+    nd = OPENPBR if node_class == "OpenPBRSurface" else OREN_NAYAR
+    r = {n: (d.uimin, d.uimax) for n, d in nodedef_inputs(nd).items()}
+    if node_class == "OrenNayarDiffuseBSDF":
+        # sigma in radians for QON (energy_compensation false), r in [0, 1] for EON
+        r["roughness"] = (0.0, 1.0 if m.diffuse_model == "eon" else math.pi / 2)
+    return r
+
+
+def clamp_inputs(m):
+    """Clamp node inputs to the node's range, with a warning per clamped input."""
+    ranges = _ranges(m.node_class, m)
+    for name, p in list(m.node_inputs.items()):
+        if name not in ranges or isinstance(p.value, (bool, str)) or p.value is None:
+            continue
+        lo, hi = ranges[name]
+        v = np.asarray(p.value, dtype=np.float64)
+        if not np.all(np.isfinite(v)):
+            raise ValueError(f"{m.file}: {m.path}: {name} = {_fmt(p.value)} is not finite")
+        lo_a = -np.inf if lo is None else np.asarray(lo, dtype=np.float64)
+        hi_a = np.inf if hi is None else np.asarray(hi, dtype=np.float64)
+        c = np.minimum(np.maximum(v, lo_a), hi_a)
+        if np.array_equal(c, v):
+            continue
+        value = tuple(float(x) for x in c) if isinstance(p.value, tuple) else float(c)
+        rng = f"[{_fmt(lo) if lo is not None else '-inf'}, {_fmt(hi) if hi is not None else 'inf'}]"
+        m.warnings.append(f"{name} = {_fmt(p.value)} is outside {rng}, the range of the "
+                          f"{m.node_class} node: clamped to {_fmt(value)}")
+        m.node_inputs[name] = Parameter(value, p.provenance + " (clamped)", p.kind, p.value)
+
+
+# ----------------------------------------------------------------------- building
+def build_material(shader, *, name, path, file, uv, variants=None, time=None):
+    """A Material from a shader adapter (MaterialX node or USD shader prim)."""
+    m = Material(name=name, path=path, file=str(file), shader_id="", supported=False,
+                 uv=tuple(float(x) for x in uv), variants=dict(variants or {}), time=time)
+    if shader is None or shader.node is None:
+        m.unsupported.append("no surface shader is connected to the material")
+        return m
+    inner = shader.unwrap_surface()
+    if inner is not None and family(inner.shader_id()) is not None \
+            and family(inner.shader_id()).node_class == "OrenNayarDiffuseBSDF":
+        m.approximations.append(f"surface node {shader.path}: its bsdf {inner.path} is evaluated; "
+                                "the surface's edf and opacity are not")
+        shader = inner
+    sid = shader.shader_id()
+    m.shader_id = sid
+    m.shader_path = shader.path
+    fam = family(sid)
+    if fam is None:
+        m.unsupported.append(f"shader {sid or '(none)'} maps onto no node of the library")
+        return m
+    canonical = ALIASES.get(sid, sid)
+    m.parameters = shader.resolve(canonical, fam.default_space, m, uv)
+    m.node_class = fam.node_class
+    m.diffuse_model = fam.diffuse_model
+    m.node_inputs = fam.map(m)
+    if m.node_class == "OpenPBRSurface" and m.diffuse_model != "eon" and not diffuse_model_available():
+        m.warnings.append(f"this OpenPBRSurface has no diffuse_model keyword: the {m.diffuse_model} diffuse of "
+                          f"{sid} cannot be built (EON would be used); marked unsupported")
+        m.unsupported.append(f"diffuse_model {m.diffuse_model!r} (needs OpenPBRSurface(diffuse_model=...))")
+        return m
+    clamp_inputs(m)
+    m.supported = True
+    return m
+
+
+__all__ = ["FAMILIES", "Family", "family", "build_material", "clamp_inputs", "ALIASES"]
