@@ -170,3 +170,22 @@ def test_unwritable_image(capsys, tmp_path):
     code, _, err = run(capsys, "colorshift", "--roughness", "1", "--mu", "1", "--image",
                        str(tmp_path / "no" / "dir" / "x.png"))
     assert code == 2 and err.count("\n") == 1
+
+
+def test_bundled_materials_colours(capsys):
+    """Every supported bundled material becomes a row; its rho_rgb is the reader's ACEScg colour
+    converted to lin_rec709 (checked with OpenImageIO's OCIO conversion, Bradford)."""
+    readers = pytest.importorskip("openpbr_diffuse.readers")
+    oiio = pytest.importorskip("OpenImageIO")
+    path = readers.BUNDLED_MATERIALS / "clay_rough.mtlx"
+    mats = [m for m in readers.load_materials(path) if m.supported]
+    code, out, _ = run(capsys, "colorshift", "--colors", str(path), "--roughness", "0.5", "--mu", "1", "--json")
+    assert code == 0
+    rows = json.loads(out)["rows"]
+    assert [r["patch"] for r in rows] == [m.name for m in mats]
+    aces = np.array([m.node_inputs["base_color"].value for m in mats], np.float32)
+    buf = oiio.ImageBufAlgo.colorconvert(oiio.ImageBuf(np.ascontiguousarray(aces[None])), "ACEScg",
+                                         "Linear Rec.709 (sRGB)")
+    np.testing.assert_allclose([r["rho_rgb"] for r in rows], np.clip(buf.get_pixels(oiio.FLOAT)[0], 0, 1),
+                               atol=2e-4)
+    assert rows[0]["material_diffuse_model"] == "eon" and rows[0]["material_diffuse_roughness"] is not None
