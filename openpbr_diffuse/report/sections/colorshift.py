@@ -8,6 +8,8 @@ methods and how much the recovered spectrum changes the answer, a plot and a swa
 """
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from ..model import Check, Figure, SectionResult, Table
@@ -158,6 +160,50 @@ def _figure(ctx, res):
                              "of RGB vs spectral evaluation against roughness, one line per patch in its colour")
 
 
+def _materials_table(ctx, cm):
+    """The colour shift of the materials of ``ctx.paths`` (default: the bundled library) at
+    each material's own diffuse roughness and at r = 1, mu = 1; (Table or None, warnings)."""
+    from ...spectral import colour_shift, from_materials
+
+    try:
+        from ...readers import BUNDLED_MATERIALS, find_material_files
+    except ImportError as exc:
+        return None, [f"materials not evaluated: openpbr_diffuse.readers unavailable ({exc})"]
+    files = find_material_files(ctx.paths or [BUNDLED_MATERIALS])
+    warnings, sets = [], []
+    for f in files:
+        try:
+            cs, w = from_materials([f], cm)
+        except (ValueError, OSError) as exc:
+            warnings.append(f"{f}: {exc}")
+            continue
+        warnings += w
+        if len(cs):
+            sets.append(cs)
+    if not sets:
+        return None, warnings + ["no material with a diffuse colour"]
+    from ...spectral import ColourSet
+
+    cs = ColourSet.concat(sets)
+    res = colour_shift(cs, [1.0], [1.0], cm)
+    rows = []
+    for p, name in enumerate(cs.names):
+        r_own = cs.extra[p].get("material_diffuse_roughness")
+        own = colour_shift(ColourSet([name], cs.spectra[p:p + 1], cs.rho_rgb[p:p + 1], cs.source[p:p + 1],
+                                     cs.roundtrip_delta_e[p:p + 1]), [r_own or 0.0], [1.0], cm)
+        rows.append([name, Path(cs.extra[p].get("material_file", "")).name, cs.extra[p].get("material_diffuse_model") or "",
+                     "-" if r_own is None else round(r_own, 4),
+                     round(float(own.delta_e_rgb_vs_spectral[0, 0, 0]), 4), round(float(own.delta_e_shift[0, 0, 0]), 4),
+                     round(float(res.delta_e_rgb_vs_spectral[p, 0, 0]), 4), round(float(res.delta_e_shift[p, 0, 0]), 4),
+                     round(float(cs.roundtrip_delta_e[p]), 4)])
+    table = Table("Materials (diffuse colour read by openpbr_diffuse.readers, ACEScg -> lin_rec709, upsampled by "
+                  "Mallett 2019), mu = 1: EON at the material's own diffuse roughness (as r, whatever its diffuse "
+                  "model) and at r = 1",
+                  ["material", "file", "diffuse model", "own r", "dE rgb vs spectral (own r)", "dE shift (own r)",
+                   "dE rgb vs spectral (r = 1)", "dE shift (r = 1)", "upsampling round trip dE"], rows)
+    return table, warnings
+
+
 def build(ctx):
     from ...spectral import checker, colorimetry, colour_shift
     from ...spectral.colorimetry import _colour
@@ -194,6 +240,8 @@ def build(ctx):
                      ["method", "colours", "max round trip dE", "median round trip dE",
                       "max dE albedo (recovered vs measured)", "patch"],
                      _recovery_table(cm, colour_shift(checker(cm), [1.0], [1.0], cm), ctx.quick))
+    ctx.progress("colorshift: materials")
+    mat_table, warnings = _materials_table(ctx, cm)
     figures = [_figure(ctx, res)]
     ctx.progress("colorshift: swatches")
     from ...spectral.swatches import write_swatches
@@ -214,5 +262,5 @@ def build(ctx):
         "'cyan' lies outside linear Rec.709 (R < 0): its RGB evaluation uses rho clipped to [0, 1], which accounts "
         "for most of its RGB-vs-spectral difference; in ACEScg all 24 patches are inside.",
     ]
-    return SectionResult(KEY, TITLE, checks=checks, tables=[summary, per_patch, recovery], figures=figures,
-                         notes=notes)
+    tables = [summary, per_patch, recovery] + ([mat_table] if mat_table else [])
+    return SectionResult(KEY, TITLE, checks=checks, tables=tables, figures=figures, notes=notes, warnings=warnings)
