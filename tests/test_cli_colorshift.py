@@ -189,3 +189,15 @@ def test_bundled_materials_colours(capsys):
     np.testing.assert_allclose([r["rho_rgb"] for r in rows], np.clip(buf.get_pixels(oiio.FLOAT)[0], 0, 1),
                                atol=2e-4)
     assert rows[0]["material_diffuse_model"] == "eon" and rows[0]["material_diffuse_roughness"] is not None
+
+
+def test_black_and_white_colours_give_finite_json(capsys):
+    code, out, _ = run(capsys, "colorshift", "--colors", "0,0,0", "1,1,1", "--roughness", "0", "1", "--mu", "0", "1",
+                       "--json")
+    assert code == 0
+    assert "NaN" not in out and "Infinity" not in out
+    rows = json.loads(out)["rows"]
+    black = [r for r in rows if r["patch"] == "0,0,0"]
+    assert all(r["rel_luminance_diff_shift"] == 0 and r["delta_e_shift"] < 1e-6 for r in black)
+    white = [r for r in rows if r["patch"] == "1,1,1"]
+    assert all(abs(r["rel_luminance_diff_shift"]) < 1e-6 for r in white)     # white furnace

@@ -40,18 +40,18 @@ def test_checker_XYZ_equals_colour_sd_to_XYZ(cm):
     res = sp.colour_shift(sp.checker(cm), [0.0], [0.5], cm)
     sds = colour.SDS_COLOURCHECKERS["BabelColor Average"]
     XYZ = res.XYZ["spectral"][:, 0, 0]
-    integration = np.array([colour.sd_to_XYZ(sds[n], cm._cmfs, cm._illuminant_sd, method="Integration")
+    integration = np.array([colour.sd_to_XYZ(sds[n], cm.cmfs, cm.illuminant_sd, method="Integration")
                             for n in res.colours.names])
     np.testing.assert_allclose(XYZ, integration, rtol=0, atol=1e-9)
     # the default (ASTM E308 weighting tables on the measured 10 nm data): a different
     # integration rule, so close but not identical
-    astm = np.array([colour.sd_to_XYZ(sds[n], cm._cmfs, cm._illuminant_sd) for n in res.colours.names])
+    astm = np.array([colour.sd_to_XYZ(sds[n], cm.cmfs, cm.illuminant_sd) for n in res.colours.names])
     np.testing.assert_allclose(XYZ, astm, rtol=0, atol=0.02)
     assert float(cm.delta_E(cm.XYZ_to_Lab(XYZ), cm.XYZ_to_Lab(astm)).max()) < 0.01
     # perfect reflector at Y = 100 and the illuminant's white as Lab reference white
     np.testing.assert_allclose(cm.XYZ_to_Lab(cm.white_XYZ), [100.0, 0.0, 0.0], atol=1e-9)
-    np.testing.assert_allclose(cm.white_XYZ, colour.sd_to_XYZ(colour.sd_ones(cm.colour_shape), cm._cmfs,
-                                                              cm._illuminant_sd, method="Integration"), atol=1e-9)
+    np.testing.assert_allclose(cm.white_XYZ, colour.sd_to_XYZ(colour.sd_ones(cm.colour_shape), cm.cmfs,
+                                                              cm.illuminant_sd, method="Integration"), atol=1e-9)
 
 
 def test_no_difference_at_zero_roughness(checker_result):
@@ -92,7 +92,7 @@ def test_white_tint_keeps_chromaticity_of_rho(checker_result):
     res = checker_result
     sds = colour.SDS_COLOURCHECKERS["BabelColor Average"]
     cm = res.colorimetry
-    ref = xy(np.array([colour.sd_to_XYZ(sds[n], cm._cmfs, cm._illuminant_sd, method="Integration")
+    ref = xy(np.array([colour.sd_to_XYZ(sds[n], cm.cmfs, cm.illuminant_sd, method="Integration")
                        for n in res.colours.names]))
     got = xy(res.XYZ["white_tint"])
     np.testing.assert_allclose(got, np.broadcast_to(ref[:, None, None], got.shape), rtol=0, atol=1e-12)
@@ -168,7 +168,7 @@ def test_bradford_adaptation_matches_openimageio():
 def test_other_illuminant_uses_its_own_white():
     """Under illuminant A the perfect reflector is Lab (100, 0, 0) and RGB (1, 1, 1)."""
     cm = sp.colorimetry("A", "lin_rec709")
-    xyA = colour.XYZ_to_xy(colour.sd_to_XYZ(colour.sd_ones(cm.colour_shape), cm._cmfs, cm._illuminant_sd,
+    xyA = colour.XYZ_to_xy(colour.sd_to_XYZ(colour.sd_ones(cm.colour_shape), cm.cmfs, cm.illuminant_sd,
                                             method="Integration") / 100)
     np.testing.assert_allclose(cm.white_xy, xyA, atol=1e-12)
     np.testing.assert_allclose(cm.XYZ_to_RGB(cm.white_XYZ), 1.0, atol=1e-9)
@@ -238,8 +238,8 @@ def test_recovery_roundtrip(method, tol):
     assert spectra.min() >= 0 and spectra.max() <= 1
     # the reported round trip is the dE2000 of the spectrum's colour, recomputed here with
     # colour-science's own sd_to_XYZ
-    XYZ = np.array([colour.sd_to_XYZ(colour.SpectralDistribution(s, cm.colour_shape), cm._cmfs,
-                                     cm._illuminant_sd, method="Integration") for s in spectra])
+    XYZ = np.array([colour.sd_to_XYZ(colour.SpectralDistribution(s, cm.colour_shape), cm.cmfs,
+                                     cm.illuminant_sd, method="Integration") for s in spectra])
     np.testing.assert_allclose(de, cm.delta_E(cm.XYZ_to_Lab(cm.RGB_to_XYZ(rgb)), cm.XYZ_to_Lab(XYZ)), atol=1e-9)
     assert de.max() < tol
 

@@ -160,11 +160,10 @@ def run(args):
     colours, warnings = colour_set(args.colors, cm, method)
     result = colour_shift(colours, args.roughness, args.mu, cm)
     settings = result.settings()
-    settings["method"] = method if method != "auto" else f"auto"
-    if method == "auto":
-        from ..spectral.recovery import resolve_method
+    from ..spectral.recovery import resolve_method
 
-        settings["method_resolved"] = resolve_method("auto", cm)
+    settings["method"] = method
+    settings["method_resolved"] = resolve_method(method, cm)
     settings["colors"] = list(args.colors)
     image = None
     if args.image:

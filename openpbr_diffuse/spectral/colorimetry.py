@@ -102,6 +102,16 @@ class Colorimetry:
     _space: object
 
     @property
+    def cmfs(self):
+        """The CIE 1931 2 degree colour-matching functions aligned to ``shape`` (colour-science)."""
+        return self._cmfs
+
+    @property
+    def illuminant_sd(self):
+        """The illuminant's spectral distribution aligned to ``shape`` (colour-science)."""
+        return self._illuminant_sd
+
+    @property
     def colour_shape(self):
         return _colour().SpectralShape(*self.shape)
 

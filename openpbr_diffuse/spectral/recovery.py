@@ -57,7 +57,7 @@ def _per_colour(method):
         # trimming / re-shaping to their native shapes are expected (see the module notes)
         with colour.utilities.suppress_warnings(colour_runtime_warnings=True):
             for i in np.ndindex(rgb.shape[:-1]):
-                sd = colour.XYZ_to_sd(XYZ[i], method=method, illuminant=cm._illuminant_sd, cmfs=cm._cmfs)
+                sd = colour.XYZ_to_sd(XYZ[i], method=method, illuminant=cm.illuminant_sd, cmfs=cm.cmfs)
                 out[i] = sd.copy().align(cm.colour_shape).values
         return np.clip(out, 0.0, 1.0)
 

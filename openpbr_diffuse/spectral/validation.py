@@ -137,6 +137,12 @@ def _r(v):
     return round(float(v), 9) if v.ndim == 0 else [round(float(x), 9) for x in v]
 
 
+def _relative(a, b):
+    """a / b - 1, defined as 0 where both are 0 (a black colour: no difference, not NaN)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where((a == 0) & (b == 0), 0.0, a / b - 1.0)
+
+
 def _grid(name, values, lo, hi):
     a = np.atleast_1d(np.asarray(values, np.float64))
     if a.ndim != 1 or a.size == 0:
@@ -199,9 +205,7 @@ def colour_shift(colours, roughness=DEFAULT_ROUGHNESS, mu=DEFAULT_MU, cm=None):
     Lab = {k: cm.XYZ_to_Lab(v) for k, v in XYZ.items()}
     C = {k: cm.chroma(v) for k, v in Lab.items()}
     Y = {k: v[..., 1] for k, v in XYZ.items()}
-    with np.errstate(divide="ignore", invalid="ignore"):
-        rel_rgb = Y["rgb"] / Y["spectral"] - 1.0
-        rel_shift = Y["spectral"] / Y["white_tint"] - 1.0
+    rel_rgb, rel_shift = _relative(Y["rgb"], Y["spectral"]), _relative(Y["spectral"], Y["white_tint"])
     return ColourShift(
         colours, r, mu, cm, rgb, clipped,
         cm.XYZ_to_RGB(XYZ["spectral"]), E_rgb, cm.XYZ_to_RGB(XYZ["white_tint"]), XYZ, Lab,

@@ -51,7 +51,7 @@ def _checks(res, cm, colour):
     checks.append(Check("flat reflectance: albedo = quadrature table", float(abs(
         fr.albedo_spectral - E_ref).max()), 1e-5, "<=", "data/albedo_eon.csv (reference_albedo)"))
     sds = colour.SDS_COLOURCHECKERS["BabelColor Average"]
-    XYZ_ref = np.array([colour.sd_to_XYZ(sds[n], cm._cmfs, cm._illuminant_sd, method="Integration")
+    XYZ_ref = np.array([colour.sd_to_XYZ(sds[n], cm.cmfs, cm.illuminant_sd, method="Integration")
                         for n in res.colours.names])
     checks.append(Check("pipeline XYZ of the patches = colour.sd_to_XYZ", float(abs(
         res.XYZ["spectral"][:, k0] - XYZ_ref[:, None]).max()), 1e-9, "<=",
