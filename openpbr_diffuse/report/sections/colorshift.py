@@ -147,7 +147,7 @@ def _figure(ctx, res):
                      ls="--" if res.rho_rgb_clipped[p] else "-", label=name if res.rho_rgb_clipped[p] else None)
     axes[0].set(title=f"colour shift: spectral vs white then tint (mu = {res.mu[m]:g})", xlabel="roughness r",
                 ylabel="CIEDE2000")
-    axes[1].set(title="per RGB channel vs per wavelength", xlabel="roughness r", ylabel="CIEDE2000", yscale="log")
+    axes[1].set(title="per RGB channel vs per wavelength", xlabel="roughness r", ylabel="CIEDE2000")
     if res.rho_rgb_clipped.any():
         axes[1].legend(title="clipped to Rec.709 (dashed)", fontsize=8)
     for ax in axes:
