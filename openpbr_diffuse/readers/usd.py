@@ -206,7 +206,7 @@ class _UsdResolver:
     def _cycle(self, key, trail):
         if key in trail:
             loop = list(trail[trail.index(key):]) + [key]
-            raise ValueError(f"{self.file}: connection cycle: {' -> '.join(loop)}")
+            raise ValueError(f"{self.file}: connection cycle: {' -> '.join(str(k) for k in loop)}")
         return trail + (key,)
 
     # ----------------------------------------------------------------- values
@@ -243,7 +243,7 @@ class _UsdResolver:
         _, UsdShade, _ = _pxr()
 
         attr = port.GetAttr()
-        trail = self._cycle(str(attr.GetPath()), trail)
+        trail = self._cycle(attr.GetPath(), trail)
         sources, invalid = port.GetConnectedSources()
         if sources:
             s = sources[0]
@@ -314,7 +314,7 @@ class _UsdResolver:
     def shader_value(self, shader, output, mx_type, trail):
         sid = shader.GetShaderId() or ""
         path = str(shader.GetPath())
-        trail = self._cycle(path, trail)
+        trail = self._cycle(shader.GetPath(), trail)
         if sid.startswith("UsdUVTexture"):
             return self.uv_texture(shader, sid, output, mx_type, trail)
         if sid.startswith("UsdPrimvarReader"):
@@ -481,7 +481,7 @@ class _UsdShader:
         for name, inp in authored.items():
             if name not in defs:
                 sink.warnings.append(f"{inp.GetAttr().GetPath()}: not an input of {sid}; ignored")
-        params = res.inputs(self.shader, sid, (str(self.shader.GetPath()),), authored)
+        params = res.inputs(self.shader, sid, (self.shader.GetPath(),), authored)
         return {n: p if p.kind == "default" else
                 Parameter(to_python(p.value), p.provenance, p.kind, to_python(p.authored))
                 for n, p in params.items()}
