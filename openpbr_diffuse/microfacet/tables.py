@@ -270,3 +270,49 @@ def padded_tables():
     """(C, R): the padded conductor basis and dielectric ratio tables, float64, C-contiguous."""
     return (np.ascontiguousarray(_padded_conductor()[0], dtype=np.float64),
             np.ascontiguousarray(_padded_dielectric()[0], dtype=np.float64))
+
+
+# Lookups whose roughness and x coordinates are fixed per material: the node index and the
+# four Catmull-Rom weights of those axes are computed once (``axis_weights``), and only the
+# mu axis is evaluated per row.
+
+def axis_weights(v, n, kind):
+    """(i, w0, w1, w2, w3) of axis ``kind`` (MU_AXIS, X_AXIS, R_AXIS; n nodes) at v (arrays)."""
+    name = {MU_AXIS: "mu", X_AXIS: "x", R_AXIS: "r"}[kind]
+    i, t = _node_coord(np.asarray(v, dtype=np.float64), n, name)
+    w = _catmull_rom(t)
+    return (i.astype(np.float64),) + tuple(w[..., k] for k in range(4))
+
+
+@kernel
+def conductor_basis_pre(C, ir, r0, r1, r2, r3, mu):
+    """(E1, E5, E6) with the roughness axis given by ``axis_weights`` (C's roughness nodes)."""
+    im, tm = _node_at(mu, C.shape[1] - 2, MU_AXIS)
+    wm = _weights_at(tm)
+    wr = (r0, r1, r2, r3)
+    e1 = e5 = e6 = 0.0
+    for a in range(4):
+        for b in range(4):
+            w = wr[a] * wm[b]
+            e1 += w * C[ir + a, im + b, 0]
+            e5 += w * C[ir + a, im + b, 1]
+            e6 += w * C[ir + a, im + b, 2]
+    return min(max(e1, 0.0), 1.0), max(e5, 0.0), max(e6, 0.0)
+
+
+@kernel
+def dielectric_albedo_pre(R, ir, r0, r1, r2, r3, ix, x0, x1, x2, x3, x, mu, E1):
+    """E_diel with the roughness and x axes given by ``axis_weights`` (R's nodes); 0 at x = 0."""
+    if not x > 0.0:
+        return 0.0
+    im, tm = _node_at(mu, R.shape[2] - 2, MU_AXIS)
+    wm = _weights_at(tm)
+    wr = (r0, r1, r2, r3)
+    wx = (x0, x1, x2, x3)
+    v = 0.0
+    for a in range(4):
+        for b in range(4):
+            wab = wr[a] * wx[b]
+            for c in range(4):
+                v += wab * wm[c] * R[ir + a, ix + b, im + c]
+    return min(max(v, 0.0), 1.0) * E1

@@ -22,7 +22,7 @@ from .._jit import INV_PI, kernel
 from .._launch import _F, _U, compiled, launch, rows
 from ..microfacet import kernels as mf
 from ..microfacet.sheen import sheen_albedo, sheen_density, sheen_sample
-from ..microfacet.tables import conductor_basis_at, dielectric_albedo_at
+from ..microfacet.tables import conductor_basis_pre, dielectric_albedo_pre
 from ..models.eon import eon_albedo_terms, eon_terms, rho_ms
 from ..models.qon import qon_AB, qon_albedo, qon_terms
 from ..sampling.ltc import from_frame, ltc_frame, to_frame
@@ -66,42 +66,65 @@ P_FUZZ_W = 37
 P_FUZZ_COLOR = 38         # 3
 P_FUZZ_R = 41
 P_THIN = 42               # geometry_thin_walled (0/1)
-N_PARAMS = 43
+# table axes fixed per material (``microfacet.tables.axis_weights``): for the base specular
+# (P_TAB_S) and the coat (P_TAB_C), the conductor table's roughness node and 4 weights, the
+# dielectric table's roughness node and 4 weights, its x node and 4 weights
+P_TAB_S = 43              # 15
+P_TAB_C = 58              # 15
+N_PARAMS = 73
 
 
 @kernel
-def row_state(p, o, mu, C, R, ms):
-    """Per-row layer factors at mu_o: (E1_s, E5_s, E6_s, E_spec, E1_c, E_coat, E_fuzz).
+def layer_albedos(p, o, t, C, R, mu, x, ms):
+    """(E1, E5, E6, E) of a GGX layer whose table axes start at p[o + t] (P_TAB_S / P_TAB_C):
+    the basis albedos and the dielectric lobe's albedo with the multiple-scattering factor."""
+    E1, E5, E6 = conductor_basis_pre(C, int(p[o + t]), p[o + t + 1], p[o + t + 2], p[o + t + 3], p[o + t + 4], mu)
+    E = dielectric_albedo_pre(R, int(p[o + t + 5]), p[o + t + 6], p[o + t + 7], p[o + t + 8], p[o + t + 9],
+                              int(p[o + t + 10]), p[o + t + 11], p[o + t + 12], p[o + t + 13], p[o + t + 14],
+                              x, mu, E1)
+    return E1, E5, E6, E * mf.multiscatter(x * x, E1, ms)
+
+
+@kernel
+def diffuse_albedo_terms(dmodel, mu, r):
+    """(e_g, e_h, <E_F>) of the diffuse lobe's albedo rho e_g + m(rho) e_h (channel-free):
+    EON Eq. 20 (m = rho_ms), QON Eq. 8 or Lambert (m = 0)."""
+    if dmodel == D_EON:
+        return eon_albedo_terms(mu, r, False)
+    if dmodel == D_QON:
+        A, B = qon_AB(r, 0.33)
+        return qon_albedo(mu, A, B), 0.0, 0.0
+    return 1.0, 0.0, 0.0
+
+
+@kernel
+def row_state(p, o, mu, C, R, dmodel, ms):
+    """Per-row quantities shared by every lobe at mu_o: (E1_s, E5_s, E6_s, E_spec, E1_c,
+    E_coat, E_fuzz, e_g, e_h, <E_F>, E_qon).
 
     E1/E5/E6: GGX basis albedos of the base specular roughness; E_spec, E_coat: albedos of
     the dielectric specular and coat lobes (with the multiple-scattering factor); E_fuzz:
-    the sheen albedo.  Layers that are off (weight 0) are not looked up.
+    the sheen albedo; e_g, e_h, <E_F>: the diffuse albedo terms; E_qon: the QON albedo of
+    the thin-walled subsurface reflection.  Layers that are off are not looked up.
     """
-    r_s = p[o + P_R_S]
-    x_s = p[o + P_X_S]
-    E1s, E5s, E6s = conductor_basis_at(C, mu, r_s)
-    Es = dielectric_albedo_at(R, mu, r_s, x_s, E1s) * mf.multiscatter(x_s * x_s, E1s, ms)
-    E1c, Ec, Ef = 1.0, 0.0, 0.0
+    E1s, E5s, E6s, Es = layer_albedos(p, o, P_TAB_S, C, R, mu, p[o + P_X_S], ms)
+    E1c, Ec, Ef, Eq = 1.0, 0.0, 0.0, 0.0
     if p[o + P_COAT_W] > 0.0:
-        r_c = p[o + P_R_C]
-        x_c = p[o + P_X_C]
-        E1c, _, _ = conductor_basis_at(C, mu, r_c)
-        Ec = dielectric_albedo_at(R, mu, r_c, x_c, E1c) * mf.multiscatter(x_c * x_c, E1c, ms)
+        E1c, _, _, Ec = layer_albedos(p, o, P_TAB_C, C, R, mu, p[o + P_X_C], ms)
     if p[o + P_FUZZ_W] > 0.0:
         Ef = sheen_albedo(mu, p[o + P_FUZZ_R])
-    return E1s, E5s, E6s, Es, E1c, Ec, Ef
+    eg, eh, avg = diffuse_albedo_terms(dmodel, mu, p[o + P_R_DIFF])
+    if p[o + P_THIN] > 0.0 and p[o + P_SSS_W] > 0.0:
+        Eq, _, _ = diffuse_albedo_terms(D_QON, mu, p[o + P_R_DIFF])
+    return E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, avg, Eq
 
 
 @kernel
-def diffuse_albedo(dmodel, mu, r, rho):
-    """E(mu_o) of the diffuse lobe for one channel: EON Eq. 20, QON Eq. 8, or rho."""
+def diffuse_albedo(dmodel, rho, eg, eh, avg):
+    """One channel of the diffuse albedo from ``diffuse_albedo_terms``."""
     if dmodel == D_EON:
-        eg, eh, avg = eon_albedo_terms(mu, r, False)
         return rho * eg + rho_ms(rho, avg) * eh
-    if dmodel == D_QON:
-        A, B = qon_AB(r, 0.33)
-        return rho * qon_albedo(mu, A, B)
-    return rho
+    return rho * eg
 
 
 @kernel
@@ -120,7 +143,7 @@ def lobe_weight_albedo(k, c, p, o, st, mu, dmodel, ms):
     attenuated by the coat (P_BASE_MUL); metal / dielectric by base_metalness; under the
     dielectric specular layer the substrate mixes transmission, subsurface and diffuse.
     """
-    E1s, E5s, E6s, Es, E1c, Ec, Ef = st
+    E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, avg, Eq = st
     Tf = 1.0 - p[o + P_FUZZ_W] * Ef
     if k == FUZZ:
         return p[o + P_FUZZ_W] * p[o + P_FUZZ_COLOR + c], Ef
@@ -143,13 +166,13 @@ def lobe_weight_albedo(k, c, p, o, st, mu, dmodel, ms):
     g = p[o + P_SSS_ANISO]
     if k == SUBSURFACE:
         if p[o + P_THIN] > 0.0:   # reflection half of the thin-walled mix: QON, colour^2 (1 - g)/2
-            return opaque * S * 0.5 * color * (1.0 - g), diffuse_albedo(D_QON, mu, p[o + P_R_DIFF], color)
+            return opaque * S * 0.5 * color * (1.0 - g), color * Eq
         return opaque * S, color
     if k == SUBSURFACE_T:
         return opaque * S * 0.5 * color * (1.0 + g), color
     # DIFFUSE
     return (opaque * (1.0 - S) * p[o + P_BASE_WEIGHT],
-            diffuse_albedo(dmodel, mu, p[o + P_R_DIFF], p[o + P_BASE_COLOR + c]))
+            diffuse_albedo(dmodel, p[o + P_BASE_COLOR + c], eg, eh, avg))
 
 
 @kernel
@@ -167,7 +190,7 @@ def diffuse_f(dmodel, r, rho, iz, oz, s):
 @kernel
 def lobe_f(k, p, o, st, ix, iy, iz, ox, oy, oz, dmodel, ms):
     """The lobe's own BSDF (f0, f1, f2), weight not applied; 0 outside the lobe's hemisphere."""
-    E1s, E5s, E6s, Es, E1c, Ec, Ef = st
+    E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, avg, Eq = st
     up = iz > 0.0 and oz > 0.0
     if k == DIFFUSE or k == SUBSURFACE:
         if not up:
@@ -318,7 +341,7 @@ def _lobes_drive(active, dmodel, sel, ms, C, R, p, wo, W, E, P):
         o = _U(i) * _U(N_PARAMS)
         oz = _F(wo[j + _U(2)])
         mu = min(max(oz, 0.0), 1.0)
-        st = row_state(p, o, mu, C, R, ms)
+        st = row_state(p, o, mu, C, R, dmodel, ms)
         up = oz > 0.0
         S = 0.0
         K = 0
@@ -352,7 +375,7 @@ def _albedo_drive(active, dmodel, ms, C, R, p, wo, out):
         o = _U(i) * _U(N_PARAMS)
         oz = _F(wo[j + _U(2)])
         mu = min(max(oz, 0.0), 1.0)
-        st = row_state(p, o, mu, C, R, ms)
+        st = row_state(p, o, mu, C, R, dmodel, ms)
         a0 = a1 = a2 = 0.0
         if oz > 0.0:
             for k in range(N_LOBES):
@@ -378,7 +401,7 @@ def _eval_drive(active, only, dmodel, ms, C, R, p, wi, wo, out):
         ix, iy, iz = _F(wi[j]), _F(wi[j + _U(1)]), _F(wi[j + _U(2)])
         ox, oy, oz = _F(wo[j]), _F(wo[j + _U(1)]), _F(wo[j + _U(2)])
         mu = min(max(oz, 0.0), 1.0)
-        st = row_state(p, o, mu, C, R, ms)
+        st = row_state(p, o, mu, C, R, dmodel, ms)
         a0 = a1 = a2 = 0.0
         if oz > 0.0:
             for k in range(N_LOBES):
@@ -410,7 +433,7 @@ def _pdf_drive(active, dmodel, sel, ms, vndf, C, R, p, wo, wi, out):
         mu = min(max(oz, 0.0), 1.0)
         q = 0.0
         if oz > 0.0:
-            st = row_state(p, o, mu, C, R, ms)
+            st = row_state(p, o, mu, C, R, dmodel, ms)
             S, K = total_score(active, p, o, st, mu, dmodel, ms, sel)
             for k in range(N_LOBES):
                 if active & (1 << k):
@@ -433,7 +456,7 @@ def _sample_drive(active, dmodel, sel, ms, vndf, C, R, p, wo, u, wi, out):
         ju = _U(i) * _U(ud)
         ox, oy, oz = _F(wo[j]), _F(wo[j + _U(1)]), _F(wo[j + _U(2)])
         mu = min(max(oz, 0.0), 1.0)
-        st = row_state(p, o, mu, C, R, ms)
+        st = row_state(p, o, mu, C, R, dmodel, ms)
         S, K = total_score(active, p, o, st, mu, dmodel, ms, sel)
         u0 = _F(u[ju])
         # choose the lobe: the first whose cumulative probability exceeds u0
@@ -481,7 +504,7 @@ def _sample_drive(active, dmodel, sel, ms, vndf, C, R, p, wo, u, wi, out):
 
 
 @functools.cache
-def _tables():
+def tables():
     from ..microfacet.tables import padded_tables
 
     return padded_tables()
@@ -493,7 +516,7 @@ def lobes_rows(flags, params, wo, lead):
     W = np.empty(n * N_LOBES * 3)
     E = np.empty(n * N_LOBES * 3)
     P = np.empty(n * N_LOBES)
-    C, R = _tables()
+    C, R = tables()
     launch(_lobes_drive, (flags.active, flags.dmodel, flags.sel, flags.ms, C, R), _inputs(params, lead, (wo, 3)),
            [(W, N_LOBES * 3), (E, N_LOBES * 3), (P, N_LOBES)], n)
     return W.reshape(lead + (N_LOBES, 3)), E.reshape(lead + (N_LOBES, 3)), P.reshape(lead + (N_LOBES,))
@@ -512,7 +535,7 @@ def _inputs(params, lead, *dirs):
 def albedo_rows(flags, params, wo, lead):
     n = int(np.prod(lead))
     out = np.empty(n * 3)
-    C, R = _tables()
+    C, R = tables()
     launch(_albedo_drive, (flags.active, flags.dmodel, flags.ms, C, R), _inputs(params, lead, (wo, 3)),
            [(out, 3)], n)
     return out.reshape(lead + (3,))
@@ -521,7 +544,7 @@ def albedo_rows(flags, params, wo, lead):
 def eval_rows(flags, params, wi, wo, lead, only=-1):
     n = int(np.prod(lead))
     out = np.empty(n * 3)
-    C, R = _tables()
+    C, R = tables()
     launch(_eval_drive, (flags.active, only, flags.dmodel, flags.ms, C, R),
            _inputs(params, lead, (wi, 3), (wo, 3)), [(out, 3)], n)
     return out.reshape(lead + (3,))
@@ -530,7 +553,7 @@ def eval_rows(flags, params, wi, wo, lead, only=-1):
 def pdf_rows(flags, params, wo, wi, lead):
     n = int(np.prod(lead))
     out = np.empty(n)
-    C, R = _tables()
+    C, R = tables()
     launch(_pdf_drive, (flags.active, flags.dmodel, flags.sel, flags.ms, flags.vndf, C, R),
            _inputs(params, lead, (wo, 3), (wi, 3)), [(out, 1)], n)
     return out.reshape(lead)
@@ -540,7 +563,7 @@ def sample_rows(flags, params, wo, u, lead):
     n = int(np.prod(lead))
     wi = np.empty(n * 3)
     out = np.empty(n)
-    C, R = _tables()
+    C, R = tables()
     launch(_sample_drive, (flags.active, flags.dmodel, flags.sel, flags.ms, flags.vndf, C, R),
            _inputs(params, lead, (wo, 3), (u, u.shape[-1])), [(wi, 3), (out, 1)], n)
     return wi.reshape(lead + (3,)), out.reshape(lead)

@@ -67,6 +67,8 @@ Speed: every verb is one compiled loop over rows (``_surface_kernels``); the mat
 inputs are packed once into a parameter vector per material.
 """
 import dataclasses
+import functools
+import math
 import warnings
 from typing import NamedTuple
 
@@ -74,6 +76,7 @@ import numpy as np
 
 from .. import _arrays as ar
 from ..microfacet import fresnel, ggx
+from ..microfacet import tables as spec_tables
 from . import _surface_kernels as sk
 from ._node import NodeMeta, bind_inputs, convert_input, is_default, node_signature
 from .frame import Frame
@@ -99,6 +102,7 @@ LOBE_NAMES = sk.LOBE_NAMES
 DIFFUSE_MODELS = {"eon": sk.D_EON, "qon": sk.D_QON, "lambert": sk.D_LAMBERT}
 _OPTIONS = (("selection", "length"), ("specular_sampling", "vndf"), ("multiscatter", True),
             ("diffuse_model", "eon"))
+_OPTION_NAMES = tuple(n for n, _ in _OPTIONS)
 
 
 class IgnoredInputWarning(UserWarning):
@@ -175,19 +179,34 @@ def pack_parameters(p):
         (sk.P_X_C, xc), (sk.P_ETA_C, fresnel.eta_of_parameter(xc)), (sk.P_BASE_MUL, base_mul),
         (sk.P_FUZZ_W, p["fuzz_weight"]), (sk.P_FUZZ_COLOR, p["fuzz_color"]), (sk.P_FUZZ_R, p["fuzz_roughness"]),
         (sk.P_THIN, np.float64(bool(p["geometry_thin_walled"]))),
+        (sk.P_TAB_S, _table_axes(r_eff, x)), (sk.P_TAB_C, _table_axes(p["coat_roughness"], xc)),
     ]
-    lead = np.broadcast_shapes(*(np.shape(v)[:-1] if k in _COLOUR_SLOTS else np.shape(v) for k, v in cols))
+    lead = np.broadcast_shapes(*(np.shape(v)[:-1] if k in _VECTOR_SLOTS else np.shape(v) for k, v in cols))
     out = np.empty(lead + (sk.N_PARAMS,))
     for k, v in cols:
-        if k in _COLOUR_SLOTS:
-            out[..., k:k + 3] = v
+        if k in _VECTOR_SLOTS:
+            out[..., k:k + np.shape(v)[-1]] = v
         else:
             out[..., k] = v
     return out, warn
 
 
-_COLOUR_SLOTS = (sk.P_BASE_COLOR, sk.P_SPEC_COLOR, sk.P_METAL_F0, sk.P_METAL_A, sk.P_TRANS_TINT,
-                 sk.P_SSS_COLOR, sk.P_BASE_MUL, sk.P_FUZZ_COLOR)
+def _table_axes(roughness, x):
+    """(..., 15): the GGX tables' roughness and x axes of one layer (``axis_weights``)."""
+    C, R = sk.tables()
+    axes = (spec_tables.axis_weights(roughness, C.shape[0] - 2, spec_tables.R_AXIS)
+            + spec_tables.axis_weights(roughness, R.shape[0] - 2, spec_tables.R_AXIS)
+            + spec_tables.axis_weights(x, R.shape[1] - 2, spec_tables.X_AXIS))
+    return np.stack(np.broadcast_arrays(*axes), axis=-1)
+
+
+_VECTOR_SLOTS = (sk.P_BASE_COLOR, sk.P_SPEC_COLOR, sk.P_METAL_F0, sk.P_METAL_A, sk.P_TRANS_TINT,
+                 sk.P_SSS_COLOR, sk.P_BASE_MUL, sk.P_FUZZ_COLOR, sk.P_TAB_S, sk.P_TAB_C)
+
+
+@functools.cache
+def _signature(nodedef):
+    return node_signature(nodedef, _OPTIONS, keyword_only=True)
 
 
 def _active_lobes(p, x_s):
@@ -210,6 +229,39 @@ def _active_lobes(p, x_s):
 def _validity(idef):
     """The nodedef entry with the range the input is checked against (see UNBOUNDED_ABOVE)."""
     return dataclasses.replace(idef, uimax=None) if idef.name in UNBOUNDED_ABOVE else idef
+
+
+@functools.cache
+def _interface(nodedef):
+    """(checked defs, converted defaults) of the nodedef, built once per process."""
+    checked = {n: _validity(d) for n, d in nodedef_inputs(nodedef).items()}
+    defaults = {}
+    for n, d in checked.items():
+        v = convert_input(d, d.default)
+        if isinstance(v, np.ndarray):
+            v.flags.writeable = False
+        defaults[n] = v
+    return checked, defaults
+
+
+def _in(lo, hi, v):
+    return math.isfinite(v) and (lo is None or v >= lo) and (hi is None or v <= hi)
+
+
+def _convert(idef, v):
+    """``convert_input`` with a fast path for plain Python numbers and 3-tuples in range
+    (the common case when building many materials); anything else, and every error
+    message, goes through ``convert_input``."""
+    t = idef.type
+    if t == "float" and type(v) in (float, int):
+        if _in(idef.uimin, idef.uimax, v):
+            return np.float64(v)
+    elif t == "color3" and type(v) in (tuple, list) and len(v) == 3 and all(type(c) in (float, int) for c in v):
+        lo, hi = idef.uimin, idef.uimax
+        at = lambda b, k: b[k] if isinstance(b, tuple) else b   # noqa: E731  (per component or shared)
+        if all(_in(at(lo, k), at(hi, k), v[k]) for k in range(3)):
+            return np.array(v, dtype=np.float64)
+    return convert_input(idef, v)
 
 
 class OpenPBRSurface(metaclass=NodeMeta):
@@ -256,19 +308,26 @@ class OpenPBRSurface(metaclass=NodeMeta):
 
     @classmethod
     def signature(cls):
-        return node_signature(cls.NODEDEF, _OPTIONS, keyword_only=True)
+        return _signature(cls.NODEDEF)
 
     @classmethod
     def defaults(cls):
         """Default value of every input, by name (None: supplied by the renderer)."""
-        return {n: d.default for n, d in nodedef_inputs(cls.NODEDEF).items()}
+        return {n: d.default for n, d in _interface(cls.NODEDEF)[0].items()}
 
     def __init__(self, **kwargs):
-        values = bind_inputs(type(self), (), kwargs)
-        self.selection = values.pop("selection")
-        self.specular_sampling = values.pop("specular_sampling")
-        self.multiscatter = values.pop("multiscatter")
-        self.diffuse_model = values.pop("diffuse_model")
+        checked, defaults = _interface(self.NODEDEF)
+        unknown = [n for n in kwargs if n not in checked and n not in _OPTION_NAMES]
+        if unknown:
+            bind_inputs(type(self), (), kwargs)   # raises, naming them
+        options = dict(_OPTIONS)
+        for n in _OPTION_NAMES:
+            if n in kwargs:
+                options[n] = kwargs.pop(n)
+        self.selection = options["selection"]
+        self.specular_sampling = options["specular_sampling"]
+        self.multiscatter = options["multiscatter"]
+        self.diffuse_model = options["diffuse_model"]
         if self.selection not in SELECTIONS:
             raise ValueError(f"selection must be one of {', '.join(SELECTIONS)}; got {self.selection!r}")
         if self.specular_sampling not in ggx.SAMPLING_METHODS:
@@ -278,10 +337,11 @@ class OpenPBRSurface(metaclass=NodeMeta):
             raise TypeError(f"multiscatter must be a bool, got {type(self.multiscatter).__name__}")
         if self.diffuse_model not in DIFFUSE_MODELS:
             raise ValueError(f"diffuse_model must be one of {', '.join(DIFFUSE_MODELS)}; got {self.diffuse_model!r}")
-        defs = nodedef_inputs(self.NODEDEF)
-        self.inputs = {n: convert_input(_validity(defs[n]), v) for n, v in values.items()}
-        self._ignored = {n: v for n, v in self.inputs.items()
-                         if n not in MODELLED and not is_default(defs[n], v)}
+        self.inputs = dict(defaults)
+        for n, v in kwargs.items():
+            self.inputs[n] = _convert(checked[n], v)
+        self._ignored = {n: self.inputs[n] for n in kwargs
+                         if n not in MODELLED and not is_default(checked[n], self.inputs[n])}
         if self._ignored:
             warnings.warn(f"OpenPBRSurface does not model these inputs; they have no effect: "
                           f"{', '.join(self._ignored)}", IgnoredInputWarning, stacklevel=2)
