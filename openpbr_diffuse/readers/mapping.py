@@ -47,10 +47,11 @@ class Family:
     map: Callable
 
 
+@functools.lru_cache(maxsize=1)
 def _modelled():
     from ..nodes import openpbr_surface
 
-    return set(getattr(openpbr_surface, "MODELLED", ()))
+    return frozenset(getattr(openpbr_surface, "MODELLED", ()))
 
 
 def _differs(value, default):
@@ -86,16 +87,16 @@ def _openpbr_inputs(inputs, m):
     lobe's colour, roughness, ... only when its weight is non-zero)."""
     modelled = _modelled()
     defs = mxlib.inputs(OPENPBR)
-    out = {}
-    for name, (t, default, geomprop) in defs.items():
-        if geomprop:
+    defaults = mxlib.default_parameters(OPENPBR)
+    if inputs.keys() >= defaults.keys():
+        out = {n: inputs[n] for n in defaults}
+    else:   # a mapped shader without some inputs: OpenPBR's defaults
+        prov = f"default of {OPENPBR} (no counterpart in {m.shader_id})"
+        out = {n: inputs[n] if n in inputs else Parameter(p.value, prov, "default") for n, p in defaults.items()}
+    for name, p in out.items():
+        if p.kind == "default" or name in modelled:
             continue
-        if name not in inputs:   # a mapped shader without this input: OpenPBR's default
-            out[name] = Parameter(default, f"default of {OPENPBR} (no counterpart in {m.shader_id})", "default")
-            continue
-        p = inputs[name]
-        out[name] = p
-        if name not in modelled and _differs(p.value, default) and not _gated_off(name, inputs):
+        if _differs(p.value, defs[name][1]) and not _gated_off(name, out):
             m.unsupported.append(f"{name} = {_fmt(p.value)} (not modelled by OpenPBRSurface)")
     return out
 
