@@ -514,3 +514,20 @@ def test_materialx_bare_oren_nayar_and_standard_surface(tmp_path):
     assert ni["specular_weight"] == 1.0
     assert np.allclose(ni["base_color"], (0.2, 0.4, 0.6))   # coat 0: no coat attenuation
     assert m.approximations
+
+
+def test_pruned_standard_surface_translation_equals_the_full_graph():
+    """The mapping evaluates only the translation outputs that depend on set inputs; the full
+    evaluation of MaterialX's graph must give the same OpenPBR inputs."""
+    from openpbr_diffuse.readers import BUNDLED_MATERIALS, mapping
+
+    (m,) = load_materials(BUNDLED_MATERIALS / "felt_red_standard_surface.mtlx")
+    full = mapping._translate(list(mapping._translation_dependencies()), m.parameters, m)
+    for out, value in full.items():
+        got = m.node_inputs[out[:-4]].value
+        want = value
+        if m.node_inputs[out[:-4]].kind != "default" and out[:-4] in ("base_color", "base_weight",
+                                                                       "base_diffuse_roughness", "specular_weight"):
+            assert np.allclose(got, want), out
+        if isinstance(want, (tuple, float)):
+            assert np.allclose(np.asarray(got, dtype=float), np.asarray(want, dtype=float), atol=0), out

@@ -108,7 +108,15 @@ def write_image(img, path):
         raise OSError(f"render: cannot write {path}: {buf.geterror() or oiio.geterror()}")
 
 
+def _check_out(path):
+    if os.path.splitext(path)[1].lower() not in (".exr", ".png", ".jpg", ".jpeg", ".tif", ".tiff"):
+        raise ValueError(f"--out must end in .exr or .png (also .jpg, .tif), got {path!r}")
+
+
 def run(args):
+    _check_out(args.out)
+    if not 8 <= args.size <= 4096:
+        raise ValueError(f"size must be an integer in [8, 4096], got {args.size!r}")
     materials = load(args)
     if len(materials) != 1:
         names = ", ".join(m.path for m in materials[:8])

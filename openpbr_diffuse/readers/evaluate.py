@@ -83,7 +83,10 @@ def diffuse_lobe(node, wo):
 
 
 def _group_key(m):
-    return (m.node_class, m.diffuse_model)
+    """Materials stack into one node when they share the node, the diffuse model and every
+    boolean (uniform) input such as geometry_thin_walled."""
+    flags = tuple(sorted((n, p.value) for n, p in m.node_inputs.items() if isinstance(p.value, bool)))
+    return (m.node_class, m.diffuse_model, flags)
 
 
 def stacked_node(materials):
@@ -95,7 +98,8 @@ def stacked_node(materials):
     first = materials[0]
     if first.node_class == "OpenPBRSurface":
         names = [n for n in first.node_inputs if n in MODELLED]
-        kw = {n: np.array([m.node_inputs[n].value for m in materials], dtype=np.float64) for n in names}
+        kw = {n: (first.node_inputs[n].value if isinstance(first.node_inputs[n].value, bool)
+                  else np.array([m.node_inputs[n].value for m in materials], dtype=np.float64)) for n in names}
         kw.update(surface_options(first.diffuse_model))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")

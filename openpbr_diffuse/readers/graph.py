@@ -175,8 +175,7 @@ class Resolver:
                                f"({geomprop}); not evaluated", True)
                     return None
                 else:
-                    v = np.asarray(default, dtype=np.float64) if isinstance(default, tuple) else default
-                    p = Parameter(v, f"default of {ndname}", "default")
+                    p = Parameter(default, f"default of {ndname}", "default")
             resolved[name] = p
         if cat == "image":
             return self.texture(node.getNamePath(), ndname, resolved, out_type)

@@ -19,6 +19,7 @@ nodedef range are clamped to it with a warning (OpenPBR's reference graph clamps
 with max(base_color, 0) and the scaled specular F0 to [0, 0.99999]; the library's nodes
 accept only the nodedef's [uimin, uimax]).
 """
+import functools
 import math
 from dataclasses import dataclass
 from typing import Callable
@@ -46,17 +47,17 @@ class Family:
     map: Callable
 
 
+@functools.lru_cache(maxsize=1)
 def _modelled():
     from ..nodes import openpbr_surface
 
-    return set(getattr(openpbr_surface, "MODELLED", ()))
+    return frozenset(getattr(openpbr_surface, "MODELLED", ()))
 
 
 def _differs(value, default):
-    if default is None:
-        return value is not None
-    if isinstance(default, tuple):
-        return not np.allclose(np.asarray(value, dtype=np.float64), np.asarray(default, dtype=np.float64))
+    """True if a resolved value is not the nodedef default (exact comparison)."""
+    if isinstance(value, np.ndarray):
+        value = tuple(float(x) for x in value.reshape(-1))
     return value != default
 
 
@@ -86,16 +87,16 @@ def _openpbr_inputs(inputs, m):
     lobe's colour, roughness, ... only when its weight is non-zero)."""
     modelled = _modelled()
     defs = mxlib.inputs(OPENPBR)
-    out = {}
-    for name, (t, default, geomprop) in defs.items():
-        if geomprop:
+    defaults = mxlib.default_parameters(OPENPBR)
+    if inputs.keys() >= defaults.keys():
+        out = {n: inputs[n] for n in defaults}
+    else:   # a mapped shader without some inputs: OpenPBR's defaults
+        prov = f"default of {OPENPBR} (no counterpart in {m.shader_id})"
+        out = {n: inputs[n] if n in inputs else Parameter(p.value, prov, "default") for n, p in defaults.items()}
+    for name, p in out.items():
+        if p.kind == "default" or name in modelled:
             continue
-        if name not in inputs:   # a mapped shader without this input: OpenPBR's default
-            out[name] = Parameter(default, f"default of {OPENPBR} (no counterpart in {m.shader_id})", "default")
-            continue
-        p = inputs[name]
-        out[name] = p
-        if name not in modelled and _differs(p.value, default) and not _gated_off(name, inputs):
+        if _differs(p.value, defs[name][1]) and not _gated_off(name, out):
             m.unsupported.append(f"{name} = {_fmt(p.value)} (not modelled by OpenPBRSurface)")
     return out
 
@@ -104,22 +105,62 @@ def _map_openpbr(m):
     return _openpbr_inputs(m.parameters, m)
 
 
-def _map_standard_surface(m):
+@functools.lru_cache(maxsize=1)
+def _translation_dependencies():
+    """{output name: the interface inputs it depends on} of the translation graph (static)."""
+    graph = mxlib.implementation_graph(TRANSLATION)
+
+    def deps(port, seen):
+        if port.hasInterfaceName():
+            return {port.getInterfaceName()}
+        node = port.getConnectedNode()
+        if node is None or node.getNamePath() in seen:
+            return set()
+        seen = seen | {node.getNamePath()}
+        out = set()
+        for i in node.getInputs():
+            out |= deps(i, seen)
+        return out
+
+    return {o.getName(): deps(o, frozenset()) for o in graph.getOutputs()}
+
+
+def _translate(outputs, params, m):
+    """Evaluate ``outputs`` of the translation graph with the Standard Surface ``params``."""
     from .graph import Resolver, to_python
 
-    graph = next(g for g in mxlib.library().getNodeGraphs() if g.getNodeDefString() == TRANSLATION)
+    graph = mxlib.implementation_graph(TRANSLATION)
     iface = {n: Parameter(np.asarray(p.value, dtype=np.float64) if isinstance(p.value, tuple) else p.value,
-                          p.provenance, p.kind) for n, p in m.parameters.items()}
-    ev = Resolver(m.file, m.uv, "raw", m)
+                          p.provenance, p.kind) for n, p in params.items()}
+    ev = Resolver(m.file if m is not None else "", (0.5, 0.5), "raw", m if m is not None else Material("", "", "", "", False))
+    out = {}
+    for name in outputs:
+        p = ev.port(graph.getOutput(name), (), iface, True)
+        if p is not None:
+            out[name] = to_python(p.value)
+    return out
+
+
+@functools.lru_cache(maxsize=1)
+def _translated_defaults():
+    """The translation graph's outputs for a Standard Surface with every input at its default."""
+    params = {n: Parameter(v, "default", "default") for n, (t, v, g) in mxlib.inputs(STANDARD_SURFACE).items()
+              if not g}
+    return _translate(list(_translation_dependencies()), params, None)
+
+
+def _map_standard_surface(m):
+    graph_name = mxlib.implementation_graph(TRANSLATION).getName()
+    # only the outputs that depend on a set input are evaluated; the rest are the outputs of
+    # the all-default Standard Surface (computed once)
+    set_inputs = {n for n, p in m.parameters.items() if p.kind != "default"}
+    todo = [o for o, d in _translation_dependencies().items() if d & set_inputs]
+    values = dict(_translated_defaults())
+    values.update(_translate(todo, m.parameters, m))
     mapped = {}
-    for out in graph.getOutputs():
-        name = out.getName()
+    for name, value in values.items():
         target = name[:-4] if name.endswith("_out") else name
-        p = ev.port(out, (), iface, True)
-        if p is None:
-            continue
-        mapped[target] = Parameter(to_python(p.value), f"{graph.getName()}.{name} (Standard Surface -> OpenPBR)",
-                                   "mapped")
+        mapped[target] = Parameter(value, f"{graph_name}.{name} (Standard Surface -> OpenPBR)", "mapped")
     trans_inputs = mxlib.inputs(TRANSLATION)
     for name, p in m.parameters.items():
         t, default, _ = mxlib.inputs(STANDARD_SURFACE)[name]
@@ -189,24 +230,38 @@ def family(shader_id):
 
 
 # ----------------------------------------------------------------------- clamping
-def _ranges(node_class, m):
+@functools.lru_cache(maxsize=None)
+def _ranges(node_class, diffuse_model):
+    """{input: (lo, hi)} of the node's numeric inputs (the nodedef's uimin / uimax)."""
     from ..nodes.materialx_defs import nodedef_inputs
 
     nd = OPENPBR if node_class == "OpenPBRSurface" else OREN_NAYAR
-    r = {n: (d.uimin, d.uimax) for n, d in nodedef_inputs(nd).items()}
+    r = {n: (d.uimin, d.uimax) for n, d in nodedef_inputs(nd).items()
+         if d.type == "float" or d.type.startswith("color")}
     if node_class == "OrenNayarDiffuseBSDF":
         # sigma in radians for QON (energy_compensation false), r in [0, 1] for EON
-        r["roughness"] = (0.0, 1.0 if m.diffuse_model == "eon" else math.pi / 2)
+        r["roughness"] = (0.0, 1.0 if diffuse_model == "eon" else math.pi / 2)
     return r
+
+
+def _inside(v, lo, hi):
+    """Fast path: a float or tuple of floats within [lo, hi] (None = unbounded)."""
+    vals = v if isinstance(v, tuple) else (v,)
+    los = lo if isinstance(lo, tuple) else (lo,) * len(vals)
+    his = hi if isinstance(hi, tuple) else (hi,) * len(vals)
+    return all(isinstance(x, float) and x == x and (a is None or x >= a) and (b is None or x <= b)
+               and x not in (math.inf, -math.inf) for x, a, b in zip(vals, los, his))
 
 
 def clamp_inputs(m):
     """Clamp node inputs to the node's range, with a warning per clamped input."""
-    ranges = _ranges(m.node_class, m)
+    ranges = _ranges(m.node_class, m.diffuse_model)
     for name, p in list(m.node_inputs.items()):
-        if name not in ranges or isinstance(p.value, (bool, str)) or p.value is None:
+        if p.kind == "default" or name not in ranges or isinstance(p.value, (bool, str)) or p.value is None:
             continue
         lo, hi = ranges[name]
+        if _inside(p.value, lo, hi):
+            continue
         v = np.asarray(p.value, dtype=np.float64)
         if not np.all(np.isfinite(v)):
             raise ValueError(f"{m.file}: {m.path}: {name} = {_fmt(p.value)} is not finite")

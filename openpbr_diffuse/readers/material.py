@@ -7,13 +7,14 @@ onto (``OpenPBRSurface`` or ``OrenNayarDiffuseBSDF``), after the mapping (``mapp
 the clamping to the nodedef's range; ``node()`` builds that node.  Colours are in the
 working space, ACEScg (``colorspace.WORKING_SPACE``).
 """
+import functools
 import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
 
-@dataclass
+@dataclass(frozen=True)
 class Parameter:
     """One resolved value and where it came from.
 
@@ -147,7 +148,9 @@ def surface_options(diffuse_model):
     raise ValueError(f"this OpenPBRSurface has no diffuse_model keyword; cannot build a {diffuse_model!r} diffuse")
 
 
+@functools.lru_cache(maxsize=1)
 def diffuse_model_available():
+    """Whether OpenPBRSurface takes ``diffuse_model`` (checked once)."""
     from ..nodes import OpenPBRSurface
 
     return "diffuse_model" in OpenPBRSurface.signature().parameters

@@ -139,7 +139,8 @@ class _MxShader:
                 if geomprop:
                     continue
                 p = Parameter(default, f"default of {sid}", "default")
-            params[name] = Parameter(to_python(p.value), p.provenance, p.kind, to_python(p.authored))
+            params[name] = p if p.kind == "default" else Parameter(to_python(p.value), p.provenance, p.kind,
+                                                                    to_python(p.authored))
         return params
 
 

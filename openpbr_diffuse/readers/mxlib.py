@@ -45,6 +45,16 @@ def inputs(name):
 
 
 @functools.lru_cache(maxsize=None)
+def default_parameters(name):
+    """{input name: Parameter(default, "default of <nodedef>", "default")} of the non-geometry
+    inputs of nodedef ``name`` (shared, immutable)."""
+    from .material import Parameter
+
+    prov = f"default of {name}"
+    return {n: Parameter(v, prov, "default") for n, (t, v, g) in inputs(name).items() if not g}
+
+
+@functools.lru_cache(maxsize=None)
 def outputs(name):
     """{output name: type} of nodedef ``name``."""
     nd = nodedef(name)

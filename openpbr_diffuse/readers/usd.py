@@ -27,6 +27,7 @@ Resolution as USD defines it:
 """
 import contextlib
 import os
+import struct
 import tempfile
 
 import numpy as np
@@ -112,14 +113,26 @@ def apply_variants(stage, variants, diagnostics):
         raise ValueError(f"variant set {missing[0]!r} is not on any prim; variant sets: {known}")
 
 
+_PXR = {}
+_F32 = struct.Struct("f")
+
+
+def _pxr():
+    """(Usd, UsdShade, Sdf), imported once (an import statement per call costs ~30 us)."""
+    if not _PXR:
+        from pxr import Sdf, Usd, UsdShade
+
+        _PXR.update(Usd=Usd, UsdShade=UsdShade, Sdf=Sdf)
+    return _PXR["Usd"], _PXR["UsdShade"], _PXR["Sdf"]
+
+
 def _py(v):
     """A USD value -> Python (tuples for vectors, str for tokens / asset paths)."""
-    from pxr import Sdf
-
+    _, _, Sdf = _pxr()
     if isinstance(v, Sdf.AssetPath):
         return v
     if hasattr(v, "__len__") and not isinstance(v, str):
-        return tuple(_f32(x) for x in v)
+        return tuple(map(_f32, v))
     if isinstance(v, bool) or isinstance(v, int):
         return v
     if isinstance(v, float):
@@ -129,20 +142,28 @@ def _py(v):
 
 def _f32(x):
     """A float as written: USD hands float32 values over as doubles (0.132 -> 0.13199999928);
-    the shortest decimal that rounds to the same float32 gives back the authored text."""
+    the shortest decimal (7 to 9 digits) that rounds to the same float32 gives back the
+    authored text.  Doubles that are not float32 values pass through."""
     x = float(x)
-    f = np.float32(x)
-    if float(f) != x or not np.isfinite(f):
+    try:
+        if _F32.unpack(_F32.pack(x))[0] != x:
+            return x
+    except OverflowError:
         return x
-    return float(np.format_float_positional(f, unique=True))
+    for digits in ("%.7g", "%.8g"):
+        y = float(digits % x)
+        if _F32.unpack(_F32.pack(y))[0] == x:
+            return y
+    return float("%.9g" % x)
 
 
 class _UsdResolver:
     """Resolves UsdShade inputs of one material at one time and uv."""
 
-    def __init__(self, file, time, uv, default_space, sink):
+    def __init__(self, file, time, uv, default_space, sink, space_cache=None):
         from pxr import Usd
 
+        self.space_cache = {} if space_cache is None else space_cache
         self.file = str(file)
         self.time = time
         self.tc = Usd.TimeCode(time) if time is not None else Usd.TimeCode.Default()
@@ -156,17 +177,27 @@ class _UsdResolver:
         if text not in lst:
             lst.append(text)
 
+    def prim_space(self, prim):
+        """ColorSpaceAPI colour space of a prim or its nearest ancestor ('' if none); cached
+        per prim path for the whole stage."""
+        Usd, _, _ = _pxr()
+
+        key = prim.GetPath()
+        if key in self.space_cache:
+            return self.space_cache[key]
+        if not prim or not prim.IsValid() or prim.IsPseudoRoot():
+            name = ""
+        elif prim.HasAPI(Usd.ColorSpaceAPI):
+            name = Usd.ColorSpaceAPI(prim).GetColorSpaceNameAttr().Get() or ""
+        else:
+            name = self.prim_space(prim.GetParent())
+        self.space_cache[key] = name
+        return name
+
     def space_of(self, attr):
         """Colour space of an attribute: its metadata, else ColorSpaceAPI up the namespace."""
-        from pxr import Usd
-
         name = attr.GetColorSpace() if attr.HasColorSpace() else ""
-        prim = attr.GetPrim()
-        while not name and prim and prim.IsValid() and not prim.IsPseudoRoot():
-            if prim.HasAPI(Usd.ColorSpaceAPI):
-                name = Usd.ColorSpaceAPI(prim).GetColorSpaceNameAttr().Get() or ""
-            prim = prim.GetParent()
-        name = name or self.default_space
+        name = name or self.prim_space(attr.GetPrim()) or self.default_space
         try:
             return colorspace.canonical(name)
         except ValueError as exc:
@@ -175,13 +206,13 @@ class _UsdResolver:
     def _cycle(self, key, trail):
         if key in trail:
             loop = list(trail[trail.index(key):]) + [key]
-            raise ValueError(f"{self.file}: connection cycle: {' -> '.join(loop)}")
+            raise ValueError(f"{self.file}: connection cycle: {' -> '.join(str(k) for k in loop)}")
         return trail + (key,)
 
     # ----------------------------------------------------------------- values
     def attr_value(self, attr, mx_type):
         """(value, time note) of an attribute at the resolver's time, or (None, "")."""
-        from pxr import Usd
+        Usd, _, _ = _pxr()
 
         note = ""
         if self.time is None:
@@ -198,8 +229,7 @@ class _UsdResolver:
             return None, ""
         v = _py(v)
         if mx_type == "filename":
-            from pxr import Sdf
-
+            _, _, Sdf = _pxr()
             if isinstance(v, Sdf.AssetPath):
                 path = v.resolvedPath or v.path
                 if path and not os.path.isabs(path):
@@ -210,10 +240,10 @@ class _UsdResolver:
 
     def port(self, port, mx_type, trail=()):
         """Resolve a UsdShade Input/Output; None when nothing is authored (use the default)."""
-        from pxr import UsdShade
+        _, UsdShade, _ = _pxr()
 
         attr = port.GetAttr()
-        trail = self._cycle(str(attr.GetPath()), trail)
+        trail = self._cycle(attr.GetPath(), trail)
         sources, invalid = port.GetConnectedSources()
         if sources:
             s = sources[0]
@@ -251,34 +281,40 @@ class _UsdResolver:
             v = np.asarray(v, dtype=np.float64)
         return Parameter(v, prov, "time" if note else "authored")
 
-    def inputs(self, shader, sid, trail):
-        """Resolved {name: Parameter} of every nodedef input of a shader (defaults filled)."""
-        out = {}
-        for name, (t, default, geomprop) in mxlib.inputs(sid).items():
-            inp = shader.GetInput(name)
-            p = None
-            if inp:
-                got = _MX_TYPES.get(str(inp.GetTypeName()), str(inp.GetTypeName()))
-                if got != t and not (t == "string" and got == "filename"):
-                    raise ValueError(f"{self.file}: {inp.GetAttr().GetPath()}: type {inp.GetTypeName()}, but "
-                                     f"input {name} of {sid} is {t}")
-                p = self.port(inp, t, trail)
-            if p is None:
-                if geomprop in ("UV0", "UV1"):
-                    p = Parameter(self.uv.copy(), f"uv ({self.uv[0]:g}, {self.uv[1]:g})", "uv")
-                elif geomprop:
-                    continue
-                else:
-                    v = np.asarray(default, dtype=np.float64) if isinstance(default, tuple) else default
-                    p = Parameter(v, f"default of {sid}", "default")
-            out[name] = p
-        return out
+    def inputs(self, shader, sid, trail, authored=None):
+        """Resolved {name: Parameter} of every nodedef input of a shader (defaults filled).
+
+        ``authored``: {name: UsdShade.Input} of the shader's authored inputs (from
+        ``GetInputs``, computed here if not given): only those are resolved, the rest take
+        the nodedef default without asking USD again.
+        """
+        if authored is None:
+            authored = {i.GetBaseName(): i for i in shader.GetInputs()}
+        defs = mxlib.inputs(sid)
+        out = dict(mxlib.default_parameters(sid))
+        for name, (t, default, geomprop) in defs.items():
+            if geomprop in ("UV0", "UV1") and name not in authored:
+                out[name] = Parameter(self.uv.copy(), f"uv ({self.uv[0]:g}, {self.uv[1]:g})", "uv")
+        for name, inp in authored.items():
+            if name not in defs:
+                continue
+            t = defs[name][0]
+            tn = str(inp.GetTypeName())
+            got = _MX_TYPES.get(tn, tn)
+            if got != t and not (t == "string" and got == "filename"):
+                raise ValueError(f"{self.file}: {inp.GetAttr().GetPath()}: type {tn}, but "
+                                 f"input {name} of {sid} is {t}")
+            p = self.port(inp, t, trail)
+            if p is not None:
+                out[name] = p
+        # geometry inputs (normals, ...) that nothing supplies are left out
+        return {n: out[n] for n in defs if n in out}
 
     # ----------------------------------------------------------------- shader nodes
     def shader_value(self, shader, output, mx_type, trail):
         sid = shader.GetShaderId() or ""
         path = str(shader.GetPath())
-        trail = self._cycle(path, trail)
+        trail = self._cycle(shader.GetPath(), trail)
         if sid.startswith("UsdUVTexture"):
             return self.uv_texture(shader, sid, output, mx_type, trail)
         if sid.startswith("UsdPrimvarReader"):
@@ -410,19 +446,23 @@ def _kind(p):
 class _UsdShader:
     """Adapter: a UsdShade shader prim as seen by ``mapping.build_material``."""
 
-    def __init__(self, shader, file, time):
+    def __init__(self, shader, file, time, space_cache=None):
         self.shader = shader
         self.node = shader if shader else None
         self.file = file
         self.time = time
+        self.space_cache = space_cache
+        self._sid = None
 
     @property
     def path(self):
         return str(self.shader.GetPath()) if self.shader else ""
 
     def shader_id(self):
-        sid = self.shader.GetShaderId() if self.shader else ""
-        return sid or "(no info:id)"
+        if self._sid is None:
+            sid = self.shader.GetShaderId() if self.shader else ""
+            self._sid = sid or "(no info:id)"
+        return self._sid
 
     def unwrap_surface(self):
         from pxr import UsdShade
@@ -435,16 +475,18 @@ class _UsdShader:
         sources, _ = inp.GetConnectedSources()
         if not sources or not sources[0].source.GetPrim().IsA(UsdShade.Shader):
             return None
-        return _UsdShader(UsdShade.Shader(sources[0].source.GetPrim()), self.file, self.time)
+        return _UsdShader(UsdShade.Shader(sources[0].source.GetPrim()), self.file, self.time, self.space_cache)
 
     def resolve(self, sid, default_space, sink, uv):
-        res = _UsdResolver(self.file, self.time, uv, default_space, sink)
+        res = _UsdResolver(self.file, self.time, uv, default_space, sink, self.space_cache)
         defs = mxlib.inputs(sid)
-        for inp in self.shader.GetInputs():
-            if inp.GetBaseName() not in defs:
+        authored = {i.GetBaseName(): i for i in self.shader.GetInputs()}
+        for name, inp in authored.items():
+            if name not in defs:
                 sink.warnings.append(f"{inp.GetAttr().GetPath()}: not an input of {sid}; ignored")
-        params = res.inputs(self.shader, sid, (str(self.shader.GetPath()),))
-        return {n: Parameter(to_python(p.value), p.provenance, p.kind, to_python(p.authored))
+        params = res.inputs(self.shader, sid, (self.shader.GetPath(),), authored)
+        return {n: p if p.kind == "default" else
+                Parameter(to_python(p.value), p.provenance, p.kind, to_python(p.authored))
                 for n, p in params.items()}
 
 
@@ -452,6 +494,8 @@ class _UsdShader:
 def _mtlx_references(prim):
     """[(absolute .mtlx path, referenced prim path)] of the references/payloads of ``prim``."""
     out = []
+    if not (prim.HasAuthoredReferences() or prim.HasAuthoredPayloads()):
+        return out
     for spec in prim.GetPrimStack():
         for lst in (spec.referenceList, spec.payloadList):
             items = (list(lst.explicitItems) + list(lst.prependedItems) + list(lst.appendedItems)
@@ -480,12 +524,13 @@ def _entries(stage, file, time, uv, variants, diagnostics):
     from . import materialx
 
     entries = []
+    space_cache = {}
     for prim in stage.TraverseAll():
         if prim.IsA(UsdShade.Material):
             def build(prim=prim):
                 mat = UsdShade.Material(prim)
                 shader, _, _ = mat.ComputeSurfaceSource("mtlx")
-                adapter = _UsdShader(shader if shader else None, file, time)
+                adapter = _UsdShader(shader if shader else None, file, time, space_cache)
                 return build_material(adapter, name=prim.GetName(), path=str(prim.GetPath()), file=file, uv=uv,
                                       variants=variants, time=time)
             entries.append(_Entry(str(prim.GetPath()), prim.GetName(), build))
@@ -556,6 +601,20 @@ def _ancestors(prim):
 
 def load(path, *, time=None, variants=None, uv=(0.5, 0.5), material=None, purpose="full"):
     """Materials of a USD stage (see the module docstring)."""
+    import gc
+
+    # reading thousands of materials allocates many small objects that all stay alive: the
+    # cyclic garbage collector's passes over them are wasted work (~8 %), so it pauses here
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        return _load(path, time=time, variants=variants, uv=uv, material=material, purpose=purpose)
+    finally:
+        if enabled:
+            gc.enable()
+
+
+def _load(path, *, time, variants, uv, material, purpose):
     from pxr import Sdf, UsdShade
 
     file = os.fspath(path)
