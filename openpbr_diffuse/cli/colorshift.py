@@ -72,6 +72,16 @@ def _parse_rgb(token):
     return rgb
 
 
+def _file_readers():
+    """File suffix -> reader(path, cm, method) -> (ColourSet, warnings)."""
+    from ..spectral import colorsets
+
+    readers = {".csv": lambda path, cm, method: (colorsets.from_spectra_csv(path, cm), [])}
+    readers.update({suffix: lambda path, cm, method: colorsets.from_materials([path], cm, method)
+                    for suffix in colorsets.MATERIAL_SUFFIXES})
+    return readers
+
+
 def colour_set(tokens, cm, method):
     """The ColourSet (and warnings) the --colors tokens name, in the order given."""
     from pathlib import Path
@@ -79,6 +89,7 @@ def colour_set(tokens, cm, method):
     from ..spectral import colorsets
 
     sets, warnings, rgbs = [], [], []
+    readers = _file_readers()
 
     def flush():
         if rgbs:
@@ -97,16 +108,13 @@ def colour_set(tokens, cm, method):
         path = Path(token)
         if not path.is_file():
             raise _usage(f"--colors: {token!r} is not 'checker', R,G,B or an existing file")
-        suffix = path.suffix.lower()
-        if suffix == ".csv":
-            sets.append(colorsets.from_spectra_csv(path, cm))
-        elif suffix in colorsets.MATERIAL_SUFFIXES:
-            cs, w = colorsets.from_materials([path], cm, method)
-            sets.append(cs)
-            warnings += w
-        else:
+        reader = readers.get(path.suffix.lower())
+        if reader is None:
             raise _usage(f"--colors: {token!r}: files must be .csv (spectra) or "
                          f"{'/'.join(colorsets.MATERIAL_SUFFIXES)} (materials)")
+        cs, w = reader(path, cm, method)
+        sets.append(cs)
+        warnings += w
     flush()
     return colorsets.ColourSet.concat(sets), warnings
 
