@@ -201,3 +201,18 @@ def test_black_and_white_colours_give_finite_json(capsys):
     assert all(r["rel_luminance_diff_shift"] == 0 and r["delta_e_shift"] < 1e-6 for r in black)
     white = [r for r in rows if r["patch"] == "1,1,1"]
     assert all(abs(r["rel_luminance_diff_shift"]) < 1e-6 for r in white)     # white furnace
+
+
+@pytest.mark.parametrize("name,text,match", [
+    ("colours.txt", "0.5,0.5,0.5\n", ".csv"),
+    ("bad.csv", "wavelength,a\n400,0.5\n410,0.5\n", "at least 6"),
+    ("bad2.csv", "wavelength,a\n" + "".join(f"{400 + 10 * i},0.5\n" for i in range(6)) + "470,x\n", "numbers"),
+    ("bad3.csv", "wavelength,a\n" + "".join(f"{400 + 10 * i},0.5\n" for i in range(6)) + "470,1.5\n", "[0, 1]"),
+    ("bad5.csv", "wavelength,a\n" + "".join(f"{400 + 10 * i},0.5\n" for i in range(6)) + "470,0.5,0.2\n", "columns"),
+    ("bad4.csv", "wavelength,a\n" + "".join(f"{480 - 10 * i},0.5\n" for i in range(7)), "increase"),
+])
+def test_bad_files_one_line_exit_2(tmp_path, capsys, name, text, match):
+    path = tmp_path / name
+    path.write_text(text)
+    code, out, err = run(capsys, "colorshift", "--colors", str(path), "--roughness", "1", "--mu", "1")
+    assert code == 2 and not out and err.count("\n") == 1 and match in err

@@ -31,6 +31,8 @@ DIFFUSE_COLOR_INPUTS = ("base_color", "color", "diffuseColor")
 #: diffuse-roughness inputs of the library nodes (OpenPBRSurface, OrenNayarDiffuseBSDF).
 DIFFUSE_ROUGHNESS_INPUTS = ("base_diffuse_roughness", "roughness")
 MATERIAL_SUFFIXES = (".usd", ".usda", ".usdc", ".usdz", ".mtlx")
+#: fewest wavelength rows of a spectra CSV (colour-science's Sprague interpolation needs 6).
+MIN_CSV_SAMPLES = 6
 
 
 @dataclass
@@ -125,20 +127,25 @@ def from_spectra_csv(path, cm):
     path = Path(path)
     with open(path, encoding="utf-8") as f:
         lines = [ln for ln in f if ln.strip() and not ln.lstrip().startswith("#")]
-    if len(lines) < 3:
-        raise ValueError(f"{path}: a spectra CSV needs a header and at least two wavelength rows")
+    if len(lines) < 1 + MIN_CSV_SAMPLES:
+        raise ValueError(f"{path}: a spectra CSV needs a header and at least {MIN_CSV_SAMPLES} wavelength rows")
     header = [h.strip() for h in lines[0].split(",")]
+    cells = [ln.split(",") for ln in lines[1:]]
+    if len(header) < 2 or any(len(c) != len(header) for c in cells):
+        raise ValueError(f"{path}: every row must have the header's {len(header)} columns (wavelength + spectra)")
     try:
-        data = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])
+        data = np.array([[float(v) for v in c] for c in cells])
     except ValueError:
         raise ValueError(f"{path}: every row after the header must be numbers") from None
-    if data.ndim != 2 or data.shape[1] != len(header) or len(header) < 2:
-        raise ValueError(f"{path}: rows must have {len(header)} columns (wavelength + spectra)")
     wl = data[:, 0]
     if not (np.all(np.diff(wl) > 0) and wl[0] >= 300 and wl[-1] <= 830):
         raise ValueError(f"{path}: wavelengths must increase, within 300-830 nm")
-    spectra = [colour.SpectralDistribution(dict(zip(wl, data[:, j])), name=header[j])
-               .align(cm.colour_shape).values for j in range(1, len(header))]
+    values = data[:, 1:]
+    if not np.all(np.isfinite(values)) or np.any((values < 0) | (values > 1)):
+        raise ValueError(f"{path}: reflectances must lie in [0, 1]")
+    # interpolation (Sprague for uniform data) may overshoot [0, 1] slightly near 0 or 1: clipped
+    spectra = [np.clip(colour.SpectralDistribution(dict(zip(wl, values[:, j])), name=header[j + 1])
+                       .align(cm.colour_shape).values, 0.0, 1.0) for j in range(values.shape[1])]
     return _measured(header[1:], spectra, cm, str(path))
 
 
