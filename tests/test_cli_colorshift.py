@@ -157,7 +157,7 @@ def test_material_files_need_the_readers_or_work(tmp_path, capsys):
     (["--mu", "-0.5"], "mu"),
     (["--method", "smits"], "--method"),
     (["--illuminant", "D66"], "illuminant"),
-    (["--working-space", "srgb"], "working-space"),
+    (["--working-space", "srgb"], "working_space"),
     (["--colors", "0.9,0.05,0.05", "--working-space", "acescg", "--method", "mallett2019"], "gamut"),
 ])
 def test_bad_input_one_line_exit_2(capsys, argv, match):

@@ -250,6 +250,13 @@ def test_recovery_jakob2019_per_colour_optimisation():
     assert de[0] < 0.05 and 0 < spectra.min() and spectra.max() < 1
 
 
+def test_names_are_case_insensitive_with_aliases():
+    assert sp.colorimetry("d65", "ACEScg").describe()["illuminant"] == "D65"
+    assert sp.colorimetry("D65", "lin_ap1_scene").working_space == "acescg"
+    assert sp.colorimetry("D65", "Rec709").working_space == "lin_rec709"
+    assert sp.colorimetry("fl2").illuminant == "FL2"
+
+
 def test_auto_method_and_method_table():
     assert set(recovery.RECOVERY_METHODS) == {"Mallett 2019", "Otsu 2018", "Jakob 2019"}
     assert recovery.resolve_method("auto", sp.colorimetry()) == "Mallett 2019"

@@ -38,8 +38,9 @@ def add_parser(subparsers):
                         f"{', '.join(RECOVERY_METHODS)} (spaces optional)")
     p.add_argument("--illuminant", default=DEFAULT_ILLUMINANT,
                    help="a colour.SDS_ILLUMINANTS name (default D65; e.g. D50, A, FL2, LED-B1)")
-    p.add_argument("--working-space", default=DEFAULT_WORKING_SPACE, choices=list(WORKING_SPACES),
-                   help="RGB working space of the colours and results (default lin_rec709)")
+    p.add_argument("--working-space", default=DEFAULT_WORKING_SPACE, metavar="SPACE",
+                   help=f"RGB working space of the colours and results: {', '.join(WORKING_SPACES)} "
+                        f"(default lin_rec709; case-insensitive, aliases such as lin_ap1_scene)")
     p.add_argument("--json", action="store_true", help="one JSON document: settings and rows")
     p.add_argument("--image", metavar="PATH", help="write a labelled swatch image (PNG, EXR, ... by suffix)")
     p.set_defaults(run=run)

@@ -32,6 +32,14 @@ WORKING_SPACES = {
     "lin_rec2020": "ITU-R BT.2020",
     "lin_p3d65": "P3-D65",
 }
+#: other spellings (case-insensitive: MaterialX / OCIO / USD names) -> working-space name.
+WORKING_SPACE_ALIASES = {
+    "rec709": "lin_rec709", "lin_srgb": "lin_rec709", "srgb_linear": "lin_rec709", "linear": "lin_rec709",
+    "lin_rec709_scene": "lin_rec709", "linear rec.709 (srgb)": "lin_rec709",
+    "aces_cg": "acescg", "lin_ap1": "acescg", "lin_ap1_scene": "acescg", "ap1": "acescg",
+    "rec2020": "lin_rec2020", "lin_rec2020_scene": "lin_rec2020", "linear rec.2020": "lin_rec2020",
+    "p3d65": "lin_p3d65", "lin_p3d65_scene": "lin_p3d65", "linear p3-d65": "lin_p3d65",
+}
 DEFAULT_WORKING_SPACE = "lin_rec709"
 DEFAULT_ILLUMINANT = "D65"
 OBSERVER = "CIE 1931 2 Degree Standard Observer"
@@ -181,11 +189,16 @@ class Colorimetry:
         return _colour().Lab_to_LCHab(Lab)[..., 1]
 
 
-def _check_name(what, name, allowed):
+def working_space_name(name):
+    """The ``WORKING_SPACES`` key a working-space name or alias stands for (case-insensitive)."""
     if not isinstance(name, str):
-        raise TypeError(f"{what} must be a string, got {type(name).__name__}")
-    if name not in allowed:
-        raise ValueError(f"{what} must be one of {', '.join(allowed)}; got {name!r}")
+        raise TypeError(f"working_space must be a string, got {type(name).__name__}")
+    key = name.strip().lower()
+    key = WORKING_SPACE_ALIASES.get(key, key)
+    if key not in WORKING_SPACES:
+        raise ValueError(f"working_space must be one of {', '.join(WORKING_SPACES)} (or an alias such as "
+                         f"lin_ap1_scene, rec709); got {name!r}")
+    return key
 
 
 def colorimetry(illuminant=DEFAULT_ILLUMINANT, working_space=DEFAULT_WORKING_SPACE, shape=DEFAULT_SHAPE):
@@ -196,7 +209,8 @@ def colorimetry(illuminant=DEFAULT_ILLUMINANT, working_space=DEFAULT_WORKING_SPA
     illuminant : str
         A name of ``colour.SDS_ILLUMINANTS`` ("D65" default, "A", "D50", "FL2", ...).
     working_space : str
-        One of ``WORKING_SPACES`` ("lin_rec709" default, "acescg", ...).
+        One of ``WORKING_SPACES`` ("lin_rec709" default, "acescg", ...) or an alias of
+        ``WORKING_SPACE_ALIASES`` (case-insensitive).
     shape : (start, end, interval) in nm
         Spectral sampling (default 380-780 nm every 5 nm).
 
@@ -208,7 +222,7 @@ def colorimetry(illuminant=DEFAULT_ILLUMINANT, working_space=DEFAULT_WORKING_SPA
     >>> [round(float(v), 6) for v in c.XYZ_to_RGB(c.white_XYZ)]   # white -> RGB (1, 1, 1)
     [1.0, 1.0, 1.0]
     """
-    _check_name("working_space", working_space, list(WORKING_SPACES))
+    working_space = working_space_name(working_space)
     try:
         start, end, interval = (float(v) for v in shape)
     except (TypeError, ValueError):
@@ -223,9 +237,11 @@ def colorimetry(illuminant=DEFAULT_ILLUMINANT, working_space=DEFAULT_WORKING_SPA
 @lru_cache(maxsize=16)
 def _colorimetry(illuminant, working_space, shape):
     colour = _colour()
-    if illuminant not in colour.SDS_ILLUMINANTS:
+    if illuminant not in colour.SDS_ILLUMINANTS:  # a CanonicalMapping: case-insensitive lookup
         raise ValueError(f"illuminant must be a name of colour.SDS_ILLUMINANTS "
                          f"(e.g. D65, D50, A, FL2, LED-B1); got {illuminant!r}")
+    illuminant = next((k for k in colour.SDS_ILLUMINANTS.keys() if k.lower() == illuminant.lower()),
+                      colour.SDS_ILLUMINANTS[illuminant].name)
     cshape = colour.SpectralShape(*shape)
     cmfs = colour.MSDS_CMFS[OBSERVER].copy().align(cshape)
     sd = colour.SDS_ILLUMINANTS[illuminant].copy().align(cshape)
