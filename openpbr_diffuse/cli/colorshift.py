@@ -132,7 +132,8 @@ def _table(result, settings, warnings):
              "rgb/spec: albedo_rgb vs albedo_spectral; shift: albedo_spectral vs albedo_white_tint; "
              "dY = relative luminance difference, dC = chroma difference"]
     head = (f"{'patch':24} {'r':>5} {'mu':>5}  {'rho_rgb':20}  {'albedo_spectral':20}  {'albedo_rgb':20}  "
-            f"{'albedo_white_tint':20}  {'dE rgb/spec':>11} {'dY %':>7} {'dC':>7}  {'dE shift':>8} {'dY %':>7} {'dC':>7}")
+            f"{'albedo_white_tint':20}  {'dE rgb/spec':>11} {'dY %':>7} {'dC':>7}  "
+            f"{'dE shift':>8} {'dY %':>7} {'dC':>7}")
     lines += [head, "-" * len(head)]
     for row in result.rows():
         flag = "*" if row["rho_rgb_clipped"] else " "

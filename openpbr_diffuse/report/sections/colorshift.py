@@ -191,7 +191,8 @@ def _materials_table(ctx, cm):
         r_own = cs.extra[p].get("material_diffuse_roughness")
         own = colour_shift(ColourSet([name], cs.spectra[p:p + 1], cs.rho_rgb[p:p + 1], cs.source[p:p + 1],
                                      cs.roundtrip_delta_e[p:p + 1]), [r_own or 0.0], [1.0], cm)
-        rows.append([name, Path(cs.extra[p].get("material_file", "")).name, cs.extra[p].get("material_diffuse_model") or "",
+        rows.append([name, Path(cs.extra[p].get("material_file", "")).name,
+                     cs.extra[p].get("material_diffuse_model") or "",
                      "-" if r_own is None else round(r_own, 4),
                      round(float(own.delta_e_rgb_vs_spectral[0, 0, 0]), 4), round(float(own.delta_e_shift[0, 0, 0]), 4),
                      round(float(res.delta_e_rgb_vs_spectral[p, 0, 0]), 4), round(float(res.delta_e_shift[p, 0, 0]), 4),
