@@ -89,6 +89,27 @@ def _measured(names, spectra, cm, source):
                      np.full(len(names), np.nan))
 
 
+def from_spectra(spectra, cm, names=None, source="spectra"):
+    """Reflectance spectra already sampled on ``cm.wavelengths`` (array (P, N) in [0, 1]).
+
+    Examples
+    --------
+    >>> from openpbr_diffuse.spectral.colorimetry import colorimetry
+    >>> cm = colorimetry()
+    >>> cs = from_spectra([[0.5] * 81], cm)
+    >>> [round(float(v), 6) for v in cs.rho_rgb[0]]
+    [0.5, 0.5, 0.5]
+    """
+    spectra = np.atleast_2d(np.asarray(spectra, np.float64))
+    if spectra.ndim != 2 or spectra.shape[1] != cm.wavelengths.size:
+        raise ValueError(f"spectra must have shape (P, {cm.wavelengths.size}) on {cm.shape[0]:g}-{cm.shape[1]:g} nm "
+                         f"every {cm.shape[2]:g} nm; got {spectra.shape}")
+    names = [f"spectrum {i}" for i in range(len(spectra))] if names is None else list(names)
+    if len(names) != len(spectra):
+        raise ValueError(f"names must have one entry per spectrum ({len(spectra)}), got {len(names)}")
+    return _measured(names, spectra, cm, source)
+
+
 def checker(cm):
     """The 24 measured ColorChecker spectra ('BabelColor Average' of colour-science).
 
