@@ -262,6 +262,10 @@ def build(ctx):
         "At mu = 0 E_F = 1 for every r, so there is no shift at exactly grazing view; it grows towards normal view.",
         "'cyan' lies outside linear Rec.709 (R < 0): its RGB evaluation uses rho clipped to [0, 1], which accounts "
         "for most of its RGB-vs-spectral difference; in ACEScg all 24 patches are inside.",
+        "Per RGB channel the shift always raises saturation; per wavelength it need not: a spectrum whose most "
+        "reflective wavelengths have another hue than its colour (a blue reflecting most in the deep red, say) can "
+        "lose saturation as r grows while the per-channel evaluation says it gains (tests: "
+        "test_metameric_spectrum_can_lose_saturation). All 19 chromatic ColorChecker patches gain.",
     ]
     tables = [summary, per_patch, recovery] + ([mat_table] if mat_table else [])
     return SectionResult(KEY, TITLE, checks=checks, tables=tables, figures=figures, notes=notes, warnings=warnings)
