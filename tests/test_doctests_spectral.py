@@ -37,3 +37,16 @@ def test_colour_plotting_still_importable_after_lazy_import():
             "import colour.plotting; print(hasattr(colour.plotting, 'plot_single_sd'))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "True"
+
+
+def test_missing_colour_science_is_one_clear_line():
+    """Without colour-science the CLI says what to install (one line, exit 2)."""
+    import subprocess
+    import sys
+
+    code = ("import sys; sys.modules['colour'] = None\n"
+            "from openpbr_diffuse.cli.main import main\n"
+            "sys.exit(main(['colorshift', '--roughness', '1', '--mu', '1']))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 2 and out.stderr.count("\n") == 1
+    assert "pip install 'colour-science" in out.stderr

@@ -166,7 +166,10 @@ def run(args):
     from ..spectral.validation import colour_shift
 
     method = _method(args.method)
-    cm = colorimetry(args.illuminant, args.working_space)
+    try:
+        cm = colorimetry(args.illuminant, args.working_space)
+    except ImportError as exc:  # colour-science missing: one line, exit 2
+        raise _usage(str(exc)) from None
     colours, warnings = colour_set(args.colors, cm, method)
     result = colour_shift(colours, args.roughness, args.mu, cm)
     settings = result.settings()

@@ -50,11 +50,8 @@ DEFAULT_SHAPE = (380.0, 780.0, 5.0)
 
 def _colour():
     """colour-science, imported on first use (1-3 s; only the spectral features need it)."""
-    if "colour" not in sys.modules:
-        _import_colour_without_plotting()
-    import colour
-
-    return colour
+    colour = sys.modules.get("colour")
+    return colour if colour is not None else _import_colour_without_plotting()
 
 
 def _import_colour_without_plotting():
@@ -67,12 +64,16 @@ def _import_colour_without_plotting():
     sys.modules["colour.plotting"] = placeholder
     try:
         import colour
+    except ImportError as exc:
+        raise ImportError(f"the spectral features need colour-science ({exc}): "
+                          f"pip install 'colour-science>=0.4.4'") from exc
     finally:
         if sys.modules.get("colour.plotting") is placeholder:
             del sys.modules["colour.plotting"]
     module = getattr(colour, "_module", colour)  # colour wraps itself in a ModuleAPI proxy
     if getattr(module, "plotting", None) is placeholder:
         delattr(module, "plotting")
+    return colour
 
 
 def illuminant_names():
