@@ -216,3 +216,28 @@ def test_bad_files_one_line_exit_2(tmp_path, capsys, name, text, match):
     path.write_text(text)
     code, out, err = run(capsys, "colorshift", "--colors", str(path), "--roughness", "1", "--mu", "1")
     assert code == 2 and not out and err.count("\n") == 1 and match in err
+
+
+def test_image_exr_keeps_linear_working_space_values(tmp_path, capsys):
+    oiio = pytest.importorskip("OpenImageIO")
+    from openpbr_diffuse.spectral import swatches
+
+    path = tmp_path / "sw.exr"
+    code, _, _ = run(capsys, "colorshift", "--colors", "0.8,0.3,0.1", "--working-space", "acescg",
+                     "--roughness", "1", "--mu", "1", "--image", str(path))
+    assert code == 0
+    doc = json.loads(main_json_args(capsys, "--colors", "0.8,0.3,0.1", "--working-space", "acescg",
+                                    "--roughness", "1", "--mu", "1"))
+    row = doc["rows"][0]
+    buf = oiio.ImageBuf(str(path))
+    assert buf.spec().get_string_attribute("oiio:ColorSpace") in ("ACEScg", "lin_ap1_scene")  # OIIO normalises
+    px = buf.get_pixels(oiio.FLOAT)
+    y = swatches.HEAD_H + swatches.SWATCH // 2
+    for j, name in enumerate(("rho_rgb", "albedo_rgb", "albedo_spectral", "albedo_white_tint")):
+        x = swatches.LABEL_W + j * swatches.SWATCH + swatches.SWATCH // 2
+        np.testing.assert_allclose(px[y, x], row[name], rtol=2e-3, atol=1e-4)
+
+
+def main_json_args(capsys, *argv):
+    main(["colorshift", *argv, "--json"])
+    return capsys.readouterr()[0]
