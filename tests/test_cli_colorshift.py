@@ -35,6 +35,7 @@ def test_default_json_schema(capsys):
     assert len(rows) == 24 * len(s["roughness"]) * len(s["mu"])
     assert set(rows[0]) == FIELDS
     assert rows[0]["patch"] == "dark skin" and rows[0]["roundtrip_delta_e"] is None
+    assert s["roundtrip_delta_e_max"] is None                 # measured spectra: no upsampling
     # independent: rho_rgb of a patch is colour-science's own sd_to_XYZ -> XYZ_to_RGB (Bradford)
     sd = colour.SDS_COLOURCHECKERS["BabelColor Average"]["dark skin"]
     XYZ = colour.sd_to_XYZ(sd, colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"],
@@ -61,6 +62,7 @@ def test_rgb_colours_and_methods(capsys):
     assert code == 0
     doc = json.loads(out)
     assert doc["settings"]["method"] == "Otsu 2018"
+    assert doc["settings"]["roundtrip_delta_e_max"] == pytest.approx(max(r["roundtrip_delta_e"] for r in doc["rows"]))
     rows = doc["rows"]
     assert [r["patch"] for r in rows] == ["0.8,0.2,0.1", "0.5,0.5,0.5"]
     assert rows[0]["rho_rgb"] == [0.8, 0.2, 0.1]

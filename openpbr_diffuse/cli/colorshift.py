@@ -14,6 +14,8 @@ materials' diffuse colours are used.  The quantities are those of
 import json
 import math
 
+import numpy as np
+
 from ..spectral.colorimetry import DEFAULT_ILLUMINANT, DEFAULT_WORKING_SPACE, WORKING_SPACES
 from ..spectral.recovery import RECOVERY_METHODS
 from ..spectral.validation import DEFAULT_MU, DEFAULT_ROUGHNESS
@@ -178,6 +180,8 @@ def run(args):
     settings["method"] = method
     settings["method_resolved"] = resolve_method(method, cm)
     settings["colors"] = list(args.colors)
+    rt = colours.roundtrip_delta_e[~np.isnan(colours.roundtrip_delta_e)]
+    settings["roundtrip_delta_e_max"] = float(rt.max()) if rt.size else None  # over the upsampled colours
     image = None
     if args.image:
         from ..spectral.swatches import write_swatches
