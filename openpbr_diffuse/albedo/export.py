@@ -19,7 +19,7 @@ import numpy as np
 
 from .._version import __version__
 from ..models.registry import INFO, MIX_LINEAR, MIX_RHO2, MIX_RHO_MS, model_info
-from .tables import load_table, mix_weight
+from ..models.tables import load_table, mix_weight
 
 #: Default texture resolution.
 DEFAULT_SIZE = 32

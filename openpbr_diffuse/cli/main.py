@@ -16,6 +16,9 @@ COMMANDS = {
     "vectors": "vectors",
     "check": "check",
     "report": "report",
+    "colorshift": "colorshift",
+    "eval": "eval",
+    "render": "render",
 }
 
 

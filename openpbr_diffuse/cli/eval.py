@@ -1,0 +1,115 @@
+"""``openpbr-diffuse eval``: what diffuse lobe a USD / MaterialX material really describes.
+
+    openpbr-diffuse eval materials/clay_rough.mtlx
+    openpbr-diffuse eval scene.usda --material /World/Ball --theta-i 0 30 60 --theta-o 45 --phi 180
+    openpbr-diffuse eval paint.usda --variant finish=gloss --time 12 --uv 0.25 0.75 --json
+
+For each material (or the one asked for, or the material bound to a geometry prim): the
+resolved parameters with their provenance (colours in ACEScg), the diffuse lobe's effective
+weight and selection probability, the directional albedo at theta_o and the BRDF values
+(no cosine) at the given directions.  Angles in degrees; phi is the azimuth of wi relative
+to wo (180: forward, in the plane of incidence).
+"""
+import json
+
+import numpy as np
+
+from ._materials import add_material_options, load
+
+
+def add_parser(subparsers):
+    p = subparsers.add_parser("eval", help="evaluate the materials of a USD / MaterialX file",
+                              description=__doc__.splitlines()[0].strip("`").replace("``", ""))
+    add_material_options(p)
+    p.add_argument("--theta-i", type=float, nargs="+", default=[30.0], metavar="DEG",
+                   help="incidence angle(s) of wi from the normal, degrees in [0, 90] (default 30)")
+    p.add_argument("--theta-o", type=float, nargs="+", default=[30.0], metavar="DEG",
+                   help="view angle(s) of wo, degrees in [0, 90] (default 30)")
+    p.add_argument("--phi", type=float, nargs="+", default=[180.0], metavar="DEG",
+                   help="azimuth of wi relative to wo, degrees (default 180)")
+    p.add_argument("--all", action="store_true", help="list every parameter, not only the set and modelled ones")
+    p.add_argument("--json", action="store_true", help="one JSON document (schema in the README)")
+    p.set_defaults(run=run)
+    return p
+
+
+def _fmt(v):
+    if isinstance(v, (tuple, list)):
+        return "(" + ", ".join(_fmt(x) for x in v) + ")"
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    return str(v)
+
+
+def _rgb(a):
+    return "(" + ", ".join(f"{x:.6f}" for x in a) + ")"
+
+
+def run(args):
+    from ..readers import WORKING_SPACE
+    from ..readers.evaluate import evaluate
+
+    try:
+        ti, to, ph = np.broadcast_arrays(np.asarray(args.theta_i), np.asarray(args.theta_o), np.asarray(args.phi))
+    except ValueError:
+        raise ValueError("eval: --theta-i, --theta-o and --phi must have the same number of values (or one)") from None
+    materials = load(args)
+    results = [(m, evaluate(m, ti, to, ph)) for m in materials]
+    if args.json:
+        doc = {
+            "file": args.file, "working_space": WORKING_SPACE, "time": args.time,
+            "variants": dict(v.split("=", 1) for v in args.variant), "uv": list(args.uv),
+            "directions": {"theta_i": ti.tolist(), "theta_o": to.tolist(), "phi": ph.tolist(),
+                           "units": "degrees", "frame": "local, normal +z; phi = azimuth of wi relative to wo"},
+            "materials": [dict(m.to_dict(), evaluation=r) for m, r in results],
+        }
+        print(json.dumps(doc, allow_nan=False))
+        return 0
+    from ..readers.mapping import family
+
+    for m, r in results:
+        print(f"# {m.path}  [{m.shader_id or 'no shader'}]  from {m.file}")
+        if not m.supported:
+            print("  not supported: " + "; ".join(m.unsupported))
+            for w in m.warnings:
+                print(f"  warning: {w}")
+            continue
+        print(f"  node: {m.node_class}" + (f" (diffuse {m.diffuse_model})" if m.diffuse_model else "")
+              + f"; colours in {WORKING_SPACE}")
+        print("  parameters:")
+        modelled = set(m.node_inputs)
+        for name, p in m.parameters.items():
+            if not args.all and p.kind == "default" and name not in ("base_color", "base_diffuse_roughness",
+                                                                       "base_weight", "color", "roughness",
+                                                                       "weight", "diffuseColor"):
+                continue
+            print(f"    {name} = {_fmt(p.value)}    <- {p.provenance}")
+        if m.parameters.keys() != modelled:
+            mapped = {n: p for n, p in m.node_inputs.items() if n not in m.parameters or p.kind == "mapped"}
+            for name, p in mapped.items():
+                if args.all or p.value != m.node_inputs.get(name, p).value or name.startswith("base"):
+                    print(f"    -> {name} = {_fmt(p.value)}")
+        n = len(r["theta_o"])
+        d = r["diffuse"]
+        # one line per distinct theta_o (these depend on wo only)
+        first = sorted({r["theta_o"][k]: k for k in reversed(range(n))}.values())
+        print("  diffuse lobe (weight, selection probability, albedo of the lobe, weight x albedo):")
+        for k in first:
+            print(f"    theta_o {r['theta_o'][k]:g}: weight {_rgb(d['weight'][k])}  P {d['probability'][k]:.6f}  "
+                  f"E {_rgb(d['albedo'][k])}  w*E {_rgb(d['contribution'][k])}")
+        print("  directional albedo of the material:")
+        for k in first:
+            print(f"    theta_o {r['theta_o'][k]:g}: {_rgb(r['albedo'][k])}")
+        print("  BRDF f(wi, wo) (no cosine):")
+        for k in range(n):
+            print(f"    theta_i {r['theta_i'][k]:g} theta_o {r['theta_o'][k]:g} phi {r['phi'][k]:g}: {_rgb(r['brdf'][k])}")
+        for u in m.unsupported:
+            print(f"  unsupported: {u}")
+        for a in m.approximations:
+            print(f"  approximation: {a}")
+        for w in m.warnings:
+            print(f"  warning: {w}")
+    return 0
+
+
+__all__ = ["add_parser", "run"]

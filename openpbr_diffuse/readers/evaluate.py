@@ -1,0 +1,140 @@
+"""Evaluate materials with their library nodes: the diffuse lobe's weight, selection
+probability and albedo, the directional albedo and BRDF values at given directions.
+
+Directions are given as angles in degrees in the local frame (normal +z):
+wo = (sin theta_o, 0, cos theta_o), wi = (sin theta_i cos phi, sin theta_i sin phi, cos theta_i);
+phi is the azimuth of wi relative to wo (180 = the plane of incidence, forward scattering).
+
+``evaluate_many`` evaluates thousands of materials at once: materials with the same node and
+diffuse model are stacked into one node with array-valued inputs (the nodes broadcast their
+inputs), so the cost is one vectorised call per group, not per material.
+"""
+import warnings
+
+import numpy as np
+
+from ..nodes.openpbr_surface import MODELLED
+
+
+def directions(theta_i, theta_o, phi):
+    """(wi, wo) unit vectors (..., 3) from angles in degrees (broadcast together)."""
+    ti, to, ph = np.broadcast_arrays(*(np.radians(np.asarray(a, dtype=np.float64)) for a in (theta_i, theta_o, phi)))
+    wi = np.stack([np.sin(ti) * np.cos(ph), np.sin(ti) * np.sin(ph), np.cos(ti)], axis=-1)
+    wo = np.stack([np.sin(to), np.zeros_like(to), np.cos(to)], axis=-1)
+    return wi, wo
+
+
+def check_angles(name, values):
+    a = np.asarray(values, dtype=np.float64)
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} must be finite degrees, got {values!r}")
+    if name != "phi" and (np.any(a < 0.0) or np.any(a > 90.0)):
+        raise ValueError(f"{name} must lie in [0, 90] degrees, got {values!r}")
+    return a
+
+
+def evaluate(material, theta_i=(30.0,), theta_o=(30.0,), phi=(180.0,)):
+    """Evaluate one material at the given directions.
+
+    Returns
+    -------
+    dict with keys (None values for an unsupported material):
+        theta_i, theta_o, phi (degrees, broadcast), brdf (n, 3) BSDF without the cosine,
+        albedo (n, 3) directional albedo at theta_o, diffuse: {weight (n, 3), albedo (n, 3),
+        probability (n,), contribution (n, 3) = weight * albedo}, lobes: [{name,
+        probability (n,)}].
+    """
+    ti, to, ph = np.broadcast_arrays(*(np.atleast_1d(check_angles(n, v))
+                                       for n, v in (("theta_i", theta_i), ("theta_o", theta_o), ("phi", phi))))
+    out = {"theta_i": ti.tolist(), "theta_o": to.tolist(), "phi": ph.tolist(),
+           "brdf": None, "albedo": None, "diffuse": None, "lobes": []}
+    node = material.node()
+    if node is None:
+        return out
+    wi, wo = directions(ti, to, ph)
+    out["brdf"] = np.asarray(node.eval(wi, wo)).tolist()
+    out["albedo"] = np.asarray(node.albedo(wo)).tolist()
+    out["diffuse"], out["lobes"] = diffuse_lobe(node, wo)
+    return out
+
+
+def diffuse_lobe(node, wo):
+    """({weight, albedo, probability, contribution}, [{name, probability}]) of a node at wo."""
+    n = wo.shape[0] if wo.ndim > 1 else 1
+    if hasattr(node, "lobes"):
+        lobes = node.lobes(wo)
+        listing = [{"name": lb.name, "probability": np.broadcast_to(lb.probability, (n,)).tolist()} for lb in lobes]
+        d = next((lb for lb in lobes if lb.name == "diffuse"), None)
+        if d is None:
+            zero = np.zeros((n, 3))
+            return ({"weight": zero.tolist(), "albedo": zero.tolist(), "probability": [0.0] * n,
+                     "contribution": zero.tolist()}, listing)
+        w = np.broadcast_to(d.weight, (n, 3))
+        E = np.broadcast_to(d.albedo, (n, 3))
+        return ({"weight": w.tolist(), "albedo": E.tolist(), "probability": np.broadcast_to(d.probability, (n,)).tolist(),
+                 "contribution": (w * E).tolist()}, listing)
+    # OrenNayarDiffuseBSDF: one lobe, weight * f(color)
+    E = np.broadcast_to(node.albedo(wo), (n, 3))
+    w = np.broadcast_to(np.asarray(node.weight, dtype=np.float64)[..., None] * np.ones(3), (n, 3))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        own = np.where(w > 0, E / np.where(w > 0, w, 1.0), 0.0)
+    return ({"weight": w.tolist(), "albedo": own.tolist(), "probability": [1.0] * n, "contribution": E.tolist()},
+            [{"name": "diffuse", "probability": [1.0] * n}])
+
+
+def _group_key(m):
+    """Materials stack into one node when they share the node, the diffuse model and every
+    boolean (uniform) input such as geometry_thin_walled."""
+    flags = tuple(sorted((n, p.value) for n, p in m.node_inputs.items() if isinstance(p.value, bool)))
+    return (m.node_class, m.diffuse_model, flags)
+
+
+def stacked_node(materials):
+    """One library node whose inputs are the stacked inputs of ``materials`` (same node class
+    and diffuse model); only the modelled inputs are stacked."""
+    from ..nodes import OpenPBRSurface, OrenNayarDiffuseBSDF
+    from .material import surface_options
+
+    first = materials[0]
+    if first.node_class == "OpenPBRSurface":
+        names = [n for n in first.node_inputs if n in MODELLED]
+        kw = {n: (first.node_inputs[n].value if isinstance(first.node_inputs[n].value, bool)
+                  else np.array([m.node_inputs[n].value for m in materials], dtype=np.float64)) for n in names}
+        kw.update(surface_options(first.diffuse_model))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return OpenPBRSurface(**kw)
+    kw = {n: np.array([m.node_inputs[n].value for m in materials], dtype=np.float64)
+          for n in ("weight", "color", "roughness")}
+    return OrenNayarDiffuseBSDF(**kw, energy_compensation=bool(first.node_inputs["energy_compensation"].value))
+
+
+def evaluate_many(materials, theta_i=30.0, theta_o=30.0, phi=180.0):
+    """Evaluate many materials at one direction pair, vectorised per group.
+
+    Returns
+    -------
+    dict with arrays over the materials (unsupported ones NaN): brdf (N, 3), albedo (N, 3),
+    diffuse_weight (N, 3), diffuse_probability (N,).
+    """
+    N = len(materials)
+    out = {k: np.full((N, 3), np.nan) for k in ("brdf", "albedo", "diffuse_weight")}
+    out["diffuse_probability"] = np.full(N, np.nan)
+    groups = {}
+    for i, m in enumerate(materials):
+        if m.supported:
+            groups.setdefault(_group_key(m), []).append(i)
+    wi, wo = directions(theta_i, theta_o, phi)
+    for idx in groups.values():
+        node = stacked_node([materials[i] for i in idx])
+        # directions broadcast to one row per material (the nodes' inputs are (n,) / (n, 3))
+        wig, wog = np.broadcast_to(wi, (len(idx), 3)), np.broadcast_to(wo, (len(idx), 3))
+        out["brdf"][idx] = node.eval(wig, wog)
+        out["albedo"][idx] = node.albedo(wog)
+        d, _ = diffuse_lobe(node, wog)
+        out["diffuse_weight"][idx] = d["weight"]
+        out["diffuse_probability"][idx] = d["probability"]
+    return out
+
+
+__all__ = ["directions", "evaluate", "evaluate_many", "diffuse_lobe", "stacked_node"]

@@ -1,0 +1,259 @@
+"""The MaterialX graph evaluator: the value of an input at one surface point.
+
+Value resolution follows the MaterialX 1.39 specification: an input's value is its
+connection (``nodename`` / ``nodegraph`` + ``output``; the connected output is followed
+whatever its name), else its ``interfacename`` (the enclosing nodegraph's input), else its
+authored ``value``, else the nodedef default from the MaterialX data library.  Connected
+nodes are evaluated at one surface point (``uv``): stdlib math nodes (``ops``), ``constant``,
+``image`` (sampled with OpenImageIO, ``textures``) and every node whose nodedef is
+implemented by a nodegraph in the library (e.g. ``tiledimage``, evaluated through that
+graph).  Other nodes (noise, closures, geometry other than texcoord) are listed as
+unsupported and the input falls back to its nodedef default.  Colours are converted from
+their active ``colorspace`` to ACEScg (``colorspace``).  A connection cycle raises
+ValueError naming the elements on the cycle.
+
+The same evaluator runs MaterialX's own translation graph for Standard Surface
+(``ND_standard_surface_to_open_pbr_surface``, see ``mapping``) and the library graphs of
+``ND_`` nodes met in USD stages.
+"""
+import os
+
+import numpy as np
+
+from . import colorspace, mxlib, ops, textures
+from .material import Parameter
+from ..nodes.materialx_defs import parse_value
+
+#: Node output types the evaluator can produce (closures are not values).
+VALUE_TYPES = ("float", "integer", "boolean", "string", "filename", "color3", "color4",
+               "vector2", "vector3", "vector4")
+_COLORS = ("color3", "color4")
+
+
+def to_python(v):
+    """Evaluator value -> Parameter value (tuple of floats for arrays)."""
+    if isinstance(v, np.ndarray):
+        return tuple(float(x) for x in v.reshape(-1))
+    if isinstance(v, np.floating):
+        return float(v)
+    return v
+
+
+def convert_color(value, type_name, space):
+    """A colorN value converted from ``space`` to the working space (alpha untouched)."""
+    a = np.asarray(value, dtype=np.float64).reshape(-1)
+    if type_name not in _COLORS or space == "raw":
+        return a
+    out = a.copy()
+    out[:3] = colorspace.to_working(a[:3], space)
+    return out
+
+
+class Resolver:
+    """Evaluates inputs of one MaterialX document at one uv.
+
+    ``sink``: a Material whose ``warnings`` / ``unsupported`` collect what is met;
+    ``default_space``: colour space of colours when the document names none.
+    """
+
+    def __init__(self, file, uv, default_space, sink):
+        self.file = str(file)
+        self.uv = np.asarray(uv, dtype=np.float64)
+        self.default_space = default_space
+        self.sink = sink
+
+    # ----------------------------------------------------------------- helpers
+    def _note(self, text, unsupported=False):
+        lst = self.sink.unsupported if unsupported else self.sink.warnings
+        if text not in lst:
+            lst.append(text)
+
+    def _space(self, elem):
+        space = elem.getActiveColorSpace() or self.default_space
+        try:
+            return colorspace.canonical(space)
+        except ValueError as exc:
+            raise ValueError(f"{self.file}: {elem.getNamePath()}: {exc}") from None
+
+    def _cycle(self, key, trail):
+        if key in trail:
+            loop = list(trail[trail.index(key):]) + [key]
+            raise ValueError(f"{self.file}: connection cycle: {' -> '.join(loop)}")
+        return trail + (key,)
+
+    def _authored(self, port, library):
+        t = port.getType()
+        text = port.getValueString()
+        try:
+            raw = parse_value(t, text)
+        except ValueError as exc:
+            raise ValueError(f"{self.file}: {port.getNamePath()}: bad {t} value {text!r} ({exc})") from None
+        if t == "filename":
+            resolved = port.getResolvedValueString() or raw
+            if resolved and not os.path.isabs(resolved):
+                base = port.getActiveSourceUri() or self.file
+                resolved = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(base)), resolved))
+            space = "raw" if library else self._space(port)
+            return Parameter(resolved, f"file {raw}", "file", authored=space)
+        if t in _COLORS and not library:
+            space = self._space(port)
+            value = convert_color(raw, t, space)
+            prov = f"authored at {port.getNamePath()}" + ("" if space == colorspace.WORKING_SPACE
+                                                           else f" ({space} -> {colorspace.WORKING_SPACE})")
+            return Parameter(value, prov, "authored", authored=raw)
+        if isinstance(raw, tuple):
+            raw = np.asarray(raw, dtype=np.float64)
+        return Parameter(raw, f"authored at {port.getNamePath()}", "authored")
+
+    # ----------------------------------------------------------------- ports
+    def port(self, port, trail=(), iface=None, library=False):
+        """Resolve an input or output element; None when nothing is set (use the default)."""
+        trail = self._cycle("port:" + port.getNamePath(), trail)
+        if port.hasInterfaceName():
+            name = port.getInterfaceName()
+            if iface is not None:
+                return iface.get(name)
+            ii = port.getInterfaceInput() if hasattr(port, "getInterfaceInput") else None
+            if ii is None:
+                self._note(f"{port.getNamePath()}: interface input {name!r} does not exist; default used")
+                return None
+            p = self.port(ii, trail, None, library)
+            if p is None:
+                return None
+            return Parameter(p.value, f"interface {ii.getNamePath()} <- {p.provenance}", _kind(p), p.authored)
+        node = port.getConnectedNode()
+        if node is not None:
+            out = port.getConnectedOutput() if hasattr(port, "getConnectedOutput") else None
+            outname = port.getOutputString()
+            via = ""
+            if out is not None and out.getParent() is not None and out.getParent().getCategory() == "nodegraph":
+                via = f"{out.getNamePath()} <- "
+                outname = out.getOutputString()
+            p = self.node_value(node, outname, trail, iface, library)
+            if p is None:
+                return None
+            return Parameter(p.value, via + p.provenance, _kind(p), p.authored)
+        if port.getNodeName() or port.getNodeGraphString():
+            target = port.getNodeName() or port.getNodeGraphString()
+            self._note(f"{port.getNamePath()}: connected to {target!r}, which does not exist; default used")
+            return None
+        if port.hasValueString():
+            return self._authored(port, library)
+        return None
+
+    # ----------------------------------------------------------------- nodes
+    def node_value(self, node, outname, trail=(), iface=None, library=False):
+        """The value of output ``outname`` of ``node`` (None if the node is not evaluated)."""
+        trail = self._cycle("node:" + node.getNamePath(), trail)
+        nd = node.getNodeDef()
+        cat = node.getCategory()
+        if nd is None:
+            self._note(f"node {node.getNamePath()} ({cat}, type {node.getType()}) has no nodedef in the "
+                       f"MaterialX library: not evaluated, default used", True)
+            return None
+        ndname = nd.getName()
+        outs = mxlib.outputs(ndname)
+        out_type = outs.get(outname) if outname else None
+        if out_type is None:
+            out_type = node.getType() if node.getType() != "multioutput" else next(iter(outs.values()))
+            outname = outname or next(iter(outs))
+        if out_type not in VALUE_TYPES:
+            self._note(f"node {node.getNamePath()} ({ndname}) outputs a {out_type}: not a value", True)
+            return None
+        if cat not in ops.OPS and cat != "image" and mxlib.implementation_graph(ndname) is None:
+            self._note(f"node {node.getNamePath()} ({ndname}) is not evaluated by the reader; default used", True)
+            return None
+        resolved = {}
+        for name, (t, default, geomprop) in mxlib.inputs(ndname).items():
+            inp = node.getInput(name)
+            p = self.port(inp, trail, iface, library) if inp is not None else None
+            if p is None:
+                if geomprop in ("UV0", "UV1"):
+                    p = Parameter(self.uv.copy(), f"uv ({self.uv[0]:g}, {self.uv[1]:g})", "uv")
+                elif geomprop:
+                    self._note(f"node {node.getNamePath()} ({ndname}): input {name} needs geometry "
+                               f"({geomprop}); not evaluated", True)
+                    return None
+                else:
+                    p = Parameter(default, f"default of {ndname}", "default")
+            resolved[name] = p
+        if cat == "image":
+            return self.texture(node.getNamePath(), ndname, resolved, out_type)
+        if cat in ops.OPS:
+            try:
+                value = ops.apply(cat, {n: p.value for n, p in resolved.items()}, out_type)
+            except (TypeError, ValueError, IndexError) as exc:
+                raise ValueError(f"{self.file}: node {node.getNamePath()} ({ndname}): {exc}") from None
+            return Parameter(value, _describe(f"{cat} {node.getNamePath()}", resolved), _combined(resolved))
+        graph = mxlib.implementation_graph(ndname)
+        out = graph.getOutput(outname) or graph.getOutputs()[0]
+        p = self.port(out, trail, resolved, True)
+        if p is None:
+            return None
+        return Parameter(p.value, f"{cat} {node.getNamePath()} ({ndname} via {graph.getName()}) <- {p.provenance}",
+                         _kind(p), p.authored)
+
+    def texture(self, where, ndname, resolved, out_type):
+        """An ``image`` node: sample its file at its texcoord with OpenImageIO."""
+        fp = resolved["file"]
+        default = resolved["default"].value
+        modes = (resolved["uaddressmode"].value, resolved["vaddressmode"].value)
+        uv = np.asarray(resolved["texcoord"].value, dtype=np.float64).reshape(-1)[:2]
+        path = fp.value
+        space = fp.authored if fp.kind == "file" and fp.authored else "raw"
+        label = f"texture {os.path.basename(path) if path else '(none)'} at uv ({uv[0]:.6g}, {uv[1]:.6g})"
+        fallback = Parameter(ops._as(default, out_type), f"{label}: default of {where}", "texture")
+        if not path:
+            self._note(f"image node {where} has no file; its default is used")
+            return fallback
+        try:
+            for mode in modes:
+                textures.wrap_name(mode)
+            outside = [m == "constant" and not 0.0 <= c <= 1.0 for m, c in zip(modes, uv)]
+            if any(outside):
+                return Parameter(fallback.value, f"{label}: outside [0, 1] with address mode constant: "
+                                 f"default of {where}", "texture")
+            texel = textures.sample(path, uv, modes[0], modes[1])
+        except textures.TextureError as exc:
+            self._note(f"{where}: {exc}; the node's default is used")
+            return fallback
+        except ValueError as exc:
+            raise ValueError(f"{self.file}: {where}: {exc}") from None
+        value = _channels(texel, out_type)
+        value = convert_color(value, out_type, space) if out_type in _COLORS else value
+        cs = "" if space in ("raw", colorspace.WORKING_SPACE) else f", {space} -> {colorspace.WORKING_SPACE}"
+        return Parameter(value, f"{label}, wrap {modes[0]}/{modes[1]}{cs} ({path})", "texture",
+                         authored=to_python(_channels(texel, out_type)))
+
+
+def _channels(texel, out_type):
+    """Texel channels -> the node's output type (grey replicated, alpha 1 if missing)."""
+    n = texel.size
+    if out_type == "float":
+        return float(texel[0])
+    want = int(out_type[-1])
+    if n == 1:
+        base = np.repeat(texel, min(want, 3))
+    else:
+        base = texel[: min(n, want)]
+    if base.size < want:
+        pad = np.ones(want - base.size) if out_type.startswith("color") else np.zeros(want - base.size)
+        base = np.concatenate([base, pad])
+    return base
+
+
+def _kind(p):
+    return "texture" if p.kind == "texture" else ("file" if p.kind == "file" else "connection")
+
+
+def _combined(resolved):
+    return "texture" if any(p.kind == "texture" for p in resolved.values()) else "connection"
+
+
+def _describe(head, resolved):
+    set_ = [f"{n}: {p.provenance}" for n, p in resolved.items() if p.kind not in ("default",)]
+    return f"{head}({'; '.join(set_)})" if set_ else head
+
+
+
+__all__ = ["Resolver", "to_python", "convert_color", "VALUE_TYPES"]

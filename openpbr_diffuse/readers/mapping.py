@@ -1,0 +1,316 @@
+"""Which library node a shader maps onto, and how its inputs become the node's inputs.
+
+A table (shader id -> ``Family``), not an if-chain:
+
+- ``ND_open_pbr_surface_surfaceshader`` -> ``OpenPBRSurface`` (diffuse EON), inputs as they are;
+- ``ND_standard_surface_surfaceshader`` -> ``OpenPBRSurface(diffuse_model="qon")``: the
+  inputs go through MaterialX's own translation graph ``ND_standard_surface_to_open_pbr_surface``
+  (evaluated by ``materialx.Resolver``; base_diffuse_roughness = diffuse_roughness, used as
+  QON's sigma in radians, as MaterialX's standard_surface graph does);
+- ``UsdPreviewSurface`` -> ``OpenPBRSurface(diffuse_model="lambert")``: diffuseColor ->
+  base_color, metallic -> base_metalness, roughness -> specular_roughness (it is the specular
+  roughness), ior -> specular_ior, clearcoat -> coat_weight, clearcoatRoughness ->
+  coat_roughness, opacity -> geometry_opacity;
+- ``ND_oren_nayar_diffuse_bsdf`` (bare, or as the bsdf of a ``surface`` node) ->
+  ``OrenNayarDiffuseBSDF``.
+
+Anything else is ``supported = False`` with its shader id.  Values outside the node's
+nodedef range are clamped to it with a warning (OpenPBR's reference graph clamps base_color
+with max(base_color, 0) and the scaled specular F0 to [0, 0.99999]; the library's nodes
+accept only the nodedef's [uimin, uimax]).
+"""
+import functools
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from . import mxlib
+from .material import Material, Parameter, diffuse_model_available
+
+OPENPBR = "ND_open_pbr_surface_surfaceshader"
+STANDARD_SURFACE = "ND_standard_surface_surfaceshader"
+PREVIEW = "ND_UsdPreviewSurface_surfaceshader"
+OREN_NAYAR = "ND_oren_nayar_diffuse_bsdf"
+TRANSLATION = "ND_standard_surface_to_open_pbr_surface"
+
+#: Shader ids written in USD files that name the same nodedefs.
+ALIASES = {"UsdPreviewSurface": PREVIEW, "ND_standard_surface_surfaceshader_100": STANDARD_SURFACE}
+
+
+@dataclass(frozen=True)
+class Family:
+    node_class: str
+    diffuse_model: str
+    default_space: str
+    map: Callable
+
+
+@functools.lru_cache(maxsize=1)
+def _modelled():
+    from ..nodes import openpbr_surface
+
+    return frozenset(getattr(openpbr_surface, "MODELLED", ()))
+
+
+def _differs(value, default):
+    """True if a resolved value is not the nodedef default (exact comparison)."""
+    if isinstance(value, np.ndarray):
+        value = tuple(float(x) for x in value.reshape(-1))
+    return value != default
+
+
+def _fmt(v):
+    if isinstance(v, tuple):
+        return "(" + ", ".join(f"{x:.6g}" for x in v) + ")"
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    return str(v)
+
+
+#: An OpenPBR lobe's inputs matter only when its weight is non-zero (prefix -> weight input).
+_GATES = {"coat_": "coat_weight", "fuzz_": "fuzz_weight", "subsurface_": "subsurface_weight",
+          "transmission_": "transmission_weight", "thin_film_": "thin_film_weight",
+          "emission_": "emission_luminance"}
+
+
+def _gated_off(name, inputs):
+    for prefix, weight in _GATES.items():
+        if name.startswith(prefix) and name != weight and weight in inputs:
+            return inputs[weight].value == 0
+    return False
+
+
+def _openpbr_inputs(inputs, m):
+    """Keep the OpenPBR inputs (no geometry props); list the set-but-unmodelled ones (a
+    lobe's colour, roughness, ... only when its weight is non-zero)."""
+    modelled = _modelled()
+    defs = mxlib.inputs(OPENPBR)
+    defaults = mxlib.default_parameters(OPENPBR)
+    if inputs.keys() >= defaults.keys():
+        out = {n: inputs[n] for n in defaults}
+    else:   # a mapped shader without some inputs: OpenPBR's defaults
+        prov = f"default of {OPENPBR} (no counterpart in {m.shader_id})"
+        out = {n: inputs[n] if n in inputs else Parameter(p.value, prov, "default") for n, p in defaults.items()}
+    for name, p in out.items():
+        if p.kind == "default" or name in modelled:
+            continue
+        if _differs(p.value, defs[name][1]) and not _gated_off(name, out):
+            m.unsupported.append(f"{name} = {_fmt(p.value)} (not modelled by OpenPBRSurface)")
+    return out
+
+
+def _map_openpbr(m):
+    return _openpbr_inputs(m.parameters, m)
+
+
+@functools.lru_cache(maxsize=1)
+def _translation_dependencies():
+    """{output name: the interface inputs it depends on} of the translation graph (static)."""
+    graph = mxlib.implementation_graph(TRANSLATION)
+
+    def deps(port, seen):
+        if port.hasInterfaceName():
+            return {port.getInterfaceName()}
+        node = port.getConnectedNode()
+        if node is None or node.getNamePath() in seen:
+            return set()
+        seen = seen | {node.getNamePath()}
+        out = set()
+        for i in node.getInputs():
+            out |= deps(i, seen)
+        return out
+
+    return {o.getName(): deps(o, frozenset()) for o in graph.getOutputs()}
+
+
+def _translate(outputs, params, m):
+    """Evaluate ``outputs`` of the translation graph with the Standard Surface ``params``."""
+    from .graph import Resolver, to_python
+
+    graph = mxlib.implementation_graph(TRANSLATION)
+    iface = {n: Parameter(np.asarray(p.value, dtype=np.float64) if isinstance(p.value, tuple) else p.value,
+                          p.provenance, p.kind) for n, p in params.items()}
+    ev = Resolver(m.file if m is not None else "", (0.5, 0.5), "raw", m if m is not None else Material("", "", "", "", False))
+    out = {}
+    for name in outputs:
+        p = ev.port(graph.getOutput(name), (), iface, True)
+        if p is not None:
+            out[name] = to_python(p.value)
+    return out
+
+
+@functools.lru_cache(maxsize=1)
+def _translated_defaults():
+    """The translation graph's outputs for a Standard Surface with every input at its default."""
+    params = {n: Parameter(v, "default", "default") for n, (t, v, g) in mxlib.inputs(STANDARD_SURFACE).items()
+              if not g}
+    return _translate(list(_translation_dependencies()), params, None)
+
+
+def _map_standard_surface(m):
+    graph_name = mxlib.implementation_graph(TRANSLATION).getName()
+    # only the outputs that depend on a set input are evaluated; the rest are the outputs of
+    # the all-default Standard Surface (computed once)
+    set_inputs = {n for n, p in m.parameters.items() if p.kind != "default"}
+    todo = [o for o, d in _translation_dependencies().items() if d & set_inputs]
+    values = dict(_translated_defaults())
+    values.update(_translate(todo, m.parameters, m))
+    mapped = {}
+    for name, value in values.items():
+        target = name[:-4] if name.endswith("_out") else name
+        mapped[target] = Parameter(value, f"{graph_name}.{name} (Standard Surface -> OpenPBR)", "mapped")
+    trans_inputs = mxlib.inputs(TRANSLATION)
+    for name, p in m.parameters.items():
+        t, default, _ = mxlib.inputs(STANDARD_SURFACE)[name]
+        if name not in trans_inputs and _differs(p.value, default):
+            m.unsupported.append(f"{name} = {_fmt(p.value)} (Standard Surface input without an OpenPBR counterpart)")
+    m.approximations += [
+        "diffuse: Standard Surface's Oren-Nayar (QON, sigma = diffuse_roughness in radians, as MaterialX's "
+        "standard_surface graph) evaluated as OpenPBRSurface(diffuse_model='qon')",
+        f"other inputs mapped to OpenPBR by MaterialX's translation graph {TRANSLATION}: base_color is "
+        "multiplied by the coat colour, specular_color is dropped for metals (specular_weight 1), "
+        "thin-film thickness rescaled",
+        "the specular/metal Fresnel and the layering are OpenPBR's (exact dielectric Fresnel, F82-tint metal, "
+        "albedo scaling), not Standard Surface's own (Schlick-based metal with edge colour)",
+    ]
+    return _openpbr_inputs(mapped, m)
+
+
+_PREVIEW_MAP = {"diffuseColor": "base_color", "metallic": "base_metalness", "roughness": "specular_roughness",
+                "ior": "specular_ior", "clearcoat": "coat_weight", "clearcoatRoughness": "coat_roughness",
+                "opacity": "geometry_opacity"}
+
+
+def _map_preview(m):
+    defs = mxlib.inputs(PREVIEW)
+    mapped = {}
+    for src, dst in _PREVIEW_MAP.items():
+        p = m.parameters[src]
+        mapped[dst] = Parameter(p.value, f"UsdPreviewSurface {src} -> {dst}: {p.provenance}", "mapped", p.authored)
+    spec_workflow = int(m.parameters["useSpecularWorkflow"].value) == 1
+    if spec_workflow:
+        p = m.parameters["specularColor"]
+        mapped["specular_color"] = Parameter(p.value, f"UsdPreviewSurface specularColor -> specular_color "
+                                             f"(specular workflow): {p.provenance}", "mapped", p.authored)
+        m.approximations.append("useSpecularWorkflow = 1: specularColor (the preview surface's F0 colour) is used "
+                                "as OpenPBR's specular_color tint; F0 still comes from ior; metallic is ignored")
+        mapped["base_metalness"] = Parameter(0.0, "specular workflow: metallic ignored", "mapped")
+    for name in ("emissiveColor", "normal", "displacement", "occlusion", "opacityThreshold"):
+        t, default, _ = defs[name]
+        if name in m.parameters and _differs(m.parameters[name].value, default):
+            m.unsupported.append(f"{name} = {_fmt(m.parameters[name].value)} (UsdPreviewSurface input not modelled)")
+    m.approximations += [
+        "diffuse: Lambertian, as UsdPreviewSurface defines it: OpenPBRSurface(diffuse_model='lambert')",
+        "roughness is the preview surface's specular roughness (-> specular_roughness); the GGX lobe uses "
+        "OpenPBR's exact dielectric Fresnel of ior instead of the preview surface's Schlick form",
+        "clearcoat maps onto OpenPBR's coat (IOR 1.6 default rather than the preview surface's 1.5)",
+    ]
+    return _openpbr_inputs(mapped, m)
+
+
+def _map_oren_nayar(m):
+    out = {n: p for n, p in m.parameters.items() if n != "normal"}
+    m.diffuse_model = "eon" if out["energy_compensation"].value else "qon"
+    return out
+
+
+FAMILIES = {
+    OPENPBR: Family("OpenPBRSurface", "eon", "acescg", _map_openpbr),
+    STANDARD_SURFACE: Family("OpenPBRSurface", "qon", "lin_rec709", _map_standard_surface),
+    PREVIEW: Family("OpenPBRSurface", "lambert", "lin_rec709", _map_preview),
+    OREN_NAYAR: Family("OrenNayarDiffuseBSDF", "", "lin_rec709", _map_oren_nayar),
+}
+
+
+def family(shader_id):
+    """The Family of a shader id (after ALIASES), or None."""
+    return FAMILIES.get(ALIASES.get(shader_id, shader_id))
+
+
+# ----------------------------------------------------------------------- clamping
+@functools.lru_cache(maxsize=None)
+def _ranges(node_class, diffuse_model):
+    """{input: (lo, hi)} of the node's numeric inputs (the nodedef's uimin / uimax)."""
+    from ..nodes.materialx_defs import nodedef_inputs
+
+    nd = OPENPBR if node_class == "OpenPBRSurface" else OREN_NAYAR
+    r = {n: (d.uimin, d.uimax) for n, d in nodedef_inputs(nd).items()
+         if d.type == "float" or d.type.startswith("color")}
+    if node_class == "OrenNayarDiffuseBSDF":
+        # sigma in radians for QON (energy_compensation false), r in [0, 1] for EON
+        r["roughness"] = (0.0, 1.0 if diffuse_model == "eon" else math.pi / 2)
+    return r
+
+
+def _inside(v, lo, hi):
+    """Fast path: a float or tuple of floats within [lo, hi] (None = unbounded)."""
+    vals = v if isinstance(v, tuple) else (v,)
+    los = lo if isinstance(lo, tuple) else (lo,) * len(vals)
+    his = hi if isinstance(hi, tuple) else (hi,) * len(vals)
+    return all(isinstance(x, float) and x == x and (a is None or x >= a) and (b is None or x <= b)
+               and x not in (math.inf, -math.inf) for x, a, b in zip(vals, los, his))
+
+
+def clamp_inputs(m):
+    """Clamp node inputs to the node's range, with a warning per clamped input."""
+    ranges = _ranges(m.node_class, m.diffuse_model)
+    for name, p in list(m.node_inputs.items()):
+        if p.kind == "default" or name not in ranges or isinstance(p.value, (bool, str)) or p.value is None:
+            continue
+        lo, hi = ranges[name]
+        if _inside(p.value, lo, hi):
+            continue
+        v = np.asarray(p.value, dtype=np.float64)
+        if not np.all(np.isfinite(v)):
+            raise ValueError(f"{m.file}: {m.path}: {name} = {_fmt(p.value)} is not finite")
+        lo_a = -np.inf if lo is None else np.asarray(lo, dtype=np.float64)
+        hi_a = np.inf if hi is None else np.asarray(hi, dtype=np.float64)
+        c = np.minimum(np.maximum(v, lo_a), hi_a)
+        if np.array_equal(c, v):
+            continue
+        value = tuple(float(x) for x in c) if isinstance(p.value, tuple) else float(c)
+        rng = f"[{_fmt(lo) if lo is not None else '-inf'}, {_fmt(hi) if hi is not None else 'inf'}]"
+        m.warnings.append(f"{name} = {_fmt(p.value)} is outside {rng}, the range of the "
+                          f"{m.node_class} node: clamped to {_fmt(value)}")
+        m.node_inputs[name] = Parameter(value, p.provenance + " (clamped)", p.kind, p.value)
+
+
+# ----------------------------------------------------------------------- building
+def build_material(shader, *, name, path, file, uv, variants=None, time=None):
+    """A Material from a shader adapter (MaterialX node or USD shader prim)."""
+    m = Material(name=name, path=path, file=str(file), shader_id="", supported=False,
+                 uv=tuple(float(x) for x in uv), variants=dict(variants or {}), time=time)
+    if shader is None or shader.node is None:
+        m.unsupported.append("no surface shader is connected to the material")
+        return m
+    inner = shader.unwrap_surface()
+    if inner is not None and family(inner.shader_id()) is not None \
+            and family(inner.shader_id()).node_class == "OrenNayarDiffuseBSDF":
+        m.approximations.append(f"surface node {shader.path}: its bsdf {inner.path} is evaluated; "
+                                "the surface's edf and opacity are not")
+        shader = inner
+    sid = shader.shader_id()
+    m.shader_id = sid
+    m.shader_path = shader.path
+    fam = family(sid)
+    if fam is None:
+        m.unsupported.append(f"shader {sid or '(none)'} maps onto no node of the library")
+        return m
+    canonical = ALIASES.get(sid, sid)
+    m.parameters = shader.resolve(canonical, fam.default_space, m, uv)
+    m.node_class = fam.node_class
+    m.diffuse_model = fam.diffuse_model
+    m.node_inputs = fam.map(m)
+    if m.node_class == "OpenPBRSurface" and m.diffuse_model != "eon" and not diffuse_model_available():
+        m.warnings.append(f"this OpenPBRSurface has no diffuse_model keyword: the {m.diffuse_model} diffuse of "
+                          f"{sid} cannot be built (EON would be used); marked unsupported")
+        m.unsupported.append(f"diffuse_model {m.diffuse_model!r} (needs OpenPBRSurface(diffuse_model=...))")
+        return m
+    clamp_inputs(m)
+    m.supported = True
+    return m
+
+
+__all__ = ["FAMILIES", "Family", "family", "build_material", "clamp_inputs", "ALIASES"]
