@@ -13,6 +13,7 @@ from .._version import __version__
 #: sub-command name -> module in this package (added as the commands are built).
 COMMANDS = {
     "albedo": "albedo",
+    "simulate": "simulate",
 }
 
 
