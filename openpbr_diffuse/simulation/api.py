@@ -34,7 +34,7 @@ CHUNK_PATHS = 1 << 15
 #: a path still inside the surface after this many bounces is cut (counted in ``truncated``)
 #: and scored rho^(MAX_BOUNCES + 1): exact at rho = 1, high by < rho^MAX_BOUNCES otherwise
 #: (deep V-grooves, slope near pi/2, trap light for very many bounces)
-MAX_BOUNCES = 10_000
+MAX_BOUNCES = 1_000
 _KIND = {"albedo": 1, "average": 2, "brdf": 3}
 
 
