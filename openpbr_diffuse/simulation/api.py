@@ -73,10 +73,10 @@ def _chunk_seed(seed, kind, geometry, key, chunk):
 
 def _run_task(task):
     """One chunk (module-level so that Dask workers can import it)."""
-    from ._kernels import GEOMETRY_IDS, run_chunk
+    from ._kernels import run_chunk
 
     geometry, roughness, wi, random_wi, wo, rho, n, seed = task
-    return run_chunk(GEOMETRY_IDS[geometry], roughness, wi, random_wi, wo, rho, n, seed, MAX_BOUNCES)
+    return run_chunk(geometry, roughness, wi, random_wi, wo, rho, n, seed, MAX_BOUNCES)
 
 
 def _client(client, scheduler):
