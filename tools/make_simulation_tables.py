@@ -123,8 +123,9 @@ def grade(out):
     gr.write_csv(out / gr.TABLES["grading"], provenance(
         "lobe models graded against the simulated microsurfaces",
         "per model and simulated surface: model_roughness (sigma or r) fitted to minimise the RMS of "
-        f"E_model(mu; rho) - E_sim(mu; rho) over the table's mu and rho in {gr.FIT_RHO} (fit = 'fitted'; "
-        "'same sigma': the V-cavity's own sigma, sigma models only); albedo_rms / albedo_max: that albedo error; "
+        f"E_model(mu; rho) - E_sim(mu; rho) over the table's mu and rho in {gr.FIT_RHO} (fit = 'albedo'), or "
+        f"the RMS relative error of the BRDF slices at rho = {gr.BRDF_RHO} (fit = 'brdf'); "
+        "'same sigma': the V-cavity's own sigma, sigma models only; albedo_rms / albedo_max: that albedo error; "
         "albedo_stderr: RMS standard error of the simulated values; single_rms / single_max: the model's "
         "rho-linear albedo (rho -> 0 of E/rho) against the simulated order-1 albedo at rho = 1; brdf_rel_rms / "
         f"brdf_rel_max: relative error of f against the simulated in-plane slices at rho = {gr.BRDF_RHO}",
@@ -135,7 +136,7 @@ def grade(out):
     # colour shift: EON at its fitted r for each surface
     cs_rows = []
     for r in rows:
-        if r["model"] != "eon" or r["fit"] != "fitted":
+        if r["model"] != "eon" or r["fit"] != "albedo":
             continue
         cs = gr.eon_colorshift(alb, r["geometry"], r["roughness"], r["model_roughness"])
         for k, x in enumerate(cs["rho"]):

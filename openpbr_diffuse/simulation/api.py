@@ -104,7 +104,6 @@ def _execute(tasks, workers, client, scheduler):
         finally:
             if own:
                 cl.close()
-    workers = os.cpu_count() or 1 if workers is None else _check_count("workers", workers, 1)
     if workers == 1 or len(tasks) == 1:
         return [_run_task(t) for t in tasks]
     with ThreadPoolExecutor(max_workers=workers) as pool:  # the kernel releases the GIL
@@ -266,6 +265,7 @@ def simulate_albedo(geometry, roughness, mu, rho=1.0, paths=1_000_000, seed=0, *
     rho = _rho(rho)
     paths = _check_count("paths", paths, 1)
     seed = _check_count("seed", seed, 0)
+    workers = (os.cpu_count() or 1) if workers is None else _check_count("workers", workers, 1)
     no_wo = np.zeros((0, 3))
     queries = [(np.array([math.sqrt(max(0.0, 1.0 - m * m)), 0.0, m]), no_wo, [m]) for m in mu]
     tasks, spans = _plan("albedo", geometry, roughness, queries, False, rho, paths, seed)
@@ -290,6 +290,7 @@ def simulate_average_albedo(geometry, roughness, rho=1.0, paths=1_000_000, seed=
     rho = _rho(rho)
     paths = _check_count("paths", paths, 1)
     seed = _check_count("seed", seed, 0)
+    workers = (os.cpu_count() or 1) if workers is None else _check_count("workers", workers, 1)
     queries = [(np.array([0.0, 0.0, 1.0]), np.zeros((0, 3)), [-1.0])]
     tasks, spans = _plan("average", geometry, roughness, queries, True, rho, paths, seed)
     results = _execute(tasks, workers, client, scheduler)
@@ -340,6 +341,7 @@ def simulate_brdf(geometry, roughness, wi, wo, rho=1.0, paths=1_000_000, seed=0,
     rho = _rho(rho)
     paths = _check_count("paths", paths, 1)
     seed = _check_count("seed", seed, 0)
+    workers = (os.cpu_count() or 1) if workers is None else _check_count("workers", workers, 1)
     uniq, inverse = np.unique(wi, axis=0, return_inverse=True)
     inverse = inverse.reshape(-1)
     queries, rows = [], []

@@ -9,9 +9,10 @@ Tables (``openpbr_diffuse/data/``, written by ``tools/make_simulation_tables.py`
   roughness and the errors of the model's albedo, single-scattering albedo and BRDF slices;
 - ``simulation_colorshift.csv``: EON's multiple-scattering colour against the simulation.
 
-The fit: a model's roughness (sigma or r) is chosen per simulated surface to minimise the RMS
-of E_model(mu; rho) - E_sim(mu; rho) over the table's mu and ``FIT_RHO`` (at rho = 1 every
-energy-conserving model and both surfaces give 1, so the fit uses coloured albedos).
+The fits: a model's roughness (sigma or r) is chosen per simulated surface either to minimise
+the RMS of E_model(mu; rho) - E_sim(mu; rho) over the table's mu and ``FIT_RHO`` ("albedo";
+at rho = 1 every energy-conserving model and both surfaces give 1, so the fit uses coloured
+albedos), or the RMS relative error of the in-plane BRDF slices at ``BRDF_RHO`` ("brdf").
 """
 from __future__ import annotations
 
@@ -154,54 +155,82 @@ def slice_directions(theta_i, theta_o):
     return wi, wo
 
 
-def grade_surface(model, albedo_cols, brdf_cols, geometry, roughness, fit=True):
-    """Grade one model against one simulated surface; returns a dict (one grading row)."""
+def _slices(brdf_cols, geometry, roughness):
+    sel = _select(brdf_cols, geometry=geometry, roughness=roughness)
+    sel &= np.isclose(brdf_cols["rho"], BRDF_RHO)
+    wi, wo = slice_directions(np.radians(brdf_cols["theta_i"][sel]), np.radians(brdf_cols["theta_o"][sel]))
+    return wi, wo, brdf_cols["f"][sel]
+
+
+def fit_roughness_brdf(model, wi, wo, f_sim):
+    """Model roughness minimising the RMS relative error of the BRDF slices at ``BRDF_RHO``."""
+    from scipy.optimize import minimize_scalar
+
+    from ..models import evaluate
+
+    lo, hi = _model_roughness_range(model)
+    rel = lambda s: float(np.sqrt(np.mean(((evaluate(model, wi, wo, s, [BRDF_RHO])[:, 0] - f_sim) / f_sim) ** 2)))
+    grid = np.linspace(lo, hi, 41)
+    vals = [rel(s) for s in grid]
+    k = int(np.argmin(vals))
+    res = minimize_scalar(rel, bounds=(grid[max(k - 1, 0)], grid[min(k + 1, 40)]), method="bounded",
+                          options={"xatol": 1e-5})
+    return (float(res.x), float(res.fun)) if res.fun <= vals[k] else (float(grid[k]), float(vals[k]))
+
+
+#: how the model roughness of a grading row is chosen
+FITS = ("albedo", "brdf", "same sigma")
+
+
+def grade_surface(model, albedo_cols, brdf_cols, geometry, roughness, fit="albedo"):
+    """Grade one model against one simulated surface; returns a dict (one grading row).
+
+    ``fit``: "albedo" (roughness fitted to the coloured directional albedos), "brdf" (fitted
+    to the in-plane BRDF slices, relative error) or "same sigma" (the V-cavity's own sigma,
+    for the sigma models).
+    """
     from ..models import evaluate
     from ..models.registry import model_info
 
+    if fit not in FITS:
+        raise ValueError(f"fit must be one of {FITS}, got {fit!r}")
     rho = np.array(FIT_RHO)
     mu, E, se = sim_albedo(albedo_cols, geometry, roughness, rho)
+    wi, wo, f_sim = _slices(brdf_cols, geometry, roughness)
     info = model_info(model)
-    if fit:
-        s, rms = fit_roughness(model, mu, rho, E)
-        how = "fitted"
+    if fit == "albedo":
+        s, _ = fit_roughness(model, mu, rho, E)
+    elif fit == "brdf":
+        s, _ = fit_roughness_brdf(model, wi, wo, f_sim)
     else:
         s = roughness
-        rms = float(np.sqrt(np.mean((model_albedo(model, mu, s, rho) - E) ** 2)))
-        how = "same sigma"
     err = model_albedo(model, mu, s, rho) - E
     # single scattering: the model's rho-linear part (its albedo as rho -> 0, over rho)
     # against the simulated order-1 albedo (rho = 1, i.e. the escape probability after 1 bounce)
     _, E1, _ = sim_albedo(albedo_cols, geometry, roughness, [1.0], column="E1")
     m1 = (model_albedo(model, mu, s, [1e-9]) / 1e-9)[:, 0]
     ss_err = m1 - E1[:, 0]
-    # BRDF slices at rho = BRDF_RHO
-    sel = _select(brdf_cols, geometry=geometry, roughness=roughness)
-    sel &= np.isclose(brdf_cols["rho"], BRDF_RHO)
-    wi, wo = slice_directions(np.radians(brdf_cols["theta_i"][sel]), np.radians(brdf_cols["theta_o"][sel]))
-    f_sim = brdf_cols["f"][sel]
     f_mod = evaluate(model, wi, wo, s, [BRDF_RHO])[:, 0]
     rel = (f_mod - f_sim) / f_sim
-    # white furnace of the model itself at rho = 1 against the simulated 1
-    return {"model": model, "geometry": geometry, "roughness": roughness, "fit": how,
+    return {"model": model, "geometry": geometry, "roughness": roughness, "fit": fit,
             "roughness_name": info.roughness_name, "model_roughness": s,
-            "albedo_rms": rms, "albedo_max": float(np.max(np.abs(err))),
+            "albedo_rms": float(np.sqrt(np.mean(err**2))), "albedo_max": float(np.max(np.abs(err))),
             "albedo_stderr": float(np.sqrt(np.mean(se**2))),
             "single_rms": float(np.sqrt(np.mean(ss_err**2))), "single_max": float(np.max(np.abs(ss_err))),
             "brdf_rel_rms": float(np.sqrt(np.mean(rel**2))), "brdf_rel_max": float(np.max(np.abs(rel))),
-            "n_slices": int(sel.sum())}
+            "n_slices": int(len(f_sim))}
 
 
 def grade_all(albedo_cols, brdf_cols, models=GRADED_MODELS, progress=lambda msg: None):
-    """Grading rows: every model against every simulated surface (fitted roughness), and the
-    sigma models also at the V-cavity's own sigma."""
+    """Grading rows: every model against every simulated surface, roughness fitted to the albedo
+    and to the BRDF slices, and the sigma models also at the V-cavity's own sigma."""
     rows = []
     for geometry, roughness in surfaces(albedo_cols):
         progress(f"grading {geometry} {roughness:g}")
         for model in models:
-            rows.append(grade_surface(model, albedo_cols, brdf_cols, geometry, roughness))
-            if geometry == "vcavity" and model in ("full_on", "qon", "qon_fujii"):
-                rows.append(grade_surface(model, albedo_cols, brdf_cols, geometry, roughness, fit=False))
+            for fit in FITS:
+                if fit != "same sigma" or (geometry == "vcavity" and model in ("full_on", "qon", "qon_fujii")):
+                    rows.append(grade_surface(model, albedo_cols, brdf_cols, geometry, roughness, fit=fit))
     return rows
 
 
@@ -232,5 +261,5 @@ def eon_colorshift(albedo_cols, geometry, roughness, r, model="eon"):
 
 
 __all__ = ["GRADED_MODELS", "FIT_RHO", "BRDF_RHO", "TABLES", "load", "read_csv", "write_csv",
-           "fit_roughness", "grade_surface", "grade_all", "eon_colorshift", "sim_albedo", "sim_average",
+           "fit_roughness", "fit_roughness_brdf", "FITS", "grade_surface", "grade_all", "eon_colorshift", "sim_albedo", "sim_average",
            "slice_directions", "surfaces"]

@@ -27,7 +27,7 @@ def _tables(directory=None):
     return {name: gr.load(name, directory) for name in gr.TABLES}
 
 
-def _grading_rows(g, fit="fitted"):
+def _grading_rows(g, fit="albedo"):
     n = len(g["model"])
     return [{k: g[k][i] for k in g} for i in range(n) if g["fit"][i] == fit]
 
@@ -57,18 +57,24 @@ def plot_all(table_dir, image_dir, prefix="simulation"):
     paths = []
     geoms = list(GEOMETRY_LABEL)
     rows = _grading_rows(g)
+    brows = _grading_rows(g, "brdf")
+    plt.rcParams.update({"font.size": 8})
     # 1. albedo error and fitted roughness against the simulated roughness
-    fig, axes = plt.subplots(2, 3, figsize=(13, 7), constrained_layout=True)
+    fig, axes = plt.subplots(3, 3, figsize=(13, 10), constrained_layout=True)
     for j, geom in enumerate(geoms):
         for model, color in MODEL_STYLE.items():
             rr = [r for r in rows if r["geometry"] == geom and r["model"] == model]
+            bb = [r for r in brows if r["geometry"] == geom and r["model"] == model]
             x = [r["roughness"] for r in rr]
             axes[0, j].plot(x, [r["albedo_rms"] for r in rr], "o-", color=color, label=model, ms=3)
-            axes[1, j].plot(x, [r["model_roughness"] for r in rr], "o-", color=color, label=model, ms=3)
+            axes[1, j].plot(x, [r["brdf_rel_rms"] for r in bb], "o-", color=color, label=model, ms=3)
+            axes[2, j].plot(x, [r["model_roughness"] for r in rr], "o-", color=color, label=model, ms=3)
+            axes[2, j].plot(x, [r["model_roughness"] for r in bb], "x--", color=color, ms=4)
         axes[0, j].set_title(GEOMETRY_LABEL[geom])
-        axes[0, j].set_ylabel("RMS albedo error (rho = 0.2, 0.5, 0.8)")
-        axes[1, j].set_ylabel("fitted model roughness (sigma or r)")
-        axes[1, j].set_xlabel("simulated roughness")
+        axes[0, j].set_ylabel("RMS albedo error, albedo fit")
+        axes[1, j].set_ylabel("RMS relative BRDF error, BRDF fit")
+        axes[2, j].set_ylabel("fitted roughness (o: albedo fit, x: BRDF fit)")
+        axes[2, j].set_xlabel("simulated roughness")
     axes[0, 0].legend(fontsize=8)
     p = image_dir / f"{prefix}_albedo_error.png"
     fig.savefig(p, dpi=90); plt.close(fig); paths.append(p)
@@ -87,8 +93,8 @@ def plot_all(table_dir, image_dir, prefix="simulation"):
             axes[1, j].plot(cs["rho"][sel], cs["ratio_eon"][sel], "--", color=c)
         axes[0, j].plot([0, 1], [0, 1], ":", color="gray", lw=0.8)
         axes[0, j].set_title(GEOMETRY_LABEL[geom])
-        axes[0, j].set_ylabel("multi-bounce colour: E_ms(rho)/E_ms(1); EON rho_ms (dashed)")
-        axes[1, j].set_ylabel("<E>(rho) / rho (solid: sim, dashed: EON)")
+        axes[0, j].set_ylabel("E_ms(rho) / E_ms(1) (dashed: EON rho_ms)")
+        axes[1, j].set_ylabel("<E>(rho) / rho (dashed: EON)")
         axes[1, j].set_xlabel("microfacet albedo rho")
         axes[0, j].legend(fontsize=7)
     p = image_dir / f"{prefix}_colorshift.png"
@@ -106,12 +112,12 @@ def plot_all(table_dir, image_dir, prefix="simulation"):
         axes[j].errorbar(to, b["f"][sel], yerr=b["f_se"][sel], fmt="ko", ms=3, label="simulation")
         axes[j].plot(to, b["f1"][sel], "k:", label="simulation, 1 bounce")
         wi, wo = gr.slice_directions(np.radians(np.full(200, 60.0)), np.radians(np.linspace(-89, 89, 200)))
-        for r in rows:
+        for r in brows:
             if r["geometry"] == geom and np.isclose(r["roughness"], target):
                 f = evaluate(r["model"], wi, wo, r["model_roughness"], [gr.BRDF_RHO])[:, 0]
                 axes[j].plot(np.linspace(-89, 89, 200), f, color=MODEL_STYLE[r["model"]],
                              label=f"{r['model']} ({r['model_roughness']:.2f})")
-        axes[j].set_title(f"{GEOMETRY_LABEL[geom]} = {target:g}, theta_i = 60 deg, rho = {gr.BRDF_RHO:g}")
+        axes[j].set_title(f"{GEOMETRY_LABEL[geom]} = {target:g}; theta_i 60, rho {gr.BRDF_RHO:g}", fontsize=8)
         axes[j].set_xlabel("theta_o (deg; < 0: towards the light)")
         axes[j].set_ylabel("f")
         axes[j].legend(fontsize=7)
@@ -172,34 +178,41 @@ def build(ctx) -> SectionResult:
                 measured=float(worst["albedo_rms"]), threshold=0.02, reference=gr.TABLES["grading"],
                 detail=f"worst at roughness {worst['roughness']:g} (r = {worst['model_roughness']:.3f}); "
                        "threshold: the documented agreement, not a physical law"))
-    # tables: per geometry, roughness x model albedo RMS (fitted), and the fitted roughness
+    # tables: per geometry, roughness x model: albedo RMS at the albedo fit, BRDF error at the BRDF fit
+    brows = _grading_rows(g, "brdf")
     for geom in GEOMETRY_LABEL:
         rough = sorted({r["roughness"] for r in rows if r["geometry"] == geom})
-        table_rows = []
-        for s in rough:
-            cells = [s]
-            for model in gr.GRADED_MODELS:
-                r = next(r for r in rows if r["geometry"] == geom and r["model"] == model and r["roughness"] == s)
-                cells.append(f"{r['albedo_rms']:.4f} ({r['model_roughness']:.3f})")
-            table_rows.append(cells)
-        res.tables.append(Table(
-            caption=f"{GEOMETRY_LABEL[geom]}: RMS error of the directional albedo (rho = 0.2, 0.5, 0.8; "
-                    f"10 mu) at the best-fitting model roughness (in brackets)",
-            columns=[GEOMETRY_LABEL[geom].split(", ")[-1]] + list(gr.GRADED_MODELS), rows=table_rows))
+        name = GEOMETRY_LABEL[geom].split(", ")[-1]
+        for label, rr, key in (("RMS error of the directional albedo (rho = 0.2, 0.5, 0.8; 10 mu) at the "
+                                "roughness fitted to it", rows, "albedo_rms"),
+                               (f"RMS relative error of the in-plane BRDF slices (rho = {gr.BRDF_RHO:g}, theta_i = "
+                                "30/60/80 deg, 18 theta_o) at the roughness fitted to them", brows, "brdf_rel_rms")):
+            table_rows = []
+            for sv in rough:
+                cells = [sv]
+                for model in gr.GRADED_MODELS:
+                    r = next(r for r in rr if r["geometry"] == geom and r["model"] == model and r["roughness"] == sv)
+                    cells.append(f"{r[key]:.4f} ({r['model_roughness']:.3f})")
+                table_rows.append(cells)
+            res.tables.append(Table(caption=f"{GEOMETRY_LABEL[geom]}: {label} (fitted roughness in brackets)",
+                                    columns=[name] + list(gr.GRADED_MODELS), rows=table_rows))
     # sigma <-> r correspondence
     fit_rows = []
     for geom in GEOMETRY_LABEL:
-        for model in ("eon", "fon", "full_on"):
-            rr = [r for r in rows if r["geometry"] == geom and r["model"] == model]
-            law = fit_power_law([r["roughness"] for r in rr], [r["model_roughness"] for r in rr]) \
-                if model != "full_on" else None
-            sat = [r["roughness"] for r in rr if r["model_roughness"] >= 0.99 * (1.0 if model != "full_on" else 1.5707963)]
-            fit_rows.append([geom, model, ", ".join(f"{r['roughness']:g}->{r['model_roughness']:.3f}" for r in rr),
-                             "" if law is None else f"r = ({GEOMETRY_LABEL[geom].split(', ')[-1]}/{law[0]:.3f})^{law[1]:.2f}",
-                             f">= {min(sat):g}" if sat else "none"])
-    res.tables.append(Table(caption="Best-fitting model roughness for each simulated surface (albedo fit)",
-                            columns=["geometry", "model", "simulated -> fitted", "power-law fit", "saturates (r = 1) from"],
-                            rows=fit_rows))
+        name = GEOMETRY_LABEL[geom].split(", ")[-1]
+        for model in ("eon", "fon"):
+            for fit, rr_all in (("albedo", rows), ("brdf", brows)):
+                rr = [r for r in rr_all if r["geometry"] == geom and r["model"] == model]
+                law = fit_power_law([r["roughness"] for r in rr], [r["model_roughness"] for r in rr])
+                sat = [r["roughness"] for r in rr if r["model_roughness"] >= 0.99]
+                fit_rows.append([geom, model, fit,
+                                 ", ".join(f"{r['roughness']:g}->{r['model_roughness']:.3f}" for r in rr),
+                                 "" if law is None else f"r = ({name}/{law[0]:.3f})^{law[1]:.2f}",
+                                 f">= {min(sat):g}" if sat else "none"])
+    res.tables.append(Table(caption="Best-fitting r for each simulated surface (fitted to the albedo or to the BRDF "
+                                    "slices) and a power law through the unsaturated points",
+                            columns=["geometry", "model", "fit", "simulated -> fitted r", "power-law fit",
+                                     "saturates (r = 1) from"], rows=fit_rows))
     # colour shift
     _, cs = t["colorshift"]
     cs_rows = []
@@ -223,7 +236,7 @@ def build(ctx) -> SectionResult:
                    "colorshift": "Colour of multiply scattered light (top) and albedo nonlinearity <E>/rho (bottom): "
                                  "simulation (solid) vs EON at its fitted r (dashed)",
                    "brdf_slices": "In-plane BRDF slices: simulation (points, +- 1 standard error) vs the models at "
-                                  "their fitted roughness"}[p.stem.replace("simulation_", "")]
+                                  "the roughness fitted to the slices"}[p.stem.replace("simulation_", "")]
         res.figures.append(Figure(file=p.name, caption=caption))
     res.notes.append(
         "Simulated by openpbr_diffuse.simulation (Monte Carlo with every interreflection; V-cavities after Oren & "
