@@ -29,8 +29,9 @@ def test_single_bounce_quadrature_detects_a_wrong_geometry():
 @pytest.mark.parametrize("sigma", [0.2, 0.35, 0.5])
 def test_single_bounce_close_to_oren_nayar_f1(sigma):
     """Oren-Nayar's f1 (the rho-linear term of full_on) was fitted to this very geometry:
-    its albedo agrees with the exact single bounce within a few per cent for moderate sigma
-    (measured: <= 1.7 % for sigma <= 0.5 over mu in [0.1, 1]; the fit's own accuracy)."""
+    its albedo agrees with the exact single bounce to a few hundredths (measured: max abs
+    difference 0.008 / 0.017 / 0.022 / 0.015 at sigma = 0.1 / 0.2 / 0.3 / 0.5 over mu in
+    [0.05, 1]: the accuracy of their functional fit)."""
     mu = np.array([0.1, 0.3, 0.6, 1.0])
     exact = np.array([single_bounce_albedo(m, sigma)[0] for m in mu])
     # e_g of full_on: the albedo of the rho-linear term (rho -> 0 limit of E / rho)

@@ -10,7 +10,7 @@ deviation sigma (their Eq. for L_r integrates P(theta_a) L_rp sin(theta_a) over 
 hemisphere of facet normals), truncated to theta_a < pi/2; the groove azimuth is uniform.
 (A half-Gaussian density of theta_a itself, without the sin(theta_a) of the solid angle,
 gives single-scattering albedos ~10 % above Oren-Nayar's fitted f1 at sigma = 0.5; with it,
-within ~1-3 %: ``tests/test_simulation_vcavity.py``.)  Grooves do not shadow or mask each other: light
+they agree within 0.008-0.026: ``tests/test_simulation_vcavity.py``.)  Grooves do not shadow or mask each other: light
 enters and leaves through the groove's opening in the macro plane z = 0.
 
 A groove is infinitely long, so a path is traced in its 2-D cross-section: the facets are

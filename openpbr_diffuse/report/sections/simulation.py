@@ -133,7 +133,6 @@ def _live_check(albedo_cols, quick):
     from ...simulation import grading as gr
 
     paths = 20_000 if quick else 100_000
-    mu = 0.5 if False else None
     sel = (albedo_cols["geometry"] == "vcavity") & np.isclose(albedo_cols["roughness"], 0.4) \
         & (albedo_cols["kind"] == "directional") & np.isclose(albedo_cols["rho"], 0.8)
     k = np.flatnonzero(sel)
