@@ -8,6 +8,7 @@ Prints, per mu, the directional albedo in total and per bounce order (1, 2, >= 3
 standard errors (``--json``: a ``rows`` list with mu, albedo, albedo_by_order, stderr).
 """
 import json
+import math
 
 import numpy as np
 
@@ -26,13 +27,26 @@ def add_parser(subparsers):
     p.add_argument("--average", action="store_true", help="average albedo <E> instead of E(mu)")
     p.add_argument("--rho", type=float, nargs="+", metavar="RHO", default=[1.0],
                    help="microfacet albedo per channel in [0, 1] (default 1)")
-    p.add_argument("--paths", type=int, default=1_000_000, metavar="N", help="paths per mu (default 10^6)")
+    p.add_argument("--paths", type=_count, default=1_000_000, metavar="N", help="paths per mu (default 10^6; 1e6 accepted)")
     p.add_argument("--seed", type=int, default=0, metavar="K", help="seed (default 0)")
     p.add_argument("--workers", type=int, default=None, metavar="W", help="local threads (default: all cores)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="run the chunks on this Dask distributed scheduler")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(run=run)
     return p
+
+
+def _count(text):
+    """An integer count, also written as 1e6."""
+    import argparse
+
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value.is_integer()):
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text!r}")
+    return int(value)
 
 
 def _usage(message):

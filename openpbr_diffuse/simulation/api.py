@@ -51,6 +51,8 @@ def _check_geometry(geometry, roughness):
 
 
 def _check_count(name, value, minimum):
+    if isinstance(value, (float, np.floating)) and math.isfinite(value) and float(value).is_integer():
+        value = int(value)  # paths=1e6
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
         raise TypeError(f"{name} must be an integer >= {minimum}, got {value!r}")
     if value < minimum:
