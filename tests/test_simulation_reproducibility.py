@@ -57,3 +57,13 @@ def test_missing_dask_is_a_clear_error(monkeypatch):
     monkeypatch.setattr(builtins, "__import__", no_dask)
     with pytest.raises(ImportError, match="dask"):
         simulate_albedo("vcavity", 0.5, [0.5], paths=10, scheduler="tcp://127.0.0.1:1")
+
+
+def test_brdf_value_does_not_depend_on_the_other_view_directions():
+    """Next-event estimation draws no random numbers: f(wi, wo) is the same whichever other
+    wo share its paths."""
+    wi = np.array([0.6, 0.0, 0.8])
+    wo = np.array([[0.0, 0.6, 0.8], [-0.8, 0.0, 0.6], [0.28, 0.0, 0.96]])
+    many = simulate_brdf("smith-ggx", 0.5, wi, wo, rho=[0.7, 0.2], paths=5000, seed=8)
+    one = simulate_brdf("smith-ggx", 0.5, wi, wo[1], rho=[0.7, 0.2], paths=5000, seed=8)
+    assert np.array_equal(many.f[1], one.f[0]) and np.array_equal(many.stderr[1], one.stderr[0])
