@@ -17,7 +17,6 @@ albedos), or the RMS relative error of the in-plane BRDF slices at ``BRDF_RHO`` 
 from __future__ import annotations
 
 import csv
-import math
 from pathlib import Path
 
 import numpy as np

@@ -10,8 +10,9 @@ deviation sigma (their Eq. for L_r integrates P(theta_a) L_rp sin(theta_a) over 
 hemisphere of facet normals), truncated to theta_a < pi/2; the groove azimuth is uniform.
 (A half-Gaussian density of theta_a itself, without the sin(theta_a) of the solid angle,
 gives single-scattering albedos ~10 % above Oren-Nayar's fitted f1 at sigma = 0.5; with it,
-they agree within 0.008-0.026: ``tests/test_simulation_vcavity.py``.)  Grooves do not shadow or mask each other: light
-enters and leaves through the groove's opening in the macro plane z = 0.
+they agree within 0.008-0.026: ``tests/test_simulation_vcavity.py``.)  Grooves do not
+shadow or mask each other: light enters and leaves through the groove's opening, which lies
+in the macro plane.
 
 A groove is infinitely long, so a path is traced in its 2-D cross-section: the facets are
 z = tan(theta_a) |x|, the opening is x in [-1, 1] at z = h = tan(theta_a) (coordinates
