@@ -5,6 +5,7 @@
     python tools/make_simulation_tables.py --quick      # a small run (minutes less; not shipped)
     python tools/make_simulation_tables.py --grade-only # re-grade from the shipped simulation tables
     python tools/make_simulation_tables.py --out DIR    # somewhere else than openpbr_diffuse/data
+    python tools/make_simulation_tables.py --check      # regenerate into a temporary folder, compare
 
 Writes ``simulation_albedo.csv``, ``simulation_brdf.csv`` (Monte Carlo, with standard
 errors), ``simulation_grading.csv``, ``simulation_colorshift.csv`` and the figures
@@ -162,7 +163,21 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="10x fewer paths")
     ap.add_argument("--grade-only", action="store_true", help="re-grade and re-plot from existing simulation tables")
     ap.add_argument("--no-plots", action="store_true")
+    ap.add_argument("--check", action="store_true",
+                    help="regenerate into a temporary folder and compare with the tables in --out (exit 1 if they differ)")
     args = ap.parse_args(argv)
+    if args.check:
+        import tempfile
+
+        with tempfile.TemporaryDirectory() as tmp:
+            main(["--out", tmp, "--no-plots"] + (["--quick"] if args.quick else []))
+            bad = []
+            for name in gr.TABLES.values():
+                rows = lambda path: [line for line in Path(path).read_text().splitlines() if not line.startswith("#")]
+                same = rows(Path(tmp) / name) == rows(args.out / name)
+                log(f"{name}: {'identical' if same else 'DIFFERS'}")
+                bad += [] if same else [name]
+        return 1 if bad else 0
     args.out.mkdir(parents=True, exist_ok=True)
     start = time.monotonic()
     if not args.grade_only:
@@ -179,4 +194,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())
