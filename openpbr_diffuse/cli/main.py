@@ -19,6 +19,7 @@ COMMANDS = {
     "colorshift": "colorshift",
     "eval": "eval",
     "render": "render",
+    "simulate": "simulate",
 }
 
 
