@@ -175,7 +175,7 @@ def test_glsl_adapter_passes_the_right_function(glsl_file, capsys):
     status, result = check(capsys, "--glsl", str(glsl_file), "--function", "f_test", "--albedo-function", "E_test")
     q = by_quantity(result)
     assert status == 0 and result["passed"], result
-    assert q["brdf"]["n"] == 396 and q["albedo"]["n"] == 96
+    assert q["brdf"]["n"] == 396 and q["albedo"]["n"] == 84
 
 
 @needs_gl

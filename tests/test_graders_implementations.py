@@ -5,10 +5,11 @@ README section "Graded implementations"), each backed by a reason in the code un
 
 - MaterialX GLSL clamps L.V to [M_FLOAT_EPS, 1] (mx_oren_nayar_diffuse_bsdf.glsl) -> ldotv_clamped;
   its albedo conforms.
-- The EON paper's listings conform for f and for the sampler; diffuse_brdf_albedo returns 0 at
-  mu_o = 0 (its horizon test z < 1e-7) where the vectors expect the grazing limit E = rho.
+- The EON paper's listings conform for f, the albedo and the sampler (diffuse_brdf_albedo
+  returns 0 at exactly mu_o = 0, its horizon test z < 1e-7: the vectors, version 2, leave
+  that convention out).
 - OpenPBR-viewer evaluates the lobe at white albedo and tints the lobe weight -> white_tint,
-  for f and inside the surface; its albedo also returns 0 at mu_o = 0.
+  for f, its albedo and inside the surface.
 - Adobe's diffuse lobe is EON with the Eq. 14 fit (eon_approx) and conforms; it samples the lobe
   with cosine sampling; its surface scales the diffuse lobe reciprocally and selects lobes from
   rho x (1 - E_spec) estimates, so weight x albedo and probability differ from OpenPBRSurface.
@@ -78,9 +79,10 @@ def test_eon_paper_listings(graded):
     r = graded("eon-diffuse-glsl")
     q = quantities(r)
     assert q["brdf"].passed and q["brdf"].max_abs_error < 5e-5
-    # the albedo fails only where mu_o = 0: the listing's horizon test returns 0 there
-    assert not q["albedo"].passed and q["albedo"].diagnosis is None
-    assert "12 of 96 rows" in q["albedo"].detail and "(mu = 0)" in q["albedo"].detail
+    # the vectors stop at mu = 0.001 (at exactly mu = 0 the listing's horizon test returns 0,
+    # a defensible convention): the authors' own albedo conforms
+    assert q["albedo"].passed and q["albedo"].max_abs_error < 5e-5
+    assert r.passed
     assert q["sampler pdf"].passed and q["sampler pdf"].diagnosis is None      # matches the "eon" strategy
     assert q["sampler chi2"].passed
     assert len(r.version["sha256"]) == 64 and r.version["files"] == ["main.glsl"]
@@ -93,7 +95,7 @@ def test_openpbr_viewer_tints_white(graded):
     r = graded("openpbr-viewer-glsl")
     q = quantities(r)
     assert not q["brdf"].passed and q["brdf"].diagnosis == "white_tint"
-    assert not q["albedo"].passed and "mu = 0" in q["albedo"].detail
+    assert not q["albedo"].passed and q["albedo"].diagnosis == "white_tint"
     assert q["sampler pdf"].passed and q["sampler pdf"].diagnosis is None
     assert q["sampler chi2"].passed
     assert not q["surface weight x albedo"].passed and q["surface weight x albedo"].diagnosis == "white_tint"
