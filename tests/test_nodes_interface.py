@@ -106,7 +106,7 @@ class TestOpenPBRInterface:
     def test_options_are_not_inputs(self, library):
         lib = _mx_inputs(library, self.NODEDEF)
         extra = set(inspect.signature(OpenPBRSurface).parameters) - set(lib)
-        assert extra == {"selection", "specular_sampling", "multiscatter"}
+        assert extra == {"selection", "specular_sampling", "multiscatter", "diffuse_model"}
 
     def test_default_surface_uses_library_values(self):
         s = OpenPBRSurface()
