@@ -445,6 +445,20 @@ def total_score(active, p, o, st, mu, dmodel, ms, sel):
 
 
 @kernel
+def _score_if(k, active, p, o, st, mu, dmodel, ms, sel):
+    return lobe_score(k, p, o, st, mu, dmodel, ms, sel) if active & (1 << k) else 0.0
+
+
+@kernel
+def all_scores(active, p, o, st, mu, dmodel, ms, sel):
+    """The 8 lobe scores (0 for inactive slots) as a tuple, computed once per row."""
+    return (_score_if(0, active, p, o, st, mu, dmodel, ms, sel), _score_if(1, active, p, o, st, mu, dmodel, ms, sel),
+            _score_if(2, active, p, o, st, mu, dmodel, ms, sel), _score_if(3, active, p, o, st, mu, dmodel, ms, sel),
+            _score_if(4, active, p, o, st, mu, dmodel, ms, sel), _score_if(5, active, p, o, st, mu, dmodel, ms, sel),
+            _score_if(6, active, p, o, st, mu, dmodel, ms, sel), _score_if(7, active, p, o, st, mu, dmodel, ms, sel))
+
+
+@kernel
 def probability(sk, S, K):
     """P_k = s_k / S; 1/K when every score is 0 (black surface: any distribution will do)."""
     return sk / S if S > 0.0 else 1.0 / K
@@ -582,7 +596,12 @@ def _sample_drive(active, dmodel, sel, ms, vndf, C, R, p, ps, wo, u, wi, out):
         ox, oy, oz = _F(wo[j]), _F(wo[j + _U(1)]), _F(wo[j + _U(2)])
         mu = min(max(oz, 0.0), 1.0)
         st = row_state(p, o, mu, C, R, dmodel, ms)
-        S, K = total_score(active, p, o, st, mu, dmodel, ms, sel)
+        ss = all_scores(active, p, o, st, mu, dmodel, ms, sel)
+        S = 0.0
+        K = 0
+        for k in range(N_LOBES):
+            S += ss[k]
+            K += 1 if active & (1 << k) else 0
         u0 = _F(u[ju])
         # choose the lobe: the first whose cumulative probability exceeds u0
         chosen = -1
@@ -593,7 +612,7 @@ def _sample_drive(active, dmodel, sel, ms, vndf, C, R, p, ps, wo, u, wi, out):
             if active & (1 << k):
                 last = k
                 if chosen < 0:
-                    Pk = probability(lobe_score(k, p, o, st, mu, dmodel, ms, sel), S, K)
+                    Pk = probability(ss[k], S, K)
                     if u0 < lo + Pk:
                         chosen = k
                         Pc = Pk
@@ -601,7 +620,7 @@ def _sample_drive(active, dmodel, sel, ms, vndf, C, R, p, ps, wo, u, wi, out):
                         lo += Pk
         if chosen < 0:   # rounding left the CDF's end below u0
             chosen = last
-            Pc = probability(lobe_score(last, p, o, st, mu, dmodel, ms, sel), S, K)
+            Pc = probability(ss[last], S, K)
         if ud == 3:
             u1, u2 = _F(u[ju + _U(1)]), _F(u[ju + _U(2)])
         else:
@@ -612,7 +631,7 @@ def _sample_drive(active, dmodel, sel, ms, vndf, C, R, p, ps, wo, u, wi, out):
         if oz > 0.0 and ok and own > 0.0:
             for k in range(N_LOBES):
                 if active & (1 << k):
-                    Pk = probability(lobe_score(k, p, o, st, mu, dmodel, ms, sel), S, K)
+                    Pk = probability(ss[k], S, K)
                     if k == chosen:
                         q += Pk * own
                     elif Pk > 0.0:
