@@ -219,14 +219,15 @@ def diffuse_albedo_terms(dmodel, mu, r):
 
 
 @kernel
-def row_state(p, o, mu, C, R, dmodel, ms):
+def row_state(p, o, mu, C, R, dmodel, ms, albedos=True):
     """Per-row quantities shared by every lobe at mu_o: (E1_s, E5_s, E6_s, E_spec, E1_c,
     E_coat, E_fuzz, e_g, e_h, <E_F>, E_qon).
 
     E1/E5/E6: GGX basis albedos of the base specular roughness; E_spec, E_coat: albedos of
     the dielectric specular and coat lobes (with the multiple-scattering factor); E_fuzz:
     the sheen albedo; e_g, e_h, <E_F>: the diffuse albedo terms; E_qon: the QON albedo of
-    the thin-walled subsurface reflection.  Layers that are off are not looked up.
+    the thin-walled subsurface reflection (0 unless ``albedos``).  Layers that are off are
+    not looked up.
     """
     E1s, E5s, E6s, Es = layer_albedos(p, o, P_TAB_S, C, R, mu, p[o + P_X_S], ms)
     E1c, Ec, Ef, Eq = 1.0, 0.0, 0.0, 0.0
@@ -234,8 +235,10 @@ def row_state(p, o, mu, C, R, dmodel, ms):
         E1c, _, _, Ec = layer_albedos(p, o, P_TAB_C, C, R, mu, p[o + P_X_C], ms)
     if p[o + P_FUZZ_W] > 0.0:
         Ef = sheen_albedo(mu, p[o + P_FUZZ_R])
-    eg, eh, avg = diffuse_albedo_terms(dmodel, mu, p[o + P_R_DIFF])
-    if p[o + P_THIN] > 0.0 and p[o + P_SSS_W] > 0.0:
+    eg, eh, avg = 0.0, 0.0, 0.0
+    if albedos:   # the weights do not need the diffuse albedos (eval does not)
+        eg, eh, avg = diffuse_albedo_terms(dmodel, mu, p[o + P_R_DIFF])
+    if albedos and p[o + P_THIN] > 0.0 and p[o + P_SSS_W] > 0.0:
         Eq, _, _ = diffuse_albedo_terms(D_QON, mu, p[o + P_R_DIFF])
     return E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, avg, Eq
 
@@ -533,7 +536,7 @@ def _eval_drive(active, only, dmodel, ms, C, R, p, ps, wi, wo, out):
         ix, iy, iz = _F(wi[j]), _F(wi[j + _U(1)]), _F(wi[j + _U(2)])
         ox, oy, oz = _F(wo[j]), _F(wo[j + _U(1)]), _F(wo[j + _U(2)])
         mu = min(max(oz, 0.0), 1.0)
-        st = row_state(p, o, mu, C, R, dmodel, ms)
+        st = row_state(p, o, mu, C, R, dmodel, ms, False)
         a0 = a1 = a2 = 0.0
         if oz > 0.0:
             for k in range(N_LOBES):
