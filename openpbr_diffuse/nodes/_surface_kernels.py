@@ -25,7 +25,7 @@ from .._launch import _F, _U, compiled, launch, rows
 from ..microfacet import fresnel
 from ..microfacet import kernels as mf
 from ..microfacet.sheen import sheen_albedo, sheen_density, sheen_sample
-from ..microfacet.tables import MU_AXIS, R_AXIS, X_AXIS, catmull_rom_at, conductor_basis_pre, dielectric_albedo_pre, node_at
+from ..microfacet.tables import MU_AXIS, R_AXIS, X_AXIS, catmull_rom_at, conductor_basis_pre, node_at
 from ..models.eon import eon_albedo_terms, eon_terms, rho_ms
 from ..models.qon import qon_AB, qon_albedo, qon_terms
 from ..sampling.ltc import from_frame, ltc_frame, to_frame
@@ -74,7 +74,12 @@ P_THIN = 42               # geometry_thin_walled (0/1)
 # dielectric table's roughness node and 4 weights, its x node and 4 weights
 P_TAB_S = 43              # 15
 P_TAB_C = 58              # 15
-N_PARAMS = 73
+# the dielectric table collapsed on those two axes: E_diel/E1 at every (padded) mu node of the
+# table, for the base specular and the coat; per row only a 4-point cubic in mu remains
+N_CURVE = 35              # mu nodes of the dielectric table + 2 ghost nodes
+P_CURVE_S = 73
+P_CURVE_C = P_CURVE_S + N_CURVE
+N_PARAMS = P_CURVE_C + N_CURVE
 
 
 # --------------------------------------------------------------------------- packing
@@ -110,7 +115,20 @@ def _table_axes(out, q, r, x, nCr, nRr, nRx):
     _axes(out, q + 10, x, nRx, X_AXIS)
 
 
-def _pack_drive(raw, out, nCr, nRr, nRx):
+@kernel
+def _curve(out, q, t, R):
+    """out[q + m] = the dielectric ratio table at the (roughness, x) of the axes at out[t:]
+    for every padded mu node m (the same tensor-product Catmull-Rom, summed over two axes)."""
+    ir, ix = int(out[t + 5]), int(out[t + 10])
+    for m in range(N_CURVE):
+        v = 0.0
+        for a in range(4):
+            for b in range(4):
+                v += out[t + 6 + a] * out[t + 11 + b] * R[ir + a, ix + b, m]
+        out[q + m] = v
+
+
+def _pack_drive(raw, out, nCr, nRr, nRx, R):
     """Pack rows of RAW inputs into parameter rows (the reference graph's derived values);
     returns (mask of the lobes active in some row, warning bits)."""
     m = raw.shape[0] // N_RAW
@@ -181,6 +199,8 @@ def _pack_drive(raw, out, nCr, nRr, nRx):
         out[o + P_THIN] = thin
         _table_axes(out, o + P_TAB_S, r_eff, x, nCr, nRr, nRx)
         _table_axes(out, o + P_TAB_C, r_c, xc, nCr, nRr, nRx)
+        _curve(out, o + P_CURVE_S, o + P_TAB_S, R)
+        _curve(out, o + P_CURVE_C, o + P_TAB_C, R)
         # lobes that can be non-zero
         diel = 1.0 - M
         sc_any = raw[a + 6] > 0.0 or raw[a + 7] > 0.0 or raw[a + 8] > 0.0
@@ -196,13 +216,18 @@ pack_drive = numba.njit(cache=True, error_model="numpy")(_pack_drive)
 
 
 @kernel
-def layer_albedos(p, o, t, C, R, mu, x, ms):
-    """(E1, E5, E6, E) of a GGX layer whose table axes start at p[o + t] (P_TAB_S / P_TAB_C):
-    the basis albedos and the dielectric lobe's albedo with the multiple-scattering factor."""
+def layer_albedos(p, o, t, q, mu, C, x, ms):
+    """(E1, E5, E6, E) of a GGX layer whose table axes start at p[o + t] (P_TAB_S / P_TAB_C)
+    and whose collapsed dielectric curve at p[o + q]: the basis albedos and the dielectric
+    lobe's albedo with the multiple-scattering factor (0 at x = 0: index-matched)."""
     E1, E5, E6 = conductor_basis_pre(C, int(p[o + t]), p[o + t + 1], p[o + t + 2], p[o + t + 3], p[o + t + 4], mu)
-    E = dielectric_albedo_pre(R, int(p[o + t + 5]), p[o + t + 6], p[o + t + 7], p[o + t + 8], p[o + t + 9],
-                              int(p[o + t + 10]), p[o + t + 11], p[o + t + 12], p[o + t + 13], p[o + t + 14],
-                              x, mu, E1)
+    E = 0.0
+    if x > 0.0:
+        im, tm = node_at(mu, N_CURVE - 2, MU_AXIS)
+        w0, w1, w2, w3 = catmull_rom_at(tm)
+        b = o + q + im
+        v = w0 * p[b] + w1 * p[b + 1] + w2 * p[b + 2] + w3 * p[b + 3]
+        E = min(max(v, 0.0), 1.0) * E1
     return E1, E5, E6, E * mf.multiscatter(x * x, E1, ms)
 
 
@@ -229,10 +254,10 @@ def row_state(p, o, mu, C, R, dmodel, ms, albedos=True):
     the thin-walled subsurface reflection (0 unless ``albedos``).  Layers that are off are
     not looked up.
     """
-    E1s, E5s, E6s, Es = layer_albedos(p, o, P_TAB_S, C, R, mu, p[o + P_X_S], ms)
+    E1s, E5s, E6s, Es = layer_albedos(p, o, P_TAB_S, P_CURVE_S, mu, C, p[o + P_X_S], ms)
     E1c, Ec, Ef, Eq = 1.0, 0.0, 0.0, 0.0
     if p[o + P_COAT_W] > 0.0:
-        E1c, _, _, Ec = layer_albedos(p, o, P_TAB_C, C, R, mu, p[o + P_X_C], ms)
+        E1c, _, _, Ec = layer_albedos(p, o, P_TAB_C, P_CURVE_C, mu, C, p[o + P_X_C], ms)
     if p[o + P_FUZZ_W] > 0.0:
         Ef = sheen_albedo(mu, p[o + P_FUZZ_R])
     eg, eh, avg = 0.0, 0.0, 0.0
@@ -663,9 +688,13 @@ def _driver(f, n):
 
 @functools.cache
 def tables():
+    """(C, R): the padded GGX albedo tables (``microfacet.tables.padded_tables``)."""
     from ..microfacet.tables import padded_tables
 
-    return padded_tables()
+    C, R = padded_tables()
+    if R.shape[2] != N_CURVE:   # the parameter layout reserves N_CURVE mu nodes
+        raise RuntimeError(f"dielectric albedo table has {R.shape[2] - 2} mu nodes; N_CURVE expects {N_CURVE - 2}")
+    return C, R
 
 
 def _run(f, head, params, lead, dirs, outs):

@@ -146,7 +146,7 @@ def pack_parameters(p):
     out = np.empty(lead + (sk.N_PARAMS,))
     C, R = sk.tables()
     mask, warn = sk.pack_drive(np.ascontiguousarray(raw, dtype=np.float64).reshape(-1), out.reshape(-1),
-                               C.shape[0] - 2, R.shape[0] - 2, R.shape[1] - 2)
+                               C.shape[0] - 2, R.shape[0] - 2, R.shape[1] - 2, R)
     return out, mask, warn
 
 
