@@ -45,6 +45,14 @@ def _rgb(a):
     return "(" + ", ".join(f"{x:.6f}" for x in a) + ")"
 
 
+def _node_defaults(node_class):
+    from ..readers import mxlib
+
+    nd = {"OpenPBRSurface": "ND_open_pbr_surface_surfaceshader",
+          "OrenNayarDiffuseBSDF": "ND_oren_nayar_diffuse_bsdf"}.get(node_class)
+    return {n: v for n, (t, v, g) in mxlib.inputs(nd).items()} if nd else {}
+
+
 def run(args):
     from ..readers import WORKING_SPACE
     from ..readers.evaluate import evaluate
@@ -81,13 +89,14 @@ def run(args):
                                                                        "weight", "diffuseColor"):
                 continue
             print(f"    {name} = {_fmt(p.value)}    <- {p.provenance}")
-        # node inputs that differ from the shader's own (mapped from another shader, or clamped)
+        # node inputs that differ from the shader's own (mapped from another shader, or
+        # clamped); without --all, mapped values equal to the node's defaults are not shown
         shown = False
+        node_defaults = _node_defaults(m.node_class)
         for name, p in m.node_inputs.items():
             own = m.parameters.get(name)
-            if own is not None and own.value == p.value and not args.all:
-                continue
-            if p.kind == "default" and not args.all:
+            if not args.all and (p.kind == "default" or (own is not None and own.value == p.value)
+                                 or (own is None and node_defaults.get(name) == p.value)):
                 continue
             if not shown:
                 print(f"  {m.node_class} inputs (mapped / clamped):")
