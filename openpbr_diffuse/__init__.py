@@ -10,9 +10,10 @@ from .albedo.tables import reference_albedo, reference_average_albedo
 from .models import COLOR_MODES, MODELS, average_albedo, directional_albedo, evaluate
 from .nodes import OpenPBRSurface, OrenNayarDiffuseBSDF
 from .sampling import STRATEGIES, pdf, sample, sample_rng
+from .readers import BUNDLED_MATERIALS, load_materials
 from .simulation import simulate_albedo, simulate_average_albedo, simulate_brdf
 
 __all__ = ["__version__", "MODELS", "COLOR_MODES", "evaluate", "directional_albedo", "average_albedo",
            "reference_albedo", "reference_average_albedo", "STRATEGIES", "sample", "pdf", "sample_rng",
-           "OrenNayarDiffuseBSDF", "OpenPBRSurface"]
-__all__ += ["simulate_albedo", "simulate_average_albedo", "simulate_brdf"]
+           "OrenNayarDiffuseBSDF", "OpenPBRSurface", "load_materials", "BUNDLED_MATERIALS",
+           "simulate_albedo", "simulate_average_albedo", "simulate_brdf"]

@@ -45,6 +45,14 @@ def _rgb(a):
     return "(" + ", ".join(f"{x:.6f}" for x in a) + ")"
 
 
+def _node_defaults(node_class):
+    from ..readers import mxlib
+
+    nd = {"OpenPBRSurface": "ND_open_pbr_surface_surfaceshader",
+          "OrenNayarDiffuseBSDF": "ND_oren_nayar_diffuse_bsdf"}.get(node_class)
+    return {n: v for n, (t, v, g) in mxlib.inputs(nd).items()} if nd else {}
+
+
 def run(args):
     from ..readers import WORKING_SPACE
     from ..readers.evaluate import evaluate
@@ -65,8 +73,6 @@ def run(args):
         }
         print(json.dumps(doc, allow_nan=False))
         return 0
-    from ..readers.mapping import family
-
     for m, r in results:
         print(f"# {m.path}  [{m.shader_id or 'no shader'}]  from {m.file}")
         if not m.supported:
@@ -77,18 +83,25 @@ def run(args):
         print(f"  node: {m.node_class}" + (f" (diffuse {m.diffuse_model})" if m.diffuse_model else "")
               + f"; colours in {WORKING_SPACE}")
         print("  parameters:")
-        modelled = set(m.node_inputs)
         for name, p in m.parameters.items():
             if not args.all and p.kind == "default" and name not in ("base_color", "base_diffuse_roughness",
                                                                        "base_weight", "color", "roughness",
                                                                        "weight", "diffuseColor"):
                 continue
             print(f"    {name} = {_fmt(p.value)}    <- {p.provenance}")
-        if m.parameters.keys() != modelled:
-            mapped = {n: p for n, p in m.node_inputs.items() if n not in m.parameters or p.kind == "mapped"}
-            for name, p in mapped.items():
-                if args.all or p.value != m.node_inputs.get(name, p).value or name.startswith("base"):
-                    print(f"    -> {name} = {_fmt(p.value)}")
+        # node inputs that differ from the shader's own (mapped from another shader, or
+        # clamped); without --all, mapped values equal to the node's defaults are not shown
+        shown = False
+        node_defaults = _node_defaults(m.node_class)
+        for name, p in m.node_inputs.items():
+            own = m.parameters.get(name)
+            if not args.all and (p.kind == "default" or (own is not None and own.value == p.value)
+                                 or (own is None and node_defaults.get(name) == p.value)):
+                continue
+            if not shown:
+                print(f"  {m.node_class} inputs (mapped / clamped):")
+                shown = True
+            print(f"    {name} = {_fmt(p.value)}    <- {p.provenance}")
         n = len(r["theta_o"])
         d = r["diffuse"]
         # one line per distinct theta_o (these depend on wo only)

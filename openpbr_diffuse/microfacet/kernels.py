@@ -1,7 +1,7 @@
 """Scalar compiled forms of the GGX lobe for the surface's batch drivers.
 
-The same model as ``ggx`` and ``fresnel`` (which are the NumPy forms used by the table
-generation and the tests), written per direction pair for numba: local frame, normal +z,
+The same model as ``ggx`` (the NumPy form used by the table generation and the tests),
+written per direction pair for numba (the Fresnel factors are ``fresnel``'s kernels): local frame, normal +z,
 ``wo``/``wi`` pointing away from the surface, alpha the GGX width.  ``tests/test_ggx.py``
 checks these against the NumPy forms and both against quadrature.
 
@@ -14,6 +14,13 @@ import math
 
 from .._jit import INV_PI, kernel
 from ..sampling.simple import cos_sin_2pi
+from .ggx import ALPHA_MIN
+
+
+@kernel
+def alpha_of(roughness):
+    """GGX alpha = max(roughness^2, ALPHA_MIN) (OpenPBR's perceptual mapping; ``ggx.alpha_of``)."""
+    return max(roughness * roughness, ALPHA_MIN)
 
 
 @kernel
@@ -105,30 +112,6 @@ def sample_reflection(ox, oy, oz, alpha, u1, u2, vndf):
     x, y, z = 2.0 * d * hx - ox, 2.0 * d * hy - oy, 2.0 * d * hz - oz
     inv = 1.0 / math.sqrt(x * x + y * y + z * z)
     return x * inv, y * inv, z * inv, d > 0.0
-
-
-@kernel
-def fresnel_dielectric(c, eta):
-    """Exact unpolarised dielectric Fresnel reflectance (Walter 2007 Eq. 22); eta = 1 gives 0,
-    g^2 <= 0 (total internal reflection) gives 1."""
-    if eta == 1.0:
-        return 0.0
-    g2 = eta * eta - 1.0 + c * c
-    if not g2 > 0.0:
-        return 1.0
-    g = math.sqrt(g2)
-    a = (g - c) / (g + c)
-    b = (c * (g + c) - 1.0) / (c * (g - c) + 1.0)
-    return 0.5 * a * a * (1.0 + b * b)
-
-
-@kernel
-def fresnel_f82_tint(c, F0, a):
-    """F82-tint: F0 + (1 - F0)(1 - c)^5 - a c (1 - c)^6 with a from ``fresnel.f82_coefficient``."""
-    m = 1.0 - c
-    m2 = m * m
-    m5 = m2 * m2 * m
-    return F0 + (1.0 - F0) * m5 - a * c * m5 * m
 
 
 @kernel

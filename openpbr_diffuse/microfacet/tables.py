@@ -209,7 +209,7 @@ MU_AXIS, X_AXIS, R_AXIS = 0, 1, 2
 
 
 @kernel
-def _node_at(v, n, kind):
+def node_at(v, n, kind):
     v = min(max(v, 0.0), 1.0)
     if kind == MU_AXIS:
         s = math.sqrt(v) * (n - 1)
@@ -222,7 +222,7 @@ def _node_at(v, n, kind):
 
 
 @kernel
-def _weights_at(t):
+def catmull_rom_at(t):
     t2 = t * t
     t3 = t2 * t
     return (0.5 * (-t3 + 2.0 * t2 - t), 0.5 * (3.0 * t3 - 5.0 * t2 + 2.0),
@@ -232,10 +232,10 @@ def _weights_at(t):
 @kernel
 def conductor_basis_at(C, mu, roughness):
     """(E1, E5, E6) at one point from the padded conductor table C (``padded_tables``)."""
-    ir, tr = _node_at(roughness, C.shape[0] - 2, R_AXIS)
-    im, tm = _node_at(mu, C.shape[1] - 2, MU_AXIS)
-    wr = _weights_at(tr)
-    wm = _weights_at(tm)
+    ir, tr = node_at(roughness, C.shape[0] - 2, R_AXIS)
+    im, tm = node_at(mu, C.shape[1] - 2, MU_AXIS)
+    wr = catmull_rom_at(tr)
+    wm = catmull_rom_at(tm)
     e1 = e5 = e6 = 0.0
     for a in range(4):
         for b in range(4):
@@ -251,12 +251,12 @@ def dielectric_albedo_at(R, mu, roughness, x, E1):
     """E_diel at one point from the padded ratio table R, given E1 there (``ggx_albedo``)."""
     if not x > 0.0:
         return 0.0
-    ir, tr = _node_at(roughness, R.shape[0] - 2, R_AXIS)
-    ix, tx = _node_at(x, R.shape[1] - 2, X_AXIS)
-    im, tm = _node_at(mu, R.shape[2] - 2, MU_AXIS)
-    wr = _weights_at(tr)
-    wx = _weights_at(tx)
-    wm = _weights_at(tm)
+    ir, tr = node_at(roughness, R.shape[0] - 2, R_AXIS)
+    ix, tx = node_at(x, R.shape[1] - 2, X_AXIS)
+    im, tm = node_at(mu, R.shape[2] - 2, MU_AXIS)
+    wr = catmull_rom_at(tr)
+    wx = catmull_rom_at(tx)
+    wm = catmull_rom_at(tm)
     v = 0.0
     for a in range(4):
         for b in range(4):
@@ -287,8 +287,8 @@ def axis_weights(v, n, kind):
 @kernel
 def conductor_basis_pre(C, ir, r0, r1, r2, r3, mu):
     """(E1, E5, E6) with the roughness axis given by ``axis_weights`` (C's roughness nodes)."""
-    im, tm = _node_at(mu, C.shape[1] - 2, MU_AXIS)
-    wm = _weights_at(tm)
+    im, tm = node_at(mu, C.shape[1] - 2, MU_AXIS)
+    wm = catmull_rom_at(tm)
     wr = (r0, r1, r2, r3)
     e1 = e5 = e6 = 0.0
     for a in range(4):
@@ -305,8 +305,8 @@ def dielectric_albedo_pre(R, ir, r0, r1, r2, r3, ix, x0, x1, x2, x3, x, mu, E1):
     """E_diel with the roughness and x axes given by ``axis_weights`` (R's nodes); 0 at x = 0."""
     if not x > 0.0:
         return 0.0
-    im, tm = _node_at(mu, R.shape[2] - 2, MU_AXIS)
-    wm = _weights_at(tm)
+    im, tm = node_at(mu, R.shape[2] - 2, MU_AXIS)
+    wm = catmull_rom_at(tm)
     wr = (r0, r1, r2, r3)
     wx = (x0, x1, x2, x3)
     v = 0.0

@@ -14,15 +14,18 @@ Lobe ids (slots): DIFFUSE, SPECULAR, METAL, TRANSMISSION, SUBSURFACE (the thin-w
 reflection part when thin-walled), SUBSURFACE_T (thin-walled translucency), COAT, FUZZ.
 """
 import functools
+import math
 
+import numba
 import numpy as np
 from numba import prange
 
-from .._jit import INV_PI, kernel
+from .._jit import FASTMATH, INV_PI, kernel
 from .._launch import _F, _U, compiled, launch, rows
+from ..microfacet import fresnel
 from ..microfacet import kernels as mf
 from ..microfacet.sheen import sheen_albedo, sheen_density, sheen_sample
-from ..microfacet.tables import conductor_basis_pre, dielectric_albedo_pre
+from ..microfacet.tables import MU_AXIS, R_AXIS, X_AXIS, catmull_rom_at, conductor_basis_pre, node_at
 from ..models.eon import eon_albedo_terms, eon_terms, rho_ms
 from ..models.qon import qon_AB, qon_albedo, qon_terms
 from ..sampling.ltc import from_frame, ltc_frame, to_frame
@@ -71,17 +74,160 @@ P_THIN = 42               # geometry_thin_walled (0/1)
 # dielectric table's roughness node and 4 weights, its x node and 4 weights
 P_TAB_S = 43              # 15
 P_TAB_C = 58              # 15
-N_PARAMS = 73
+# the dielectric table collapsed on those two axes: E_diel/E1 at every (padded) mu node of the
+# table, for the base specular and the coat; per row only a 4-point cubic in mu remains
+N_CURVE = 35              # mu nodes of the dielectric table + 2 ghost nodes
+P_CURVE_S = 73
+P_CURVE_C = P_CURVE_S + N_CURVE
+N_PARAMS = P_CURVE_C + N_CURVE
+
+
+# --------------------------------------------------------------------------- packing
+# The material's inputs, in this order (float64; colours 3 wide), are packed into the
+# parameter layout above by ``pack_drive``, once per material.
+RAW = (("base_color", 3), ("base_diffuse_roughness", 1), ("base_weight", 1), ("base_metalness", 1),
+       ("specular_color", 3), ("specular_weight", 1), ("specular_roughness", 1), ("specular_ior", 1),
+       ("transmission_weight", 1), ("transmission_color", 3), ("transmission_depth", 1),
+       ("subsurface_weight", 1), ("subsurface_color", 3), ("subsurface_scatter_anisotropy", 1),
+       ("coat_weight", 1), ("coat_color", 3), ("coat_roughness", 1), ("coat_ior", 1), ("coat_darkening", 1),
+       ("fuzz_weight", 1), ("fuzz_color", 3), ("fuzz_roughness", 1), ("geometry_thin_walled", 1))
+N_RAW = sum(w for _, w in RAW)
+#: warning bits of ``pack_drive``
+W_SPEC_TIR, W_COAT_TIR, W_F82_NEGATIVE = 1, 2, 4
 
 
 @kernel
-def layer_albedos(p, o, t, C, R, mu, x, ms):
-    """(E1, E5, E6, E) of a GGX layer whose table axes start at p[o + t] (P_TAB_S / P_TAB_C):
-    the basis albedos and the dielectric lobe's albedo with the multiple-scattering factor."""
+def _axes(out, q, v, n, kind):
+    """Node index and Catmull-Rom weights of v on a table axis, into out[q:q + 5]."""
+    i, t = node_at(v, n, kind)
+    w0, w1, w2, w3 = catmull_rom_at(t)
+    out[q] = i
+    out[q + 1] = w0
+    out[q + 2] = w1
+    out[q + 3] = w2
+    out[q + 4] = w3
+
+
+@kernel
+def _table_axes(out, q, r, x, nCr, nRr, nRx):
+    _axes(out, q, r, nCr, R_AXIS)
+    _axes(out, q + 5, r, nRr, R_AXIS)
+    _axes(out, q + 10, x, nRx, X_AXIS)
+
+
+@kernel
+def _curve(out, q, t, R):
+    """out[q + m] = the dielectric ratio table at the (roughness, x) of the axes at out[t:]
+    for every padded mu node m (the same tensor-product Catmull-Rom, summed over two axes)."""
+    ir, ix = int(out[t + 5]), int(out[t + 10])
+    for m in range(N_CURVE):
+        v = 0.0
+        for a in range(4):
+            for b in range(4):
+                v += out[t + 6 + a] * out[t + 11 + b] * R[ir + a, ix + b, m]
+        out[q + m] = v
+
+
+def _pack_drive(raw, out, nCr, nRr, nRx, R):
+    """Pack rows of RAW inputs into parameter rows (the reference graph's derived values);
+    returns (mask of the lobes active in some row, warning bits)."""
+    m = raw.shape[0] // N_RAW
+    mask = 0
+    warn = 0
+    for i in range(m):
+        a = i * N_RAW
+        o = i * N_PARAMS
+        bw, M, sw = raw[a + 4], raw[a + 5], raw[a + 9]
+        r_s, ior = raw[a + 10], raw[a + 11]
+        T, S, g = raw[a + 12], raw[a + 17], raw[a + 21]
+        C, r_c, c_ior, c_dark = raw[a + 22], raw[a + 26], raw[a + 27], raw[a + 28]
+        F, thin = raw[a + 29], raw[a + 34]
+        # the coat's effect on the base specular [effective_specular_roughness, eta_s]
+        r_eff = (1.0 - C) * r_s + C * min(1.0, 2.0 * r_c ** 4 + r_s ** 4) ** 0.25
+        eta_s = ior
+        if C > 0.0:
+            ratio = ior / c_ior
+            eta_s = (1.0 - C) * ior + C * (ratio if ratio > 1.0 else 1.0 / ratio)
+        x = fresnel.modulated_x(sw, eta_s)
+        if x < 0.0:
+            warn |= W_SPEC_TIR
+        x = abs(x)
+        xc = fresnel.modulated_x(1.0, c_ior)
+        if xc < 0.0 and C > 0.0:
+            warn |= W_COAT_TIR
+        xc = abs(xc)
+        K = 1.0 - (1.0 - fresnel.f0(c_ior)) / (c_ior * c_ior)
+        for c in range(3):
+            bc = raw[a + c]
+            sc = raw[a + 6 + c]
+            out[o + P_BASE_COLOR + c] = bc
+            out[o + P_SPEC_COLOR + c] = sc
+            F0 = bw * bc
+            out[o + P_METAL_F0 + c] = F0
+            am = fresnel.f82_a(F0, sc)
+            out[o + P_METAL_A + c] = am
+            if M > 0.0 and sw > 0.0:
+                for k in range(257):
+                    if fresnel.f82(k / 256.0, F0, am) < 0.0:
+                        warn |= W_F82_NEGATIVE
+            out[o + P_TRANS_TINT + c] = 1.0 if raw[a + 16] > 0.0 else raw[a + 13 + c]
+            ssc = raw[a + 18 + c]
+            out[o + P_SSS_COLOR + c] = ssc
+            # base darkening and coat attenuation [Kcoat, Ebase, base_darkening, coat_attenuation]
+            E_base = (1.0 - M) * ((1.0 - S) * bc + S * ssc) + M * bc * sw
+            dark = (1.0 - K) / (1.0 - E_base * K)
+            out[o + P_BASE_MUL + c] = (1.0 + C * c_dark * (dark - 1.0)) * (1.0 + C * (raw[a + 23 + c] - 1.0))
+            out[o + P_FUZZ_COLOR + c] = raw[a + 30 + c]
+        out[o + P_R_DIFF] = raw[a + 3]
+        out[o + P_BASE_WEIGHT] = bw
+        out[o + P_METAL] = M
+        out[o + P_SPEC_WEIGHT] = sw
+        out[o + P_ALPHA_S] = mf.alpha_of(r_eff)
+        out[o + P_R_S] = r_eff
+        out[o + P_X_S] = x
+        out[o + P_ETA_S] = fresnel.eta_of_x(x)
+        out[o + P_TRANS_W] = T
+        out[o + P_SSS_W] = S
+        out[o + P_SSS_ANISO] = g
+        out[o + P_COAT_W] = C
+        out[o + P_ALPHA_C] = mf.alpha_of(r_c)
+        out[o + P_R_C] = r_c
+        out[o + P_X_C] = xc
+        out[o + P_ETA_C] = fresnel.eta_of_x(xc)
+        out[o + P_FUZZ_W] = F
+        out[o + P_FUZZ_R] = raw[a + 33]
+        out[o + P_THIN] = thin
+        _table_axes(out, o + P_TAB_S, r_eff, x, nCr, nRr, nRx)
+        _table_axes(out, o + P_TAB_C, r_c, xc, nCr, nRr, nRx)
+        _curve(out, o + P_CURVE_S, o + P_TAB_S, R)
+        _curve(out, o + P_CURVE_C, o + P_TAB_C, R)
+        # lobes that can be non-zero
+        diel = 1.0 - M
+        sc_any = raw[a + 6] > 0.0 or raw[a + 7] > 0.0 or raw[a + 8] > 0.0
+        on = ((diel * (1.0 - T) * (1.0 - S) * bw > 0.0, diel > 0.0 and x > 0.0 and sc_any, M > 0.0 and sw > 0.0,
+               diel * T > 0.0, diel * (1.0 - T) * S > 0.0, thin > 0.0 and diel * (1.0 - T) * S > 0.0, C > 0.0, F > 0.0))
+        for k in range(N_LOBES):
+            if on[k]:
+                mask |= 1 << k
+    return mask, warn
+
+
+pack_drive = numba.njit(cache=True, error_model="numpy")(_pack_drive)
+
+
+@kernel
+def layer_albedos(p, o, t, q, mu, C, x, ms):
+    """(E1, E5, E6, E) of a GGX layer whose table axes start at p[o + t] (P_TAB_S / P_TAB_C)
+    and whose collapsed dielectric curve at p[o + q]: the basis albedos and the dielectric
+    lobe's albedo with the multiple-scattering factor (0 at x = 0: index-matched)."""
     E1, E5, E6 = conductor_basis_pre(C, int(p[o + t]), p[o + t + 1], p[o + t + 2], p[o + t + 3], p[o + t + 4], mu)
-    E = dielectric_albedo_pre(R, int(p[o + t + 5]), p[o + t + 6], p[o + t + 7], p[o + t + 8], p[o + t + 9],
-                              int(p[o + t + 10]), p[o + t + 11], p[o + t + 12], p[o + t + 13], p[o + t + 14],
-                              x, mu, E1)
+    E = 0.0
+    if x > 0.0:
+        im, tm = node_at(mu, N_CURVE - 2, MU_AXIS)
+        w0, w1, w2, w3 = catmull_rom_at(tm)
+        b = o + q + im
+        v = w0 * p[b] + w1 * p[b + 1] + w2 * p[b + 2] + w3 * p[b + 3]
+        E = min(max(v, 0.0), 1.0) * E1
     return E1, E5, E6, E * mf.multiscatter(x * x, E1, ms)
 
 
@@ -98,23 +244,26 @@ def diffuse_albedo_terms(dmodel, mu, r):
 
 
 @kernel
-def row_state(p, o, mu, C, R, dmodel, ms):
+def row_state(p, o, mu, C, R, dmodel, ms, albedos=True):
     """Per-row quantities shared by every lobe at mu_o: (E1_s, E5_s, E6_s, E_spec, E1_c,
     E_coat, E_fuzz, e_g, e_h, <E_F>, E_qon).
 
     E1/E5/E6: GGX basis albedos of the base specular roughness; E_spec, E_coat: albedos of
     the dielectric specular and coat lobes (with the multiple-scattering factor); E_fuzz:
     the sheen albedo; e_g, e_h, <E_F>: the diffuse albedo terms; E_qon: the QON albedo of
-    the thin-walled subsurface reflection.  Layers that are off are not looked up.
+    the thin-walled subsurface reflection (0 unless ``albedos``).  Layers that are off are
+    not looked up.
     """
-    E1s, E5s, E6s, Es = layer_albedos(p, o, P_TAB_S, C, R, mu, p[o + P_X_S], ms)
+    E1s, E5s, E6s, Es = layer_albedos(p, o, P_TAB_S, P_CURVE_S, mu, C, p[o + P_X_S], ms)
     E1c, Ec, Ef, Eq = 1.0, 0.0, 0.0, 0.0
     if p[o + P_COAT_W] > 0.0:
-        E1c, _, _, Ec = layer_albedos(p, o, P_TAB_C, C, R, mu, p[o + P_X_C], ms)
+        E1c, _, _, Ec = layer_albedos(p, o, P_TAB_C, P_CURVE_C, mu, C, p[o + P_X_C], ms)
     if p[o + P_FUZZ_W] > 0.0:
         Ef = sheen_albedo(mu, p[o + P_FUZZ_R])
-    eg, eh, avg = diffuse_albedo_terms(dmodel, mu, p[o + P_R_DIFF])
-    if p[o + P_THIN] > 0.0 and p[o + P_SSS_W] > 0.0:
+    eg, eh, avg = 0.0, 0.0, 0.0
+    if albedos:   # the weights do not need the diffuse albedos (eval does not)
+        eg, eh, avg = diffuse_albedo_terms(dmodel, mu, p[o + P_R_DIFF])
+    if albedos and p[o + P_THIN] > 0.0 and p[o + P_SSS_W] > 0.0:
         Eq, _, _ = diffuse_albedo_terms(D_QON, mu, p[o + P_R_DIFF])
     return E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, avg, Eq
 
@@ -223,18 +372,18 @@ def lobe_f(k, p, o, st, ix, iy, iz, ox, oy, oz, dmodel, ms):
     if k == COAT:
         m, c = mf.reflection(ix, iy, iz, ox, oy, oz, p[o + P_ALPHA_C])
         x = p[o + P_X_C]
-        v = m * mf.fresnel_dielectric(c, p[o + P_ETA_C]) * mf.multiscatter(x * x, E1c, ms)
+        v = m * fresnel.dielectric(c, p[o + P_ETA_C]) * mf.multiscatter(x * x, E1c, ms)
         return v, v, v
     m, c = mf.reflection(ix, iy, iz, ox, oy, oz, p[o + P_ALPHA_S])
     if k == SPECULAR:
         x = p[o + P_X_S]
-        v = m * mf.fresnel_dielectric(c, p[o + P_ETA_S]) * mf.multiscatter(x * x, E1s, ms)
+        v = m * fresnel.dielectric(c, p[o + P_ETA_S]) * mf.multiscatter(x * x, E1s, ms)
         return v, v, v
     # METAL
     F0r, F0g, F0b = p[o + P_METAL_F0], p[o + P_METAL_F0 + 1], p[o + P_METAL_F0 + 2]
-    return (m * mf.fresnel_f82_tint(c, F0r, p[o + P_METAL_A]) * mf.multiscatter(F0r, E1s, ms),
-            m * mf.fresnel_f82_tint(c, F0g, p[o + P_METAL_A + 1]) * mf.multiscatter(F0g, E1s, ms),
-            m * mf.fresnel_f82_tint(c, F0b, p[o + P_METAL_A + 2]) * mf.multiscatter(F0b, E1s, ms))
+    return (m * fresnel.f82(c, F0r, p[o + P_METAL_A]) * mf.multiscatter(F0r, E1s, ms),
+            m * fresnel.f82(c, F0g, p[o + P_METAL_A + 1]) * mf.multiscatter(F0g, E1s, ms),
+            m * fresnel.f82(c, F0b, p[o + P_METAL_A + 2]) * mf.multiscatter(F0b, E1s, ms))
 
 
 @kernel
@@ -324,6 +473,20 @@ def total_score(active, p, o, st, mu, dmodel, ms, sel):
 
 
 @kernel
+def _score_if(k, active, p, o, st, mu, dmodel, ms, sel):
+    return lobe_score(k, p, o, st, mu, dmodel, ms, sel) if active & (1 << k) else 0.0
+
+
+@kernel
+def all_scores(active, p, o, st, mu, dmodel, ms, sel):
+    """The 8 lobe scores (0 for inactive slots) as a tuple, computed once per row."""
+    return (_score_if(0, active, p, o, st, mu, dmodel, ms, sel), _score_if(1, active, p, o, st, mu, dmodel, ms, sel),
+            _score_if(2, active, p, o, st, mu, dmodel, ms, sel), _score_if(3, active, p, o, st, mu, dmodel, ms, sel),
+            _score_if(4, active, p, o, st, mu, dmodel, ms, sel), _score_if(5, active, p, o, st, mu, dmodel, ms, sel),
+            _score_if(6, active, p, o, st, mu, dmodel, ms, sel), _score_if(7, active, p, o, st, mu, dmodel, ms, sel))
+
+
+@kernel
 def probability(sk, S, K):
     """P_k = s_k / S; 1/K when every score is 0 (black surface: any distribution will do)."""
     return sk / S if S > 0.0 else 1.0 / K
@@ -332,13 +495,12 @@ def probability(sk, S, K):
 # --------------------------------------------------------------------------- drivers
 
 
-@compiled
-def _lobes_drive(active, dmodel, sel, ms, C, R, p, wo, W, E, P):
+def _lobes_drive(active, dmodel, sel, ms, C, R, p, ps, wo, W, E, P):
     """W, E (n*8*3), P (n*8): weight, albedo and probability of every lobe slot."""
     n = wo.shape[0] // 3
     for i in prange(n):
         j = _U(i) * _U(3)
-        o = _U(i) * _U(N_PARAMS)
+        o = _U(i) * _U(ps)
         oz = _F(wo[j + _U(2)])
         mu = min(max(oz, 0.0), 1.0)
         st = row_state(p, o, mu, C, R, dmodel, ms)
@@ -367,12 +529,11 @@ def _lobes_drive(active, dmodel, sel, ms, C, R, p, wo, W, E, P):
                 P[b] = probability(P[b], S, K)
 
 
-@compiled
-def _albedo_drive(active, dmodel, ms, C, R, p, wo, out):
+def _albedo_drive(active, dmodel, ms, C, R, p, ps, wo, out):
     n = wo.shape[0] // 3
     for i in prange(n):
         j = _U(i) * _U(3)
-        o = _U(i) * _U(N_PARAMS)
+        o = _U(i) * _U(ps)
         oz = _F(wo[j + _U(2)])
         mu = min(max(oz, 0.0), 1.0)
         st = row_state(p, o, mu, C, R, dmodel, ms)
@@ -391,17 +552,16 @@ def _albedo_drive(active, dmodel, ms, C, R, p, wo, out):
         out[j + _U(2)] = a2
 
 
-@compiled
-def _eval_drive(active, only, dmodel, ms, C, R, p, wi, wo, out):
+def _eval_drive(active, only, dmodel, ms, C, R, p, ps, wi, wo, out):
     """out (n*3) = sum_k w_k f_k, or the unweighted f_only when only >= 0."""
     n = wo.shape[0] // 3
     for i in prange(n):
         j = _U(i) * _U(3)
-        o = _U(i) * _U(N_PARAMS)
+        o = _U(i) * _U(ps)
         ix, iy, iz = _F(wi[j]), _F(wi[j + _U(1)]), _F(wi[j + _U(2)])
         ox, oy, oz = _F(wo[j]), _F(wo[j + _U(1)]), _F(wo[j + _U(2)])
         mu = min(max(oz, 0.0), 1.0)
-        st = row_state(p, o, mu, C, R, dmodel, ms)
+        st = row_state(p, o, mu, C, R, dmodel, ms, False)
         a0 = a1 = a2 = 0.0
         if oz > 0.0:
             for k in range(N_LOBES):
@@ -421,30 +581,37 @@ def _eval_drive(active, only, dmodel, ms, C, R, p, wi, wo, out):
         out[j + _U(2)] = a2
 
 
-@compiled
-def _pdf_drive(active, dmodel, sel, ms, vndf, C, R, p, wo, wi, out):
+def _pdf_drive(active, dmodel, sel, ms, vndf, C, R, p, ps, wo, wi, out):
     """out (n) = sum_k P_k pdf_k(wi | wo)."""
     n = wo.shape[0] // 3
     for i in prange(n):
         j = _U(i) * _U(3)
-        o = _U(i) * _U(N_PARAMS)
+        o = _U(i) * _U(ps)
         ix, iy, iz = _F(wi[j]), _F(wi[j + _U(1)]), _F(wi[j + _U(2)])
         ox, oy, oz = _F(wo[j]), _F(wo[j + _U(1)]), _F(wo[j + _U(2)])
         mu = min(max(oz, 0.0), 1.0)
         q = 0.0
         if oz > 0.0:
+            # one pass: sum_k s_k pdf_k / sum_k s_k (uniform over the active lobes when every
+            # score is 0), the mixture pdf with P_k = s_k / sum s
             st = row_state(p, o, mu, C, R, dmodel, ms)
-            S, K = total_score(active, p, o, st, mu, dmodel, ms, sel)
+            num = 0.0
+            S = 0.0
+            flat = 0.0
+            K = 0
             for k in range(N_LOBES):
                 if active & (1 << k):
-                    Pk = probability(lobe_score(k, p, o, st, mu, dmodel, ms, sel), S, K)
-                    if Pk > 0.0:
-                        q += Pk * lobe_pdf(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, vndf)
+                    sk_ = lobe_score(k, p, o, st, mu, dmodel, ms, sel)
+                    pk = lobe_pdf(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, vndf)
+                    num += sk_ * pk
+                    S += sk_
+                    flat += pk
+                    K += 1
+            q = num / S if S > 0.0 else flat / K
         out[i] = q
 
 
-@compiled
-def _sample_drive(active, dmodel, sel, ms, vndf, C, R, p, wo, u, wi, out):
+def _sample_drive(active, dmodel, sel, ms, vndf, C, R, p, ps, wo, u, wi, out):
     """Pick lobe k with P_k (u[0]), sample it (u[1:3], or u[0] rescaled and u[1] when u has
     2 columns); wi (n*3), out (n) = the mixture pdf, with the chosen lobe's own pdf from its
     sampler; 0 marks a failed sample."""
@@ -452,12 +619,17 @@ def _sample_drive(active, dmodel, sel, ms, vndf, C, R, p, wo, u, wi, out):
     ud = u.shape[0] // n
     for i in prange(n):
         j = _U(i) * _U(3)
-        o = _U(i) * _U(N_PARAMS)
+        o = _U(i) * _U(ps)
         ju = _U(i) * _U(ud)
         ox, oy, oz = _F(wo[j]), _F(wo[j + _U(1)]), _F(wo[j + _U(2)])
         mu = min(max(oz, 0.0), 1.0)
         st = row_state(p, o, mu, C, R, dmodel, ms)
-        S, K = total_score(active, p, o, st, mu, dmodel, ms, sel)
+        ss = all_scores(active, p, o, st, mu, dmodel, ms, sel)
+        S = 0.0
+        K = 0
+        for k in range(N_LOBES):
+            S += ss[k]
+            K += 1 if active & (1 << k) else 0
         u0 = _F(u[ju])
         # choose the lobe: the first whose cumulative probability exceeds u0
         chosen = -1
@@ -468,7 +640,7 @@ def _sample_drive(active, dmodel, sel, ms, vndf, C, R, p, wo, u, wi, out):
             if active & (1 << k):
                 last = k
                 if chosen < 0:
-                    Pk = probability(lobe_score(k, p, o, st, mu, dmodel, ms, sel), S, K)
+                    Pk = probability(ss[k], S, K)
                     if u0 < lo + Pk:
                         chosen = k
                         Pc = Pk
@@ -476,7 +648,7 @@ def _sample_drive(active, dmodel, sel, ms, vndf, C, R, p, wo, u, wi, out):
                         lo += Pk
         if chosen < 0:   # rounding left the CDF's end below u0
             chosen = last
-            Pc = probability(lobe_score(last, p, o, st, mu, dmodel, ms, sel), S, K)
+            Pc = probability(ss[last], S, K)
         if ud == 3:
             u1, u2 = _F(u[ju + _U(1)]), _F(u[ju + _U(2)])
         else:
@@ -487,7 +659,7 @@ def _sample_drive(active, dmodel, sel, ms, vndf, C, R, p, wo, u, wi, out):
         if oz > 0.0 and ok and own > 0.0:
             for k in range(N_LOBES):
                 if active & (1 << k):
-                    Pk = probability(lobe_score(k, p, o, st, mu, dmodel, ms, sel), S, K)
+                    Pk = probability(ss[k], S, K)
                     if k == chosen:
                         q += Pk * own
                     elif Pk > 0.0:
@@ -502,68 +674,82 @@ def _sample_drive(active, dmodel, sel, ms, vndf, C, R, p, wo, u, wi, out):
 
 # --------------------------------------------------------------------------- batch calls
 
+#: Below this many rows the serial build of a driver runs: waking the thread pool costs
+#: more than a small batch (a single material's lobes(wo) is the common case).
+SERIAL_ROWS = 4096
+_serial = numba.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+_DRIVERS = {f: (compiled(f), _serial(f)) for f in (_lobes_drive, _albedo_drive, _eval_drive, _pdf_drive, _sample_drive)}
+
+
+def _driver(f, n):
+    parallel, serial = _DRIVERS[f]
+    return serial if n < SERIAL_ROWS else parallel
+
 
 @functools.cache
 def tables():
+    """(C, R): the padded GGX albedo tables (``microfacet.tables.padded_tables``)."""
     from ..microfacet.tables import padded_tables
 
-    return padded_tables()
+    C, R = padded_tables()
+    if R.shape[2] != N_CURVE:   # the parameter layout reserves N_CURVE mu nodes
+        raise RuntimeError(f"dielectric albedo table has {R.shape[2] - 2} mu nodes; N_CURVE expects {N_CURVE - 2}")
+    return C, R
+
+
+def _run(f, head, params, lead, dirs, outs):
+    """Run driver f over the rows of ``lead``: ``params`` is one material (stride 0, never
+    copied or tiled) or materials broadcasting to ``lead`` (stride N_PARAMS, expanded)."""
+    n = math.prod(lead)
+    if n == 0:
+        return
+    if params.ndim == 1:
+        inputs = []
+        for d, k in dirs:
+            b, t = rows(d, lead, k)
+            inputs.append((b, k, t))
+        launch(_driver(f, n), head + (params, 0), inputs, outs, n)
+        return
+    p = np.ascontiguousarray(np.broadcast_to(params, lead + (N_PARAMS,))).reshape(-1)
+    full = [np.ascontiguousarray(np.broadcast_to(d, lead + (k,))).reshape(-1) for d, k in dirs]
+    _driver(f, n)(*head, p, N_PARAMS, *full, *(o for o, _ in outs))
 
 
 def lobes_rows(flags, params, wo, lead):
-    """(W (n, 8, 3), E (n, 8, 3), P (n, 8)) for float64 arrays broadcasting to ``lead``."""
-    n = int(np.prod(lead))
+    """(W (..., 8, 3), E (..., 8, 3), P (..., 8)) for float64 arrays broadcasting to ``lead``."""
+    n = math.prod(lead)
     W = np.empty(n * N_LOBES * 3)
     E = np.empty(n * N_LOBES * 3)
     P = np.empty(n * N_LOBES)
-    C, R = tables()
-    launch(_lobes_drive, (flags.active, flags.dmodel, flags.sel, flags.ms, C, R), _inputs(params, lead, (wo, 3)),
-           [(W, N_LOBES * 3), (E, N_LOBES * 3), (P, N_LOBES)], n)
+    _run(_lobes_drive, (flags.active, flags.dmodel, flags.sel, flags.ms) + tables(), params, lead, [(wo, 3)],
+         [(W, N_LOBES * 3), (E, N_LOBES * 3), (P, N_LOBES)])
     return W.reshape(lead + (N_LOBES, 3)), E.reshape(lead + (N_LOBES, 3)), P.reshape(lead + (N_LOBES,))
 
 
-def _inputs(params, lead, *dirs):
-    out = []
-    b, t = rows(params, lead, N_PARAMS)
-    out.append((b, N_PARAMS, t))
-    for d, k in dirs:
-        b, t = rows(d, lead, k)
-        out.append((b, k, t))
-    return out
-
-
 def albedo_rows(flags, params, wo, lead):
-    n = int(np.prod(lead))
-    out = np.empty(n * 3)
-    C, R = tables()
-    launch(_albedo_drive, (flags.active, flags.dmodel, flags.ms, C, R), _inputs(params, lead, (wo, 3)),
-           [(out, 3)], n)
+    out = np.empty(math.prod(lead) * 3)
+    _run(_albedo_drive, (flags.active, flags.dmodel, flags.ms) + tables(), params, lead, [(wo, 3)], [(out, 3)])
     return out.reshape(lead + (3,))
 
 
 def eval_rows(flags, params, wi, wo, lead, only=-1):
-    n = int(np.prod(lead))
-    out = np.empty(n * 3)
-    C, R = tables()
-    launch(_eval_drive, (flags.active, only, flags.dmodel, flags.ms, C, R),
-           _inputs(params, lead, (wi, 3), (wo, 3)), [(out, 3)], n)
+    out = np.empty(math.prod(lead) * 3)
+    _run(_eval_drive, (flags.active, only, flags.dmodel, flags.ms) + tables(), params, lead, [(wi, 3), (wo, 3)],
+         [(out, 3)])
     return out.reshape(lead + (3,))
 
 
 def pdf_rows(flags, params, wo, wi, lead):
-    n = int(np.prod(lead))
-    out = np.empty(n)
-    C, R = tables()
-    launch(_pdf_drive, (flags.active, flags.dmodel, flags.sel, flags.ms, flags.vndf, C, R),
-           _inputs(params, lead, (wo, 3), (wi, 3)), [(out, 1)], n)
+    out = np.empty(math.prod(lead))
+    _run(_pdf_drive, (flags.active, flags.dmodel, flags.sel, flags.ms, flags.vndf) + tables(), params, lead,
+         [(wo, 3), (wi, 3)], [(out, 1)])
     return out.reshape(lead)
 
 
 def sample_rows(flags, params, wo, u, lead):
-    n = int(np.prod(lead))
+    n = math.prod(lead)
     wi = np.empty(n * 3)
     out = np.empty(n)
-    C, R = tables()
-    launch(_sample_drive, (flags.active, flags.dmodel, flags.sel, flags.ms, flags.vndf, C, R),
-           _inputs(params, lead, (wo, 3), (u, u.shape[-1])), [(wi, 3), (out, 1)], n)
+    _run(_sample_drive, (flags.active, flags.dmodel, flags.sel, flags.ms, flags.vndf) + tables(), params, lead,
+         [(wo, 3), (u, u.shape[-1])], [(wi, 3), (out, 1)])
     return wi.reshape(lead + (3,)), out.reshape(lead)

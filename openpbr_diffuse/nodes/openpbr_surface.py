@@ -75,8 +75,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .. import _arrays as ar
-from ..microfacet import fresnel, ggx
-from ..microfacet import tables as spec_tables
+from ..microfacet import ggx
 from . import _surface_kernels as sk
 from ._node import NodeMeta, bind_inputs, convert_input, is_default, node_signature
 from .frame import Frame
@@ -130,100 +129,54 @@ class _Flags(NamedTuple):
     vndf: bool
 
 
-def _mix(bg, fg, t):
-    """MaterialX mix(fg, bg, t) = fg t + bg (1 - t)."""
-    return fg * t + bg * (1.0 - t)
-
-
 def pack_parameters(p):
-    """The per-material parameter vectors (..., N_PARAMS) of the compiled path from the
-    converted inputs ``p`` (float arrays (...), colours (..., 3)), and warnings to give."""
-    f = lambda name: p[name][..., None]        # noqa: E731  (float input with a channel axis)
-    C = p["coat_weight"]
-    # the coat's effect on the base specular [effective_specular_roughness, eta_s]
-    r_s = p["specular_roughness"]
-    r_eff = _mix(r_s, np.minimum(1.0, 2.0 * p["coat_roughness"] ** 4 + r_s ** 4) ** 0.25, C)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = p["specular_ior"] / p["coat_ior"]
-    eta_s = _mix(p["specular_ior"], np.where(ratio > 1.0, ratio, 1.0 / ratio), C)
-    warn = []
-    x = fresnel.modulated_ior_parameter(p["specular_weight"], eta_s)
-    if np.any(x < 0.0):
-        warn.append("specular_ior < 1: total internal reflection is not modelled; the Fresnel factor "
-                    "of the reciprocal index (same F0) is used")
-    x = np.abs(x)
-    xc = fresnel.modulated_ior_parameter(1.0, p["coat_ior"])
-    if np.any((xc < 0.0) & (C > 0.0)):
-        warn.append("coat_ior < 1: total internal reflection is not modelled; the Fresnel factor of "
-                    "the reciprocal index (same F0) is used")
-    xc = np.abs(xc)
-    metal_f0 = f("base_weight") * p["base_color"]
-    # darkening of the base under the coat [Kcoat, Ebase, base_darkening]
-    K = 1.0 - (1.0 - fresnel.f0_of_eta(p["coat_ior"])) / np.square(p["coat_ior"])
-    M, S = f("base_metalness"), f("subsurface_weight")
-    E_base = _mix(_mix(p["base_color"], p["subsurface_color"], S), p["base_color"] * f("specular_weight"), M)
-    dark = (1.0 - K[..., None]) / (1.0 - E_base * K[..., None])
-    base_mul = _mix(1.0, dark, f("coat_weight") * f("coat_darkening")) * _mix(1.0, p["coat_color"], f("coat_weight"))
-    tint = np.where(f("transmission_depth") > 0.0, 1.0, p["transmission_color"])
-    cols = [
-        (sk.P_BASE_COLOR, p["base_color"]), (sk.P_R_DIFF, p["base_diffuse_roughness"]),
-        (sk.P_BASE_WEIGHT, p["base_weight"]), (sk.P_METAL, p["base_metalness"]),
-        (sk.P_SPEC_COLOR, p["specular_color"]), (sk.P_SPEC_WEIGHT, p["specular_weight"]),
-        (sk.P_ALPHA_S, ggx.alpha_of(r_eff)), (sk.P_R_S, r_eff), (sk.P_X_S, x),
-        (sk.P_ETA_S, fresnel.eta_of_parameter(x)), (sk.P_METAL_F0, metal_f0),
-        (sk.P_METAL_A, fresnel.f82_coefficient(metal_f0, p["specular_color"])),
-        (sk.P_TRANS_W, p["transmission_weight"]), (sk.P_TRANS_TINT, tint),
-        (sk.P_SSS_W, p["subsurface_weight"]), (sk.P_SSS_COLOR, p["subsurface_color"]),
-        (sk.P_SSS_ANISO, p["subsurface_scatter_anisotropy"]),
-        (sk.P_COAT_W, C), (sk.P_ALPHA_C, ggx.alpha_of(p["coat_roughness"])), (sk.P_R_C, p["coat_roughness"]),
-        (sk.P_X_C, xc), (sk.P_ETA_C, fresnel.eta_of_parameter(xc)), (sk.P_BASE_MUL, base_mul),
-        (sk.P_FUZZ_W, p["fuzz_weight"]), (sk.P_FUZZ_COLOR, p["fuzz_color"]), (sk.P_FUZZ_R, p["fuzz_roughness"]),
-        (sk.P_THIN, np.float64(bool(p["geometry_thin_walled"]))),
-        (sk.P_TAB_S, _table_axes(r_eff, x)), (sk.P_TAB_C, _table_axes(p["coat_roughness"], xc)),
-    ]
-    lead = np.broadcast_shapes(*(np.shape(v)[:-1] if k in _VECTOR_SLOTS else np.shape(v) for k, v in cols))
+    """(parameter rows (..., N_PARAMS), active-lobe mask, warning bits) of the compiled path
+    from the converted inputs ``p`` (float arrays (...), colours (..., 3)): the derived
+    values of the reference graph, computed once per material (``_surface_kernels.pack_drive``)."""
+    vals = [p[n] for n, _ in sk.RAW]
+    vals[-1] = np.float64(bool(vals[-1]))
+    flat = _one_material(vals)
+    if flat is not None:
+        lead = ()
+        raw = np.array(flat)
+    else:
+        lead = np.broadcast_shapes(*(np.shape(v)[:-1] if w == 3 else np.shape(v) for v, (_, w) in zip(vals, sk.RAW)))
+        raw = np.concatenate([np.broadcast_to(v if w == 3 else np.asarray(v)[..., None], lead + (w,))
+                              for v, (_, w) in zip(vals, sk.RAW)], axis=-1)
     out = np.empty(lead + (sk.N_PARAMS,))
-    for k, v in cols:
-        if k in _VECTOR_SLOTS:
-            out[..., k:k + np.shape(v)[-1]] = v
-        else:
-            out[..., k] = v
-    return out, warn
-
-
-def _table_axes(roughness, x):
-    """(..., 15): the GGX tables' roughness and x axes of one layer (``axis_weights``)."""
     C, R = sk.tables()
-    axes = (spec_tables.axis_weights(roughness, C.shape[0] - 2, spec_tables.R_AXIS)
-            + spec_tables.axis_weights(roughness, R.shape[0] - 2, spec_tables.R_AXIS)
-            + spec_tables.axis_weights(x, R.shape[1] - 2, spec_tables.X_AXIS))
-    return np.stack(np.broadcast_arrays(*axes), axis=-1)
+    mask, warn = sk.pack_drive(np.ascontiguousarray(raw, dtype=np.float64).reshape(-1), out.reshape(-1),
+                               C.shape[0] - 2, R.shape[0] - 2, R.shape[1] - 2, R)
+    return out, mask, warn
 
 
-_VECTOR_SLOTS = (sk.P_BASE_COLOR, sk.P_SPEC_COLOR, sk.P_METAL_F0, sk.P_METAL_A, sk.P_TRANS_TINT,
-                 sk.P_SSS_COLOR, sk.P_BASE_MUL, sk.P_FUZZ_COLOR, sk.P_TAB_S, sk.P_TAB_C)
+def _one_material(vals):
+    """The RAW values as one flat list of floats when every input is a single value, else None."""
+    flat = []
+    for v, (_, w) in zip(vals, sk.RAW):
+        if w == 1 and np.ndim(v) == 0:
+            flat.append(float(v))
+        elif w == 3 and np.shape(v) == (3,):
+            flat.extend(v.tolist())
+        else:
+            return None
+    return flat
+
+
+_WARNINGS = {
+    sk.W_SPEC_TIR: "specular_ior < 1: total internal reflection is not modelled; the Fresnel factor of the "
+                   "reciprocal index (same F0) is used",
+    sk.W_COAT_TIR: "coat_ior < 1: total internal reflection is not modelled; the Fresnel factor of the "
+                   "reciprocal index (same F0) is used",
+    sk.W_F82_NEGATIVE: "the F82-tint Fresnel of this metal is negative at some angles (dark base_color with a "
+                       "dark specular_color): the published formula is used unclamped, so the metal lobe and "
+                       "its albedo can be negative",
+}
 
 
 @functools.cache
 def _signature(nodedef):
     return node_signature(nodedef, _OPTIONS, keyword_only=True)
-
-
-def _active_lobes(p, x_s):
-    """Names of the lobes that can be non-zero for some material of the batch."""
-    M, T, S = p["base_metalness"], p["transmission_weight"], p["subsurface_weight"]
-    diel = 1.0 - M
-    on = {
-        "diffuse": np.any(diel * (1.0 - T) * (1.0 - S) * p["base_weight"] > 0.0),
-        "specular": np.any(diel > 0.0) and np.any(x_s > 0.0) and np.any(p["specular_color"] > 0.0),
-        "metal": np.any(M > 0.0) and np.any(p["specular_weight"] > 0.0),
-        "transmission": np.any(diel * T > 0.0),
-        "subsurface": np.any(diel * (1.0 - T) * S > 0.0),
-        "subsurface_transmission": bool(p["geometry_thin_walled"]) and np.any(diel * (1.0 - T) * S > 0.0),
-        "coat": np.any(p["coat_weight"] > 0.0),
-        "fuzz": np.any(p["fuzz_weight"] > 0.0),
-    }
-    return tuple(n for n in LOBE_NAMES if on[n]) or ("diffuse",)
 
 
 def _validity(idef):
@@ -351,23 +304,16 @@ class OpenPBRSurface(metaclass=NodeMeta):
     def _setup(self):
         p = self.inputs
         self.frame = Frame(p["geometry_normal"])
-        self.params, warn = pack_parameters(p)
-        for w in warn:
-            warnings.warn(w, UserWarning, stacklevel=3)
-        self.active = _active_lobes(p, self.params[..., sk.P_X_S])
-        mask = 0
-        for name in self.active:
-            mask |= 1 << LOBE_NAMES.index(name)
+        self.params, mask, warn = pack_parameters(p)
+        for bit, text in _WARNINGS.items():
+            if warn & bit:
+                warnings.warn(text, UserWarning, stacklevel=3)
+        if not mask:
+            mask = 1 << sk.DIFFUSE      # a black surface: keep one lobe (f = 0 everywhere)
+        self._slots = tuple(k for k in range(len(LOBE_NAMES)) if mask & (1 << k))
+        self.active = tuple(LOBE_NAMES[k] for k in self._slots)
         self._flags = _Flags(mask, DIFFUSE_MODELS[self.diffuse_model], SELECTIONS.index(self.selection),
                              bool(self.multiscatter), self.specular_sampling == "vndf")
-        if "metal" in self.active:
-            c = np.linspace(0.0, 1.0, 257).reshape((257,) + (1,) * (self.params.ndim - 1))
-            F0 = self.params[..., sk.P_METAL_F0:sk.P_METAL_F0 + 3]
-            if np.any(fresnel.fresnel_f82_tint(c, F0, p["specular_color"]) < 0.0):
-                warnings.warn("the F82-tint Fresnel of this metal is negative at some angles (dark "
-                              "base_color with a dark specular_color): the published formula is used "
-                              "unclamped, so the metal lobe and its albedo can be negative", UserWarning,
-                              stacklevel=3)
 
     @property
     def ignored_inputs(self):
@@ -378,6 +324,8 @@ class OpenPBRSurface(metaclass=NodeMeta):
         return self.frame.to_local(ar.directions(name, w, np.float64))
 
     def _lead(self, **shapes):
+        if self.params.ndim == 1 and all(not s for s in shapes.values()):   # one material, one row
+            return ()
         return ar.broadcast_leading(material=self.params.shape[:-1], **shapes)
 
     # ------------------------------------------------------------------ verbs
@@ -389,8 +337,7 @@ class OpenPBRSurface(metaclass=NodeMeta):
         wo = self._local("wo", wo)
         lead = self._lead(wo=wo.shape[:-1])
         W, E, P = sk.lobes_rows(self._flags, self.params, wo, lead)
-        return [Lobe(n, W[..., k, :], E[..., k, :], P[..., k])
-                for k, n in enumerate(LOBE_NAMES) if n in self.active]
+        return [Lobe(LOBE_NAMES[k], W[..., k, :], E[..., k, :], P[..., k]) for k in self._slots]
 
     def lobe_eval(self, name, wi, wo):
         """The BSDF f_k of one lobe (its weight w_k not applied), shape (..., 3).

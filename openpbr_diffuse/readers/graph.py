@@ -42,7 +42,7 @@ def to_python(v):
 def convert_color(value, type_name, space):
     """A colorN value converted from ``space`` to the working space (alpha untouched)."""
     a = np.asarray(value, dtype=np.float64).reshape(-1)
-    if type_name not in _COLORS or space == "raw":
+    if type_name not in _COLORS or space == "raw" or space == colorspace.WORKING_SPACE:
         return a
     out = a.copy()
     out[:3] = colorspace.to_working(a[:3], space)

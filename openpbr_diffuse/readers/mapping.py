@@ -170,8 +170,9 @@ def _map_standard_surface(m):
         "diffuse: Standard Surface's Oren-Nayar (QON, sigma = diffuse_roughness in radians, as MaterialX's "
         "standard_surface graph) evaluated as OpenPBRSurface(diffuse_model='qon')",
         f"other inputs mapped to OpenPBR by MaterialX's translation graph {TRANSLATION}: base_color is "
-        "multiplied by the coat colour, specular_color is dropped for metals (specular_weight 1), "
-        "thin-film thickness rescaled",
+        "multiplied by the coat colour (mixed by coat), specular_weight becomes 1 when metalness > 0 (OpenPBR's "
+        "specular_weight also scales the metal), a black specular_color becomes white, thin film and "
+        "emission rescaled",
         "the specular/metal Fresnel and the layering are OpenPBR's (exact dielectric Fresnel, F82-tint metal, "
         "albedo scaling), not Standard Surface's own (Schlick-based metal with edge colour)",
     ]

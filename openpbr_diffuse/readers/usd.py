@@ -170,7 +170,14 @@ class _UsdResolver:
         self.uv = np.asarray(uv, dtype=np.float64)
         self.default_space = default_space
         self.sink = sink
-        self.mx = Resolver(file, uv, default_space, sink)
+        self._mx = None
+
+    @property
+    def mx(self):
+        """The MaterialX graph evaluator (for ND_ nodes and images), made when first needed."""
+        if self._mx is None:
+            self._mx = Resolver(self.file, self.uv, self.default_space, self.sink)
+        return self._mx
 
     def _note(self, text, unsupported=False):
         lst = self.sink.unsupported if unsupported else self.sink.warnings
@@ -244,7 +251,8 @@ class _UsdResolver:
 
         attr = port.GetAttr()
         trail = self._cycle(attr.GetPath(), trail)
-        sources, invalid = port.GetConnectedSources()
+        # most inputs hold a plain value: ask for connection sources only if any are authored
+        sources, invalid = port.GetConnectedSources() if attr.HasAuthoredConnections() else ((), ())
         if sources:
             s = sources[0]
             src_prim = s.source.GetPrim()
