@@ -242,7 +242,7 @@ def test_ms_lobe_negative_where_qon_albedo_exceeds_one():
 
 def _ggx_zh_direct(alpha, n=40):
     """GGX (F = 1) ZH by the half-vector quadrature of nodes.ggx (not the table)."""
-    from openpbr_diffuse.nodes import ggx
+    from openpbr_diffuse.microfacet import quadrature as ggx
 
     x, w = np.polynomial.legendre.leggauss(n)
     th = 0.25 * math.pi * (x + 1)

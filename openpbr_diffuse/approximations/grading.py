@@ -266,7 +266,7 @@ def grade_kc_zh(quick=False):
         for l in range(3):
             rows.append(_row(f"kc_ggx_zh_E{l}{tag}", f"ZH fit E{l}(beta), GGX ({form} form)",
                              "post Pt. 2 SH fits", f"E_{l} of the GGX (F = 1) MS lobe, alpha = GGX alpha",
-                             "Gauss-Legendre (64) of the GGX albedo table (nodes.specular_albedo, E1)",
+                             "Gauss-Legendre (64) of the GGX albedo table (microfacet.tables, E1)",
                              "alpha in [0, 1]", "|fit - exact|", fit[:, l] - exact[:, l],
                              lambda idx: _fmt(alpha=a[idx[0]]),
                              "GGX table accuracy <= 6e-4 (3e-3 for alpha < 0.04)"))

@@ -53,7 +53,7 @@ ZH_FIT_GGX = np.array([
     [-0.10732852337149004, 0.8686198207608287, -0.3980009298364805]])
 GGX_M33 = (21.342911007109528, 93.01620773161568, 0.4814723396401988, 143.39682026031764, 15.2)
 GGX_MAG = (0.09791431592022058, -1.4272852958071647, 7.768226052923069, -4.475643330561517)
-#: Pseudo-model name of the GGX lobe with F = 1 (table ``nodes.specular_albedo.ggx_albedo``),
+#: Pseudo-model name of the GGX lobe with F = 1 (table ``microfacet.tables.ggx_albedo``),
 #: roughness = GGX alpha in [0, 1] (beta = sqrt(alpha) = OpenPBR specular_roughness).
 GGX = "ggx"
 # LTC fits for Oren-Nayar, polynomials in beta (m33 rational quadratic, magnitude cubic).
@@ -132,10 +132,10 @@ def single_scattering_albedo(model, mu, roughness):
     """E(mu) of ``model`` at rho = 1 from the reference tables (``od.reference_albedo``).
 
     ``model="ggx"``: the GGX lobe with F = 1 (height-correlated Smith), from the specular
-    tables of ``nodes.specular_albedo`` (E1 at specular_roughness = sqrt(alpha)).
+    tables of ``microfacet.tables`` (E1 at specular_roughness = sqrt(alpha)).
     """
     if model == GGX:
-        from ..nodes.specular_albedo import ggx_albedo
+        from ..microfacet.tables import ggx_albedo
 
         mu = ar.in_range("mu", mu, np.float64, 0.0, 1.0, " (cosine of the view angle)")
         return ggx_albedo(mu, np.sqrt(_roughness(model, roughness)))
