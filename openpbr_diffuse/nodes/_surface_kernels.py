@@ -469,18 +469,6 @@ def lobe_score(k, p, o, st, mu, dmodel, ms, sel):
 
 
 @kernel
-def total_score(active, p, o, st, mu, dmodel, ms, sel):
-    """(sum of the scores of the active lobes, number of active lobes)."""
-    S = 0.0
-    K = 0
-    for k in range(N_LOBES):
-        if active & (1 << k):
-            S += lobe_score(k, p, o, st, mu, dmodel, ms, sel)
-            K += 1
-    return S, K
-
-
-@kernel
 def _score_if(k, active, p, o, st, mu, dmodel, ms, sel):
     return lobe_score(k, p, o, st, mu, dmodel, ms, sel) if active & (1 << k) else 0.0
 
