@@ -8,7 +8,7 @@ every row (a tiled buffer), so no input is ever expanded to full size.
 import numba
 import numpy as np
 
-from .models._jit import FASTMATH
+from ._jit import FASTMATH
 
 #: Batch drivers: parallel, cached; numpy's error model (x/0 gives inf, not an exception)
 #: so that rows below the horizon can be computed and then discarded without a branch.

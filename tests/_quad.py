@@ -1,4 +1,5 @@
-"""Test-side Gauss-Legendre quadrature of a BRDF over the upper hemisphere.
+"""Test-side Gauss-Legendre quadrature: the one Gauss-Legendre helper of the test suite
+(``gauss_legendre``) and a hemisphere rule for BRDFs built on it.
 
 Written independently of the library's albedo code: it only calls ``evaluate``.  The
 integrand is smooth in (theta_i, phi) except at theta_i = theta_o (the max(mu_i, mu_o)
@@ -10,14 +11,23 @@ import numpy as np
 import openpbr_diffuse as od
 
 
-def _panels(edges, n):
+def gauss_legendre(lo, hi, n):
+    """Gauss-Legendre nodes and weights of order n on [lo, hi].
+
+    ``lo``, ``hi`` may be arrays (they broadcast); the nodes are on a new last axis, so
+    ``gauss_legendre(edges[:-1], edges[1:], n)`` gives one rule per panel, shape (P, n).
+    """
     x, w = np.polynomial.legendre.leggauss(n)
-    xs, ws = [], []
-    for a, b in zip(edges[:-1], edges[1:]):
-        if b > a:
-            xs.append(0.5 * (b - a) * x + 0.5 * (b + a))
-            ws.append(0.5 * (b - a) * w)
-    return np.concatenate(xs), np.concatenate(ws)
+    lo, hi = np.asarray(lo, dtype=np.float64)[..., None], np.asarray(hi, dtype=np.float64)[..., None]
+    return 0.5 * (lo + hi) + 0.5 * (hi - lo) * x, 0.5 * (hi - lo) * w
+
+
+def _panels(edges, n):
+    """Nodes and weights of order n on each non-empty panel of ``edges``, concatenated."""
+    edges = np.asarray(edges, dtype=np.float64)
+    keep = edges[1:] > edges[:-1]
+    x, w = gauss_legendre(edges[:-1][keep], edges[1:][keep], n)
+    return x.ravel(), w.ravel()
 
 
 def hemisphere_grid(mu_o, n=48):

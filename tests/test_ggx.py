@@ -11,18 +11,14 @@ import math
 import numpy as np
 import pytest
 
+from _quad import gauss_legendre
 from openpbr_diffuse.albedo.quadrature import hemisphere_albedo
-from openpbr_diffuse.nodes import ggx
-from openpbr_diffuse.nodes import specular_albedo as tables
+from openpbr_diffuse.microfacet import fresnel, ggx, quadrature
+from openpbr_diffuse.microfacet import tables
 
 
 def _wo(mu):
     return np.array([math.sqrt(1.0 - mu * mu), 0.0, mu])
-
-
-def _gl(a, b, n):
-    x, w = np.polynomial.legendre.leggauss(n)
-    return 0.5 * (a + b) + 0.5 * (b - a) * x, 0.5 * (b - a) * w
 
 
 def _quad_albedo(alpha, mu, fresnel, n=48):
@@ -38,7 +34,7 @@ class TestMicrofacet:
     @pytest.mark.parametrize("alpha", [0.05, 0.3, 1.0])
     def test_ndf_is_normalised(self, alpha):
         # int D(h) mu_h dh = 1 (projected area of the microsurface = 1)
-        t, w = _gl(0.0, 0.5 * math.pi, 400)
+        t, w = gauss_legendre(0.0, 0.5 * math.pi, 400)
         mu = np.cos(t)
         total = 2.0 * math.pi * np.sum(w * ggx.ndf(mu, alpha) * mu * np.sin(t))
         assert total == pytest.approx(1.0, abs=1e-6)
@@ -47,7 +43,7 @@ class TestMicrofacet:
         # alpha = 1: D = 1/pi, Lambda(mu) = (1/mu - 1)/2, so at mu_o = 1, f = 1/(2 pi (1 + mu_i))
         # and E = int_0^1 mu/(1 + mu) dmu = 1 - ln 2.
         one = lambda c: np.ones((1,) + np.shape(c))
-        assert ggx.albedo_quadrature(1.0, 1.0, one)[0] == pytest.approx(1.0 - math.log(2.0), abs=1e-12)
+        assert quadrature.albedo_quadrature(1.0, 1.0, one)[0] == pytest.approx(1.0 - math.log(2.0), abs=1e-12)
         assert _quad_albedo(1.0, 1.0, lambda c: 1.0) == pytest.approx(1.0 - math.log(2.0), abs=1e-9)
 
     def test_reciprocity(self, rng):
@@ -73,31 +69,31 @@ class TestFresnel:
         ct = np.sqrt(1.0 - s * s)
         rs = (c - eta * ct) / (c + eta * ct)
         rp = (eta * c - ct) / (eta * c + ct)
-        assert np.allclose(ggx.fresnel_dielectric(c, eta), 0.5 * (rs * rs + rp * rp), atol=1e-14)
+        assert np.allclose(fresnel.fresnel_dielectric(c, eta), 0.5 * (rs * rs + rp * rp), atol=1e-14)
 
     def test_dielectric_limits(self):
-        assert ggx.fresnel_dielectric(1.0, 1.5) == pytest.approx(0.04)
-        assert ggx.fresnel_dielectric(0.0, 1.5) == 1.0
-        assert np.all(ggx.fresnel_dielectric(np.linspace(0, 1, 11), 1.0) == 0.0)
+        assert fresnel.fresnel_dielectric(1.0, 1.5) == pytest.approx(0.04)
+        assert fresnel.fresnel_dielectric(0.0, 1.5) == 1.0
+        assert np.all(fresnel.fresnel_dielectric(np.linspace(0, 1, 11), 1.0) == 0.0)
 
     def test_specular_weight_modulates_f0(self):
         # OpenPBR: eta' is the index whose F0 is specular_weight * F0(eta)
         for w, ior in [(0.5, 1.5), (1.0, 2.0), (0.1, 1.33), (2.0, 1.5)]:
-            x = ggx.modulated_ior_parameter(w, ior)
-            assert ggx.f0_of_eta(ggx.eta_of_parameter(x)) == pytest.approx(w * ggx.f0_of_eta(ior), rel=1e-12)
-        assert ggx.modulated_ior_parameter(0.0, 1.5) == 0.0
-        assert ggx.modulated_ior_parameter(1.0, 1.0 / 1.5) < 0.0   # eta < 1 keeps its side
+            x = fresnel.modulated_ior_parameter(w, ior)
+            assert fresnel.f0_of_eta(fresnel.eta_of_parameter(x)) == pytest.approx(w * fresnel.f0_of_eta(ior), rel=1e-12)
+        assert fresnel.modulated_ior_parameter(0.0, 1.5) == 0.0
+        assert fresnel.modulated_ior_parameter(1.0, 1.0 / 1.5) < 0.0   # eta < 1 keeps its side
 
     def test_f82_tint_defining_properties(self):
         F0 = np.array([[0.9, 0.6, 0.3]])
         tint = np.array([[0.8, 0.5, 1.0]])
         schlick = lambda c: F0 + (1.0 - F0) * (1.0 - c) ** 5
-        assert np.allclose(ggx.fresnel_f82_tint(1.0, F0, tint), F0)
-        assert np.allclose(ggx.fresnel_f82_tint(0.0, F0, tint), 1.0)
-        assert np.allclose(ggx.fresnel_f82_tint(1.0 / 7.0, F0, tint), tint * schlick(1.0 / 7.0))
+        assert np.allclose(fresnel.fresnel_f82_tint(1.0, F0, tint), F0)
+        assert np.allclose(fresnel.fresnel_f82_tint(0.0, F0, tint), 1.0)
+        assert np.allclose(fresnel.fresnel_f82_tint(1.0 / 7.0, F0, tint), tint * schlick(1.0 / 7.0))
         # tint = 1 is Schlick everywhere
         c = np.linspace(0, 1, 9)
-        assert np.allclose(ggx.fresnel_f82_tint(c, F0, np.ones((1, 3))), schlick(c[:, None]))
+        assert np.allclose(fresnel.fresnel_f82_tint(c, F0, np.ones((1, 3))), schlick(c[:, None]))
 
 
 # ----------------------------------------------------------------------------- sampling
@@ -128,10 +124,10 @@ class TestHalfVectorQuadrature:
     @pytest.mark.parametrize("alpha, mu, eta", [(0.09, 0.3, 1.5), (0.25, 0.05, 1.5), (0.6, 0.8, 2.0),
                                                 (0.0025, 0.5, 1.33), (1.0, 0.02, 1.5)])
     def test_agrees_with_hemisphere_quadrature(self, alpha, mu, eta):
-        f = lambda c: ggx.fresnel_dielectric(c, eta)
-        half = ggx.albedo_quadrature(mu, alpha, lambda c: f(c)[None], 48, 48)[0]
+        f = lambda c: fresnel.fresnel_dielectric(c, eta)
+        half = quadrature.albedo_quadrature(mu, alpha, lambda c: f(c)[None], 48, 48)[0]
         if alpha < 0.01:   # too peaked for the wi-space grid: compare with a finer half-vector rule
-            ref = ggx.albedo_quadrature(mu, alpha, lambda c: f(c)[None], 128, 128)[0]
+            ref = quadrature.albedo_quadrature(mu, alpha, lambda c: f(c)[None], 128, 128)[0]
         else:
             ref = _quad_albedo(alpha, mu, f, n=64)
         assert half == pytest.approx(ref, abs=2e-6)
@@ -156,12 +152,12 @@ class TestTables:
             r = rng.uniform(r_lo, r_hi)
             mu = rng.uniform(math.sqrt(mu_lo), 1.0) ** 2
             ior, weight = rng.uniform(1.2, 2.6), rng.choice([1.0, rng.uniform(0.05, 1.0)])
-            x = float(ggx.modulated_ior_parameter(weight, ior))
+            x = float(fresnel.modulated_ior_parameter(weight, ior))
             alpha = float(ggx.alpha_of(r))
-            eta = float(ggx.eta_of_parameter(x))
-            fres = lambda c: np.stack([ggx.fresnel_dielectric(c, eta), np.ones_like(c),
+            eta = float(fresnel.eta_of_parameter(x))
+            fres = lambda c: np.stack([fresnel.fresnel_dielectric(c, eta), np.ones_like(c),
                                        (1 - c) ** 5, c * (1 - c) ** 6])
-            ref = ggx.albedo_quadrature(max(mu, tables.MU0), alpha, fres, 48, 48)
+            ref = quadrature.albedo_quadrature(max(mu, tables.MU0), alpha, fres, 48, 48)
             worst_d = max(worst_d, abs(float(tables.dielectric_albedo(mu, r, x)) - ref[0]))
             worst_c = max(worst_c, float(np.max(np.abs(np.array(tables.conductor_basis(mu, r)) - ref[1:]))))
         assert worst_d < tol and worst_c < tol, (worst_d, worst_c)
@@ -171,6 +167,6 @@ class TestTables:
         tint = np.array([0.9, 0.7, 0.5])
         for r, mu in [(0.3, 0.4), (0.7, 0.9)]:
             alpha = float(ggx.alpha_of(r))
-            ref = [_quad_albedo(alpha, mu, lambda c, k=k: ggx.fresnel_f82_tint(c, F0, tint)[..., k])
+            ref = [_quad_albedo(alpha, mu, lambda c, k=k: fresnel.fresnel_f82_tint(c, F0, tint)[..., k])
                    for k in range(3)]
             assert np.allclose(tables.f82_albedo(mu, r, F0, tint), ref, atol=3e-4)

@@ -11,7 +11,7 @@ import openpbr_diffuse as od
 from conftest import random_directions, roughness_max
 from openpbr_diffuse import _arrays as ar
 from openpbr_diffuse import _launch
-from openpbr_diffuse.models._jit import acos
+from openpbr_diffuse._jit import acos
 
 
 # --- arccos ---------------------------------------------------------------------------------

@@ -12,6 +12,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from _chi2 import chi2_pvalue
+from _chi2 import chi2_test as chi2_goodness
 from openpbr_diffuse.sampling import STRATEGIES, pdf, sample_rng
 
 ALPHA = 0.01
@@ -38,66 +40,16 @@ def wo_at(mu, phi=PHI_O):
     return np.array([s * np.cos(phi), s * np.sin(phi), mu])
 
 
-def _nodes(edges, nq):
-    x, w = np.polynomial.legendre.leggauss(nq)
-    lo, hi = edges[:-1, None], edges[1:, None]
-    return 0.5 * (lo + hi) + 0.5 * (hi - lo) * x, 0.5 * (hi - lo) * w
-
-
-def bin_integrals(strategy, wo, r, z_edges, phi_edges, nq=6):
-    """Integral of ``pdf`` over each (cos theta, phi) bin, Gauss-Legendre nq x nq per bin."""
-    zn, zw = _nodes(z_edges, nq)
-    pn, pw = _nodes(phi_edges, nq)
-    Z = zn[:, None, :, None]
-    P = pn[None, :, None, :]
-    S = np.sqrt(np.maximum(0.0, 1.0 - Z * Z))
-    wi = np.stack(np.broadcast_arrays(S * np.cos(P), S * np.sin(P), Z), axis=-1)
-    p = pdf(strategy, wo, wi, r)
-    return np.einsum("ijab,ia,jb->ij", p, zw, pw)
-
-
-def histogram(wi, z_edges, phi_edges):
-    z = wi[:, 2]
-    phi = np.mod(np.arctan2(wi[:, 1], wi[:, 0]), 2.0 * np.pi)
-    outside = (z < z_edges[0]) | (z > z_edges[-1])
-    counts, _, _ = np.histogram2d(z, phi, bins=[z_edges, phi_edges])
-    return counts, int(outside.sum())
-
-
-def chi2_pvalue(observed, expected, min_expected=5.0):
-    """Pearson chi2 with bins of expected count < min_expected pooled (Mitsuba's rule)."""
-    order = np.argsort(expected, axis=None)
-    obs, exp = observed.ravel()[order], expected.ravel()[order]
-    chi2, dof = 0.0, 0
-    pool_o = pool_e = 0.0
-    for o, e in zip(obs, exp):
-        if e < min_expected:
-            pool_o += o
-            pool_e += e
-            if pool_e >= min_expected:
-                chi2 += (pool_o - pool_e) ** 2 / pool_e
-                dof += 1
-                pool_o = pool_e = 0.0
-        else:
-            chi2 += (o - e) ** 2 / e
-            dof += 1
-    if pool_e > 0.0:  # the remainder joins the smallest regular bin's statistic as its own bin
-        chi2 += (pool_o - pool_e) ** 2 / max(pool_e, min_expected)
-        dof += 1
-    return float(stats.chi2.sf(chi2, dof - 1)), chi2, dof - 1
-
-
 def chi2_test(strategy, mu, r, n, res, seed, pdf_strategy=None, pdf_r=None):
     """Return (p-value, chi2, dof, expected-mass) of samples of ``strategy`` vs a pdf."""
     wo = wo_at(mu)
     sphere = strategy == "ltc" or pdf_strategy == "ltc"
     z_edges = np.linspace(-1.0 if sphere else 0.0, 1.0, (2 if sphere else 1) * res[0] + 1)
     phi_edges = np.linspace(0.0, 2.0 * np.pi, res[1] + 1)
-    wi, _ = sample_rng(strategy, wo, r, seed, shape=(n,))
-    observed, outside = histogram(wi, z_edges, phi_edges)
-    assert outside == 0, f"{outside} samples outside the binned domain"
-    mass = bin_integrals(pdf_strategy or strategy, wo, r if pdf_r is None else pdf_r, z_edges, phi_edges)
-    return (*chi2_pvalue(observed, n * mass), mass.sum())
+    pdf_r = r if pdf_r is None else pdf_r
+    # every returned direction counts (sample_rng's pdf is > 0 for wo above the horizon)
+    return chi2_goodness(lambda m: sample_rng(strategy, wo, r, seed, shape=(m,)),
+                         lambda wi: pdf(pdf_strategy or strategy, wo, wi, pdf_r), n, z_edges, phi_edges)
 
 
 def _case_id(case):

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import openpbr_diffuse as od
-from _quad import hemisphere_grid, wo_of
+from _quad import gauss_legendre, hemisphere_grid, wo_of
 from openpbr_diffuse.sampling import INFO, STRATEGIES, pdf, sample, sample_rng
 from openpbr_diffuse.sampling.ltc import ltc_coeffs
 
@@ -30,13 +30,6 @@ def wo_at(mu, phi=0.7):
     return np.array([s * math.cos(phi), s * math.sin(phi), mu])
 
 
-def _gl(lo, hi, n):
-    """Gauss-Legendre nodes/weights on [lo, hi] (arrays of endpoints broadcast)."""
-    x, w = np.polynomial.legendre.leggauss(n)
-    lo, hi = np.asarray(lo)[..., None], np.asarray(hi)[..., None]
-    return 0.5 * (lo + hi) + 0.5 * (hi - lo) * x, 0.5 * (hi - lo) * w
-
-
 def pdf_integral(strategy, mu, r, z_lo=0.0, z_hi=1.0, phi_o=0.7, n=96):
     """Integral of ``pdf`` over z = cos(theta) in [z_lo, z_hi] and all phi.
 
@@ -48,13 +41,13 @@ def pdf_integral(strategy, mu, r, z_lo=0.0, z_hi=1.0, phi_o=0.7, n=96):
     a, _, _, d = ltc_coeffs(mu, r)
     if strategy == "ltc_nonneg":
         d = 0.0
-    pl, pw = (np.concatenate(v, axis=-1) for v in zip(_gl(-0.5 * np.pi, 0.5 * np.pi, n),
-                                                        _gl(0.5 * np.pi, 1.5 * np.pi, n)))
+    pl, pw = (np.concatenate(v, axis=-1) for v in zip(gauss_legendre(-0.5 * np.pi, 0.5 * np.pi, n),
+                                                        gauss_legendre(0.5 * np.pi, 1.5 * np.pi, n)))
     pl, pw = pl.ravel(), pw.ravel()
     t = d / a * np.cos(pl)
     zb = np.clip(t / np.sqrt(1.0 + t * t), z_lo, z_hi)
-    z1, w1 = _gl(np.full_like(zb, z_lo), zb, n)
-    z2, w2 = _gl(zb, np.full_like(zb, z_hi), n)
+    z1, w1 = gauss_legendre(np.full_like(zb, z_lo), zb, n)
+    z2, w2 = gauss_legendre(zb, np.full_like(zb, z_hi), n)
     Z, WZ = np.concatenate([z1, z2], axis=1), np.concatenate([w1, w2], axis=1)  # (n_phi, 2n)
     P = (pl + phi_o)[:, None]
     S = np.sqrt(np.maximum(0.0, 1.0 - Z * Z))

@@ -13,7 +13,7 @@ Writes two CSV files under openpbr_diffuse/data/ (each with a '#' provenance hea
 
 In both, alpha = max(r^2, ALPHA_MIN) with r = specular_roughness.
 
-Method: nodes.ggx.albedo_quadrature (half-vector Gauss-Legendre with panel edges at the
+Method: microfacet.quadrature.albedo_quadrature (half-vector Gauss-Legendre with panel edges at the
 horizon cut, independent of the BRDF evaluation and of the samplers) at order n per panel
 for the values and n/2 for the error estimate written in the header (max |Q_n - Q_n/2|).
 mu = 0 is the grazing limit, evaluated at mu = MU0.
@@ -32,8 +32,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 
 from openpbr_diffuse import __version__  # noqa: E402
-from openpbr_diffuse.nodes import ggx  # noqa: E402
-from openpbr_diffuse.nodes.specular_albedo import (  # noqa: E402
+from openpbr_diffuse.microfacet import fresnel, ggx, quadrature  # noqa: E402
+from openpbr_diffuse.microfacet.tables import (  # noqa: E402
     CONDUCTOR_FILE, DIELECTRIC_FILE, MU0, mu_grid, roughness_grid, x_grid)
 
 #: Conductor (2-D) grid, and the dielectric (3-D) grid, a sub-grid of it in (r, mu).
@@ -46,7 +46,7 @@ def dielectric_fresnels(xs):
         out = np.empty((len(xs),) + c.shape)
         for k, x in enumerate(xs):
             # x = 1 is eta = infinity: F = 1 (the formula would give inf/inf)
-            out[k] = 1.0 if x >= 1.0 else ggx.fresnel_dielectric(c, ggx.eta_of_parameter(x))
+            out[k] = 1.0 if x >= 1.0 else fresnel.fresnel_dielectric(c, fresnel.eta_of_parameter(x))
         return out
     return fresnels
 
@@ -57,8 +57,8 @@ def conductor_fresnels(c):
 
 def quad(mu, alpha, fresnels, n):
     m = max(mu, MU0)
-    hi = ggx.albedo_quadrature(m, alpha, fresnels, n, n)
-    lo = ggx.albedo_quadrature(m, alpha, fresnels, n // 2, n // 2)
+    hi = quadrature.albedo_quadrature(m, alpha, fresnels, n, n)
+    lo = quadrature.albedo_quadrature(m, alpha, fresnels, n // 2, n // 2)
     return hi, float(np.max(np.abs(hi - lo)))
 
 
@@ -92,7 +92,7 @@ def header(what, n, err, extra):
         "# model: GGX NDF, Smith height-correlated G2, alpha = max(roughness^2, "
         f"{ggx.ALPHA_MIN:g}) (roughness = OpenPBR specular_roughness), single scattering",
         "# method: half-vector Gauss-Legendre quadrature with panel edges at the horizon cut "
-        f"(openpbr_diffuse.nodes.ggx.albedo_quadrature), order {n} per panel",
+        f"(openpbr_diffuse.microfacet.quadrature.albedo_quadrature), order {n} per panel",
         f"# error estimate of the quadrature: max |Q_{n} - Q_{n // 2}| over the table = {err:.1e} "
         f"(bounds the error of Q_{n // 2}; the stored Q_{n} is more accurate)",
         "# interpolated accuracy (tests/test_ggx.py, against an independent quadrature): <= 2e-4 for "
@@ -116,9 +116,9 @@ def main(argv=None):
     cond, err_c = tabulate_conductor(args.n)
     hc = header("Basis albedos of the GGX lobe of the OpenPBR metal: E1, E5, E6 for Fresnel "
                 "factors 1, (1-c)^5, c(1-c)^6 (c = wo.h)", args.n, err_c,
-                ["# F82-tint metal albedo = F0 (E1 - E5) + E5 - a E6 (a: nodes.ggx.f82_coefficient)",
+                ["# F82-tint metal albedo = F0 (E1 - E5) + E5 - a E6 (a: microfacet.fresnel.f82_coefficient)",
                  f"# grid: roughness = k/{N_R_C - 1}, mu = (k/{N_MU_C - 1})^2; interpolation "
-                 "(nodes.specular_albedo): Catmull-Rom in both node coordinates"])
+                 "(microfacet.tables): Catmull-Rom in both node coordinates"])
     with open(os.path.join(args.out, CONDUCTOR_FILE), "w") as fh:
         fh.write(hc + "\nroughness,mu,E1,E5,E6\n")
         for i, r in enumerate(roughness_grid(N_R_C)):
@@ -132,7 +132,7 @@ def main(argv=None):
                  "x = 1 means F = 1",
                  f"# grid: roughness = k/{N_R_D - 1}, x = sin^2(pi k/{2 * (N_X - 1)}), "
                  f"mu = (k/{N_MU_D - 1})^2 (columns)",
-                 "# interpolation (nodes.specular_albedo): E/E1 by tensor-product Catmull-Rom in the node "
+                 "# interpolation (microfacet.tables): E/E1 by tensor-product Catmull-Rom in the node "
                  "coordinates of roughness, x and mu, times E1 from the conductor table"])
     mu_cols = ",".join(f"{m:.9g}" for m in mu_grid(N_MU_D))
     with open(os.path.join(args.out, DIELECTRIC_FILE), "w") as fh:

@@ -17,7 +17,7 @@ import time
 
 import numpy as np
 
-from openpbr_diffuse.albedo import tables
+from openpbr_diffuse.albedo import generate as tables
 from openpbr_diffuse.models.registry import MODELS
 
 

@@ -21,7 +21,7 @@ import numpy as np
 
 from .._version import __version__
 from ..models.registry import INFO, MIX_LINEAR, MIX_RHO2, MIX_RHO_MS, model_info
-from .tables import load_table, mix_weight, table_path
+from ..models.tables import load_table, mix_weight, table_path
 
 #: Default texture resolution, largest size, and texels per computed block of rows.
 DEFAULT_SIZE = 32

@@ -27,14 +27,14 @@ from numba import prange
 
 from .._arrays import is_unit, is_within
 from .._launch import _F, _U, compiled, launch, rows
-from ._jit import INV_PI, kernel
+from .._jit import kernel
 from .eon import eon_albedo_terms, eon_average_terms, eon_terms, rho_ms
-from .fon import C2, G_fon, G_qon, fon_A, fon_terms
-from .fujii import fujii_coeffs, fujii_terms
+from .fon import fon_albedo, fon_terms
+from .fujii import fujii_albedo_terms, fujii_terms
 from .full_on import full_on_terms
-from .gotanda import gotanda_AB, gotanda_terms
-from .lambert import lambert_terms
-from .qon import QON_AVG_G, qon_AB, qon_terms
+from .gotanda import gotanda_albedo, gotanda_terms
+from .lambert import lambert_albedo, lambert_terms
+from .qon import qon_AB, qon_albedo, qon_average_albedo, qon_terms
 from .registry import INFO, MIX_RHO2, MIX_RHO_MS
 from .van_ouwerkerk import van_ouwerkerk_terms
 
@@ -71,9 +71,9 @@ def lobe_terms(model, ix, iy, iz, ox, oy, oz, r):
 def albedo_terms(model, mu, r, average):
     """(e_g, e_h, <E_F>) of E = rho e_g + m(rho) e_h; the average <E> when ``average``.
 
-    QON family: E = A + B G(mu)/pi (Eq. 8), <E> = A + (2/3 - 64/(45 pi)) B (Eq. 9).
-    Models of FON's shape f = (A + B s/t)/pi (FON, Gotanda, Fujii): E = A + B G_F(mu)/pi
-    (Eq. 12-13 with A_F, B_F replaced) and <E> = A + c2 B (Eq. 15).
+    Each model module holds its own closed form: QON family Eq. 8-9 (``qon``), FON
+    Eq. 12-15 and the lobes of FON's shape (``fon``, ``gotanda``, ``fujii``), EON Eq. 20
+    (``eon``).  ("full_on" has none: its albedo comes from the reference tables.)
     """
     if model == EON or model == EON_APPROX:
         if average:
@@ -82,21 +82,16 @@ def albedo_terms(model, mu, r, average):
     if model == QON or model == QON_FOOTNOTE or model == QON_VO:
         A, B = qon_AB(r, 0.57 if model == QON_FOOTNOTE else 0.33)
         if average:
-            return A + QON_AVG_G * B, 0.0, 0.0
-        return A + B * G_qon(mu) * INV_PI, 0.0, 0.0
-    h = 0.0
+            return qon_average_albedo(A, B), 0.0, 0.0
+        return qon_albedo(mu, A, B), 0.0, 0.0
     if model == FON:
-        A = fon_A(r)
-        B = r * A
-    elif model == GOTANDA:
-        A, B = gotanda_AB(r)
-    elif model == QON_FUJII:
-        A, B, h = fujii_coeffs(r)
-    else:  # Lambert
-        return 1.0, 0.0, 0.0
-    if average:
-        return A + C2 * B, h, 0.0
-    return A + B * G_fon(mu) * INV_PI, h, 0.0
+        return fon_albedo(mu, r, average), 0.0, 0.0
+    if model == GOTANDA:
+        return gotanda_albedo(mu, r, average), 0.0, 0.0
+    if model == QON_FUJII:
+        g, h = fujii_albedo_terms(mu, r, average)
+        return g, h, 0.0
+    return lambert_albedo(), 0.0, 0.0
 
 
 @kernel

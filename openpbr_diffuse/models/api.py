@@ -77,7 +77,7 @@ def _albedo(model, mu, roughness, rho, color_mode, average):
     info = model_info(model)
     tint = ar.white_tint(color_mode)
     if not info.closed_form_albedo:
-        from ..albedo.tables import table_albedo
+        from .tables import table_albedo
 
         return table_albedo(info.name, mu, roughness, rho, average=average, tint=tint)
     dtype = ar.result_dtype(roughness, rho) if average else ar.result_dtype(mu, roughness, rho)

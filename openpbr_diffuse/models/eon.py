@@ -10,7 +10,7 @@ f_EON = f_FON + f_ms with
 "eon" uses the exact E_F (Eq. 12), "eon_approx" the Eq. 14 fit inside f_ms; the
 single-scattering FON term is the same in both.
 """
-from ._jit import EPS, INV_PI, kernel
+from .._jit import EPS, INV_PI, kernel
 from .fon import E_F, E_F_avg, E_F_avg_of, fon_terms
 
 

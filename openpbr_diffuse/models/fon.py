@@ -9,7 +9,8 @@ JCGT 14(1), 2025, Section 2.2 (Eq. 10-15) and Listing 1.
 """
 import math
 
-from ._jit import INV_PI, PI, acos, kernel, max_mu
+from .._jit import INV_PI, PI, kernel, max_mu
+from .qon import G_qon
 
 #: Eq. 11/15 constants.
 C1 = 0.5 - 2.0 / (3.0 * PI)
@@ -36,19 +37,6 @@ def fon_A(r):
 def fon_terms(mu_i, mu_o, s, r):
     """f_FON / rho (Eq. 10): A_F (1 + r s/t) / pi."""
     return fon_A(r) * (1.0 + r * s_over_t(mu_i, mu_o, s)) * INV_PI
-
-
-@kernel
-def G_qon(mu):
-    """G(theta) of the QON albedo (Eq. 5/8) as a function of mu = cos(theta).
-
-    ``sin(th)(th - sin cos) + (2/3) tan(th)(1 - sin^3)`` with ``tan(1 - S^3)`` rewritten as
-    ``S mu (1 + S + S^2) / (1 + S)`` (since ``1 - S = mu^2 / (1 + S)``): no division by mu,
-    no cancellation, and the limit pi/2 at mu = 0 comes out exactly.
-    """
-    mu = min(max(mu, 0.0), 1.0)
-    S = math.sqrt(max(0.0, 1.0 - mu * mu))
-    return S * (acos(mu) - S * mu) + (2.0 / 3.0) * S * mu * (1.0 + S + S * S) / (1.0 + S)
 
 
 @kernel
@@ -102,3 +90,27 @@ def E_F_avg_of(r, approx):
     if approx:
         return fon_A(r) * (1.0 + C2_APPROX * r)
     return E_F_avg(r)
+
+
+@kernel
+def fon_shape_albedo(mu, A, B):
+    """E(mu) / rho = A + B G_F(mu)/pi of any lobe (A + B s/t)/pi with FON's t (Eq. 12-13).
+
+    FON itself (A = A_F, B = r A_F), and Gotanda's and Fujii's lobes, which share its shape.
+    """
+    return A + B * G_fon(mu) * INV_PI
+
+
+@kernel
+def fon_shape_average(A, B):
+    """<E> / rho = A + c2 B of a lobe (A + B s/t)/pi (Eq. 15)."""
+    return A + C2 * B
+
+
+@kernel
+def fon_albedo(mu, r, average):
+    """FON albedo E_F(mu) (Eq. 12-13), or <E_F> (Eq. 15) when ``average``."""
+    A = fon_A(r)
+    if average:
+        return fon_shape_average(A, r * A)
+    return fon_shape_albedo(mu, A, r * A)

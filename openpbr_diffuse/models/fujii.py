@@ -6,8 +6,8 @@ A = 1 - 0.5 s2/(s2 + 0.33) + 0.17 rho s2/(s2 + 0.13), B = 0.45 s2/(s2 + 0.09),
 f = rho/pi (A + B s/t).  A depends on rho, so f = rho g + rho^2 h with h = K/pi.
 Fujii notes it exceeds unit albedo for rho > 0.97 (as full Oren-Nayar does).
 """
-from ._jit import INV_PI, kernel
-from .fon import s_over_t
+from .._jit import INV_PI, kernel
+from .fon import fon_shape_albedo, fon_shape_average, s_over_t
 
 
 @kernel
@@ -22,3 +22,12 @@ def fujii_terms(mu_i, mu_o, s, sigma):
     """Return (g, h) with f = rho g + rho^2 h."""
     A0, B, K = fujii_coeffs(sigma)
     return (A0 + B * s_over_t(mu_i, mu_o, s)) * INV_PI, K * INV_PI
+
+
+@kernel
+def fujii_albedo_terms(mu, sigma, average):
+    """(e_g, e_h) of E = rho e_g + rho^2 e_h (or of <E>): FON's shape, E = A + B G_F/pi + K rho."""
+    A0, B, K = fujii_coeffs(sigma)
+    if average:
+        return fon_shape_average(A0, B), K
+    return fon_shape_albedo(mu, A0, B), K

@@ -15,7 +15,7 @@ grazing angles (albedo 1.0047 at rho = 1, sigma = 0.5, mu = 0.05).
 """
 import math
 
-from ._jit import INV_PI, PI, kernel, max_mu
+from .._jit import INV_PI, PI, kernel, max_mu
 
 
 

@@ -13,8 +13,8 @@ reference.
 """
 import math
 
-from ._jit import INV_PI, kernel
-from .fon import s_over_t
+from .._jit import INV_PI, kernel
+from .fon import fon_shape_albedo, fon_shape_average, s_over_t
 
 
 def sigma_from_shininess(shininess):
@@ -33,3 +33,12 @@ def gotanda_terms(mu_i, mu_o, s, sigma):
     """f / rho of Eq. 25."""
     A, B = gotanda_AB(sigma)
     return (A + B * s_over_t(mu_i, mu_o, s)) * INV_PI
+
+
+@kernel
+def gotanda_albedo(mu, sigma, average):
+    """E(mu) / rho (or <E> / rho): the lobe has FON's shape, E = A + B G_F/pi (Eq. 12-13, 15)."""
+    A, B = gotanda_AB(sigma)
+    if average:
+        return fon_shape_average(A, B)
+    return fon_shape_albedo(mu, A, B)

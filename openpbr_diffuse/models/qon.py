@@ -2,8 +2,11 @@
 
 sigma is the slope angle in radians.  f = rho/pi (A + B max(0, s) / max(mu_i, mu_o)).
 The "footnote" variant uses 0.57 instead of 0.33 in A (Oren & Nayar's footnote).
+Albedo: E(mu) = A + B G(mu)/pi (Eq. 8), <E> = A + (2/3 - 64/(45 pi)) B (Eq. 9).
 """
-from ._jit import INV_PI, PI, kernel, max_mu
+import math
+
+from .._jit import INV_PI, PI, acos, kernel, max_mu
 
 #: <G/pi> weighted by 2 mu: the constant of the QON average albedo (Eq. 9).
 QON_AVG_G = 2.0 / 3.0 - 64.0 / (45.0 * PI)
@@ -20,3 +23,28 @@ def qon_AB(sigma, a_const):
 def qon_terms(mu_i, mu_o, s, A, B):
     """f_QON / rho (Eq. 1): (A + B max(0, s) / max(mu_i, mu_o)) / pi."""
     return (A + B * max(0.0, s) / max_mu(mu_i, mu_o)) * INV_PI
+
+
+@kernel
+def G_qon(mu):
+    """G(theta) of the QON albedo (Eq. 5/8) as a function of mu = cos(theta).
+
+    ``sin(th)(th - sin cos) + (2/3) tan(th)(1 - sin^3)`` with ``tan(1 - S^3)`` rewritten as
+    ``S mu (1 + S + S^2) / (1 + S)`` (since ``1 - S = mu^2 / (1 + S)``): no division by mu,
+    no cancellation, and the limit pi/2 at mu = 0 comes out exactly.
+    """
+    mu = min(max(mu, 0.0), 1.0)
+    S = math.sqrt(max(0.0, 1.0 - mu * mu))
+    return S * (acos(mu) - S * mu) + (2.0 / 3.0) * S * mu * (1.0 + S + S * S) / (1.0 + S)
+
+
+@kernel
+def qon_albedo(mu, A, B):
+    """Directional albedo E(mu) / rho = A + B G(mu)/pi (Eq. 8)."""
+    return A + B * G_qon(mu) * INV_PI
+
+
+@kernel
+def qon_average_albedo(A, B):
+    """Average albedo <E> / rho = A + (2/3 - 64/(45 pi)) B (Eq. 9)."""
+    return A + QON_AVG_G * B

@@ -7,7 +7,7 @@ cosines, in-plane projections normalised, cos(phi) saturated, and
 """
 import math
 
-from ._jit import INV_PI, kernel, max_mu
+from .._jit import INV_PI, kernel, max_mu
 
 
 @kernel

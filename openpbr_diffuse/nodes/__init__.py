@@ -6,9 +6,8 @@
 
 Both read their interface (input names, types, defaults, ranges) from the MaterialX data
 library (``materialx_defs``) and share the verbs ``eval(wi, wo)``, ``albedo(wo)``,
-``sample(wo, u) -> (wi, pdf)`` and ``pdf(wo, wi)``.  Modules: ``frame`` (shading frames),
-``ggx`` (microfacet terms, Fresnel factors, GGX sampling, albedo quadrature),
-``specular_albedo`` (the shipped GGX albedo tables).
+``sample(wo, u) -> (wi, pdf)`` and ``pdf(wo, wi)``.  Modules: ``frame`` (shading frames);
+the GGX lobes they compose live in ``openpbr_diffuse.microfacet``.
 """
 from .materialx_defs import nodedef_inputs
 from .openpbr_surface import IgnoredInputWarning, Lobe, OpenPBRSurface

@@ -61,8 +61,8 @@ from typing import NamedTuple
 import numpy as np
 
 from .. import _arrays as ar
-from . import ggx
-from . import specular_albedo as tables
+from ..microfacet import fresnel, ggx
+from ..microfacet import tables
 from ._node import NodeMeta, bind_inputs, convert_input, is_default, node_signature
 from .frame import Frame
 from .materialx_defs import nodedef_inputs
@@ -167,12 +167,12 @@ class OpenPBRSurface(metaclass=NodeMeta):
         self.metalness = p["base_metalness"]
         self.roughness = p["specular_roughness"]
         self.alpha = ggx.alpha_of(self.roughness)
-        x = ggx.modulated_ior_parameter(p["specular_weight"], p["specular_ior"])
+        x = fresnel.modulated_ior_parameter(p["specular_weight"], p["specular_ior"])
         if np.any(x < 0.0):
             warnings.warn("specular_ior < 1: total internal reflection is not modelled; the Fresnel "
                           "factor of the reciprocal index (same F0) is used", UserWarning, stacklevel=3)
         self.x = np.abs(x)                       # sqrt(F0) of the modulated index, eta' >= 1
-        self.eta = ggx.eta_of_parameter(self.x)
+        self.eta = fresnel.eta_of_parameter(self.x)
         self.metal_f0 = p["base_weight"][..., None] * p["base_color"]
         self.diffuse = OrenNayarDiffuseBSDF(1.0, p["base_color"], p["base_diffuse_roughness"], True)
         dielectric = np.any(self.metalness < 1.0)
@@ -183,7 +183,7 @@ class OpenPBRSurface(metaclass=NodeMeta):
         ) if on) or ("diffuse",)
         if "metal" in self.active:
             c = np.linspace(0.0, 1.0, 257).reshape((257,) + (1,) * self.metal_f0.ndim)
-            if np.any(ggx.fresnel_f82_tint(c, self.metal_f0, p["specular_color"]) < 0.0):
+            if np.any(fresnel.fresnel_f82_tint(c, self.metal_f0, p["specular_color"]) < 0.0):
                 warnings.warn("the F82-tint Fresnel of this metal is negative at some angles (dark "
                               "base_color with a dark specular_color): the published formula is used "
                               "unclamped, so the metal lobe and its albedo can be negative", UserWarning,
@@ -274,9 +274,9 @@ class OpenPBRSurface(metaclass=NodeMeta):
         m, c = ggx.microfacet_terms(wi, wo, self.alpha)
         mu_o = np.clip(wo[..., 2], 0.0, 1.0)
         if name == "specular":
-            F = ggx.fresnel_dielectric(c, self.eta) * self._ms(mu_o, np.square(self.x))
+            F = fresnel.fresnel_dielectric(c, self.eta) * self._ms(mu_o, np.square(self.x))
             return np.broadcast_to((F * m)[..., None], np.shape(m) + (3,))
-        F = ggx.fresnel_f82_tint(c, self.metal_f0, self.inputs["specular_color"])
+        F = fresnel.fresnel_f82_tint(c, self.metal_f0, self.inputs["specular_color"])
         return F * self._ms(mu_o, self.metal_f0, channels=True) * m[..., None]
 
     def _lobe_pdf(self, name, wi, wo):

@@ -30,7 +30,7 @@ d <= 0 (every mu_o < 0.9999) the mapping is exactly Listing 3's.
 """
 import math
 
-from ..models._jit import PI, kernel
+from .._jit import PI, kernel
 from .simple import cos_sin_2pi
 
 

@@ -5,7 +5,7 @@ of the combined strategy is the mixture P_u/(2 pi) + P_c pdf_CLTC (P_c = 1 - P_u
 makes the estimator unbiased where CLTC misses a lune and bounds the throughput weight.
 At r = 0, P_u = 0 and M = I: the sampler is cosine sampling.
 """
-from ..models._jit import kernel
+from .._jit import kernel
 from .ltc import clip_fraction, from_frame, ltc_coeffs, ltc_pdf_local, ltc_sample_local, to_frame
 from .simple import INV_2PI, uniform_sample
 

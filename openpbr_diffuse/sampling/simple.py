@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from ..models._jit import INV_PI, kernel
+from .._jit import INV_PI, kernel
 
 INV_2PI = 0.5 / math.pi
 _SQRT_HALF = math.sqrt(0.5)
@@ -21,7 +21,7 @@ def cos_sin_2pi(u):
     """Return (cos 2 pi u, sin 2 pi u) for u in [0, 1), to a few ulp (absolute).
 
     Why not ``math.cos``/``math.sin``: a libm call keeps LLVM from vectorising the batch
-    loop (see ``models/_jit.py``), and in double precision the two calls alone cost about
+    loop (see ``openpbr_diffuse/_jit.py``), and in double precision the two calls alone cost about
     40 ns per sample on the 2-core test machine.  This is a few multiply-adds, branch-free,
     and accurate to 5e-16 (tested against long-double cos/sin).
     The angle is reduced exactly in u (quadrant q = floor(4u)) and centred on the

@@ -27,7 +27,7 @@ import os
 
 import numpy as np
 
-from . import ggx
+from . import fresnel
 
 DATA_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "data")
 DIELECTRIC_FILE = "specular_albedo_dielectric.csv"
@@ -64,7 +64,7 @@ def _check_grid(name, ok):
     # Node indices are computed arithmetically below: a file on another grid would be
     # read wrongly, so refuse it.
     if not ok:
-        raise RuntimeError(f"{name}: grid does not match the layout nodes.specular_albedo assumes")
+        raise RuntimeError(f"{name}: grid does not match the layout microfacet.tables assumes")
 
 
 @functools.lru_cache(maxsize=None)
@@ -152,7 +152,7 @@ def _floats(*arrays):
 def dielectric_albedo(mu, roughness, x):
     """E_diel(mu, roughness, x): single-scattering albedo of the dielectric specular lobe.
 
-    Arrays broadcast; x = sqrt(F0) in [0, 1] of the index (``ggx.modulated_ior_parameter``).
+    Arrays broadcast; x = sqrt(F0) in [0, 1] of the index (``fresnel.modulated_ior_parameter``).
     x = 0 gives exactly 0 (F = 0 for eta = 1).
     """
     R, _ = _padded_dielectric()
@@ -194,5 +194,5 @@ def ggx_albedo(mu, roughness):
 def f82_albedo(mu, roughness, F0, tint):
     """Albedo of the F82-tint GGX lobe, F0 (E1 - E5) + E5 - a E6; F0, tint (..., C)."""
     E1, E5, E6 = conductor_basis(mu, roughness)
-    a = ggx.f82_coefficient(F0, tint)
+    a = fresnel.f82_coefficient(F0, tint)
     return F0 * (E1 - E5)[..., None] + E5[..., None] - a * E6[..., None]

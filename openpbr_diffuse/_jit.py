@@ -1,8 +1,11 @@
-"""Kernel compilation settings shared by every model.
+"""Kernel compilation settings shared by every compiled formula of the package.
 
-Each formula of the paper is written once, as a scalar function compiled by numba
-(``kernel``); the batch drivers in ``_kernels.py`` loop over arrays in parallel and call
-them.  The same functions are what the tests verify: there is no second NumPy copy.
+Used by the lobe models (``models``), the samplers (``sampling``), the microfacet lobes
+(``microfacet``), the surface kernels (``nodes``) and the batch launcher (``_launch``):
+it lives at the top of the package so that none of them reaches into another's private
+module.  Each formula of the paper is written once, as a scalar function compiled by
+numba (``kernel``); the batch drivers (``models/_kernels.py``, ``sampling/_kernels.py``)
+loop over arrays in parallel and call them.  The same functions are what the tests verify: there is no second NumPy copy.
 
 ``fastmath`` is restricted to flags that keep IEEE semantics for NaN/Inf (the input checks
 and the ``max(eps, .)`` guards of Listing 1 rely on them) but allow contraction and
