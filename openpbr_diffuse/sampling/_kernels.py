@@ -52,7 +52,9 @@ def sample_driver(strategy):
     Two guarantees, for every u in [0, 1)^2 and both dtypes:
 
     - the returned pdf is ``strategy_pdf`` of the direction as stored (rounded to the
-      output dtype), i.e. exactly what ``pdf(strategy, wo, wi)`` returns for it: 0 when wo
+      output dtype), i.e. what ``pdf(strategy, wo, wi)`` returns for it (the same formula on
+      the same values; only contraction into fused multiply-adds, which LLVM may choose
+      differently in the two loops, can change the last bit or two): 0 when wo
       is below the horizon (nothing to sample; the direction is that of wo.z = 0);
     - strategies other than the general LTC never return wi.z <= 0: z is floored at
       ``z_min``, the smallest normal number of the output dtype.  Only rounding reaches the
