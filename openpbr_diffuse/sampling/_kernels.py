@@ -59,7 +59,7 @@ def sample_driver(strategy):
     - strategies other than the general LTC never return wi.z <= 0: z is floored at
       ``z_min``, the smallest normal number of the output dtype.  Only rounding reaches the
       floor -- the uniform lobe's z = u1 at u1 = 0, or a CLTC direction on the clipped
-      boundary (the horizon) -- and it moves the direction by less than 1e-38.
+      boundary (the horizon), a few ulp below 0 -- so it moves a direction by rounding only.
     """
 
     @compiled

@@ -35,16 +35,19 @@ def sample(strategy, wo, roughness, u):
     Returns
     -------
     wi : ndarray, shape broadcast(leading axes) + (3,)
-        Unit sampled directions (z >= 0 except for "ltc").
+        Unit sampled directions; z > 0 for every u in [0, 1)^2 except with "ltc" (z is
+        floored at the dtype's smallest normal number, which only rounding reaches).
     pdf : ndarray, shape broadcast(leading axes)
-        Solid-angle density of wi, equal to ``pdf(strategy, wo, wi, roughness)`` (to
-        rounding) for every wi above the horizon.
+        Solid-angle density of wi: ``pdf(strategy, wo, wi, roughness)`` evaluated on the
+        returned (rounded) wi, so the two agree to the last bits for every u; > 0 whenever
+        wo is above the horizon (no discards at u = 0 or at the largest value below 1).
 
     Notes
     -----
-    "eon" at r = 0 returns exactly the directions of "cosine" (to rounding): M = I and
-    P_u = 0.  The uniform branch of "eon" maps u1 = 0 to a horizon direction (z = 0),
-    where the weight f mu_i / pdf is 0.
+    "eon" at r = 0 returns the directions of "cosine" (to rounding) for every u: M = I
+    and P_u = 0.  The uniform lobe (and the uniform branch of "eon") maps u1 = 0 to
+    z = 0, which the floor lifts to the smallest normal number: a direction on the
+    horizon, with f mu_i / pdf = 0, and a pdf that ``pdf`` agrees with.
 
     References
     ----------
