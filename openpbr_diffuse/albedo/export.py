@@ -141,7 +141,12 @@ def _progress_bar(total, desc, progress):
     """A tqdm bar on stderr: ``progress`` True (always), False (never), None (when stderr is a TTY)."""
     if progress is False:
         return None
-    from tqdm import tqdm
+    try:
+        from tqdm import tqdm  # in the "exr" extra with OpenImageIO; optional for the automatic bar
+    except ImportError:
+        if progress:
+            raise ImportError("progress=True needs tqdm: pip install tqdm") from None
+        return None
 
     return tqdm(total=total, desc=desc, unit="row", disable=None if progress is None else False,
                 leave=False, file=sys.stderr)
