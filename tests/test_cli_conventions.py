@@ -99,7 +99,11 @@ def test_ctrl_c_is_one_line_exit_130(tmp_path):
     p = subprocess.Popen([sys.executable, "-m", "openpbr_diffuse", "albedo", "full_on", "--export", str(tmp_path),
                           "--size", "4096", "--no-progress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                          env=env)
-    time.sleep(4.0)                       # inside the command (imports done, computing)
+    target = tmp_path / "full_on_albedo.exr"   # created when writing starts: inside the command
+    deadline = time.monotonic() + 120
+    while not target.exists() and p.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert p.poll() is None, "the export ended before it could be interrupted"
     p.send_signal(signal.SIGINT)
     out, err = p.communicate(timeout=120)
     assert p.returncode == 130, err
