@@ -59,3 +59,19 @@ def quad_average(model, roughness, rho=1.0, n=48, n_mu=48, **kw):
     for ti, wti in zip(t, w):
         total = total + wti * 2.0 * np.cos(ti) * np.sin(ti) * quad_albedo(model, np.cos(ti), roughness, rho, n, **kw)
     return total
+
+
+def sphere_rule(mu_o, n=64):
+    """Directions (T, P, 3) and weights for  int g(wi) dwi  over the whole sphere, wo in the
+    xz-plane at cos(theta_o) = mu_o (integrands even in phi: phi in [0, pi], doubled).
+
+    Panel edges in theta at theta_o (the reflection peak), pi/2 (the horizon) and
+    pi - theta_o (the mirrored peak below, and where the GGX half vector reaches the
+    horizon); in phi at pi/2 and 0.9 pi (towards the peaks at phi = pi).
+    """
+    th_o = float(np.arccos(np.clip(mu_o, 0.0, 1.0)))
+    t, wt = _panels(np.unique([0.0, th_o, 0.5 * np.pi, np.pi - th_o, np.pi]), n)
+    p, wp = _panels([0.0, 0.5 * np.pi, 0.9 * np.pi, np.pi], n)
+    T, P = np.meshgrid(t, p, indexing="ij")
+    wi = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], axis=-1)
+    return wi, 2.0 * np.outer(wt, wp) * np.sin(T)

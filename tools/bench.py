@@ -277,6 +277,49 @@ print(t2 - t1, t4 - t3)
 """
 
 
+# --------------------------------------------------------------------------- the surface (issue 9)
+
+#: Issue 9 targets: time per row relative to OrenNayarDiffuseBSDF's of the same verb.
+TARGET_SURFACE_BASE = 5.0      # diffuse + specular + metal
+TARGET_SURFACE_STACK = 10.0    # + coat + fuzz
+TARGET_SURFACE_BUILD_S = 50e-6  # construct + lobes(wo) at one direction
+
+
+def surface_rows(n, reps):
+    """OpenPBRSurface eval / pdf / sample / albedo per row (float64) against the
+    OrenNayarDiffuseBSDF node's same verb, and construction + lobes(wo) per material."""
+    from openpbr_diffuse import OpenPBRSurface, OrenNayarDiffuseBSDF
+
+    x = inputs(n, np.float64, seed=9)
+    u3 = np.minimum(np.random.default_rng(9).random((n, 3)), 1.0 - 2.0 ** -53)
+    node = OrenNayarDiffuseBSDF(1.0, (0.8, 0.5, 0.3), 0.7, True)
+    base = dict(base_color=(0.8, 0.5, 0.3), base_diffuse_roughness=0.7, base_metalness=0.3, specular_roughness=0.4)
+    surfaces = {"base (diffuse+specular+metal)": (OpenPBRSurface(**base), TARGET_SURFACE_BASE),
+                "stack (+coat+fuzz)": (OpenPBRSurface(**base, coat_weight=0.6, coat_roughness=0.2,
+                                                      fuzz_weight=0.4, fuzz_roughness=0.5), TARGET_SURFACE_STACK)}
+    verbs = {"eval": (lambda o: o.eval(x["wi"], x["wo"])), "pdf": (lambda o: o.pdf(x["wo"], x["wi"])),
+             "sample": (lambda o: o.sample(x["wo"], x["u"])), "albedo": (lambda o: o.albedo(x["wo"]))}
+    rows = []
+    for verb, call in verbs.items():
+        ref = best_time(lambda: call(node), reps) / n * 1e9
+        for label, (s, bound) in surfaces.items():
+            t = best_time(lambda: call(s) if verb != "sample" else s.sample(x["wo"], u3), reps)
+            ns = t / n * 1e9
+            rows.append({"kind": f"surface.{verb}", "name": label, "dtype": "float64", "n": n, "ns": ns,
+                         "rate_per_s": n / t, "mem_extra_x": None, "ref": "OrenNayarDiffuseBSDF",
+                         "ref_ns": ref, "ratio": ns / ref, "target": f"<= {bound:g} x node",
+                         "ok": ns / ref <= bound})
+    wo = np.array([0.6, 0.0, 0.8])
+    for label, kw in (("base", base), ("stack", dict(base, coat_weight=0.6, fuzz_weight=0.4))):
+        def build(kw=kw):
+            OpenPBRSurface(**kw).lobes(wo)
+        t = best_time(build, max(reps, 20))
+        rows.append({"kind": "surface.build+lobes", "name": label, "dtype": "float64", "n": 1, "ns": t * 1e9,
+                     "rate_per_s": 1.0 / t, "mem_extra_x": None, "ref": None, "ratio": None,
+                     "target": f"< {TARGET_SURFACE_BUILD_S * 1e6:g} us", "ok": t < TARGET_SURFACE_BUILD_S})
+    return rows
+
+
 def startup(cold=True):
     """Import time and first-call time of ``evaluate("eon", ...)`` in fresh processes.
 
@@ -345,6 +388,7 @@ def run_bench(n=1_000_000, reps=15, c_reps=20, dtypes=(np.float32, np.float64), 
     """Run everything; returns a JSON-serialisable dict (``rows``, ``c``, ``startup``, ``env``)."""
     c_before = run_c(n, c_reps) if with_c else {"skipped": "disabled"}
     rows = python_rows(n, reps, c_before if "skipped" not in c_before else None, dtypes)
+    rows += surface_rows(n, reps)
     c = c_before
     if with_c and "skipped" not in c_before:
         c = _merge_c(c_before, run_c(n, c_reps))
@@ -374,7 +418,10 @@ def summary(result):
     """The issue's targets, one entry each: what was measured, the bound, met or not."""
     out = []
     for r in result["rows"]:
-        if r.get("ok") is not None:
+        if r.get("ok") is not None and r["kind"].startswith("surface."):
+            value = f"{r['ratio']:.2f} x node" if r["ratio"] is not None else f"{r['ns'] / 1e3:.1f} us"
+            out.append({"what": f"{r['kind']} {r['name']}", "value": value, "target": r["target"], "ok": bool(r["ok"])})
+        elif r.get("ok") is not None:
             value = f"{r['ratio']:.2f} x C" if r.get("ref") and "C" in (r["target"] or "") and r["ratio"] \
                 else (f"{r['rate_per_s'] / 1e6:.0f} M/s" if r["kind"] == "albedo"
                       else f"{r.get('vs_eon_approx', 0):.2f} x eon_approx")
@@ -432,7 +479,7 @@ def format_table(result):
             verdict += "  memory > 3x: MISSED"
         lines.append(f"{r['kind']:<12} {r['name']:<18} {r['dtype']:<8} {r['ns']:>8.2f} "
                      f"{r['rate_per_s'] / 1e6:>8.1f} {_fmt(r['ratio'], '6.2f'):>6} "
-                     f"{_fmt(r.get('f64_over_f32'), '7.2f'):>7} {r['mem_extra_x']:>5.2f}  {verdict}")
+                     f"{_fmt(r.get('f64_over_f32'), '7.2f'):>7} {_fmt(r['mem_extra_x'], '5.2f'):>5}  {verdict}")
     s = result.get("startup")
     if s:
         w = s["warm"]
@@ -459,9 +506,18 @@ def main(argv=None):
     p.add_argument("--no-c", action="store_true", help="skip the C yardstick")
     p.add_argument("--no-startup", action="store_true", help="skip the fresh-process start-up timings")
     p.add_argument("--dtype", choices=("float32", "float64", "both"), default="both")
+    p.add_argument("--surface-only", action="store_true", help="only the OpenPBRSurface rows (issue 9)")
     a = p.parse_args(argv)
     n = a.n or (100_000 if a.quick else 1_000_000)
     reps = a.reps or (7 if a.quick else 15)
+    if a.surface_only:
+        result = {"n": n, "reps": reps, "c": {"skipped": "--surface-only"}, "rows": surface_rows(n, reps),
+                  "env": environment()}
+        result["targets"] = summary(result)
+        print(format_table(result))
+        if a.json:
+            Path(a.json).write_text(json.dumps(result, indent=1, default=float) + "\n")
+        return 0
     dtypes = (np.float32, np.float64) if a.dtype == "both" else (np.dtype(a.dtype).type,)
     result = run_bench(n=n, reps=reps, c_reps=5 if a.quick else 20, dtypes=dtypes, with_c=not a.no_c,
                        with_startup=not a.no_startup, cold_start=not a.quick)

@@ -23,10 +23,12 @@ r < 0.2 and mu >= 0.05; near-mirror lobes at extreme grazing (r < 0.05, mu < 0.0
 """
 import functools
 import itertools
+import math
 import os
 
 import numpy as np
 
+from .._jit import kernel
 from . import fresnel
 
 DATA_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "data")
@@ -196,3 +198,121 @@ def f82_albedo(mu, roughness, F0, tint):
     E1, E5, E6 = conductor_basis(mu, roughness)
     a = fresnel.f82_coefficient(F0, tint)
     return F0 * (E1 - E5)[..., None] + E5[..., None] - a * E6[..., None]
+
+
+# --------------------------------------------------------------------------- compiled lookup
+# The same interpolation as ``_node_coord`` / ``_catmull_rom`` / ``_interpolate``, per
+# point, for the surface's batch drivers (which look the tables up once per row).
+# ``tests/test_ggx.py`` checks that both give the same values.
+
+MU_AXIS, X_AXIS, R_AXIS = 0, 1, 2
+
+
+@kernel
+def node_at(v, n, kind):
+    v = min(max(v, 0.0), 1.0)
+    if kind == MU_AXIS:
+        s = math.sqrt(v) * (n - 1)
+    elif kind == X_AXIS:
+        s = math.asin(math.sqrt(v)) * (2.0 * (n - 1) / math.pi)
+    else:
+        s = v * (n - 1)
+    i = min(int(s), n - 2)
+    return i, s - i
+
+
+@kernel
+def catmull_rom_at(t):
+    t2 = t * t
+    t3 = t2 * t
+    return (0.5 * (-t3 + 2.0 * t2 - t), 0.5 * (3.0 * t3 - 5.0 * t2 + 2.0),
+            0.5 * (-3.0 * t3 + 4.0 * t2 + t), 0.5 * (t3 - t2))
+
+
+@kernel
+def conductor_basis_at(C, mu, roughness):
+    """(E1, E5, E6) at one point from the padded conductor table C (``padded_tables``)."""
+    ir, tr = node_at(roughness, C.shape[0] - 2, R_AXIS)
+    im, tm = node_at(mu, C.shape[1] - 2, MU_AXIS)
+    wr = catmull_rom_at(tr)
+    wm = catmull_rom_at(tm)
+    e1 = e5 = e6 = 0.0
+    for a in range(4):
+        for b in range(4):
+            w = wr[a] * wm[b]
+            e1 += w * C[ir + a, im + b, 0]
+            e5 += w * C[ir + a, im + b, 1]
+            e6 += w * C[ir + a, im + b, 2]
+    return min(max(e1, 0.0), 1.0), max(e5, 0.0), max(e6, 0.0)
+
+
+@kernel
+def dielectric_albedo_at(R, mu, roughness, x, E1):
+    """E_diel at one point from the padded ratio table R, given E1 there (``ggx_albedo``)."""
+    if not x > 0.0:
+        return 0.0
+    ir, tr = node_at(roughness, R.shape[0] - 2, R_AXIS)
+    ix, tx = node_at(x, R.shape[1] - 2, X_AXIS)
+    im, tm = node_at(mu, R.shape[2] - 2, MU_AXIS)
+    wr = catmull_rom_at(tr)
+    wx = catmull_rom_at(tx)
+    wm = catmull_rom_at(tm)
+    v = 0.0
+    for a in range(4):
+        for b in range(4):
+            wab = wr[a] * wx[b]
+            for c in range(4):
+                v += wab * wm[c] * R[ir + a, ix + b, im + c]
+    return min(max(v, 0.0), 1.0) * E1
+
+
+def padded_tables():
+    """(C, R): the padded conductor basis and dielectric ratio tables, float64, C-contiguous."""
+    return (np.ascontiguousarray(_padded_conductor()[0], dtype=np.float64),
+            np.ascontiguousarray(_padded_dielectric()[0], dtype=np.float64))
+
+
+# Lookups whose roughness and x coordinates are fixed per material: the node index and the
+# four Catmull-Rom weights of those axes are computed once (``axis_weights``), and only the
+# mu axis is evaluated per row.
+
+def axis_weights(v, n, kind):
+    """(i, w0, w1, w2, w3) of axis ``kind`` (MU_AXIS, X_AXIS, R_AXIS; n nodes) at v (arrays)."""
+    name = {MU_AXIS: "mu", X_AXIS: "x", R_AXIS: "r"}[kind]
+    i, t = _node_coord(np.asarray(v, dtype=np.float64), n, name)
+    w = _catmull_rom(t)
+    return (i.astype(np.float64),) + tuple(w[..., k] for k in range(4))
+
+
+@kernel
+def conductor_basis_pre(C, ir, r0, r1, r2, r3, mu):
+    """(E1, E5, E6) with the roughness axis given by ``axis_weights`` (C's roughness nodes)."""
+    im, tm = node_at(mu, C.shape[1] - 2, MU_AXIS)
+    wm = catmull_rom_at(tm)
+    wr = (r0, r1, r2, r3)
+    e1 = e5 = e6 = 0.0
+    for a in range(4):
+        for b in range(4):
+            w = wr[a] * wm[b]
+            e1 += w * C[ir + a, im + b, 0]
+            e5 += w * C[ir + a, im + b, 1]
+            e6 += w * C[ir + a, im + b, 2]
+    return min(max(e1, 0.0), 1.0), max(e5, 0.0), max(e6, 0.0)
+
+
+@kernel
+def dielectric_albedo_pre(R, ir, r0, r1, r2, r3, ix, x0, x1, x2, x3, x, mu, E1):
+    """E_diel with the roughness and x axes given by ``axis_weights`` (R's nodes); 0 at x = 0."""
+    if not x > 0.0:
+        return 0.0
+    im, tm = node_at(mu, R.shape[2] - 2, MU_AXIS)
+    wm = catmull_rom_at(tm)
+    wr = (r0, r1, r2, r3)
+    wx = (x0, x1, x2, x3)
+    v = 0.0
+    for a in range(4):
+        for b in range(4):
+            wab = wr[a] * wx[b]
+            for c in range(4):
+                v += wab * wm[c] * R[ir + a, ix + b, im + c]
+    return min(max(v, 0.0), 1.0) * E1

@@ -1,0 +1,755 @@
+"""The compiled path of ``OpenPBRSurface``: its lobes as scalar functions, and one batch
+driver per verb.
+
+Lobes are plain values with the verbs of pbrt-v4's ``BxDF`` -- ``lobe_f`` (the lobe's own
+BSDF, weight not applied), ``lobe_sample``, ``lobe_pdf`` and ``lobe_weight_albedo`` (its
+mixture weight w_k(wo) and directional albedo E_k(wo)) -- selected by a lobe id.  A
+surface row is a flat vector of prepared parameters (layout ``P_*``, built once per
+material by ``openpbr_surface.pack_parameters``); the wo-dependent layer factors (the
+albedos of the specular, coat and fuzz layers, which scale what lies beneath) are looked up
+once per row (``row_state``) and shared by every lobe.  No input is checked here: the
+public class checks its inputs once, at construction and on each call's directions.
+
+Lobe ids (slots): DIFFUSE, SPECULAR, METAL, TRANSMISSION, SUBSURFACE (the thin-walled
+reflection part when thin-walled), SUBSURFACE_T (thin-walled translucency), COAT, FUZZ.
+"""
+import functools
+import math
+
+import numba
+import numpy as np
+from numba import prange
+
+from .._jit import FASTMATH, INV_PI, kernel
+from .._launch import _F, _U, compiled, launch, rows
+from ..microfacet import fresnel
+from ..microfacet import kernels as mf
+from ..microfacet.sheen import sheen_albedo, sheen_density, sheen_sample
+from ..microfacet.tables import MU_AXIS, R_AXIS, X_AXIS, catmull_rom_at, conductor_basis_pre, node_at
+from ..models.eon import eon_albedo_terms, eon_terms, rho_ms
+from ..models.qon import qon_AB, qon_albedo, qon_terms
+from ..sampling.ltc import from_frame, ltc_frame, to_frame
+from ..sampling.mis import eon_pdf, eon_sample
+from ..sampling.simple import cosine_pdf, cosine_sample_local
+
+DIFFUSE, SPECULAR, METAL, TRANSMISSION, SUBSURFACE, SUBSURFACE_T, COAT, FUZZ = range(8)
+N_LOBES = 8
+LOBE_NAMES = ("diffuse", "specular", "metal", "transmission", "subsurface", "subsurface_transmission",
+              "coat", "fuzz")
+#: diffuse lobe models
+D_EON, D_QON, D_LAMBERT = 0, 1, 2
+#: selection rules
+SEL_LENGTH, SEL_MAX, SEL_UNIFORM = 0, 1, 2
+
+# parameter layout of one surface row (float64)
+P_BASE_COLOR = 0          # 3: rho of the diffuse lobe
+P_R_DIFF = 3              # base_diffuse_roughness (EON r; QON sigma)
+P_BASE_WEIGHT = 4
+P_METAL = 5               # base_metalness
+P_SPEC_COLOR = 6          # 3
+P_SPEC_WEIGHT = 9
+P_ALPHA_S = 10            # GGX alpha of the base specular and metal (coat-affected)
+P_R_S = 11                # its roughness (table coordinate)
+P_X_S = 12                # |sqrt(F0)| of the modulated index (table coordinate)
+P_ETA_S = 13              # modulated index eta' >= 1
+P_METAL_F0 = 14           # 3: base_weight * base_color
+P_METAL_A = 17            # 3: F82-tint coefficient a
+P_TRANS_W = 20
+P_TRANS_TINT = 21         # 3
+P_SSS_W = 24
+P_SSS_COLOR = 25          # 3
+P_SSS_ANISO = 28
+P_COAT_W = 29
+P_ALPHA_C = 30
+P_R_C = 31
+P_X_C = 32
+P_ETA_C = 33
+P_BASE_MUL = 34           # 3: coat attenuation x darkening of everything under the coat
+P_FUZZ_W = 37
+P_FUZZ_COLOR = 38         # 3
+P_FUZZ_R = 41
+P_THIN = 42               # geometry_thin_walled (0/1)
+# table axes fixed per material (``microfacet.tables.axis_weights``): for the base specular
+# (P_TAB_S) and the coat (P_TAB_C), the conductor table's roughness node and 4 weights, the
+# dielectric table's roughness node and 4 weights, its x node and 4 weights
+P_TAB_S = 43              # 15
+P_TAB_C = 58              # 15
+# the dielectric table collapsed on those two axes: E_diel/E1 at every (padded) mu node of the
+# table, for the base specular and the coat; per row only a 4-point cubic in mu remains
+N_CURVE = 35              # mu nodes of the dielectric table + 2 ghost nodes
+P_CURVE_S = 73
+P_CURVE_C = P_CURVE_S + N_CURVE
+N_PARAMS = P_CURVE_C + N_CURVE
+
+
+# --------------------------------------------------------------------------- packing
+# The material's inputs, in this order (float64; colours 3 wide), are packed into the
+# parameter layout above by ``pack_drive``, once per material.
+RAW = (("base_color", 3), ("base_diffuse_roughness", 1), ("base_weight", 1), ("base_metalness", 1),
+       ("specular_color", 3), ("specular_weight", 1), ("specular_roughness", 1), ("specular_ior", 1),
+       ("transmission_weight", 1), ("transmission_color", 3), ("transmission_depth", 1),
+       ("subsurface_weight", 1), ("subsurface_color", 3), ("subsurface_scatter_anisotropy", 1),
+       ("coat_weight", 1), ("coat_color", 3), ("coat_roughness", 1), ("coat_ior", 1), ("coat_darkening", 1),
+       ("fuzz_weight", 1), ("fuzz_color", 3), ("fuzz_roughness", 1), ("geometry_thin_walled", 1))
+N_RAW = sum(w for _, w in RAW)
+#: warning bits of ``pack_drive``
+W_SPEC_TIR, W_COAT_TIR, W_F82_NEGATIVE = 1, 2, 4
+
+
+@kernel
+def _axes(out, q, v, n, kind):
+    """Node index and Catmull-Rom weights of v on a table axis, into out[q:q + 5]."""
+    i, t = node_at(v, n, kind)
+    w0, w1, w2, w3 = catmull_rom_at(t)
+    out[q] = i
+    out[q + 1] = w0
+    out[q + 2] = w1
+    out[q + 3] = w2
+    out[q + 4] = w3
+
+
+@kernel
+def _table_axes(out, q, r, x, nCr, nRr, nRx):
+    _axes(out, q, r, nCr, R_AXIS)
+    _axes(out, q + 5, r, nRr, R_AXIS)
+    _axes(out, q + 10, x, nRx, X_AXIS)
+
+
+@kernel
+def _curve(out, q, t, R):
+    """out[q + m] = the dielectric ratio table at the (roughness, x) of the axes at out[t:]
+    for every padded mu node m (the same tensor-product Catmull-Rom, summed over two axes)."""
+    ir, ix = int(out[t + 5]), int(out[t + 10])
+    for m in range(N_CURVE):
+        v = 0.0
+        for a in range(4):
+            for b in range(4):
+                v += out[t + 6 + a] * out[t + 11 + b] * R[ir + a, ix + b, m]
+        out[q + m] = v
+
+
+def _pack_drive(raw, out, nCr, nRr, nRx, R):
+    """Pack rows of RAW inputs into parameter rows (the reference graph's derived values);
+    returns (mask of the lobes active in some row, warning bits)."""
+    m = raw.shape[0] // N_RAW
+    mask = 0
+    warn = 0
+    for i in range(m):
+        a = i * N_RAW
+        o = i * N_PARAMS
+        bw, M, sw = raw[a + 4], raw[a + 5], raw[a + 9]
+        r_s, ior = raw[a + 10], raw[a + 11]
+        T, S, g = raw[a + 12], raw[a + 17], raw[a + 21]
+        C, r_c, c_ior, c_dark = raw[a + 22], raw[a + 26], raw[a + 27], raw[a + 28]
+        F, thin = raw[a + 29], raw[a + 34]
+        # the coat's effect on the base specular [effective_specular_roughness, eta_s]
+        r_eff = (1.0 - C) * r_s + C * min(1.0, 2.0 * r_c ** 4 + r_s ** 4) ** 0.25
+        eta_s = ior
+        if C > 0.0:
+            ratio = ior / c_ior
+            eta_s = (1.0 - C) * ior + C * (ratio if ratio > 1.0 else 1.0 / ratio)
+        x = fresnel.modulated_x(sw, eta_s)
+        if x < 0.0:
+            warn |= W_SPEC_TIR
+        x = abs(x)
+        xc = fresnel.modulated_x(1.0, c_ior)
+        if xc < 0.0 and C > 0.0:
+            warn |= W_COAT_TIR
+        xc = abs(xc)
+        K = 1.0 - (1.0 - fresnel.f0(c_ior)) / (c_ior * c_ior)
+        for c in range(3):
+            bc = raw[a + c]
+            sc = raw[a + 6 + c]
+            out[o + P_BASE_COLOR + c] = bc
+            out[o + P_SPEC_COLOR + c] = sc
+            F0 = bw * bc
+            out[o + P_METAL_F0 + c] = F0
+            am = fresnel.f82_a(F0, sc)
+            out[o + P_METAL_A + c] = am
+            if M > 0.0 and sw > 0.0:
+                for k in range(257):
+                    if fresnel.f82(k / 256.0, F0, am) < 0.0:
+                        warn |= W_F82_NEGATIVE
+            out[o + P_TRANS_TINT + c] = 1.0 if raw[a + 16] > 0.0 else raw[a + 13 + c]
+            ssc = raw[a + 18 + c]
+            out[o + P_SSS_COLOR + c] = ssc
+            # base darkening and coat attenuation [Kcoat, Ebase, base_darkening, coat_attenuation]
+            E_base = (1.0 - M) * ((1.0 - S) * bc + S * ssc) + M * bc * sw
+            dark = (1.0 - K) / (1.0 - E_base * K)
+            out[o + P_BASE_MUL + c] = (1.0 + C * c_dark * (dark - 1.0)) * (1.0 + C * (raw[a + 23 + c] - 1.0))
+            out[o + P_FUZZ_COLOR + c] = raw[a + 30 + c]
+        out[o + P_R_DIFF] = raw[a + 3]
+        out[o + P_BASE_WEIGHT] = bw
+        out[o + P_METAL] = M
+        out[o + P_SPEC_WEIGHT] = sw
+        out[o + P_ALPHA_S] = mf.alpha_of(r_eff)
+        out[o + P_R_S] = r_eff
+        out[o + P_X_S] = x
+        out[o + P_ETA_S] = fresnel.eta_of_x(x)
+        out[o + P_TRANS_W] = T
+        out[o + P_SSS_W] = S
+        out[o + P_SSS_ANISO] = g
+        out[o + P_COAT_W] = C
+        out[o + P_ALPHA_C] = mf.alpha_of(r_c)
+        out[o + P_R_C] = r_c
+        out[o + P_X_C] = xc
+        out[o + P_ETA_C] = fresnel.eta_of_x(xc)
+        out[o + P_FUZZ_W] = F
+        out[o + P_FUZZ_R] = raw[a + 33]
+        out[o + P_THIN] = thin
+        _table_axes(out, o + P_TAB_S, r_eff, x, nCr, nRr, nRx)
+        _table_axes(out, o + P_TAB_C, r_c, xc, nCr, nRr, nRx)
+        _curve(out, o + P_CURVE_S, o + P_TAB_S, R)
+        _curve(out, o + P_CURVE_C, o + P_TAB_C, R)
+        # lobes that can be non-zero
+        diel = 1.0 - M
+        sc_any = raw[a + 6] > 0.0 or raw[a + 7] > 0.0 or raw[a + 8] > 0.0
+        on = ((diel * (1.0 - T) * (1.0 - S) * bw > 0.0, diel > 0.0 and x > 0.0 and sc_any, M > 0.0 and sw > 0.0,
+               diel * T > 0.0, diel * (1.0 - T) * S > 0.0, thin > 0.0 and diel * (1.0 - T) * S > 0.0, C > 0.0, F > 0.0))
+        for k in range(N_LOBES):
+            if on[k]:
+                mask |= 1 << k
+    return mask, warn
+
+
+pack_drive = numba.njit(cache=True, error_model="numpy")(_pack_drive)
+
+
+@kernel
+def layer_albedos(p, o, t, q, mu, C, x, ms):
+    """(E1, E5, E6, E) of a GGX layer whose table axes start at p[o + t] (P_TAB_S / P_TAB_C)
+    and whose collapsed dielectric curve at p[o + q]: the basis albedos and the dielectric
+    lobe's albedo with the multiple-scattering factor (0 at x = 0: index-matched)."""
+    E1, E5, E6 = conductor_basis_pre(C, int(p[o + t]), p[o + t + 1], p[o + t + 2], p[o + t + 3], p[o + t + 4], mu)
+    E = 0.0
+    if x > 0.0:
+        im, tm = node_at(mu, N_CURVE - 2, MU_AXIS)
+        w0, w1, w2, w3 = catmull_rom_at(tm)
+        b = o + q + im
+        v = w0 * p[b] + w1 * p[b + 1] + w2 * p[b + 2] + w3 * p[b + 3]
+        E = min(max(v, 0.0), 1.0) * E1
+    return E1, E5, E6, E * mf.multiscatter(x * x, E1, ms)
+
+
+@kernel
+def diffuse_albedo_terms(dmodel, mu, r):
+    """(e_g, e_h, <E_F>) of the diffuse lobe's albedo rho e_g + m(rho) e_h (channel-free):
+    EON Eq. 20 (m = rho_ms), QON Eq. 8 or Lambert (m = 0)."""
+    if dmodel == D_EON:
+        return eon_albedo_terms(mu, r, False)
+    if dmodel == D_QON:
+        A, B = qon_AB(r, 0.33)
+        return qon_albedo(mu, A, B), 0.0, 0.0
+    return 1.0, 0.0, 0.0
+
+
+@kernel
+def row_state(p, o, mu, C, R, dmodel, ms, albedos=True):
+    """Per-row quantities shared by every lobe at mu_o: (E1_s, E5_s, E6_s, E_spec, E1_c,
+    E_coat, E_fuzz, e_g, e_h, <E_F>, E_qon).
+
+    E1/E5/E6: GGX basis albedos of the base specular roughness; E_spec, E_coat: albedos of
+    the dielectric specular and coat lobes (with the multiple-scattering factor); E_fuzz:
+    the sheen albedo; e_g, e_h, <E_F>: the diffuse albedo terms; E_qon: the QON albedo of
+    the thin-walled subsurface reflection (0 unless ``albedos``).  Layers that are off are
+    not looked up.
+    """
+    E1s, E5s, E6s, Es = layer_albedos(p, o, P_TAB_S, P_CURVE_S, mu, C, p[o + P_X_S], ms)
+    E1c, Ec, Ef, Eq = 1.0, 0.0, 0.0, 0.0
+    if p[o + P_COAT_W] > 0.0:
+        E1c, _, _, Ec = layer_albedos(p, o, P_TAB_C, P_CURVE_C, mu, C, p[o + P_X_C], ms)
+    if p[o + P_FUZZ_W] > 0.0:
+        Ef = sheen_albedo(mu, p[o + P_FUZZ_R])
+    eg, eh, avg = 0.0, 0.0, 0.0
+    if albedos:   # the weights do not need the diffuse albedos (eval does not)
+        eg, eh, avg = diffuse_albedo_terms(dmodel, mu, p[o + P_R_DIFF])
+    if albedos and p[o + P_THIN] > 0.0 and p[o + P_SSS_W] > 0.0:
+        Eq, _, _ = diffuse_albedo_terms(D_QON, mu, p[o + P_R_DIFF])
+    return E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, avg, Eq
+
+
+@kernel
+def diffuse_albedo(dmodel, rho, eg, eh, avg):
+    """One channel of the diffuse albedo from ``diffuse_albedo_terms``."""
+    if dmodel == D_EON:
+        return rho * eg + rho_ms(rho, avg) * eh
+    return rho * eg
+
+
+@kernel
+def metal_albedo(p, o, c, E1, E5, E6, ms):
+    """F82-tint GGX albedo F0 (E1 - E5) + E5 - a E6 (times the multiple-scattering factor)."""
+    F0 = p[o + P_METAL_F0 + c]
+    return (F0 * (E1 - E5) + E5 - p[o + P_METAL_A + c] * E6) * mf.multiscatter(F0, E1, ms)
+
+
+@kernel
+def lobe_weight_albedo(k, c, p, o, st, mu, dmodel, ms):
+    """(w_k, E_k) of lobe k in channel c at mu_o: the mixture weight and the lobe's albedo.
+
+    The weights follow the reference graph (open_pbr_surface.mtlx): fuzz over coat over the
+    base, each layer passing 1 - weight E_layer(mu_o) (albedo scaling); the base
+    attenuated by the coat (P_BASE_MUL); metal / dielectric by base_metalness; under the
+    dielectric specular layer the substrate mixes transmission, subsurface and diffuse.
+    """
+    E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, avg, Eq = st
+    Tf = 1.0 - p[o + P_FUZZ_W] * Ef
+    if k == FUZZ:
+        return p[o + P_FUZZ_W] * p[o + P_FUZZ_COLOR + c], Ef
+    if k == COAT:
+        return Tf * p[o + P_COAT_W], Ec
+    base = Tf * (1.0 - p[o + P_COAT_W] * Ec) * p[o + P_BASE_MUL + c]
+    M = p[o + P_METAL]
+    if k == METAL:
+        return base * M * p[o + P_SPEC_WEIGHT], metal_albedo(p, o, c, E1s, E5s, E6s, ms)
+    diel = base * (1.0 - M)
+    if k == SPECULAR:
+        return diel * p[o + P_SPEC_COLOR + c], Es
+    sub = diel * (1.0 - Es)
+    Tw = p[o + P_TRANS_W]
+    if k == TRANSMISSION:
+        return sub * Tw, p[o + P_TRANS_TINT + c]
+    opaque = sub * (1.0 - Tw)
+    S = p[o + P_SSS_W]
+    color = p[o + P_SSS_COLOR + c]
+    g = p[o + P_SSS_ANISO]
+    if k == SUBSURFACE:
+        if p[o + P_THIN] > 0.0:   # reflection half of the thin-walled mix: QON, colour^2 (1 - g)/2
+            return opaque * S * 0.5 * color * (1.0 - g), color * Eq
+        return opaque * S, color
+    if k == SUBSURFACE_T:
+        return opaque * S * 0.5 * color * (1.0 + g), color
+    # DIFFUSE
+    return (opaque * (1.0 - S) * p[o + P_BASE_WEIGHT],
+            diffuse_albedo(dmodel, p[o + P_BASE_COLOR + c], eg, eh, avg))
+
+
+@kernel
+def diffuse_f(dmodel, r, rho, iz, oz, s):
+    """One channel of the diffuse lobe's BSDF (EON Eq. 16-19, QON Eq. 1, Lambert)."""
+    if dmodel == D_EON:
+        g, h, avg = eon_terms(iz, oz, s, r, False)
+        return rho * g + rho_ms(rho, avg) * h
+    if dmodel == D_QON:
+        A, B = qon_AB(r, 0.33)
+        return rho * qon_terms(iz, oz, s, A, B)
+    return rho * INV_PI
+
+
+@kernel
+def lobe_f(k, p, o, st, ix, iy, iz, ox, oy, oz, dmodel, ms):
+    """The lobe's own BSDF (f0, f1, f2), weight not applied; 0 outside the lobe's hemisphere."""
+    E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, avg, Eq = st
+    up = iz > 0.0 and oz > 0.0
+    if k == DIFFUSE or k == SUBSURFACE:
+        if not up:
+            return 0.0, 0.0, 0.0
+        s = ix * ox + iy * oy + iz * oz - iz * oz
+        r = p[o + P_R_DIFF]
+        if k == SUBSURFACE:
+            dm = D_QON if p[o + P_THIN] > 0.0 else D_LAMBERT
+            cb = P_SSS_COLOR
+        else:
+            dm = dmodel
+            cb = P_BASE_COLOR
+        return (diffuse_f(dm, r, p[o + cb], iz, oz, s), diffuse_f(dm, r, p[o + cb + 1], iz, oz, s),
+                diffuse_f(dm, r, p[o + cb + 2], iz, oz, s))
+    if k == SUBSURFACE_T:
+        if iz < 0.0 and oz > 0.0:
+            return p[o + P_SSS_COLOR] * INV_PI, p[o + P_SSS_COLOR + 1] * INV_PI, p[o + P_SSS_COLOR + 2] * INV_PI
+        return 0.0, 0.0, 0.0
+    if k == FUZZ:
+        if not up:
+            return 0.0, 0.0, 0.0
+        Xx, Xy = ltc_frame(ox, oy)
+        lx, ly = to_frame(Xx, Xy, ix, iy)
+        v = Ef * sheen_density(lx, ly, iz, oz, p[o + P_FUZZ_R]) / iz
+        return v, v, v
+    if k == TRANSMISSION:   # the GGX lobe mirrored below the surface, normalised by E1
+        m, _ = mf.reflection(ix, iy, -iz, ox, oy, oz, p[o + P_ALPHA_S])
+        m = m / E1s
+        return m * p[o + P_TRANS_TINT], m * p[o + P_TRANS_TINT + 1], m * p[o + P_TRANS_TINT + 2]
+    if k == COAT:
+        m, c = mf.reflection(ix, iy, iz, ox, oy, oz, p[o + P_ALPHA_C])
+        x = p[o + P_X_C]
+        v = m * fresnel.dielectric(c, p[o + P_ETA_C]) * mf.multiscatter(x * x, E1c, ms)
+        return v, v, v
+    m, c = mf.reflection(ix, iy, iz, ox, oy, oz, p[o + P_ALPHA_S])
+    if k == SPECULAR:
+        x = p[o + P_X_S]
+        v = m * fresnel.dielectric(c, p[o + P_ETA_S]) * mf.multiscatter(x * x, E1s, ms)
+        return v, v, v
+    # METAL
+    F0r, F0g, F0b = p[o + P_METAL_F0], p[o + P_METAL_F0 + 1], p[o + P_METAL_F0 + 2]
+    return (m * fresnel.f82(c, F0r, p[o + P_METAL_A]) * mf.multiscatter(F0r, E1s, ms),
+            m * fresnel.f82(c, F0g, p[o + P_METAL_A + 1]) * mf.multiscatter(F0g, E1s, ms),
+            m * fresnel.f82(c, F0b, p[o + P_METAL_A + 2]) * mf.multiscatter(F0b, E1s, ms))
+
+
+@kernel
+def diffuse_uses_eon_sampler(k, dmodel):
+    return k == DIFFUSE and dmodel == D_EON
+
+
+@kernel
+def lobe_pdf(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, vndf):
+    """Solid-angle pdf of ``lobe_sample`` producing wi given wo (wo above the horizon)."""
+    if k == DIFFUSE or k == SUBSURFACE:
+        if not iz > 0.0:
+            return 0.0
+        if diffuse_uses_eon_sampler(k, dmodel):
+            Xx, Xy = ltc_frame(ox, oy)
+            lx, ly = to_frame(Xx, Xy, ix, iy)
+            return eon_pdf(lx, ly, iz, min(oz, 1.0), p[o + P_R_DIFF])
+        return cosine_pdf(iz)
+    if k == SUBSURFACE_T:
+        return cosine_pdf(-iz)
+    if k == FUZZ:
+        Xx, Xy = ltc_frame(ox, oy)
+        lx, ly = to_frame(Xx, Xy, ix, iy)
+        return sheen_density(lx, ly, iz, oz, p[o + P_FUZZ_R])
+    if k == TRANSMISSION:
+        return mf.reflection_pdf(ix, iy, -iz, ox, oy, oz, p[o + P_ALPHA_S], vndf)
+    if k == COAT:
+        return mf.reflection_pdf(ix, iy, iz, ox, oy, oz, p[o + P_ALPHA_C], vndf)
+    return mf.reflection_pdf(ix, iy, iz, ox, oy, oz, p[o + P_ALPHA_S], vndf)
+
+
+@kernel
+def lobe_sample(k, p, o, ox, oy, oz, u1, u2, dmodel, vndf):
+    """(x, y, z, pdf, ok): a direction from lobe k and its pdf (that of ``lobe_pdf``)."""
+    mu = min(max(oz, 0.0), 1.0)
+    if k == DIFFUSE or k == SUBSURFACE or k == SUBSURFACE_T or k == FUZZ:
+        Xx, Xy = ltc_frame(ox, oy)
+        if diffuse_uses_eon_sampler(k, dmodel):
+            x, y, z, q = eon_sample(Xx, Xy, mu, p[o + P_R_DIFF], u1, u2)
+            return x, y, z, q, True
+        if k == FUZZ:
+            lx, ly, z = sheen_sample(mu, p[o + P_FUZZ_R], u1, u2)
+            x, y = from_frame(Xx, Xy, lx, ly)
+            return x, y, z, sheen_density(lx, ly, z, mu, p[o + P_FUZZ_R]), True
+        lx, ly, z, q = cosine_sample_local(u1, u2)
+        x, y = from_frame(Xx, Xy, lx, ly)
+        if k == SUBSURFACE_T:
+            z = -z
+        return x, y, z, q, True
+    alpha = p[o + P_ALPHA_C] if k == COAT else p[o + P_ALPHA_S]
+    x, y, z, ok = mf.sample_reflection(ox, oy, oz, alpha, u1, u2, vndf)
+    q = mf.reflection_pdf(x, y, z, ox, oy, oz, alpha, vndf)
+    if k == TRANSMISSION:
+        z = -z
+    return x, y, z, q, ok
+
+
+@kernel
+def score(sel, w0, w1, w2, e0, e1, e2):
+    """Selection score |w * E| of a lobe: RGB length, largest component, or 1."""
+    a, b, c = w0 * e0, w1 * e1, w2 * e2
+    if sel == SEL_LENGTH:
+        return (a * a + b * b + c * c) ** 0.5
+    if sel == SEL_MAX:
+        return max(max(abs(a), abs(b)), abs(c))
+    return 1.0
+
+
+@kernel
+def lobe_score(k, p, o, st, mu, dmodel, ms, sel):
+    w0, e0 = lobe_weight_albedo(k, 0, p, o, st, mu, dmodel, ms)
+    w1, e1 = lobe_weight_albedo(k, 1, p, o, st, mu, dmodel, ms)
+    w2, e2 = lobe_weight_albedo(k, 2, p, o, st, mu, dmodel, ms)
+    return score(sel, w0, w1, w2, e0, e1, e2)
+
+
+@kernel
+def total_score(active, p, o, st, mu, dmodel, ms, sel):
+    """(sum of the scores of the active lobes, number of active lobes)."""
+    S = 0.0
+    K = 0
+    for k in range(N_LOBES):
+        if active & (1 << k):
+            S += lobe_score(k, p, o, st, mu, dmodel, ms, sel)
+            K += 1
+    return S, K
+
+
+@kernel
+def _score_if(k, active, p, o, st, mu, dmodel, ms, sel):
+    return lobe_score(k, p, o, st, mu, dmodel, ms, sel) if active & (1 << k) else 0.0
+
+
+@kernel
+def all_scores(active, p, o, st, mu, dmodel, ms, sel):
+    """The 8 lobe scores (0 for inactive slots) as a tuple, computed once per row."""
+    return (_score_if(0, active, p, o, st, mu, dmodel, ms, sel), _score_if(1, active, p, o, st, mu, dmodel, ms, sel),
+            _score_if(2, active, p, o, st, mu, dmodel, ms, sel), _score_if(3, active, p, o, st, mu, dmodel, ms, sel),
+            _score_if(4, active, p, o, st, mu, dmodel, ms, sel), _score_if(5, active, p, o, st, mu, dmodel, ms, sel),
+            _score_if(6, active, p, o, st, mu, dmodel, ms, sel), _score_if(7, active, p, o, st, mu, dmodel, ms, sel))
+
+
+@kernel
+def probability(sk, S, K):
+    """P_k = s_k / S; 1/K when every score is 0 (black surface: any distribution will do)."""
+    return sk / S if S > 0.0 else 1.0 / K
+
+
+# --------------------------------------------------------------------------- drivers
+
+
+def _lobes_drive(active, dmodel, sel, ms, C, R, p, ps, wo, W, E, P):
+    """W, E (n*8*3), P (n*8): weight, albedo and probability of every lobe slot."""
+    n = wo.shape[0] // 3
+    for i in prange(n):
+        j = _U(i) * _U(3)
+        o = _U(i) * _U(ps)
+        oz = _F(wo[j + _U(2)])
+        mu = min(max(oz, 0.0), 1.0)
+        st = row_state(p, o, mu, C, R, dmodel, ms)
+        up = oz > 0.0
+        S = 0.0
+        K = 0
+        for k in range(N_LOBES):
+            b = (_U(i) * _U(N_LOBES) + _U(k))
+            for c in range(3):
+                W[b * _U(3) + _U(c)] = 0.0
+                E[b * _U(3) + _U(c)] = 0.0
+            P[b] = 0.0
+            if active & (1 << k):
+                for c in range(3):
+                    w, e = lobe_weight_albedo(k, c, p, o, st, mu, dmodel, ms)
+                    W[b * _U(3) + _U(c)] = w
+                    E[b * _U(3) + _U(c)] = e if up else 0.0
+                s = score(sel, W[b * _U(3)], W[b * _U(3) + _U(1)], W[b * _U(3) + _U(2)],
+                          E[b * _U(3)], E[b * _U(3) + _U(1)], E[b * _U(3) + _U(2)])
+                P[b] = s
+                S += s
+                K += 1
+        for k in range(N_LOBES):
+            b = _U(i) * _U(N_LOBES) + _U(k)
+            if active & (1 << k):
+                P[b] = probability(P[b], S, K)
+
+
+def _albedo_drive(active, dmodel, ms, C, R, p, ps, wo, out):
+    n = wo.shape[0] // 3
+    for i in prange(n):
+        j = _U(i) * _U(3)
+        o = _U(i) * _U(ps)
+        oz = _F(wo[j + _U(2)])
+        mu = min(max(oz, 0.0), 1.0)
+        st = row_state(p, o, mu, C, R, dmodel, ms)
+        a0 = a1 = a2 = 0.0
+        if oz > 0.0:
+            for k in range(N_LOBES):
+                if active & (1 << k):
+                    w, e = lobe_weight_albedo(k, 0, p, o, st, mu, dmodel, ms)
+                    a0 += w * e
+                    w, e = lobe_weight_albedo(k, 1, p, o, st, mu, dmodel, ms)
+                    a1 += w * e
+                    w, e = lobe_weight_albedo(k, 2, p, o, st, mu, dmodel, ms)
+                    a2 += w * e
+        out[j] = a0
+        out[j + _U(1)] = a1
+        out[j + _U(2)] = a2
+
+
+def _eval_drive(active, only, dmodel, ms, C, R, p, ps, wi, wo, out):
+    """out (n*3) = sum_k w_k f_k, or the unweighted f_only when only >= 0."""
+    n = wo.shape[0] // 3
+    for i in prange(n):
+        j = _U(i) * _U(3)
+        o = _U(i) * _U(ps)
+        ix, iy, iz = _F(wi[j]), _F(wi[j + _U(1)]), _F(wi[j + _U(2)])
+        ox, oy, oz = _F(wo[j]), _F(wo[j + _U(1)]), _F(wo[j + _U(2)])
+        mu = min(max(oz, 0.0), 1.0)
+        st = row_state(p, o, mu, C, R, dmodel, ms, False)
+        a0 = a1 = a2 = 0.0
+        if oz > 0.0:
+            for k in range(N_LOBES):
+                if (active & (1 << k)) and (only < 0 or only == k):
+                    f0, f1, f2 = lobe_f(k, p, o, st, ix, iy, iz, ox, oy, oz, dmodel, ms)
+                    if only >= 0:
+                        a0, a1, a2 = f0, f1, f2
+                    else:
+                        w, _ = lobe_weight_albedo(k, 0, p, o, st, mu, dmodel, ms)
+                        a0 += w * f0
+                        w, _ = lobe_weight_albedo(k, 1, p, o, st, mu, dmodel, ms)
+                        a1 += w * f1
+                        w, _ = lobe_weight_albedo(k, 2, p, o, st, mu, dmodel, ms)
+                        a2 += w * f2
+        out[j] = a0
+        out[j + _U(1)] = a1
+        out[j + _U(2)] = a2
+
+
+def _pdf_drive(active, dmodel, sel, ms, vndf, C, R, p, ps, wo, wi, out):
+    """out (n) = sum_k P_k pdf_k(wi | wo)."""
+    n = wo.shape[0] // 3
+    for i in prange(n):
+        j = _U(i) * _U(3)
+        o = _U(i) * _U(ps)
+        ix, iy, iz = _F(wi[j]), _F(wi[j + _U(1)]), _F(wi[j + _U(2)])
+        ox, oy, oz = _F(wo[j]), _F(wo[j + _U(1)]), _F(wo[j + _U(2)])
+        mu = min(max(oz, 0.0), 1.0)
+        q = 0.0
+        if oz > 0.0:
+            # one pass: sum_k s_k pdf_k / sum_k s_k (uniform over the active lobes when every
+            # score is 0), the mixture pdf with P_k = s_k / sum s
+            st = row_state(p, o, mu, C, R, dmodel, ms)
+            num = 0.0
+            S = 0.0
+            flat = 0.0
+            K = 0
+            for k in range(N_LOBES):
+                if active & (1 << k):
+                    sk_ = lobe_score(k, p, o, st, mu, dmodel, ms, sel)
+                    pk = lobe_pdf(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, vndf)
+                    num += sk_ * pk
+                    S += sk_
+                    flat += pk
+                    K += 1
+            q = num / S if S > 0.0 else flat / K
+        out[i] = q
+
+
+def _sample_drive(active, dmodel, sel, ms, vndf, C, R, p, ps, wo, u, wi, out):
+    """Pick lobe k with P_k (u[0]), sample it (u[1:3], or u[0] rescaled and u[1] when u has
+    2 columns); wi (n*3), out (n) = the mixture pdf, with the chosen lobe's own pdf from its
+    sampler; 0 marks a failed sample."""
+    n = wo.shape[0] // 3
+    ud = u.shape[0] // n
+    for i in prange(n):
+        j = _U(i) * _U(3)
+        o = _U(i) * _U(ps)
+        ju = _U(i) * _U(ud)
+        ox, oy, oz = _F(wo[j]), _F(wo[j + _U(1)]), _F(wo[j + _U(2)])
+        mu = min(max(oz, 0.0), 1.0)
+        st = row_state(p, o, mu, C, R, dmodel, ms)
+        ss = all_scores(active, p, o, st, mu, dmodel, ms, sel)
+        S = 0.0
+        K = 0
+        for k in range(N_LOBES):
+            S += ss[k]
+            K += 1 if active & (1 << k) else 0
+        u0 = _F(u[ju])
+        # choose the lobe: the first whose cumulative probability exceeds u0
+        chosen = -1
+        last = -1
+        lo = 0.0
+        Pc = 0.0
+        for k in range(N_LOBES):
+            if active & (1 << k):
+                last = k
+                if chosen < 0:
+                    Pk = probability(ss[k], S, K)
+                    if u0 < lo + Pk:
+                        chosen = k
+                        Pc = Pk
+                    else:
+                        lo += Pk
+        if chosen < 0:   # rounding left the CDF's end below u0
+            chosen = last
+            Pc = probability(ss[last], S, K)
+        if ud == 3:
+            u1, u2 = _F(u[ju + _U(1)]), _F(u[ju + _U(2)])
+        else:
+            u1 = min(max((u0 - lo) / Pc, 0.0), 0.9999999999999999) if Pc > 0.0 else 0.0
+            u2 = _F(u[ju + _U(1)])
+        x, y, z, own, ok = lobe_sample(chosen, p, o, ox, oy, oz, u1, u2, dmodel, vndf)
+        q = 0.0
+        if oz > 0.0 and ok and own > 0.0:
+            for k in range(N_LOBES):
+                if active & (1 << k):
+                    Pk = probability(ss[k], S, K)
+                    if k == chosen:
+                        q += Pk * own
+                    elif Pk > 0.0:
+                        q += Pk * lobe_pdf(k, p, o, x, y, z, ox, oy, oz, dmodel, vndf)
+        if not oz > 0.0:
+            x, y, z = 0.0, 0.0, 1.0
+        wi[j] = x
+        wi[j + _U(1)] = y
+        wi[j + _U(2)] = z
+        out[i] = q
+
+
+# --------------------------------------------------------------------------- batch calls
+
+#: Below this many rows the serial build of a driver runs: waking the thread pool costs
+#: more than a small batch (a single material's lobes(wo) is the common case).
+SERIAL_ROWS = 4096
+_serial = numba.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+_DRIVERS = {f: (compiled(f), _serial(f)) for f in (_lobes_drive, _albedo_drive, _eval_drive, _pdf_drive, _sample_drive)}
+
+
+def _driver(f, n):
+    parallel, serial = _DRIVERS[f]
+    return serial if n < SERIAL_ROWS else parallel
+
+
+@functools.cache
+def tables():
+    """(C, R): the padded GGX albedo tables (``microfacet.tables.padded_tables``)."""
+    from ..microfacet.tables import padded_tables
+
+    C, R = padded_tables()
+    if R.shape[2] != N_CURVE:   # the parameter layout reserves N_CURVE mu nodes
+        raise RuntimeError(f"dielectric albedo table has {R.shape[2] - 2} mu nodes; N_CURVE expects {N_CURVE - 2}")
+    return C, R
+
+
+def _run(f, head, params, lead, dirs, outs):
+    """Run driver f over the rows of ``lead``: ``params`` is one material (stride 0, never
+    copied or tiled) or materials broadcasting to ``lead`` (stride N_PARAMS, expanded)."""
+    n = math.prod(lead)
+    if n == 0:
+        return
+    if params.ndim == 1:
+        inputs = []
+        for d, k in dirs:
+            b, t = rows(d, lead, k)
+            inputs.append((b, k, t))
+        launch(_driver(f, n), head + (params, 0), inputs, outs, n)
+        return
+    p = np.ascontiguousarray(np.broadcast_to(params, lead + (N_PARAMS,))).reshape(-1)
+    full = [np.ascontiguousarray(np.broadcast_to(d, lead + (k,))).reshape(-1) for d, k in dirs]
+    _driver(f, n)(*head, p, N_PARAMS, *full, *(o for o, _ in outs))
+
+
+def lobes_rows(flags, params, wo, lead):
+    """(W (..., 8, 3), E (..., 8, 3), P (..., 8)) for float64 arrays broadcasting to ``lead``."""
+    n = math.prod(lead)
+    W = np.empty(n * N_LOBES * 3)
+    E = np.empty(n * N_LOBES * 3)
+    P = np.empty(n * N_LOBES)
+    _run(_lobes_drive, (flags.active, flags.dmodel, flags.sel, flags.ms) + tables(), params, lead, [(wo, 3)],
+         [(W, N_LOBES * 3), (E, N_LOBES * 3), (P, N_LOBES)])
+    return W.reshape(lead + (N_LOBES, 3)), E.reshape(lead + (N_LOBES, 3)), P.reshape(lead + (N_LOBES,))
+
+
+def albedo_rows(flags, params, wo, lead):
+    out = np.empty(math.prod(lead) * 3)
+    _run(_albedo_drive, (flags.active, flags.dmodel, flags.ms) + tables(), params, lead, [(wo, 3)], [(out, 3)])
+    return out.reshape(lead + (3,))
+
+
+def eval_rows(flags, params, wi, wo, lead, only=-1):
+    out = np.empty(math.prod(lead) * 3)
+    _run(_eval_drive, (flags.active, only, flags.dmodel, flags.ms) + tables(), params, lead, [(wi, 3), (wo, 3)],
+         [(out, 3)])
+    return out.reshape(lead + (3,))
+
+
+def pdf_rows(flags, params, wo, wi, lead):
+    out = np.empty(math.prod(lead))
+    _run(_pdf_drive, (flags.active, flags.dmodel, flags.sel, flags.ms, flags.vndf) + tables(), params, lead,
+         [(wo, 3), (wi, 3)], [(out, 1)])
+    return out.reshape(lead)
+
+
+def sample_rows(flags, params, wo, u, lead):
+    n = math.prod(lead)
+    wi = np.empty(n * 3)
+    out = np.empty(n)
+    _run(_sample_drive, (flags.active, flags.dmodel, flags.sel, flags.ms, flags.vndf) + tables(), params, lead,
+         [(wo, 3), (u, u.shape[-1])], [(wi, 3), (out, 1)])
+    return wi.reshape(lead + (3,)), out.reshape(lead)

@@ -1,0 +1,99 @@
+"""The compiled microfacet lobes the surface uses: GGX kernels, the sheen LTC, table lookups.
+
+References: the NumPy GGX forms (``microfacet.ggx``, graded against quadrature in
+``test_ggx.py``), Gauss-Legendre quadrature of the densities, chi-square of the samplers
+against their densities (``_chi2``), and the NumPy table interpolation.
+"""
+import math
+
+import numpy as np
+import pytest
+
+from _chi2 import chi2_test
+from _quad import sphere_rule
+from openpbr_diffuse.microfacet import ggx, kernels, sheen
+from openpbr_diffuse.microfacet import tables as T
+
+
+def _dirs(rng, n, upper=False):
+    w = rng.normal(size=(n, 3))
+    w /= np.linalg.norm(w, axis=1, keepdims=True)
+    if upper:
+        w[:, 2] = np.abs(w[:, 2])
+    return w
+
+
+def test_reflection_kernel_equals_the_numpy_form(rng):
+    wi, wo = _dirs(rng, 300), _dirs(rng, 300, upper=True)
+    for alpha in (0.05, 0.3, 1.0):
+        m, c = ggx.microfacet_terms(wi, wo, alpha)
+        k = np.array([kernels.reflection(*a, *b, alpha) for a, b in zip(wi, wo)])
+        assert np.allclose(k[:, 0], m, rtol=1e-12, atol=1e-300)
+        up = m > 0
+        assert np.allclose(k[up, 1], c[up], rtol=1e-12)
+        for vndf, name in ((True, "vndf"), (False, "ndf")):
+            pk = np.array([kernels.reflection_pdf(*a, *b, alpha, vndf) for a, b in zip(wi, wo)])
+            assert np.allclose(pk, ggx.reflection_pdf(wo, wi, alpha, name), rtol=1e-12)
+
+
+@pytest.mark.parametrize("mu, alpha, vndf", [(0.3, 0.2, True), (0.8, 0.6, True), (0.5, 0.4, False)])
+def test_ggx_sampler_follows_its_pdf(rng, mu, alpha, vndf):
+    wo = np.array([math.sqrt(1 - mu * mu), 0.0, mu])
+
+    def sample(n):
+        u = rng.random((n, 2))
+        out = np.array([kernels.sample_reflection(*wo, alpha, a, b, vndf) for a, b in u])
+        return out[:, :3], out[:, 3]     # pdf column: ok (1) or failed (0)
+
+    z_edges = np.unique(np.concatenate([np.linspace(-1, 1, 21), [0.0]]))
+    phi_edges = np.linspace(-math.pi, math.pi, 33)
+    p, chi2, dof, mass = chi2_test(sample, lambda wi: ggx.reflection_pdf(wo, wi, alpha, "vndf" if vndf else "ndf"),
+                                   40_000, z_edges, phi_edges, nq=8)
+    assert p > 1e-3, (chi2, dof)
+
+
+@pytest.mark.parametrize("mu", (0.1, 0.5, 1.0))
+@pytest.mark.parametrize("r", (0.05, 0.4, 1.0))
+def test_sheen_density_is_normalised_on_the_upper_hemisphere(mu, r):
+    wi, w = sphere_rule(mu, 96)
+    d = np.vectorize(sheen.sheen_density)(wi[..., 0], wi[..., 1], wi[..., 2], mu, r)
+    assert np.sum(d * w) == pytest.approx(1.0, abs=2e-6)
+
+
+@pytest.mark.parametrize("mu, r", [(0.3, 0.3), (0.9, 0.8)])
+def test_sheen_sampler_follows_its_density(rng, mu, r):
+    def sample(n):
+        u = rng.random((n, 2))
+        wi = np.array([sheen.sheen_sample(mu, r, a, b) for a, b in u])
+        return wi, np.ones(n)
+
+    z_edges = np.linspace(0.0, 1.0, 17)
+    phi_edges = np.linspace(-math.pi, math.pi, 33)
+    dens = np.vectorize(sheen.sheen_density)
+    p, chi2, dof, mass = chi2_test(sample, lambda wi: dens(wi[..., 0], wi[..., 1], wi[..., 2], mu, r),
+                                   40_000, z_edges, phi_edges, nq=8)
+    assert mass == pytest.approx(1.0, abs=1e-4)
+    assert p > 1e-3, (chi2, dof)
+
+
+def test_sheen_albedo_fit_is_in_range():
+    mus, rs = np.linspace(0, 1, 21), np.linspace(0.01, 1, 21)
+    R = np.array([[sheen.sheen_albedo(m, r) for r in rs] for m in mus])
+    assert np.all(R >= 0.0) and np.all(R < 1.0)
+
+
+def test_compiled_table_lookups_equal_the_numpy_interpolation(rng):
+    C, R = T.padded_tables()
+    for mu, r, x in rng.random((100, 3)):
+        E1, E5, E6 = T.conductor_basis(mu, r)
+        a = T.conductor_basis_at(C, mu, r)
+        ir, *wr = T.axis_weights(r, C.shape[0] - 2, T.R_AXIS)
+        b = T.conductor_basis_pre(C, int(ir), *map(float, wr), mu)
+        assert np.allclose(a, (E1, E5, E6), rtol=1e-12, atol=1e-15)
+        assert np.allclose(b, (E1, E5, E6), rtol=1e-12, atol=1e-15)
+        want = float(T.dielectric_albedo(mu, r, x))
+        jr, *vr = T.axis_weights(r, R.shape[0] - 2, T.R_AXIS)
+        jx, *vx = T.axis_weights(x, R.shape[1] - 2, T.X_AXIS)
+        got = T.dielectric_albedo_pre(R, int(jr), *map(float, vr), int(jx), *map(float, vx), x, mu, float(E1))
+        assert got == pytest.approx(want, rel=1e-12, abs=1e-15)
+        assert T.dielectric_albedo_at(R, mu, r, x, float(E1)) == pytest.approx(want, rel=1e-12, abs=1e-15)
