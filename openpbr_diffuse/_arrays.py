@@ -256,17 +256,6 @@ def broadcast_leading(**shapes):
                          "(directions (..., 3), rho (..., C), roughness (...))") from None
 
 
-def flat(a, lead, k=None):
-    """View ``a`` broadcast to ``lead`` (+ its trailing axis of length k) as 1-D/2-D rows.
-
-    Broadcasting gives zero strides, which reshape keeps whenever the broadcast axes are
-    the outer ones; only genuinely outer-product inputs are copied.
-    """
-    if k is None:
-        return np.broadcast_to(a, lead).reshape(-1)
-    return np.broadcast_to(a, lead + (k,)).reshape(-1, k)
-
-
 def unit_samples(name, value, dtype):
     """Uniform random numbers u of shape (..., 2) in [0, 1)."""
     u = in_range(name, value, dtype, 0.0, 1.0, " (uniform random numbers)", hi_open=True)
