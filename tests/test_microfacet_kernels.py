@@ -83,17 +83,16 @@ def test_sheen_albedo_fit_is_in_range():
 
 
 def test_compiled_table_lookups_equal_the_numpy_interpolation(rng):
+    """The per-row lookups of the surface (conductor basis; the dielectric table collapsed per
+    material) against the NumPy tensor-product interpolation of ``microfacet.tables``."""
+    from openpbr_diffuse.nodes import OpenPBRSurface
+    from openpbr_diffuse.nodes import _surface_kernels as sk
+
     C, R = T.padded_tables()
-    for mu, r, x in rng.random((100, 3)):
-        E1, E5, E6 = T.conductor_basis(mu, r)
-        a = T.conductor_basis_at(C, mu, r)
-        ir, *wr = T.axis_weights(r, C.shape[0] - 2, T.R_AXIS)
-        b = T.conductor_basis_pre(C, int(ir), *map(float, wr), mu)
-        assert np.allclose(a, (E1, E5, E6), rtol=1e-12, atol=1e-15)
-        assert np.allclose(b, (E1, E5, E6), rtol=1e-12, atol=1e-15)
-        want = float(T.dielectric_albedo(mu, r, x))
-        jr, *vr = T.axis_weights(r, R.shape[0] - 2, T.R_AXIS)
-        jx, *vx = T.axis_weights(x, R.shape[1] - 2, T.X_AXIS)
-        got = T.dielectric_albedo_pre(R, int(jr), *map(float, vr), int(jx), *map(float, vx), x, mu, float(E1))
-        assert got == pytest.approx(want, rel=1e-12, abs=1e-15)
-        assert T.dielectric_albedo_at(R, mu, r, x, float(E1)) == pytest.approx(want, rel=1e-12, abs=1e-15)
+    for mu, r, ior in rng.random((40, 3)):
+        ior = 1.0 + 2.0 * ior
+        s = OpenPBRSurface(specular_roughness=float(r), specular_ior=float(ior))
+        x = float(s.params[sk.P_X_S])
+        E1, E5, E6, E = sk.layer_albedos(s.params, 0, sk.P_TAB_S, sk.P_CURVE_S, mu, C, x, False)
+        assert np.allclose((E1, E5, E6), T.conductor_basis(mu, r), rtol=1e-12, atol=1e-15)
+        assert E == pytest.approx(float(T.dielectric_albedo(mu, r, x)), rel=1e-12, abs=1e-15)

@@ -67,8 +67,8 @@ class TestWhiteFurnace:
     """White base, white specular, white coat and fuzz: the full stack preserves energy.
 
     Tolerance reached (quadrature of eval, order 64 per panel, mu_o in {0.2, 0.5, 1}):
-    <= 5e-4 at these roughnesses (the GGX albedo tables' accuracy, not the layering, sets it;
-    ``albedo`` itself equals 1 to 1e-12).
+    max |E - 1| = 5.2e-6 at these roughnesses (the GGX albedo tables' accuracy sets it; the
+    test allows 5e-5); ``albedo`` itself equals 1 to 1e-12.
     """
 
     CASES = [dict(coat_weight=c, coat_roughness=rc, coat_ior=ior, fuzz_weight=fw, fuzz_roughness=fr,
@@ -85,7 +85,7 @@ class TestWhiteFurnace:
         s = OpenPBRSurface(**WHITE, **self.CASES[case])
         for mu in (0.2, 0.5, 1.0):
             assert np.allclose(s.albedo(_wo(mu)), 1.0, atol=1e-12)
-            assert np.allclose(sphere_albedo(s, mu), 1.0, atol=5e-4), (case, mu)
+            assert np.allclose(sphere_albedo(s, mu), 1.0, atol=5e-5), (case, mu)
 
 
 # ----------------------------------------------------------------------------- pdf
@@ -95,7 +95,7 @@ class TestPdf:
     def test_mixture_pdf_integrates_to_one_over_the_sphere(self, name, mu):
         s = OpenPBRSurface(**STACKS[name])
         wi, w = sphere_rule(mu, 64)
-        assert np.sum(s.pdf(_wo(mu), wi) * w) == pytest.approx(1.0, abs=2e-5)
+        assert np.sum(s.pdf(_wo(mu), wi) * w) == pytest.approx(1.0, abs=5e-6)   # reached: 6.1e-7
 
     @pytest.mark.parametrize("name", ["coated", "transmissive", "everything"])
     def test_sampler_matches_pdf_chi2(self, rng, name):
@@ -122,7 +122,7 @@ class TestAlbedo:
     @pytest.mark.parametrize("mu", (0.25, 0.8))
     def test_albedo_equals_quadrature_of_eval(self, name, mu):
         s = OpenPBRSurface(**STACKS[name])
-        assert np.allclose(s.albedo(_wo(mu)), sphere_albedo(s, mu), atol=3e-4)
+        assert np.allclose(s.albedo(_wo(mu)), sphere_albedo(s, mu), atol=1e-4)   # reached: 1.1e-5
 
     @pytest.mark.parametrize("name", list(STACKS))
     def test_lobe_albedos_equal_quadrature_of_their_bsdfs(self, name):

@@ -229,64 +229,20 @@ def catmull_rom_at(t):
             0.5 * (-3.0 * t3 + 4.0 * t2 + t), 0.5 * (t3 - t2))
 
 
-@kernel
-def conductor_basis_at(C, mu, roughness):
-    """(E1, E5, E6) at one point from the padded conductor table C (``padded_tables``)."""
-    ir, tr = node_at(roughness, C.shape[0] - 2, R_AXIS)
-    im, tm = node_at(mu, C.shape[1] - 2, MU_AXIS)
-    wr = catmull_rom_at(tr)
-    wm = catmull_rom_at(tm)
-    e1 = e5 = e6 = 0.0
-    for a in range(4):
-        for b in range(4):
-            w = wr[a] * wm[b]
-            e1 += w * C[ir + a, im + b, 0]
-            e5 += w * C[ir + a, im + b, 1]
-            e6 += w * C[ir + a, im + b, 2]
-    return min(max(e1, 0.0), 1.0), max(e5, 0.0), max(e6, 0.0)
-
-
-@kernel
-def dielectric_albedo_at(R, mu, roughness, x, E1):
-    """E_diel at one point from the padded ratio table R, given E1 there (``ggx_albedo``)."""
-    if not x > 0.0:
-        return 0.0
-    ir, tr = node_at(roughness, R.shape[0] - 2, R_AXIS)
-    ix, tx = node_at(x, R.shape[1] - 2, X_AXIS)
-    im, tm = node_at(mu, R.shape[2] - 2, MU_AXIS)
-    wr = catmull_rom_at(tr)
-    wx = catmull_rom_at(tx)
-    wm = catmull_rom_at(tm)
-    v = 0.0
-    for a in range(4):
-        for b in range(4):
-            wab = wr[a] * wx[b]
-            for c in range(4):
-                v += wab * wm[c] * R[ir + a, ix + b, im + c]
-    return min(max(v, 0.0), 1.0) * E1
-
-
 def padded_tables():
     """(C, R): the padded conductor basis and dielectric ratio tables, float64, C-contiguous."""
     return (np.ascontiguousarray(_padded_conductor()[0], dtype=np.float64),
             np.ascontiguousarray(_padded_dielectric()[0], dtype=np.float64))
 
 
-# Lookups whose roughness and x coordinates are fixed per material: the node index and the
-# four Catmull-Rom weights of those axes are computed once (``axis_weights``), and only the
-# mu axis is evaluated per row.
-
-def axis_weights(v, n, kind):
-    """(i, w0, w1, w2, w3) of axis ``kind`` (MU_AXIS, X_AXIS, R_AXIS; n nodes) at v (arrays)."""
-    name = {MU_AXIS: "mu", X_AXIS: "x", R_AXIS: "r"}[kind]
-    i, t = _node_coord(np.asarray(v, dtype=np.float64), n, name)
-    w = _catmull_rom(t)
-    return (i.astype(np.float64),) + tuple(w[..., k] for k in range(4))
-
+# Lookups whose roughness coordinate is fixed per material: the node index and the four
+# Catmull-Rom weights of that axis are computed once (``node_at``, ``catmull_rom_at``), and
+# only the mu axis is evaluated per row.  (The surface also collapses the dielectric table on
+# its roughness and x axes per material: ``nodes/_surface_kernels._curve``.)
 
 @kernel
 def conductor_basis_pre(C, ir, r0, r1, r2, r3, mu):
-    """(E1, E5, E6) with the roughness axis given by ``axis_weights`` (C's roughness nodes)."""
+    """(E1, E5, E6) with the roughness axis given by its node ir and weights r0..r3."""
     im, tm = node_at(mu, C.shape[1] - 2, MU_AXIS)
     wm = catmull_rom_at(tm)
     wr = (r0, r1, r2, r3)
@@ -298,21 +254,3 @@ def conductor_basis_pre(C, ir, r0, r1, r2, r3, mu):
             e5 += w * C[ir + a, im + b, 1]
             e6 += w * C[ir + a, im + b, 2]
     return min(max(e1, 0.0), 1.0), max(e5, 0.0), max(e6, 0.0)
-
-
-@kernel
-def dielectric_albedo_pre(R, ir, r0, r1, r2, r3, ix, x0, x1, x2, x3, x, mu, E1):
-    """E_diel with the roughness and x axes given by ``axis_weights`` (R's nodes); 0 at x = 0."""
-    if not x > 0.0:
-        return 0.0
-    im, tm = node_at(mu, R.shape[2] - 2, MU_AXIS)
-    wm = catmull_rom_at(tm)
-    wr = (r0, r1, r2, r3)
-    wx = (x0, x1, x2, x3)
-    v = 0.0
-    for a in range(4):
-        for b in range(4):
-            wab = wr[a] * wx[b]
-            for c in range(4):
-                v += wab * wm[c] * R[ir + a, ix + b, im + c]
-    return min(max(v, 0.0), 1.0) * E1

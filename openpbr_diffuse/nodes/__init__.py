@@ -1,8 +1,10 @@
-"""Shading nodes: MaterialX ``oren_nayar_diffuse_bsdf`` and the OpenPBR Surface base.
+"""Shading nodes: MaterialX ``oren_nayar_diffuse_bsdf`` and OpenPBR Surface.
 
 - ``OrenNayarDiffuseBSDF``: MaterialX ``ND_oren_nayar_diffuse_bsdf`` (QON or EON).
-- ``OpenPBRSurface``: the base substrate of OpenPBR Surface 1.1 (EON diffuse, dielectric
-  GGX specular with albedo scaling, F82-tint metal) with albedo-based lobe selection.
+- ``OpenPBRSurface``: OpenPBR Surface 1.1 as a mixture of lobes around the diffuse lobe
+  (EON diffuse, GGX specular and F82-tint metal, coat, Zeltner sheen fuzz, transmission,
+  subsurface) with albedo scaling and albedo-based lobe selection, compiled
+  (``_surface_kernels``).
 
 Both read their interface (input names, types, defaults, ranges) from the MaterialX data
 library (``materialx_defs``) and share the verbs ``eval(wi, wo)``, ``albedo(wo)``,

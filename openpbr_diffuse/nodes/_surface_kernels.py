@@ -337,8 +337,11 @@ def diffuse_f(dmodel, r, rho, iz, oz, s):
 
 
 @kernel
-def lobe_f(k, p, o, st, ix, iy, iz, ox, oy, oz, dmodel, ms):
-    """The lobe's own BSDF (f0, f1, f2), weight not applied; 0 outside the lobe's hemisphere."""
+def lobe_f(k, p, o, st, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c):
+    """The lobe's own BSDF (f0, f1, f2), weight not applied; 0 outside the lobe's hemisphere.
+
+    (m, c): ``microfacet.kernels.reflection`` at the base specular's alpha, shared by the
+    specular and metal lobes (computed once per row by the caller, ``base_ggx``)."""
     E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, avg, Eq = st
     up = iz > 0.0 and oz > 0.0
     if k == DIFFUSE or k == SUBSURFACE:
@@ -366,15 +369,14 @@ def lobe_f(k, p, o, st, ix, iy, iz, ox, oy, oz, dmodel, ms):
         v = Ef * sheen_density(lx, ly, iz, oz, p[o + P_FUZZ_R]) / iz
         return v, v, v
     if k == TRANSMISSION:   # the GGX lobe mirrored below the surface, normalised by E1
-        m, _ = mf.reflection(ix, iy, -iz, ox, oy, oz, p[o + P_ALPHA_S])
-        m = m / E1s
-        return m * p[o + P_TRANS_TINT], m * p[o + P_TRANS_TINT + 1], m * p[o + P_TRANS_TINT + 2]
+        mt, _ = mf.reflection(ix, iy, -iz, ox, oy, oz, p[o + P_ALPHA_S])
+        mt = mt / E1s
+        return mt * p[o + P_TRANS_TINT], mt * p[o + P_TRANS_TINT + 1], mt * p[o + P_TRANS_TINT + 2]
     if k == COAT:
-        m, c = mf.reflection(ix, iy, iz, ox, oy, oz, p[o + P_ALPHA_C])
+        mc, cc = mf.reflection(ix, iy, iz, ox, oy, oz, p[o + P_ALPHA_C])
         x = p[o + P_X_C]
-        v = m * fresnel.dielectric(c, p[o + P_ETA_C]) * mf.multiscatter(x * x, E1c, ms)
+        v = mc * fresnel.dielectric(cc, p[o + P_ETA_C]) * mf.multiscatter(x * x, E1c, ms)
         return v, v, v
-    m, c = mf.reflection(ix, iy, iz, ox, oy, oz, p[o + P_ALPHA_S])
     if k == SPECULAR:
         x = p[o + P_X_S]
         v = m * fresnel.dielectric(c, p[o + P_ETA_S]) * mf.multiscatter(x * x, E1s, ms)
@@ -392,8 +394,9 @@ def diffuse_uses_eon_sampler(k, dmodel):
 
 
 @kernel
-def lobe_pdf(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, vndf):
-    """Solid-angle pdf of ``lobe_sample`` producing wi given wo (wo above the horizon)."""
+def lobe_pdf(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, vndf, pdf_s):
+    """Solid-angle pdf of ``lobe_sample`` producing wi given wo (wo above the horizon);
+    ``pdf_s``: the GGX reflection pdf at the base specular's alpha (specular and metal)."""
     if k == DIFFUSE or k == SUBSURFACE:
         if not iz > 0.0:
             return 0.0
@@ -412,7 +415,12 @@ def lobe_pdf(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, vndf):
         return mf.reflection_pdf(ix, iy, -iz, ox, oy, oz, p[o + P_ALPHA_S], vndf)
     if k == COAT:
         return mf.reflection_pdf(ix, iy, iz, ox, oy, oz, p[o + P_ALPHA_C], vndf)
-    return mf.reflection_pdf(ix, iy, iz, ox, oy, oz, p[o + P_ALPHA_S], vndf)
+    return pdf_s
+
+
+@kernel
+def uses_base_ggx(active):
+    return (active & ((1 << SPECULAR) | (1 << METAL))) != 0
 
 
 @kernel
@@ -458,18 +466,6 @@ def lobe_score(k, p, o, st, mu, dmodel, ms, sel):
     w1, e1 = lobe_weight_albedo(k, 1, p, o, st, mu, dmodel, ms)
     w2, e2 = lobe_weight_albedo(k, 2, p, o, st, mu, dmodel, ms)
     return score(sel, w0, w1, w2, e0, e1, e2)
-
-
-@kernel
-def total_score(active, p, o, st, mu, dmodel, ms, sel):
-    """(sum of the scores of the active lobes, number of active lobes)."""
-    S = 0.0
-    K = 0
-    for k in range(N_LOBES):
-        if active & (1 << k):
-            S += lobe_score(k, p, o, st, mu, dmodel, ms, sel)
-            K += 1
-    return S, K
 
 
 @kernel
@@ -563,10 +559,13 @@ def _eval_drive(active, only, dmodel, ms, C, R, p, ps, wi, wo, out):
         mu = min(max(oz, 0.0), 1.0)
         st = row_state(p, o, mu, C, R, dmodel, ms, False)
         a0 = a1 = a2 = 0.0
+        m, c = 0.0, 0.0
+        if uses_base_ggx(active):
+            m, c = mf.reflection(ix, iy, iz, ox, oy, oz, p[o + P_ALPHA_S])
         if oz > 0.0:
             for k in range(N_LOBES):
                 if (active & (1 << k)) and (only < 0 or only == k):
-                    f0, f1, f2 = lobe_f(k, p, o, st, ix, iy, iz, ox, oy, oz, dmodel, ms)
+                    f0, f1, f2 = lobe_f(k, p, o, st, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c)
                     if only >= 0:
                         a0, a1, a2 = f0, f1, f2
                     else:
@@ -596,13 +595,16 @@ def _pdf_drive(active, dmodel, sel, ms, vndf, C, R, p, ps, wo, wi, out):
             # score is 0), the mixture pdf with P_k = s_k / sum s
             st = row_state(p, o, mu, C, R, dmodel, ms)
             num = 0.0
+            pdf_s = 0.0
+            if uses_base_ggx(active):
+                pdf_s = mf.reflection_pdf(ix, iy, iz, ox, oy, oz, p[o + P_ALPHA_S], vndf)
             S = 0.0
             flat = 0.0
             K = 0
             for k in range(N_LOBES):
                 if active & (1 << k):
                     sk_ = lobe_score(k, p, o, st, mu, dmodel, ms, sel)
-                    pk = lobe_pdf(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, vndf)
+                    pk = lobe_pdf(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, vndf, pdf_s)
                     num += sk_ * pk
                     S += sk_
                     flat += pk
@@ -657,13 +659,16 @@ def _sample_drive(active, dmodel, sel, ms, vndf, C, R, p, ps, wo, u, wi, out):
         x, y, z, own, ok = lobe_sample(chosen, p, o, ox, oy, oz, u1, u2, dmodel, vndf)
         q = 0.0
         if oz > 0.0 and ok and own > 0.0:
+            pdf_s = 0.0
+            if uses_base_ggx(active):
+                pdf_s = mf.reflection_pdf(x, y, z, ox, oy, oz, p[o + P_ALPHA_S], vndf)
             for k in range(N_LOBES):
                 if active & (1 << k):
                     Pk = probability(ss[k], S, K)
                     if k == chosen:
                         q += Pk * own
                     elif Pk > 0.0:
-                        q += Pk * lobe_pdf(k, p, o, x, y, z, ox, oy, oz, dmodel, vndf)
+                        q += Pk * lobe_pdf(k, p, o, x, y, z, ox, oy, oz, dmodel, vndf, pdf_s)
         if not oz > 0.0:
             x, y, z = 0.0, 0.0, 1.0
         wi[j] = x

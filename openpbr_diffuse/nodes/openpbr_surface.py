@@ -129,17 +129,17 @@ class _Flags(NamedTuple):
     vndf: bool
 
 
-def pack_parameters(p):
+def pack_parameters(p, changed=None):
     """(parameter rows (..., N_PARAMS), active-lobe mask, warning bits) of the compiled path
     from the converted inputs ``p`` (float arrays (...), colours (..., 3)): the derived
-    values of the reference graph, computed once per material (``_surface_kernels.pack_drive``)."""
-    vals = [p[n] for n, _ in sk.RAW]
-    vals[-1] = np.float64(bool(vals[-1]))
-    flat = _one_material(vals)
+    values of the reference graph, computed once per material (``_surface_kernels.pack_drive``).
+    ``changed``: the names that differ from the nodedef defaults (None: any may)."""
+    flat = _one_material(p, changed)
     if flat is not None:
         lead = ()
         raw = np.array(flat)
     else:
+        vals = [p[n] if n != "geometry_thin_walled" else np.float64(bool(p[n])) for n, _ in sk.RAW]
         lead = np.broadcast_shapes(*(np.shape(v)[:-1] if w == 3 else np.shape(v) for v, (_, w) in zip(vals, sk.RAW)))
         raw = np.concatenate([np.broadcast_to(v if w == 3 else np.asarray(v)[..., None], lead + (w,))
                               for v, (_, w) in zip(vals, sk.RAW)], axis=-1)
@@ -150,14 +150,33 @@ def pack_parameters(p):
     return out, mask, warn
 
 
-def _one_material(vals):
-    """The RAW values as one flat list of floats when every input is a single value, else None."""
-    flat = []
-    for v, (_, w) in zip(vals, sk.RAW):
-        if w == 1 and np.ndim(v) == 0:
-            flat.append(float(v))
+#: offset and width of each RAW input in the flat row
+_RAW_AT = {}
+for _n, _w in sk.RAW:
+    _RAW_AT[_n] = (sum(w for _, w in sk.RAW[:len(_RAW_AT)]), _w)
+
+
+@functools.cache
+def _default_raw(nodedef):
+    return _one_material(_interface(nodedef)[1], None)
+
+
+def _one_material(p, changed):
+    """The RAW values as one flat list of floats when every input is a single value, else
+    None.  Starts from the defaults' row when only ``changed`` names differ from them."""
+    if changed is None:
+        flat, names = [0.0] * sk.N_RAW, _RAW_AT
+    else:
+        flat, names = list(_default_raw(OpenPBRSurface.NODEDEF)), [n for n in changed if n in _RAW_AT]
+    for n in names:
+        a, w = _RAW_AT[n]
+        v = p[n]
+        if n == "geometry_thin_walled":
+            flat[a] = float(bool(v))
+        elif w == 1 and np.ndim(v) == 0:
+            flat[a] = float(v)
         elif w == 3 and np.shape(v) == (3,):
-            flat.extend(v.tolist())
+            flat[a:a + 3] = v.tolist()
         else:
             return None
     return flat
@@ -291,6 +310,7 @@ class OpenPBRSurface(metaclass=NodeMeta):
         if self.diffuse_model not in DIFFUSE_MODELS:
             raise ValueError(f"diffuse_model must be one of {', '.join(DIFFUSE_MODELS)}; got {self.diffuse_model!r}")
         self.inputs = dict(defaults)
+        self._given = tuple(kwargs)
         for n, v in kwargs.items():
             self.inputs[n] = _convert(checked[n], v)
         self._ignored = {n: self.inputs[n] for n in kwargs
@@ -304,7 +324,7 @@ class OpenPBRSurface(metaclass=NodeMeta):
     def _setup(self):
         p = self.inputs
         self.frame = Frame(p["geometry_normal"])
-        self.params, mask, warn = pack_parameters(p)
+        self.params, mask, warn = pack_parameters(p, self._given)
         for bit, text in _WARNINGS.items():
             if warn & bit:
                 warnings.warn(text, UserWarning, stacklevel=3)
@@ -321,6 +341,12 @@ class OpenPBRSurface(metaclass=NodeMeta):
         return dict(self._ignored)
 
     def _local(self, name, w):
+        # one float64 direction (a renderer's query): the same unit check as
+        # ``_arrays.directions``, without its array machinery
+        if type(w) is np.ndarray and w.shape == (3,) and w.dtype == np.float64:
+            x, y, z = w.tolist()
+            if abs(x * x + y * y + z * z - 1.0) <= ar.UNIT_TOL:
+                return self.frame.to_local(w)
         return self.frame.to_local(ar.directions(name, w, np.float64))
 
     def _lead(self, **shapes):
