@@ -8,6 +8,7 @@ float64, mixed gives float64; Python scalars and lists do not promote.
 Every error is a ``ValueError`` (or ``TypeError`` for wrong types) whose message names the
 argument and the allowed range.
 """
+import math
 import numbers
 import os
 
@@ -23,9 +24,29 @@ import numba  # noqa: E402
 import numpy as np  # noqa: E402
 from numba import prange  # noqa: E402
 
-#: |w.w - 1| allowed for a "unit" direction.  Loose enough for float32-normalised input,
-#: tight enough to catch vectors that were never normalised.
+#: ||w| - 1| allowed for a "unit" direction.  Loose enough for float32-normalised input,
+#: tight enough to catch vectors that were never normalised.  The kernels compare |w|^2
+#: with the squared bounds (no square root per row); the test is the same as on |w|.
 UNIT_TOL = 1e-4
+_N2_LO = (1.0 - UNIT_TOL) ** 2
+_N2_HI = (1.0 + UNIT_TOL) ** 2
+#: float16 directions carry ~5e-4 rounding per component, more than UNIT_TOL: they are
+#: checked against this tolerance instead and renormalised in the result dtype (float32).
+UNIT_TOL_FLOAT16 = 2e-3
+
+
+def show(value, dtype=None):
+    """A number as its shortest round-trip text in ``dtype`` (default float64).
+
+    Messages print values at full precision, so that an out-of-range value never looks
+    in range (1.0000001 is not "1", pi/2 is not "1.5708").
+    """
+    v = float(value)
+    if v.is_integer() and abs(v) < 1e15:
+        return str(int(v)) if v or not math.copysign(1.0, v) < 0 else "-0"
+    if dtype is None or np.dtype(dtype).itemsize >= 8 or not np.isfinite(v):
+        return repr(v)
+    return str(np.dtype(dtype).type(v))  # shortest text that reads back to this float32/16
 
 
 def result_dtype(*values):
@@ -37,7 +58,18 @@ def result_dtype(*values):
 
 
 def as_float(name, value, dtype):
-    """``value`` as an ndarray of ``dtype``; TypeError naming ``name`` if it is not numeric."""
+    """``value`` as an ndarray of ``dtype``; TypeError naming ``name`` if it is not numeric.
+
+    Masked arrays: a mask with masked entries is refused (ValueError) rather than dropped
+    silently -- the library cannot know what a masked direction or colour should give;
+    an array whose mask is empty is used as its data.
+    """
+    if isinstance(value, np.ma.MaskedArray):
+        if np.ma.is_masked(value):
+            raise ValueError(f"{name} is a masked array with {int(np.ma.count_masked(value))} masked "
+                             f"value(s); masks are not supported: fill them ({name}.filled(v)) "
+                             "or keep only the unmasked rows")
+        value = np.ma.getdata(value)
     if isinstance(value, np.ndarray):
         arr = value
     elif isinstance(value, (numbers.Real, list, tuple)) and not isinstance(value, bool):
@@ -66,9 +98,11 @@ _predicate = numba.njit(cache=True, error_model="numpy", forceinline=True)
 
 @_predicate
 def is_unit(x, y, z):
-    """|w|^2 within ``UNIT_TOL`` of 1, computed in float64; False for NaN or Inf."""
+    """|w| within ``UNIT_TOL`` of 1 (as |w|^2 in [(1 - tol)^2, (1 + tol)^2], float64);
+    False for NaN or Inf."""
     x, y, z = 1.0 * x, 1.0 * y, 1.0 * z
-    return abs(x * x + y * y + z * z - 1.0) <= UNIT_TOL  # NaN compares false
+    n2 = x * x + y * y + z * z
+    return (n2 >= _N2_LO) & (n2 <= _N2_HI)  # NaN compares false
 
 
 @_predicate
@@ -97,30 +131,45 @@ def _norms2(flat):
     return np.einsum("ij,ij->i", flat, flat, dtype=np.float64)
 
 
+def _first_not_unit(name, w, tol, shown_dtype):
+    """ValueError naming the first row of ``w`` whose length is not within ``tol`` of 1."""
+    flat = w.reshape(-1, 3)
+    n = np.sqrt(_norms2(flat))
+    i = int(np.flatnonzero(~(np.abs(n - 1.0) <= tol))[0])
+    where = "".join(f"[{int(j)}]" for j in np.unravel_index(i, w.shape[:-1])) if w.ndim > 1 else ""
+    what = "is not finite" if not np.isfinite(flat[i]).all() else f"has length {show(n[i], shown_dtype)}"
+    vec = ", ".join(show(c, shown_dtype) for c in flat[i])
+    dt = f" ({np.dtype(shown_dtype).name} input)" if np.dtype(shown_dtype).itemsize < 8 else ""
+    return ValueError(f"{name}{where} = [{vec}] {what}; directions must be finite unit vectors "
+                      f"(|w| = 1 within {tol:g}{dt})")
+
+
 def directions(name, value, dtype, check=True):
     """A (..., 3) array of finite unit vectors.
 
     ``check=False`` checks type and shape only; the caller then owes the value check,
     either by calling again with ``check=True`` or with ``is_unit`` fused into its own
-    loop (calling again to report when that fails).
+    loop (calling again to report when that fails).  float16 input is always checked
+    here, against ``UNIT_TOL_FLOAT16`` (its own precision), and renormalised in ``dtype``.
     """
+    src = value.dtype if isinstance(value, np.ndarray) else None
     w = as_float(name, value, dtype)
     if w.ndim == 0 or w.shape[-1] != 3:
         raise ValueError(f"{name} must have shape (..., 3) (unit direction vectors), got shape {w.shape}")
+    if src == np.float16 and w.size:
+        n = np.sqrt(_norms2(w.reshape(-1, 3))).reshape(w.shape[:-1] + (1,))
+        if not (np.abs(n - 1.0) <= UNIT_TOL_FLOAT16).all():
+            raise _first_not_unit(name, w, UNIT_TOL_FLOAT16, np.float16)
+        return (w / n).astype(dtype)
     if not check:
         return w
     if w.size >= _PARALLEL_MIN and w.flags.c_contiguous:
         ok = not _count_not_unit(w.reshape(-1))
     else:
-        ok = bool((np.abs(_norms2(w.reshape(-1, 3)) - 1.0) <= UNIT_TOL).all())
+        n2 = _norms2(w.reshape(-1, 3))
+        ok = bool(((n2 >= _N2_LO) & (n2 <= _N2_HI)).all())
     if not ok:
-        flat = w.reshape(-1, 3)
-        n2 = _norms2(flat)
-        i = int(np.flatnonzero(~(np.abs(n2 - 1.0) <= UNIT_TOL))[0])
-        idx = [int(j) for j in np.unravel_index(i, w.shape[:-1])]
-        what = "is not finite" if not np.isfinite(flat[i]).all() else f"has length {np.sqrt(n2[i]):.6g}"
-        raise ValueError(f"{name}{idx} = {flat[i].tolist()} {what}; "
-                         f"directions must be finite unit vectors (|w| = 1 within {UNIT_TOL:g})")
+        raise _first_not_unit(name, w, UNIT_TOL, w.dtype)
     return w
 
 
@@ -146,15 +195,20 @@ def in_range(name, value, dtype, lo, hi, what="", lo_open=False, hi_open=False, 
         if not _count_outside(a.reshape(-1), t(lo), t(hi), lo_open, hi_open):
             return a
     if a.size:
-        if not np.isfinite(a).all():
-            raise ValueError(f"{name} must be finite{what}; got {a[~np.isfinite(a)].ravel()[0]}")
-        amin, amax = a.min(), a.max()
-        bad_lo = amin <= lo if lo_open else amin < lo
-        bad_hi = amax >= hi if hi_open else amax > hi
-        if bad_lo or bad_hi:
+        t = a.dtype.type
+        finite = np.isfinite(a)
+        above = a > t(lo) if lo_open else a >= t(lo)
+        below = a < t(hi) if hi_open else a <= t(hi)
+        bad = ~(finite & above & below)
+        if bad.any():
+            i = int(np.flatnonzero(bad.reshape(-1))[0])
+            where = " at " + name + "".join(f"[{int(j)}]" for j in np.unravel_index(i, a.shape)) if a.ndim else ""
+            val = a.reshape(-1)[i]
+            if not finite.reshape(-1)[i]:
+                raise ValueError(f"{name} must be finite{what}; got {show(val)}{where}")
             lb, hb = "(" if lo_open else "[", ")" if hi_open else "]"
-            val = amin if bad_lo else amax
-            raise ValueError(f"{name} must lie in {lb}{lo:g}, {hi:g}{hb}{what}; got {float(val):g}")
+            raise ValueError(f"{name} must lie in {lb}{show(lo)}, {show(hi)}{hb}{what}; "
+                             f"got {show(val, a.dtype)}{where}")
     return a
 
 
@@ -200,17 +254,6 @@ def broadcast_leading(**shapes):
         listed = ", ".join(f"{k} {v}" for k, v in shapes.items())
         raise ValueError(f"leading shapes do not broadcast: {listed} "
                          "(directions (..., 3), rho (..., C), roughness (...))") from None
-
-
-def flat(a, lead, k=None):
-    """View ``a`` broadcast to ``lead`` (+ its trailing axis of length k) as 1-D/2-D rows.
-
-    Broadcasting gives zero strides, which reshape keeps whenever the broadcast axes are
-    the outer ones; only genuinely outer-product inputs are copied.
-    """
-    if k is None:
-        return np.broadcast_to(a, lead).reshape(-1)
-    return np.broadcast_to(a, lead + (k,)).reshape(-1, k)
 
 
 def unit_samples(name, value, dtype):

@@ -201,7 +201,7 @@ Z = [0.0, 0.0, 1.0]
     (lambda: od.evaluate("eon", Z, [0, np.nan, 1.0], 0.5), ValueError, ["wo", "finite"]),
     (lambda: od.evaluate("eon", [0, 1.0], Z, 0.5), ValueError, ["wi", "(..., 3)"]),
     (lambda: od.evaluate("eon", Z, Z, 1.5), ValueError, ["roughness", "[0, 1]"]),
-    (lambda: od.evaluate("qon", Z, Z, 2.0), ValueError, ["roughness", "1.5708", "sigma"]),
+    (lambda: od.evaluate("qon", Z, Z, 2.0), ValueError, ["roughness", "1.5707963267948966", "sigma"]),
     (lambda: od.evaluate("eon", Z, Z, -0.1), ValueError, ["roughness"]),
     (lambda: od.evaluate("eon", Z, Z, np.inf), ValueError, ["roughness", "finite"]),
     (lambda: od.evaluate("eon", Z, Z, 0.5, 1.2), ValueError, ["rho", "[0, 1]"]),

@@ -13,16 +13,20 @@ E(rho) = rho e_g + m(rho) e_h (m = 0, rho^2, or EON's rho_ms(rho, <E_F>(r)) of E
 chromatic albedo is exact from G and B.  The axis conventions and channel meaning are also
 written into the files' metadata (``openpbr_diffuse:*`` attributes).
 """
+import errno
 import os
+import sys
 
 import numpy as np
 
 from .._version import __version__
 from ..models.registry import INFO, MIX_LINEAR, MIX_RHO2, MIX_RHO_MS, model_info
-from ..models.tables import load_table, mix_weight
+from ..models.tables import load_table, mix_weight, table_path
 
-#: Default texture resolution.
+#: Default texture resolution, largest size, and texels per computed block of rows.
 DEFAULT_SIZE = 32
+MAX_SIZE = 4096
+BLOCK_TEXELS = 1 << 18
 
 _MIX_TEXT = {MIX_LINEAR: "0 (linear in rho; B = 0)", MIX_RHO2: "rho^2",
              MIX_RHO_MS: "rho_ms = rho^2 <E_F> / (1 - rho (1 - <E_F>)), <E_F>(r) = (1 + c2 r)/(1 + c1 r) (EON Eq. 15, 18)"}
@@ -33,35 +37,57 @@ def texel_centres(size):
     return (np.arange(size) + 0.5) / size
 
 
-def _roughness_axis(name, size):
+def _roughness_axis(name, size, index="j", where="row (0 = first scanline)"):
+    """Texel-centre roughness values and their description, for an axis indexed by ``index``."""
     info = INFO[name]
     if name == "lambert":
-        return np.zeros(size), "roughness ignored (Lambert): every row is the same"
+        return np.zeros(size), "roughness ignored (Lambert): every texel along this axis is the same"
     return (texel_centres(size) * info.roughness_max,
-            f"{info.roughness_name} = (j + 0.5)/{size} * {info.roughness_max:.10g}, j = row (0 = first scanline)")
+            f"{info.roughness_name} = ({index} + 0.5)/{size} * {info.roughness_max!r}, {index} = {where}")
+
+
+def _check_size(size):
+    if not (isinstance(size, (int, np.integer)) and not isinstance(size, bool) and 4 <= size <= MAX_SIZE):
+        raise ValueError(f"size must be an integer in [4, {MAX_SIZE}], got {size!r}")
+    return int(size)
+
+
+def _rows(name, size, table, rough, start, stop):
+    """Rows start..stop-1 of the directional texture, (stop - start, N, 3) float32."""
+    mu = texel_centres(size)
+    r = rough[start:stop, None]
+    e_g, e_h = table.directional_terms(mu[None, :], r)
+    E1 = e_g + mix_weight(name, 1.0, r) * e_h
+    return np.stack([E1, e_g, e_h], axis=-1).astype(np.float32)
+
+
+def _average_row(name, table, rough):
+    a_g, a_h = table.average_terms(rough)
+    A1 = a_g + mix_weight(name, 1.0, rough) * a_h
+    return np.stack([A1, a_g, a_h], axis=-1)[None, :, :].astype(np.float32)
+
+
+def _blocks(size):
+    """Row blocks of ~BLOCK_TEXELS texels: the interpolation's float64 temporaries stay bounded."""
+    step = max(1, BLOCK_TEXELS // size)
+    return [(s, min(size, s + step)) for s in range(0, size, step)]
 
 
 def lut_values(model, size=DEFAULT_SIZE):
     """The two textures as arrays: (N, N, 3) directional and (1, N, 3) average, float32."""
     name = model_info(model).name
-    if not (isinstance(size, (int, np.integer)) and 4 <= size <= 4096):
-        raise ValueError(f"size must be an integer in [4, 4096], got {size!r}")
+    size = _check_size(size)
     table = load_table(name)
-    mu = texel_centres(size)
     rough, _ = _roughness_axis(name, size)
-    e_g, e_h = table.directional_terms(mu[None, :], rough[:, None])
-    E1 = e_g + mix_weight(name, 1.0, rough[:, None]) * e_h
-    a_g, a_h = table.average_terms(rough)
-    A1 = a_g + mix_weight(name, 1.0, rough) * a_h
-    img2d = np.stack([E1, e_g, e_h], axis=-1).astype(np.float32)
-    img1d = np.stack([A1, a_g, a_h], axis=-1)[None, :, :].astype(np.float32)
-    return img2d, img1d
+    img2d = np.empty((size, size, 3), dtype=np.float32)
+    for s, e in _blocks(size):
+        img2d[s:e] = _rows(name, size, table, rough, s, e)
+    return img2d, _average_row(name, table, rough)
 
 
 def _metadata(name, size, kind):
     info = INFO[name]
     table = load_table(name)
-    _, y_axis = _roughness_axis(name, size)
     meta = {
         "openpbr_diffuse:model": name,
         "openpbr_diffuse:quantity": ("directional albedo E(mu, roughness)" if kind == "directional"
@@ -71,50 +97,79 @@ def _metadata(name, size, kind):
         "openpbr_diffuse:rho": "R at rho = 1 (white); G, B give any rho exactly",
         "openpbr_diffuse:roughness_name": info.roughness_name,
         "openpbr_diffuse:roughness_max": 0.0 if name == "lambert" else float(info.roughness_max),
-        "openpbr_diffuse:source": (f"reference tables ({table.meta.get('method', '')[:80]}...), "
-                                   f"interpolation error {table.interpolation_error:.1e}"),
+        "openpbr_diffuse:source": (f"reference table {table_path(name).name} ({table.meta.get('method', '')}); "
+                                   f"interpolation error {table.interpolation_error!r}"),
         "openpbr_diffuse:version": __version__,
         "openpbr_diffuse:texel_convention": "texel centres: value at (index + 0.5)/N",
     }
     if kind == "directional":
         meta["openpbr_diffuse:x_axis"] = f"mu = cos(theta_o) = (i + 0.5)/{size}, i = column"
-        meta["openpbr_diffuse:y_axis"] = y_axis
+        meta["openpbr_diffuse:y_axis"] = _roughness_axis(name, size)[1]
     else:
-        meta["openpbr_diffuse:x_axis"] = y_axis.replace("j = row (0 = first scanline)", "i = column")
+        meta["openpbr_diffuse:x_axis"] = _roughness_axis(name, size, "i", "column")[1]
         meta["openpbr_diffuse:y_axis"] = "single row"
     return meta
 
 
-def _write_exr(path, pixels, meta):
-    import OpenImageIO as oiio  # optional dependency (extra "exr"), imported when needed
-
-    height, width, channels = pixels.shape
-    spec = oiio.ImageSpec(width, height, channels, oiio.FLOAT)
+def _spec(oiio, width, height, meta):
+    spec = oiio.ImageSpec(width, height, 3, oiio.FLOAT)
     spec.channelnames = ("R", "G", "B")
     spec.attribute("compression", "zip")
     for key, value in meta.items():
         spec.attribute(key, value)
+    return spec
+
+
+def _write_exr(path, height, width, rows, meta):
+    """Write an EXR whose scanlines come from ``rows``: an iterable of (start, stop, pixels)."""
+    import OpenImageIO as oiio  # optional dependency (extra "exr"), imported when needed
+
     out = oiio.ImageOutput.create(path)
     if out is None:
         raise OSError(f"cannot create {path}: {oiio.geterror()}")
     try:
-        if not out.open(path, spec) or not out.write_image(np.ascontiguousarray(pixels)):
+        if not out.open(path, _spec(oiio, width, height, meta)):
             raise OSError(f"cannot write {path}: {out.geterror()}")
+        for start, stop, pixels in rows:
+            if not out.write_scanlines(start, stop, 0, np.ascontiguousarray(pixels)):
+                raise OSError(f"cannot write {path}: {out.geterror()}")
     finally:
         out.close()
 
 
-def export_lut(model, directory, size=DEFAULT_SIZE):
+def _progress_bar(total, desc, progress):
+    """A tqdm bar on stderr: ``progress`` True (always), False (never), None (when stderr is a TTY)."""
+    if progress is False:
+        return None
+    try:
+        from tqdm import tqdm  # in the "exr" extra with OpenImageIO; optional for the automatic bar
+    except ImportError:
+        if progress:
+            raise ImportError("progress=True needs tqdm: pip install tqdm") from None
+        return None
+
+    return tqdm(total=total, desc=desc, unit="row", disable=None if progress is None else False,
+                leave=False, file=sys.stderr)
+
+
+def export_lut(model, directory, size=DEFAULT_SIZE, *, progress=False):
     """Write ``<model>_albedo.exr`` (size x size) and ``<model>_average_albedo.exr`` (size x 1).
+
+    The directional texture is computed and written in blocks of rows (~BLOCK_TEXELS
+    texels), so memory stays bounded whatever the size (4096: ~100 MB peak, measured in
+    ``tests/test_broadcast_memory.py``).
 
     Parameters
     ----------
     model : str
         One of ``MODELS``.
     directory : path-like
-        Created if missing.
+        Created if missing; an existing path that is not a directory is an error.
     size : int
         Texels per axis, 4 .. 4096.
+    progress : bool or None
+        Progress bar (tqdm) on stderr: True, False (default), or None for "when stderr is a
+        terminal".
 
     Returns
     -------
@@ -122,13 +177,29 @@ def export_lut(model, directory, size=DEFAULT_SIZE):
         Paths of the directional and average textures.
     """
     name = model_info(model).name
-    img2d, img1d = lut_values(name, size)
+    size = _check_size(size)
     directory = os.fspath(directory)
+    if os.path.exists(directory) and not os.path.isdir(directory):
+        raise NotADirectoryError(errno.ENOTDIR, "export directory exists and is not a directory", directory)
     os.makedirs(directory, exist_ok=True)
+    table = load_table(name)
+    rough, _ = _roughness_axis(name, size)
     p2 = os.path.join(directory, f"{name}_albedo.exr")
     p1 = os.path.join(directory, f"{name}_average_albedo.exr")
-    _write_exr(p2, img2d, _metadata(name, size, "directional"))
-    _write_exr(p1, img1d, _metadata(name, size, "average"))
+    bar = _progress_bar(size, f"{name}_albedo.exr", progress)
+
+    def rows():
+        for s, e in _blocks(size):
+            yield s, e, _rows(name, size, table, rough, s, e)
+            if bar is not None:
+                bar.update(e - s)
+
+    try:
+        _write_exr(p2, size, size, rows(), _metadata(name, size, "directional"))
+    finally:
+        if bar is not None:
+            bar.close()
+    _write_exr(p1, 1, size, [(0, 1, _average_row(name, table, rough))], _metadata(name, size, "average"))
     return p2, p1
 
 

@@ -1,11 +1,22 @@
 """``openpbr-diffuse``: entry point and sub-command dispatch.
 
 Each sub-command lives in its own module of this package, exposing
-``add_parser(subparsers)`` and ``run(args) -> int``.  Unusable input (``ValueError``,
-``TypeError``, ``OSError``, ``UsageError``) prints one line on stderr and exits 2.
+``add_parser(subparsers)`` and ``run(args) -> int``.
+
+Conventions (tested in ``tests/test_cli_conventions.py``):
+
+- unusable input (``ValueError``, ``TypeError``, ``OSError``, ``UsageError``, argparse
+  errors) prints one line ``openpbr-diffuse COMMAND: error: ...`` on stderr, exit 2;
+- arguments that read as numbers (``-1e-300``, ``-inf``, ``-.5``) are values, never options;
+- a closed output pipe (``... | head -2``) ends the command quietly with exit status 141
+  (128 + SIGPIPE: what a C tool killed by SIGPIPE reports, so ``set -o pipefail`` still
+  sees that the output was cut short);
+- Ctrl-C prints ``openpbr-diffuse: interrupted`` and exits 130 (128 + SIGINT), no traceback.
 """
 import argparse
 import importlib
+import os
+import re
 import sys
 
 from .._version import __version__
@@ -22,19 +33,37 @@ COMMANDS = {
     "simulate": "simulate",
 }
 
+PROG = "openpbr-diffuse"
+DESCRIPTION = ("Reference implementation and conformance validator of the OpenPBR rough diffuse "
+               "lobe (EON, Portsmouth-Kutz-Hill JCGT 2025) and the Oren-Nayar family.")
+EXIT_USAGE, EXIT_SIGPIPE, EXIT_SIGINT = 2, 141, 130
+
+#: Any float literal Python's float() reads, with a leading minus: taken as a value.
+#: (argparse's own pattern knows only -1 and -1.5, so -1e-300 and -inf became options.)
+_NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE)
+
 
 class UsageError(Exception):
     """Raised by a command for input it cannot use (exit status 2)."""
 
+    def __init__(self, message, prog=None):
+        super().__init__(message)
+        self.prog = prog
+
 
 class _Parser(argparse.ArgumentParser):
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = _NEGATIVE_NUMBER
+
     def error(self, message):  # argparse's multi-line usage dump -> one line, exit 2
-        raise UsageError(f"{self.prog}: {message}")
+        raise UsageError(message, prog=self.prog)
 
 
 def build_parser():
-    parser = _Parser(prog="openpbr-diffuse", description=__doc__.splitlines()[0])
-    parser.add_argument("--version", action="version", version=f"openpbr-diffuse {__version__}")
+    parser = _Parser(prog=PROG, description=DESCRIPTION,
+                     epilog=f"Run '{PROG} COMMAND --help' for a command's options.")
+    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
     for name, module in COMMANDS.items():
@@ -42,13 +71,44 @@ def build_parser():
     return parser
 
 
-def main(argv=None):
+def _message(exc):
+    """One line for an exception; OSErrors as 'reason: path', not '[Errno 17] ...'."""
+    if isinstance(exc, OSError) and exc.strerror:
+        where = f": {exc.filename}" if exc.filename is not None else ""
+        return f"{exc.strerror}{where}"
+    return " ".join(str(exc).split()) or type(exc).__name__
+
+
+def _silence_stdout():
+    """After EPIPE: point stdout at /dev/null so the interpreter's final flush stays quiet."""
     try:
-        args = build_parser().parse_args(argv)
-        return int(args.run(args) or 0)
-    except (UsageError, ValueError, TypeError, OSError) as exc:
-        print(f"openpbr-diffuse: error: {exc}", file=sys.stderr)
-        return 2
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # no real file descriptor (e.g. captured)
+        pass
+
+
+def main(argv=None):
+    prog = PROG
+    try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        prog = f"{PROG} {args.command}"
+        code = int(args.run(args) or 0)
+        sys.stdout.flush()  # a closed pipe shows here, inside the handler, not at exit
+        return code
+    except BrokenPipeError:
+        _silence_stdout()
+        return EXIT_SIGPIPE
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted", file=sys.stderr)
+        return EXIT_SIGINT
+    except UsageError as exc:
+        print(f"{exc.prog or prog}: error: {_message(exc)}", file=sys.stderr)
+        return EXIT_USAGE
+    except (ValueError, TypeError, OSError) as exc:
+        print(f"{prog}: error: {_message(exc)}", file=sys.stderr)
+        return EXIT_USAGE
 
 
 if __name__ == "__main__":

@@ -45,8 +45,19 @@ LAMBERT, QON, QON_FOOTNOTE, QON_VO, QON_FUJII, FON, FULL_ON, GOTANDA, EON, EON_A
 
 @kernel
 def lobe_terms(model, ix, iy, iz, ox, oy, oz, r):
-    """(g, h, <E_F>) of f = rho g + m(rho) h at one pair of directions (both above the horizon)."""
-    s = ix * ox + iy * oy + iz * oz - iz * oz
+    """(g, h, <E_F>) of f = rho g + m(rho) h at one pair of directions (both above the horizon).
+
+    s = wi.wo - mu_i mu_o = sin(theta_i) sin(theta_o) cos(phi) lies in [-1, 1] for unit
+    vectors, and is clamped to it here, the one place every model gets s from.  Directions
+    are accepted within |w| = 1 +- UNIT_TOL (``_arrays``), and for such not-quite-unit
+    vectors s reaches -(1 + 2 UNIT_TOL) at grazing opposite azimuth, where FON's
+    1 + r s/t (t = 1 for s <= 0, Eq. 10) and with it FON, EON and "eon_approx" went
+    negative (-5e-6 in float64 at r = 1).  The clamp keeps every model's f >= 0 without
+    renormalising the inputs (a square root and a division per direction, and results
+    changed by rounding everywhere); it only moves rows whose |w| differs from 1.
+    Full Oren-Nayar keeps its published negative values (``full_on``).
+    """
+    s = min(max(ix * ox + iy * oy, -1.0), 1.0)
     if model == EON or model == EON_APPROX:
         return eon_terms(iz, oz, s, r, model == EON_APPROX)
     if model == FON:

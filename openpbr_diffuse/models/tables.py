@@ -28,6 +28,7 @@ import math
 import numpy as np
 
 from .. import _arrays as ar
+from .._launch import row_blocks
 from .eon import rho_ms
 from .fon import E_F_avg
 from .registry import INFO, MIX_RHO2, MIX_RHO_MS, model_info
@@ -323,18 +324,17 @@ def table_albedo(name, mu, roughness, rho, average=False, tint=False):
     C = rho.shape[-1]
     out = np.empty(lead + (C,), dtype=dtype)
     flat_out = out.reshape(-1, C)
-    mu, r, rho = ar.flat(mu, lead), ar.flat(r, lead), ar.flat(rho, lead, C)
-    # in chunks: the float64 interpolation temporaries stay a fixed size (speed issue:
-    # peak extra memory <= 3x the output)
-    for s in range(0, flat_out.shape[0], _CHUNK):
-        e = s + _CHUNK
-        r64 = r[s:e].astype(np.float64)
+    # block by block (``_launch.row_blocks``): broadcast inputs are gathered one block of
+    # rows at a time and the float64 interpolation temporaries stay a fixed size, so the
+    # extra memory is a few blocks whatever the broadcast shapes
+    views = (np.broadcast_to(mu, lead), np.broadcast_to(r, lead), np.broadcast_to(rho, lead + (C,)))
+    for s, e, index in row_blocks(lead, _CHUNK):
+        mu_b, r64, rho64 = (np.asarray(v[index], dtype=np.float64).reshape(e - s, -1) for v in views)
         if average:
-            e_g, e_h = table.average_terms(r64)
+            e_g, e_h = table.average_terms(r64[:, 0])
         else:
-            e_g, e_h = table.directional_terms(mu[s:e].astype(np.float64), r64)
-        e_g, e_h, r64 = e_g[:, None], e_h[:, None], r64[:, None]
-        rho64 = rho[s:e].astype(np.float64)
+            e_g, e_h = table.directional_terms(mu_b[:, 0], r64[:, 0])
+        e_g, e_h = e_g[:, None], e_h[:, None]
         if tint:
             flat_out[s:e] = rho64 * (e_g + mix_weight(info.name, 1.0, r64) * e_h)
         else:

@@ -1,4 +1,6 @@
 """Public sampling verbs: ``sample``, ``pdf`` and ``sample_rng``."""
+import numbers
+
 import numpy as np
 
 from .. import _arrays as ar
@@ -33,16 +35,19 @@ def sample(strategy, wo, roughness, u):
     Returns
     -------
     wi : ndarray, shape broadcast(leading axes) + (3,)
-        Unit sampled directions (z >= 0 except for "ltc").
+        Unit sampled directions; z > 0 for every u in [0, 1)^2 except with "ltc" (z is
+        floored at the dtype's smallest normal number, which only rounding reaches).
     pdf : ndarray, shape broadcast(leading axes)
-        Solid-angle density of wi, equal to ``pdf(strategy, wo, wi, roughness)`` (to
-        rounding) for every wi above the horizon.
+        Solid-angle density of wi: ``pdf(strategy, wo, wi, roughness)`` evaluated on the
+        returned (rounded) wi, so the two agree to the last bits for every u; > 0 whenever
+        wo is above the horizon (no discards at u = 0 or at the largest value below 1).
 
     Notes
     -----
-    "eon" at r = 0 returns exactly the directions of "cosine" (to rounding): M = I and
-    P_u = 0.  The uniform branch of "eon" maps u1 = 0 to a horizon direction (z = 0),
-    where the weight f mu_i / pdf is 0.
+    "eon" at r = 0 returns the directions of "cosine" (to rounding) for every u: M = I
+    and P_u = 0.  The uniform lobe (and the uniform branch of "eon") maps u1 = 0 to
+    z = 0, which the floor lifts to the smallest normal number: a direction on the
+    horizon, with f mu_i / pdf = 0, and a pdf that ``pdf`` agrees with.
 
     References
     ----------
@@ -121,7 +126,7 @@ def sample_rng(strategy, wo, roughness, rng=None, shape=None):
     strategy, wo, roughness : as in ``sample``.
     rng : numpy.random.Generator, int, numpy.random.SeedSequence or None
         Passed to ``numpy.random.default_rng`` (a Generator is used as is).
-    shape : tuple of int, optional
+    shape : int or tuple of int, optional
         Leading shape of the samples; default broadcast(wo leading axes, roughness).
         Give e.g. ``(n,)`` to draw n samples for one wo.
 
@@ -136,8 +141,23 @@ def sample_rng(strategy, wo, roughness, rng=None, shape=None):
     >>> wi.shape, p.shape, bool((p > 0).all())
     ((4, 3), (4,), True)
     """
+    if not (rng is None or isinstance(rng, (np.random.Generator, np.random.SeedSequence, np.random.BitGenerator))
+            or (isinstance(rng, numbers.Integral) and not isinstance(rng, bool))):
+        raise TypeError("rng must be a numpy.random.Generator, a SeedSequence, a BitGenerator, "
+                        f"a non-negative int seed or None; got {type(rng).__name__}")
+    if isinstance(rng, numbers.Integral) and rng < 0:
+        raise ValueError(f"rng: an int seed must be non-negative, got {rng}")
     gen = np.random.default_rng(rng)
     dtype = ar.result_dtype(wo, roughness)
+    if shape is not None:
+        dims = (shape,) if isinstance(shape, numbers.Integral) else shape
+        try:
+            dims = tuple(dims)
+        except TypeError:
+            raise TypeError(f"shape must be a tuple of non-negative ints, got {type(shape).__name__}") from None
+        if not all(isinstance(d, numbers.Integral) and not isinstance(d, bool) and d >= 0 for d in dims):
+            raise ValueError(f"shape must be a tuple of non-negative ints, got {shape!r}")
+        shape = tuple(int(d) for d in dims)
     if shape is None:
         w = ar.as_float("wo", wo, dtype)
         r = ar.as_float("roughness", roughness, dtype)

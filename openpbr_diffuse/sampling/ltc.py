@@ -84,9 +84,19 @@ def ltc_sample_local(a, b, c, d, s, u1, u2):
     cp, sp = cos_sin_2pi(u2)  # phi = 2 pi u2
     x = R * cp
     y = R * sp
+    # The clipped map x' = side ((1 - s) q + s x), q = sqrt(1 - y^2), and the height of the
+    # disk point, hz^2 = 1 - x'^2 - y^2 = s (q - x) (2 (1 - s) q + s (q + x)).  Written so,
+    # with q^2 - x^2 = 1 - u1 (exact) carried by whichever of q -+ x does not cancel, hz
+    # stays > 0 up to u1 = 1 - 2^-53, where sqrt(u1) rounds to 1 and 1 - (x'^2 + y^2)
+    # computed directly gave hz = 0 or a direction below the horizon.
+    q = math.sqrt(max(0.0, 1.0 - u1 * sp * sp))
+    P = q + abs(x)
+    D = min((1.0 - u1) / max(P, 1e-300), P)  # = q - |x| >= 0
+    q_minus_x = D if x >= 0.0 else P
+    q_plus_x = P if x >= 0.0 else D
+    hz = math.sqrt(s * q_minus_x * (2.0 * (1.0 - s) * q + s * q_plus_x))
     side = 1.0 if d > 0.0 else -1.0  # keep the removed lune on the side where d x + z < 0
-    x = side * ((1.0 - s) * math.sqrt(max(0.0, 1.0 - y * y)) + s * x)
-    hz = math.sqrt(max(0.0, 1.0 - (x * x + y * y)))
+    x = side * ((1.0 - s) * q + s * x)
     wx = a * x + b * hz
     wy = c * y
     wz = d * x + hz

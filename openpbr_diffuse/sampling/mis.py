@@ -7,7 +7,7 @@ At r = 0, P_u = 0 and M = I: the sampler is cosine sampling.
 """
 from .._jit import kernel
 from .ltc import clip_fraction, from_frame, ltc_coeffs, ltc_pdf_local, ltc_sample_local, to_frame
-from .simple import INV_2PI, uniform_sample
+from .simple import INV_2PI, U_MAX, uniform_sample
 
 
 def _binomial_series(a, n):
@@ -92,7 +92,10 @@ def eon_sample(Xx, Xy, mu, r, u1, u2):
     """Return (x, y, z, pdf) in the local frame: Listing 4 for the LTC frame X of wo.
 
     The branch test is u1 < P_u (Listing 4 has <=; they differ only at u1 = P_u) so that
-    P_u = 0 (r = 0) never selects the uniform lobe, and both rescaled u1 stay in [0, 1).
+    P_u = 0 (r = 0) never selects the uniform lobe.  The rescaled (u1 - P_u)/P_c can round
+    to 1 for u1 just below 1 (at u1 = 1 - 2^-53 for most P_u): it is kept at or below
+    ``U_MAX``, the largest float64 below 1, so the CLTC lobe gets a u in [0, 1) as cosine
+    sampling does (and "eon" at r = 0 is cosine sampling for every u).
     Both lobes are computed and one is selected: branch-free, the batch loop vectorises
     (the uniform branch's division by P_u = 0 then gives a discarded inf).
     """
@@ -106,7 +109,7 @@ def eon_sample(Xx, Xy, mu, r, u1, u2):
     lx, ly = to_frame(Xx, Xy, ux, uy)
     pu = ltc_pdf_local(a, b, c, d, s, lx, ly, uz)
     # CLTC lobe
-    lx, ly, cz, pc = ltc_sample_local(a, b, c, d, s, (u1 - Pu) / Pc, u2)
+    lx, ly, cz, pc = ltc_sample_local(a, b, c, d, s, min((u1 - Pu) / Pc, U_MAX), u2)
     cx, cy = from_frame(Xx, Xy, lx, ly)
     p = Pu * INV_2PI + Pc * (pu if uniform else pc)
     return (ux if uniform else cx), (uy if uniform else cy), (uz if uniform else cz), p

@@ -13,6 +13,8 @@ import numpy as np
 from .._jit import INV_PI, kernel
 
 INV_2PI = 0.5 / math.pi
+#: The largest float64 below 1: the top of the u range [0, 1).
+U_MAX = 1.0 - 2.0 ** -53
 _SQRT_HALF = math.sqrt(0.5)
 
 
