@@ -112,4 +112,9 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    # `python -m openpbr_diffuse.cli.main`: run the imported module's main, so that the
+    # UsageError the sub-commands import (openpbr_diffuse.cli.main.UsageError) is the class
+    # caught here, not a second copy defined in __main__
+    from openpbr_diffuse.cli.main import main as _main
+
+    sys.exit(_main())
