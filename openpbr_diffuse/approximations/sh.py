@@ -207,7 +207,10 @@ def lobe_transfer(model, mu_o, roughness, rho=1.0, *, n=24, color_mode="referenc
     rho = ar.rho_array("rho", rho, np.float64)
     lead = ar.broadcast_leading(mu_o=mu_o.shape, roughness=rough.shape, rho=rho.shape[:-1])
     C = rho.shape[-1]
-    mu_f, r_f, rho_f = ar.flat(mu_o, lead), ar.flat(rough, lead), ar.flat(rho, lead, C)
+    # rows of the broadcast inputs (a copy only for outer products: smaller than the output)
+    mu_f = np.broadcast_to(mu_o, lead).reshape(-1)
+    r_f = np.broadcast_to(rough, lead).reshape(-1)
+    rho_f = np.broadcast_to(rho, lead + (C,)).reshape(-1, C)
     out = np.empty((len(mu_f), 9, C))
     step = max(1, (1 << 18) // (4 * n * n))
     for s in range(0, len(mu_f), step):
