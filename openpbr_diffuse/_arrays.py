@@ -46,7 +46,12 @@ def show(value, dtype=None):
         return str(int(v)) if v or not math.copysign(1.0, v) < 0 else "-0"
     if dtype is None or np.dtype(dtype).itemsize >= 8 or not np.isfinite(v):
         return repr(v)
-    return str(np.dtype(dtype).type(v))  # shortest text that reads back to this float32/16
+    # shortest text that reads back to this float32/16; format_float_* ignore NumPy's print
+    # options (colour-science sets legacy="1.13" on import, under which str() gives "1.0")
+    x = np.dtype(dtype).type(v)
+    if 1e-4 <= abs(v) < 1e16:
+        return np.format_float_positional(x, unique=True, trim="-")
+    return np.format_float_scientific(x, unique=True, trim="-")
 
 
 def result_dtype(*values):

@@ -88,3 +88,14 @@ def test_sample_rng_arguments_are_checked_before_numpy(kwargs, exc, needle):
 def test_sample_rng_accepts_an_int_shape():
     wi, p = od.sample_rng("eon", [0.0, 0.0, 1.0], 0.5, rng=1, shape=4)
     assert wi.shape == (4, 3) and p.shape == (4,)
+
+
+def test_messages_do_not_depend_on_numpy_print_options():
+    """colour-science sets np.set_printoptions(legacy="1.13") on import; messages stay exact."""
+    saved = np.get_printoptions()
+    try:
+        np.set_printoptions(legacy="1.13")
+        with pytest.raises(ValueError, match=r"got 1\.0000001\b"):
+            od.evaluate("eon", [0.0, 0.0, 1.0], [0.0, 0.0, 1.0], np.array(1.0000001, np.float32))
+    finally:
+        np.set_printoptions(**saved)

@@ -3,6 +3,8 @@ status 2 (or a warning and a defined result), never a traceback; files never mod
 import json
 
 import numpy as np
+import re
+
 import pytest
 
 from openpbr_diffuse.cli.main import main
@@ -58,7 +60,8 @@ def _run(capfd, *argv):
 def _one_error_line(err):
     lines = [ln for ln in err.splitlines() if ln.strip()]
     assert len(lines) == 1, err
-    assert "Traceback" not in err and lines[0].startswith("openpbr-diffuse: error:")
+    # "openpbr-diffuse eval: error: ..." (the program and sub-command, as argparse names them)
+    assert "Traceback" not in err and re.match(r"openpbr-diffuse (eval|render): error: ", lines[0]), lines[0]
     return lines[0]
 
 

@@ -3,22 +3,14 @@
     openpbr-diffuse render materials/clay_rough.mtlx --out clay.png
     openpbr-diffuse render scene.usda --material /World/Ball --out ball.exr --size 256
 
-Left: the sphere under a directional light (from the upper left, irradiance pi at normal
-incidence, so a white Lambertian surface facing the light is 1); right: under a uniform white
-environment (the "furnace": each pixel shows the directional albedo at its view angle).
-Orthographic camera along -z, 2x2 supersampling, black background, alpha = coverage.
-EXR: linear ACEScg (the readers' working space), float.  PNG: converted to sRGB with
-OpenImageIO's colorconvert (ACEScg -> srgb_rec709_scene), 8 bit.  Vectorised: the whole
-image is one call of the node.
+Left: the sphere under a directional light; right: under a uniform white environment (the
+furnace: each pixel is the directional albedo at its view angle).  EXR: linear ACEScg, float;
+PNG: sRGB, 8 bit (see :mod:`openpbr_diffuse.readers.preview`).
 """
 import os
 
-import numpy as np
-
+from ..readers.preview import render_image, write_image
 from ._materials import add_material_options, load
-
-LIGHT = np.array([-1.0, 1.0, 1.0]) / np.sqrt(3.0)
-VIEW = np.array([0.0, 0.0, 1.0])
 
 
 def add_parser(subparsers):
@@ -29,83 +21,6 @@ def add_parser(subparsers):
     p.add_argument("--size", type=int, default=256, metavar="N", help="height of the image in pixels (default 256)")
     p.set_defaults(run=run)
     return p
-
-
-def local_directions(normals, view=VIEW, light=LIGHT):
-    """(wi, wo) in each point's local frame (normal +z, wo in the xz-plane), from world normals (P, 3)."""
-    n = normals
-    mu_o = n @ view
-    mu_i = n @ light
-    vt = view[None, :] - mu_o[:, None] * n
-    lt = light[None, :] - mu_i[:, None] * n
-    sv = np.linalg.norm(vt, axis=1)
-    sl = np.linalg.norm(lt, axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ex = np.where(sv[:, None] > 1e-12, vt / np.where(sv > 1e-12, sv, 1.0)[:, None], 0.0)
-    # a tangent frame where the view has no y component; when the view is along n, any frame
-    ex = np.where(sv[:, None] > 1e-12, ex, _any_tangent(n))
-    ey = np.cross(n, ex)
-    wo = np.stack([sv, np.zeros_like(sv), mu_o], axis=1)
-    wi = np.stack([np.einsum("ij,ij->i", lt, ex), np.einsum("ij,ij->i", lt, ey), mu_i], axis=1)
-    return _unit(wi), _unit(wo)
-
-
-def _any_tangent(n):
-    a = np.where(np.abs(n[:, :1]) < 0.9, np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]]))
-    t = np.cross(a, n)
-    return t / np.linalg.norm(t, axis=1, keepdims=True)
-
-
-def _unit(v):
-    return v / np.linalg.norm(v, axis=1, keepdims=True)
-
-
-def render_image(material, size=256, supersample=2):
-    """(H, 2H, 4) float32 image: directional light | furnace, ACEScg, alpha = coverage."""
-    node = material.node()
-    if node is None:
-        raise ValueError(f"render: material {material.path} is not supported ({'; '.join(material.unsupported)})")
-    if not isinstance(size, (int, np.integer)) or not 8 <= size <= 4096:
-        raise ValueError(f"size must be an integer in [8, 4096], got {size!r}")
-    S = size * supersample
-    c = (np.arange(S) + 0.5) / S * 2.0 - 1.0
-    x, y = np.meshgrid(c, -c)
-    r2 = x * x + y * y
-    inside = r2 < 1.0
-    n = np.stack([x[inside], y[inside], np.sqrt(1.0 - r2[inside])], axis=1)
-    wi, wo = local_directions(n)
-    lit = np.where(wi[:, 2:3] > 0.0, node.eval(wi, wo) * np.pi * wi[:, 2:3], 0.0)
-    furnace = node.albedo(wo)
-    out = np.zeros((S, 2 * S, 4))
-    left = np.zeros((S, S, 3))
-    right = np.zeros((S, S, 3))
-    left[inside] = lit
-    right[inside] = furnace
-    out[:, :S, :3], out[:, S:, :3] = left, right
-    out[:, :S, 3] = out[:, S:, 3] = inside
-    img = out.reshape(size, supersample, 2 * size, supersample, 4).mean(axis=(1, 3))
-    return img.astype(np.float32)
-
-
-def write_image(img, path):
-    """EXR: linear ACEScg float; PNG/other: sRGB-encoded 8 bit via OpenImageIO colorconvert."""
-    import OpenImageIO as oiio
-
-    ext = os.path.splitext(path)[1].lower()
-    buf = oiio.ImageBuf(np.ascontiguousarray(img))
-    if ext == ".exr":
-        buf.specmod().attribute("oiio:ColorSpace", "ACEScg")
-        ok = buf.write(path, "float")
-    elif ext in (".png", ".jpg", ".jpeg", ".tif", ".tiff"):
-        conv = oiio.ImageBufAlgo.colorconvert(buf, "ACEScg", "srgb_rec709_scene")
-        if conv.has_error:
-            raise OSError(f"render: colour conversion failed: {conv.geterror()}")
-        ok = conv.write(path, "uint8")
-        buf = conv
-    else:
-        raise ValueError(f"--out must end in .exr or .png (also .jpg, .tif), got {path!r}")
-    if not ok:
-        raise OSError(f"render: cannot write {path}: {buf.geterror() or oiio.geterror()}")
 
 
 def _check_out(path):
@@ -127,4 +42,4 @@ def run(args):
     return 0
 
 
-__all__ = ["add_parser", "run", "render_image", "write_image", "local_directions"]
+__all__ = ["add_parser", "run"]

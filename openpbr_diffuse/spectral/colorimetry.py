@@ -60,14 +60,18 @@ def _import_colour_without_plotting():
     # ``import colour`` (measured 0.8 of 1.3 s idle, 4 of 7 s loaded).  Nothing here plots,
     # so a placeholder stands in for ``colour.plotting`` during the import and is removed
     # afterwards: a later ``import colour.plotting`` loads the real sub-package.
+    # colour-science also sets np.set_printoptions(legacy="1.13") on import: a library
+    # imported lazily should not change its caller's NumPy print options, so they are restored.
     placeholder = types.ModuleType("colour.plotting")
     sys.modules["colour.plotting"] = placeholder
+    print_options = np.get_printoptions()
     try:
         import colour
     except ImportError as exc:
         raise ImportError(f"the spectral features need colour-science ({exc}): "
                           f"pip install 'colour-science>=0.4.4'") from exc
     finally:
+        np.set_printoptions(**print_options)
         if sys.modules.get("colour.plotting") is placeholder:
             del sys.modules["colour.plotting"]
     module = getattr(colour, "_module", colour)  # colour wraps itself in a ModuleAPI proxy

@@ -78,7 +78,7 @@ def _albedo_grid(curves, path):
 
 
 def _render(m, path, size):
-    from ...cli.render import render_image, write_image
+    from ...readers.preview import render_image, write_image
 
     write_image(render_image(m, size, supersample=1), str(path))
 
