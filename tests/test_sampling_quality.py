@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from openpbr_diffuse.sampling.quality import exact_weight_moments, pooled_chi2, weight_stats
+from openpbr_diffuse.sampling.quality import exact_weight_moments, pearson_chi2, weight_stats
 
 
 @pytest.mark.parametrize("mu", [1.0, 0.5, 0.02])
@@ -33,6 +33,14 @@ def test_pooled_chi2_matches_scipy_without_pooling():
     expected = rng.uniform(20.0, 80.0, 50)
     expected *= 1000.0 / expected.sum()
     observed = rng.multinomial(1000, expected / 1000.0).astype(float)
-    chi2, dof = pooled_chi2(observed, expected)
+    p, chi2, dof = pearson_chi2(observed, expected)
     ref = stats.chisquare(observed, expected)
     assert dof == 49 and math.isclose(chi2, ref.statistic, rel_tol=1e-12)
+    assert math.isclose(p, ref.pvalue, rel_tol=1e-9)
+
+
+def test_samples_where_the_pdf_expects_none_fail():
+    """Pooling must not hide samples in bins of zero expected count."""
+    expected = np.array([50.0, 50.0, 0.0])
+    p, chi2, _ = pearson_chi2(np.array([48.0, 49.0, 3.0]), expected)
+    assert p == 0.0 and chi2 == math.inf

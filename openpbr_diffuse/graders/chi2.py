@@ -51,31 +51,10 @@ def histogram(wi, z_edges, phi_edges):
 
 
 def pearson(observed, expected, min_expected=MIN_EXPECTED):
-    """(p-value, chi2, dof): Pearson's statistic with bins of expected count < min_expected
-    pooled in ascending order of expected count (Mitsuba's rule).  The loop runs over the
-    bins of the histogram (a few hundred), not over samples."""
-    from scipy import stats
+    """(p-value, chi2, dof): :func:`openpbr_diffuse.sampling.quality.pearson_chi2`."""
+    from ..sampling.quality import pearson_chi2
 
-    order = np.argsort(expected, axis=None)
-    obs, exp = observed.ravel()[order], expected.ravel()[order]
-    chi2, dof = 0.0, 0
-    pool_o = pool_e = 0.0
-    for o, e in zip(obs, exp):
-        if e < min_expected:
-            pool_o += o
-            pool_e += e
-            if pool_e >= min_expected:
-                chi2 += (pool_o - pool_e) ** 2 / pool_e
-                dof += 1
-                pool_o = pool_e = 0.0
-        else:
-            chi2 += (o - e) ** 2 / e
-            dof += 1
-    if pool_e > 0.0:
-        chi2 += (pool_o - pool_e) ** 2 / max(pool_e, min_expected)
-        dof += 1
-    dof = max(dof - 1, 1)
-    return float(stats.chi2.sf(chi2, dof)), float(chi2), dof
+    return pearson_chi2(observed, expected, min_expected)
 
 
 def chi2_test(samples, pdf, res=(16, 32), nq=4):

@@ -104,27 +104,42 @@ def pdf_mass(strategy, mu_o, r, res=(48, 96)):
     return float(bin_mass(strategy, wo_of(mu_o, 0.7), r, z, phi).sum())
 
 
-def pooled_chi2(observed, expected, min_expected=5.0):
-    """(statistic, degrees of freedom) of Pearson's chi2, bins expecting < 5 pooled."""
+def pearson_chi2(observed, expected, min_expected=5.0):
+    """(p-value, chi2, dof) of Pearson's goodness-of-fit statistic, sparse bins pooled.
+
+    Mitsuba 3's rule (``mitsuba.chi2``): bins sorted by expected count; consecutive bins
+    expected to hold fewer than ``min_expected`` samples are merged until the pool reaches it;
+    a remainder that never does counts as one more bin (its expectation floored at
+    ``min_expected``).  Samples in bins where the pdf expects none give chi2 = inf (p = 0): a
+    sampler that puts directions where its pdf is 0 fails.  dof = bins - 1.  The loop runs
+    over the bins of a histogram (a few hundred), not over samples.  This is the one
+    implementation: the report, the graders and the test suite all call it.
+    """
+    from scipy import stats
+
     order = np.argsort(expected, axis=None)
-    obs, exp = observed.ravel()[order], expected.ravel()[order]
-    small = np.cumsum(exp < min_expected)
+    obs = np.asarray(observed, dtype=np.float64).ravel()[order]
+    exp = np.asarray(expected, dtype=np.float64).ravel()[order]
     chi2, dof = 0.0, 0
     pool_o = pool_e = 0.0
-    for o, e in zip(obs[: small[-1]] if small.size else (), exp[: small[-1]] if small.size else ()):
-        pool_o += o
-        pool_e += e
-        if pool_e >= min_expected:
-            chi2 += (pool_o - pool_e) ** 2 / pool_e
+    for o, e in zip(obs, exp):
+        if e < min_expected:
+            pool_o += o
+            pool_e += e
+            if pool_e >= min_expected:
+                chi2 += (pool_o - pool_e) ** 2 / pool_e
+                dof += 1
+                pool_o = pool_e = 0.0
+        else:
+            chi2 += (o - e) ** 2 / e
             dof += 1
-            pool_o = pool_e = 0.0
     if pool_e > 0.0:
         chi2 += (pool_o - pool_e) ** 2 / max(pool_e, min_expected)
         dof += 1
-    big_o, big_e = obs[small[-1] if small.size else 0:], exp[small[-1] if small.size else 0:]
-    chi2 += float(np.sum((big_o - big_e) ** 2 / big_e))
-    dof += int(big_e.size)
-    return chi2, dof - 1
+    elif pool_o > 0.0:
+        chi2 = math.inf
+    dof = max(dof - 1, 1)
+    return float(stats.chi2.sf(chi2, dof)), float(chi2), dof
 
 
 def chi2_test(strategy, mu_o, r, n, seed, res=(16, 32)):
@@ -141,8 +156,8 @@ def chi2_test(strategy, mu_o, r, n, seed, res=(16, 32)):
     phi = np.mod(np.arctan2(wi[:, 1], wi[:, 0]), 2.0 * math.pi)
     observed, _, _ = np.histogram2d(wi[:, 2], phi, bins=[z_edges, phi_edges])
     mass = bin_mass(strategy, wo, r, z_edges, phi_edges)
-    chi2, dof = pooled_chi2(observed, n * mass)
-    return float(stats.chi2.sf(chi2, dof)), chi2, dof, float(mass.sum())
+    p, chi2, dof = pearson_chi2(observed, n * mass)
+    return p, chi2, dof, float(mass.sum())
 
 
-__all__ = ["weight_stats", "exact_weight_moments", "chi2_test", "pdf_mass", "bin_mass", "pooled_chi2", "wo_of"]
+__all__ = ["weight_stats", "exact_weight_moments", "chi2_test", "pdf_mass", "bin_mass", "pearson_chi2", "wo_of"]
