@@ -52,6 +52,20 @@ EXPLAIN_FRACTION = 0.9
 N_WORST = 10
 
 
+def json_safe(x):
+    """``x`` with NumPy scalars as Python numbers and non-finite floats as JSON can hold them:
+    NaN -> null, +-inf -> "inf" / "-inf" (the convention of ``check --json``)."""
+    if isinstance(x, np.generic):
+        x = x.item()
+    if isinstance(x, float) and not math.isfinite(x):
+        return None if math.isnan(x) else ("inf" if x > 0 else "-inf")
+    if isinstance(x, dict):
+        return {k: json_safe(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [json_safe(v) for v in x]
+    return x
+
+
 @dataclass
 class Grade:
     """The result of :func:`grade` (see the module docstring; ``to_dict()`` for JSON)."""
@@ -74,16 +88,7 @@ class Grade:
     version: str = ""
 
     def to_dict(self) -> dict[str, Any]:
-        def clean(x):
-            if isinstance(x, float) and not math.isfinite(x):
-                return None if math.isnan(x) else ("inf" if x > 0 else "-inf")
-            if isinstance(x, dict):
-                return {k: clean(v) for k, v in x.items()}
-            if isinstance(x, (list, tuple)):
-                return [clean(v) for v in x]
-            return x
-
-        return clean({
+        return json_safe({
             "passed": self.passed, "version": self.version, "models": self.models,
             "n_rows": self.n_rows, "n_failed_rows": self.n_failed_rows,
             "max_abs_error": self.max_abs_error, "max_rel_error": self.max_rel_error,

@@ -10,7 +10,6 @@ surface implementations by the diffuse lobe's weight x albedo and selection prob
 """
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -80,18 +79,9 @@ class ImplementationGrade:
         return all(q.passed for q in self.quantities)
 
     def to_dict(self) -> dict:
-        def clean(x):
-            if isinstance(x, float) and not math.isfinite(x):
-                return None if math.isnan(x) else ("inf" if x > 0 else "-inf")
-            if isinstance(x, dict):
-                return {k: clean(v) for k, v in x.items()}
-            if isinstance(x, (list, tuple)):
-                return [clean(v) for v in x]
-            if isinstance(x, np.generic):
-                return x.item()
-            return x
+        from ..conformance.grade import json_safe
 
-        return clean({"implementation": self.name, "model": self.model, "passed": self.passed,
+        return json_safe({"implementation": self.name, "model": self.model, "passed": self.passed,
                       "version": self.version, "notes": self.notes,
                       "quantities": [asdict(q) for q in self.quantities]})
 

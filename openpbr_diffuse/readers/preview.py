@@ -24,7 +24,6 @@ def local_directions(normals, view=VIEW, light=LIGHT):
     vt = view[None, :] - mu_o[:, None] * n
     lt = light[None, :] - mu_i[:, None] * n
     sv = np.linalg.norm(vt, axis=1)
-    sl = np.linalg.norm(lt, axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
         ex = np.where(sv[:, None] > 1e-12, vt / np.where(sv > 1e-12, sv, 1.0)[:, None], 0.0)
     # a tangent frame where the view has no y component; when the view is along n, any frame

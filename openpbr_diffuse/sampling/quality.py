@@ -144,8 +144,6 @@ def pearson_chi2(observed, expected, min_expected=5.0):
 
 def chi2_test(strategy, mu_o, r, n, seed, res=(16, 32)):
     """(p-value, chi2, dof, binned pdf mass) of n samples of ``strategy`` against its pdf."""
-    from scipy import stats
-
     from .api import sample_rng
 
     wo = wo_of(mu_o, 0.7)
