@@ -21,6 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .._csv import read_headed_csv
+
 DATA = Path(__file__).resolve().parents[1] / "data"
 TABLES = {"albedo": "simulation_albedo.csv", "brdf": "simulation_brdf.csv",
           "grading": "simulation_grading.csv", "colorshift": "simulation_colorshift.csv"}
@@ -47,17 +49,7 @@ def write_csv(path, header, columns, rows):
 
 def read_csv(path):
     """(header dict, {column: ndarray}) of a table written by ``write_csv``."""
-    header, lines = {}, []
-    with Path(path).open() as fh:
-        for line in fh:
-            if line.startswith("#"):
-                key, _, value = line[1:].strip().partition(":")
-                header[key.strip()] = value.strip()
-            elif line.strip():
-                lines.append(line)
-    reader = csv.reader(lines)
-    names = next(reader)
-    rows = list(reader)
+    header, names, rows = read_headed_csv(path)
     cols = {}
     for k, name in enumerate(names):
         vals = [r[k] for r in rows]

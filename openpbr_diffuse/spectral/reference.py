@@ -8,11 +8,11 @@ colour-science versions and the regeneration command ``python tools/make_colorsh
 """
 from __future__ import annotations
 
-import csv
 from pathlib import Path
 
 import numpy as np
 
+from .._csv import read_headed_csv
 from .validation import RGB_FIELDS, SCALAR_FIELDS
 
 DATA = Path(__file__).resolve().parents[1] / "data"
@@ -62,17 +62,7 @@ def load_table(working_space="lin_rec709", path=None):
     ('python tools/make_colorshift_table.py', 1080)
     """
     path = Path(path) if path else table_path(working_space)
-    header, lines = {}, []
-    with open(path, encoding="utf-8") as f:
-        for ln in f:
-            if ln.startswith("#"):
-                key, _, value = ln[1:].strip().partition(":")
-                header[key.strip()] = value.strip()
-            elif ln.strip():
-                lines.append(ln)
-    reader = csv.reader(lines)
-    names = next(reader)
-    rows = list(reader)
+    header, names, rows = read_headed_csv(path)
     cols = {n: [r[i] for r in rows] for i, n in enumerate(names)}
     for n in names:
         if n != "patch":
