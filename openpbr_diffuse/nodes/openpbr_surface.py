@@ -64,7 +64,9 @@ not modelled, the Fresnel factor of the reciprocal index (same F0) is used, with
 The F82-tint Fresnel is the published formula, unclamped (warned when it dips below 0).
 
 Speed: every verb is one compiled loop over rows (``_surface_kernels``); the material's
-inputs are packed once into a parameter vector per material.
+inputs are packed once into a parameter vector per material.  Building a surface from plain
+Python numbers and 3-tuples skips NumPy's input conversion (same checks, same values), and
+``lobes`` at one direction of one material calls the serial driver directly.
 """
 import dataclasses
 import functools
@@ -102,6 +104,7 @@ DIFFUSE_MODELS = {"eon": sk.D_EON, "qon": sk.D_QON, "lambert": sk.D_LAMBERT}
 _OPTIONS = (("selection", "length"), ("specular_sampling", "vndf"), ("multiscatter", True),
             ("diffuse_model", "eon"))
 _OPTION_NAMES = tuple(n for n, _ in _OPTIONS)
+_MODELLED = frozenset(MODELLED)
 
 
 class IgnoredInputWarning(UserWarning):
@@ -134,20 +137,25 @@ def pack_parameters(p, changed=None):
     from the converted inputs ``p`` (float arrays (...), colours (..., 3)): the derived
     values of the reference graph, computed once per material (``_surface_kernels.pack_drive``).
     ``changed``: the names that differ from the nodedef defaults (None: any may)."""
-    flat = _one_material(p, changed)
-    if flat is not None:
-        lead = ()
-        raw = np.array(flat)
-    else:
+    raw = _one_material(p, changed)
+    lead = ()
+    if raw is None:
         vals = [p[n] if n != "geometry_thin_walled" else np.float64(bool(p[n])) for n, _ in sk.RAW]
         lead = np.broadcast_shapes(*(np.shape(v)[:-1] if w == 3 else np.shape(v) for v, (_, w) in zip(vals, sk.RAW)))
         raw = np.concatenate([np.broadcast_to(v if w == 3 else np.asarray(v)[..., None], lead + (w,))
                               for v, (_, w) in zip(vals, sk.RAW)], axis=-1)
+        raw = np.ascontiguousarray(raw, dtype=np.float64).reshape(-1)
     out = np.empty(lead + (sk.N_PARAMS,))
-    C, R = sk.tables()
-    mask, warn = sk.pack_drive(np.ascontiguousarray(raw, dtype=np.float64).reshape(-1), out.reshape(-1),
-                               C.shape[0] - 2, R.shape[0] - 2, R.shape[1] - 2, R)
+    mask, warn = sk.pack_drive(raw, out.reshape(-1) if lead else out, *_pack_tables())
     return out, mask, warn
+
+
+@functools.cache
+def _pack_tables():
+    """The table arguments of ``pack_drive``: the conductor table's roughness nodes, the
+    dielectric table's roughness and x nodes, and the dielectric table (``sk.tables``)."""
+    C, R = sk.tables()
+    return C.shape[0] - 2, R.shape[0] - 2, R.shape[1] - 2, R
 
 
 #: offset and width of each RAW input in the flat row
@@ -156,27 +164,27 @@ for _n, _w in sk.RAW:
     _RAW_AT[_n] = (sum(w for _, w in sk.RAW[:len(_RAW_AT)]), _w)
 
 
-@functools.cache
-def _default_raw(nodedef):
-    return _one_material(_interface(nodedef)[1], None)
-
-
 def _one_material(p, changed):
-    """The RAW values as one flat list of floats when every input is a single value, else
+    """The RAW values as one float64 row (N_RAW,) when every input is a single value, else
     None.  Starts from the defaults' row when only ``changed`` names differ from them."""
     if changed is None:
-        flat, names = [0.0] * sk.N_RAW, _RAW_AT
+        flat, names = np.zeros(sk.N_RAW), _RAW_AT
     else:
-        flat, names = list(_default_raw(OpenPBRSurface.NODEDEF)), [n for n in changed if n in _RAW_AT]
+        flat, names = _interface(OpenPBRSurface.NODEDEF).raw.copy(), changed
     for n in names:
-        a, w = _RAW_AT[n]
+        at = _RAW_AT.get(n)
+        if at is None:   # not an input of the compiled path
+            continue
+        a, w = at
         v = p[n]
-        if n == "geometry_thin_walled":
+        if type(v) is np.float64:   # what ``_convert`` gives a plain float input
+            flat[a] = v
+        elif n == "geometry_thin_walled":
             flat[a] = float(bool(v))
         elif w == 1 and np.ndim(v) == 0:
             flat[a] = float(v)
         elif w == 3 and np.shape(v) == (3,):
-            flat[a:a + 3] = v.tolist()
+            flat[a:a + 3] = v
         else:
             return None
     return flat
@@ -203,9 +211,30 @@ def _validity(idef):
     return dataclasses.replace(idef, uimax=None) if idef.name in UNBOUNDED_ABOVE else idef
 
 
+def _bounds(idef):
+    """(width, lo, hi) of a float (width 1, lo and hi floats) or color3 input (width 3, lo
+    and hi per component): its range, -inf / inf where the nodedef sets no bound."""
+    width = 1 if idef.type == "float" else 3
+
+    def bound(b, unbounded):
+        if width == 1:
+            return unbounded if b is None else b
+        return (unbounded,) * 3 if b is None else b if isinstance(b, tuple) else (b,) * 3
+    return width, bound(idef.uimin, -math.inf), bound(idef.uimax, math.inf)
+
+
+class _Interface(NamedTuple):
+    """What every construction reads, built once per nodedef and process (``_interface``)."""
+    checked: dict        # name -> InputDef, with the range the input is checked against
+    defaults: dict       # name -> converted default (arrays read-only)
+    accepted: frozenset  # the input and option names
+    bounds: dict         # name -> ``_bounds`` of the float and color3 inputs (``_convert``)
+    raw: np.ndarray      # the defaults' RAW row (``_one_material``), read-only
+
+
 @functools.cache
 def _interface(nodedef):
-    """(checked defs, converted defaults) of the nodedef, built once per process."""
+    """The ``_Interface`` of the nodedef."""
     checked = {n: _validity(d) for n, d in nodedef_inputs(nodedef).items()}
     defaults = {}
     for n, d in checked.items():
@@ -213,27 +242,68 @@ def _interface(nodedef):
         if isinstance(v, np.ndarray):
             v.flags.writeable = False
         defaults[n] = v
-    return checked, defaults
+    bounds = {n: _bounds(d) for n, d in checked.items() if d.type in ("float", "color3")}
+    raw = _one_material(defaults, None)
+    raw.flags.writeable = False
+    return _Interface(checked, defaults, frozenset(checked).union(_OPTION_NAMES), bounds, raw)
+
+
+_PLAIN = (float, int)
 
 
 def _in(lo, hi, v):
-    return math.isfinite(v) and (lo is None or v >= lo) and (hi is None or v <= hi)
+    """v (a plain number) finite and in [lo, hi]."""
+    return math.isfinite(v) and lo <= v <= hi
 
 
-def _convert(idef, v):
-    """``convert_input`` with a fast path for plain Python numbers and 3-tuples in range
-    (the common case when building many materials); anything else, and every error
-    message, goes through ``convert_input``."""
-    t = idef.type
-    if t == "float" and type(v) in (float, int):
-        if _in(idef.uimin, idef.uimax, v):
-            return np.float64(v)
-    elif t == "color3" and type(v) in (tuple, list) and len(v) == 3 and all(type(c) in (float, int) for c in v):
-        lo, hi = idef.uimin, idef.uimax
-        at = lambda b, k: b[k] if isinstance(b, tuple) else b   # noqa: E731  (per component or shared)
-        if all(_in(at(lo, k), at(hi, k), v[k]) for k in range(3)):
-            return np.array(v, dtype=np.float64)
-    return convert_input(idef, v)
+def _convert(iface, name, v):
+    """``convert_input`` with a fast path for plain Python numbers (float inputs) and
+    3-tuples / lists of them (color3) that are finite and in range (``_bounds``), the
+    common case when building many materials: np.float64 or a float64 (3,) array, the
+    values ``convert_input`` gives.  Anything else, and every error message, goes through
+    ``convert_input``."""
+    bounds = iface.bounds.get(name)
+    if bounds is not None:
+        width, lo, hi = bounds
+        if width == 1:
+            if type(v) in _PLAIN and math.isfinite(v) and lo <= v <= hi:
+                return np.float64(v)
+        elif (type(v) is tuple or type(v) is list) and len(v) == 3:
+            a, b, c = v
+            if (type(a) in _PLAIN and type(b) in _PLAIN and type(c) in _PLAIN
+                    and _in(lo[0], hi[0], a) and _in(lo[1], hi[1], b) and _in(lo[2], hi[2], c)):
+                return np.array(v, dtype=np.float64)
+    return convert_input(iface.checked[name], v)
+
+
+@functools.cache
+def _slots(mask):
+    """(slots, names) of the lobes in an active-lobe mask."""
+    slots = tuple(k for k in range(len(LOBE_NAMES)) if mask & (1 << k))
+    return slots, tuple(LOBE_NAMES[k] for k in slots)
+
+
+def _lobes_one(flags, params, wo):
+    """``sk.lobes_rows`` for one material (params (N_PARAMS,)) at one direction (wo (3,)):
+    the driver call ``launch`` makes for a single row, without the batch machinery."""
+    W, E, P = np.empty(sk.N_LOBES * 3), np.empty(sk.N_LOBES * 3), np.empty(sk.N_LOBES)
+    wo = np.ascontiguousarray(wo).view()
+    wo.flags.writeable = False   # as ``_launch.rows`` passes inputs: one compiled signature
+    sk._driver(sk._lobes_drive, 1)(flags.active, flags.dmodel, flags.sel, flags.ms, *sk.tables(), params, 0,
+                                   wo, W, E, P)
+    return W.reshape(sk.N_LOBES, 3), E.reshape(sk.N_LOBES, 3), P
+
+
+#: ``Lobe(name, weight, albedo, probability)`` from a tuple of the four, without the
+#: NamedTuple's Python-level ``__new__`` (``lobes`` builds one per active lobe per call)
+_new_lobe = functools.partial(tuple.__new__, Lobe)
+
+
+@functools.cache
+def _flags(mask, diffuse_model, selection, multiscatter, specular_sampling):
+    """The kernels' ``_Flags`` of an active-lobe mask and the (checked) options."""
+    return _Flags(mask, DIFFUSE_MODELS[diffuse_model], SELECTIONS.index(selection), bool(multiscatter),
+                  specular_sampling == "vndf")
 
 
 class OpenPBRSurface(metaclass=NodeMeta):
@@ -285,21 +355,28 @@ class OpenPBRSurface(metaclass=NodeMeta):
     @classmethod
     def defaults(cls):
         """Default value of every input, by name (None: supplied by the renderer)."""
-        return {n: d.default for n, d in _interface(cls.NODEDEF)[0].items()}
+        return {n: d.default for n, d in _interface(cls.NODEDEF).checked.items()}
 
     def __init__(self, **kwargs):
-        checked, defaults = _interface(self.NODEDEF)
-        unknown = [n for n in kwargs if n not in checked and n not in _OPTION_NAMES]
-        if unknown:
-            bind_inputs(type(self), (), kwargs)   # raises, naming them
-        options = dict(_OPTIONS)
-        for n in _OPTION_NAMES:
-            if n in kwargs:
-                options[n] = kwargs.pop(n)
-        self.selection = options["selection"]
-        self.specular_sampling = options["specular_sampling"]
-        self.multiscatter = options["multiscatter"]
-        self.diffuse_model = options["diffuse_model"]
+        iface = _interface(self.NODEDEF)
+        if not iface.accepted.issuperset(kwargs):
+            bind_inputs(type(self), (), kwargs)   # raises, naming the unknown names
+        self._set_options(kwargs)
+        self.inputs = dict(iface.defaults)
+        self._given = tuple(kwargs)
+        for n, v in kwargs.items():
+            self.inputs[n] = _convert(iface, n, v)
+        self._ignored = {n: self.inputs[n] for n in kwargs
+                         if n not in _MODELLED and not is_default(iface.checked[n], self.inputs[n])}
+        if self._ignored:
+            warnings.warn(f"OpenPBRSurface does not model these inputs; they have no effect: "
+                          f"{', '.join(self._ignored)}", IgnoredInputWarning, stacklevel=2)
+        self._setup()
+
+    def _set_options(self, kwargs):
+        """Take the options (selection, specular_sampling, ...) out of ``kwargs`` and check them."""
+        for n, default in _OPTIONS:
+            setattr(self, n, kwargs.pop(n, default))
         if self.selection not in SELECTIONS:
             raise ValueError(f"selection must be one of {', '.join(SELECTIONS)}; got {self.selection!r}")
         if self.specular_sampling not in ggx.SAMPLING_METHODS:
@@ -309,31 +386,20 @@ class OpenPBRSurface(metaclass=NodeMeta):
             raise TypeError(f"multiscatter must be a bool, got {type(self.multiscatter).__name__}")
         if self.diffuse_model not in DIFFUSE_MODELS:
             raise ValueError(f"diffuse_model must be one of {', '.join(DIFFUSE_MODELS)}; got {self.diffuse_model!r}")
-        self.inputs = dict(defaults)
-        self._given = tuple(kwargs)
-        for n, v in kwargs.items():
-            self.inputs[n] = _convert(checked[n], v)
-        self._ignored = {n: self.inputs[n] for n in kwargs
-                         if n not in MODELLED and not is_default(checked[n], self.inputs[n])}
-        if self._ignored:
-            warnings.warn(f"OpenPBRSurface does not model these inputs; they have no effect: "
-                          f"{', '.join(self._ignored)}", IgnoredInputWarning, stacklevel=2)
-        self._setup()
 
     # ------------------------------------------------------------------ parameters
     def _setup(self):
         p = self.inputs
         self.frame = Frame(p["geometry_normal"])
         self.params, mask, warn = pack_parameters(p, self._given)
-        for bit, text in _WARNINGS.items():
-            if warn & bit:
-                warnings.warn(text, UserWarning, stacklevel=3)
+        if warn:
+            for bit, text in _WARNINGS.items():
+                if warn & bit:
+                    warnings.warn(text, UserWarning, stacklevel=3)
         if not mask:
             mask = 1 << sk.DIFFUSE      # a black surface: keep one lobe (f = 0 everywhere)
-        self._slots = tuple(k for k in range(len(LOBE_NAMES)) if mask & (1 << k))
-        self.active = tuple(LOBE_NAMES[k] for k in self._slots)
-        self._flags = _Flags(mask, DIFFUSE_MODELS[self.diffuse_model], SELECTIONS.index(self.selection),
-                             bool(self.multiscatter), self.specular_sampling == "vndf")
+        self._slots, self.active = _slots(mask)
+        self._flags = _flags(mask, self.diffuse_model, self.selection, self.multiscatter, self.specular_sampling)
 
     @property
     def ignored_inputs(self):
@@ -350,7 +416,7 @@ class OpenPBRSurface(metaclass=NodeMeta):
         return self.frame.to_local(ar.directions(name, w, np.float64))
 
     def _lead(self, **shapes):
-        if self.params.ndim == 1 and all(not s for s in shapes.values()):   # one material, one row
+        if self.params.ndim == 1 and not any(shapes.values()):   # one material, one row
             return ()
         return ar.broadcast_leading(material=self.params.shape[:-1], **shapes)
 
@@ -362,8 +428,12 @@ class OpenPBRSurface(metaclass=NodeMeta):
         """
         wo = self._local("wo", wo)
         lead = self._lead(wo=wo.shape[:-1])
-        W, E, P = sk.lobes_rows(self._flags, self.params, wo, lead)
-        return [Lobe(LOBE_NAMES[k], W[..., k, :], E[..., k, :], P[..., k]) for k in self._slots]
+        if lead:
+            W, E, P = sk.lobes_rows(self._flags, self.params, wo, lead)
+            W, E, P = np.moveaxis(W, -2, 0), np.moveaxis(E, -2, 0), np.moveaxis(P, -1, 0)   # lobe axis first
+        else:
+            W, E, P = _lobes_one(self._flags, self.params, wo)
+        return [_new_lobe((LOBE_NAMES[k], W[k], E[k], P[k, ...])) for k in self._slots]
 
     def lobe_eval(self, name, wi, wo):
         """The BSDF f_k of one lobe (its weight w_k not applied), shape (..., 3).
