@@ -83,16 +83,21 @@ def test_sheen_albedo_fit_is_in_range():
 
 
 def test_compiled_table_lookups_equal_the_numpy_interpolation(rng):
-    """The per-row lookups of the surface (conductor basis; the dielectric table collapsed per
-    material) against the NumPy tensor-product interpolation of ``microfacet.tables``."""
+    """The per-row lookups of the surface (both tables collapsed per material to curves in mu)
+    against the NumPy tensor-product interpolation of ``microfacet.tables``."""
     from openpbr_diffuse.nodes import OpenPBRSurface
     from openpbr_diffuse.nodes import _surface_kernels as sk
 
-    C, R = T.padded_tables()
     for mu, r, ior in rng.random((40, 3)):
         ior = 1.0 + 2.0 * ior
         s = OpenPBRSurface(specular_roughness=float(r), specular_ior=float(ior))
         x = float(s.params[sk.P_X_S])
-        E1, E5, E6, E = sk.layer_albedos(s.params, 0, sk.P_TAB_S, sk.P_CURVE_S, mu, C, x, False)
+        E1, E5, E6, E = sk.layer_albedos(s.params, 0, sk.P_E1S, sk.P_E5S, sk.P_E6S, sk.P_CURVE_S, mu, x, False)
         assert np.allclose((E1, E5, E6), T.conductor_basis(mu, r), rtol=1e-12, atol=1e-15)
         assert E == pytest.approx(float(T.dielectric_albedo(mu, r, x)), rel=1e-12, abs=1e-15)
+        # the coat's curves (its own roughness and index)
+        c = OpenPBRSurface(coat_weight=1.0, coat_roughness=float(r), coat_ior=float(ior))
+        xc = float(c.params[sk.P_X_C])
+        E1c, _, _, Ec = sk.layer_albedos(c.params, 0, sk.P_E1C, sk.P_E1C, sk.P_E1C, sk.P_CURVE_C, mu, xc, False)
+        assert E1c == pytest.approx(float(T.conductor_basis(mu, r)[0]), rel=1e-12, abs=1e-15)
+        assert Ec == pytest.approx(float(T.dielectric_albedo(mu, r, xc)), rel=1e-12, abs=1e-15)

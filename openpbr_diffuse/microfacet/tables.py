@@ -235,22 +235,6 @@ def padded_tables():
             np.ascontiguousarray(_padded_dielectric()[0], dtype=np.float64))
 
 
-# Lookups whose roughness coordinate is fixed per material: the node index and the four
-# Catmull-Rom weights of that axis are computed once (``node_at``, ``catmull_rom_at``), and
-# only the mu axis is evaluated per row.  (The surface also collapses the dielectric table on
-# its roughness and x axes per material: ``nodes/_surface_kernels._curve``.)
-
-@kernel
-def conductor_basis_pre(C, ir, r0, r1, r2, r3, mu):
-    """(E1, E5, E6) with the roughness axis given by its node ir and weights r0..r3."""
-    im, tm = node_at(mu, C.shape[1] - 2, MU_AXIS)
-    wm = catmull_rom_at(tm)
-    wr = (r0, r1, r2, r3)
-    e1 = e5 = e6 = 0.0
-    for a in range(4):
-        for b in range(4):
-            w = wr[a] * wm[b]
-            e1 += w * C[ir + a, im + b, 0]
-            e5 += w * C[ir + a, im + b, 1]
-            e6 += w * C[ir + a, im + b, 2]
-    return min(max(e1, 0.0), 1.0), max(e5, 0.0), max(e6, 0.0)
+# The surface collapses both tables per material on their roughness (and x) axes and
+# evaluates only the mu axis per row: ``nodes/_surface_kernels`` (``_curve``,
+# ``_conductor_curve``, ``layer_albedos``), with ``node_at`` and ``catmull_rom_at`` above.

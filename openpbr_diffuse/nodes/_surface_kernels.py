@@ -25,7 +25,7 @@ from .._launch import _F, _U, compiled, launch, rows
 from ..microfacet import fresnel
 from ..microfacet import kernels as mf
 from ..microfacet.sheen import sheen_albedo, sheen_density, sheen_sample
-from ..microfacet.tables import MU_AXIS, R_AXIS, X_AXIS, catmull_rom_at, conductor_basis_pre, node_at
+from ..microfacet.tables import MU_AXIS, R_AXIS, X_AXIS, catmull_rom_at, node_at
 from ..models.eon import eon_albedo_terms, eon_terms, rho_ms
 from ..models.qon import qon_AB, qon_albedo, qon_terms
 from ..sampling.ltc import from_frame, ltc_frame, to_frame
@@ -79,7 +79,15 @@ P_TAB_C = 58              # 15
 N_CURVE = 35              # mu nodes of the dielectric table + 2 ghost nodes
 P_CURVE_S = 73
 P_CURVE_C = P_CURVE_S + N_CURVE
-N_PARAMS = P_CURVE_C + N_CURVE
+# the conductor table collapsed on its roughness axis: E1, E5, E6 of the base specular's
+# roughness and E1 of the coat's at every (padded) mu node; per row only a 4-point cubic in
+# mu remains (``conductor_curves``)
+N_CCURVE = 67             # mu nodes of the conductor table + 2 ghost nodes
+P_E1S = P_CURVE_C + N_CURVE
+P_E5S = P_E1S + N_CCURVE
+P_E6S = P_E5S + N_CCURVE
+P_E1C = P_E6S + N_CCURVE
+N_PARAMS = P_E1C + N_CCURVE
 
 
 # --------------------------------------------------------------------------- packing
@@ -128,12 +136,23 @@ def _curve(out, q, t, R):
         out[q + m] = v
 
 
-def _pack_drive(raw, out, nCr, nRr, nRx, R):
+@kernel
+def _conductor_curve(out, q, t, C, c):
+    """out[q + m] = basis albedo c of the conductor table at the roughness whose node and
+    weights are out[t:t + 5], for every padded mu node m."""
+    ir = int(out[t])
+    for m in range(N_CCURVE):
+        out[q + m] = (out[t + 1] * C[ir, m, c] + out[t + 2] * C[ir + 1, m, c] + out[t + 3] * C[ir + 2, m, c]
+                      + out[t + 4] * C[ir + 3, m, c])
+
+
+def _pack_drive(raw, out, CT, RT):
     """Pack rows of RAW inputs into parameter rows (the reference graph's derived values);
     returns (mask of the lobes active in some row, warning bits)."""
     m = raw.shape[0] // N_RAW
     mask = 0
     warn = 0
+    nCr, nRr, nRx = CT.shape[0] - 2, RT.shape[0] - 2, RT.shape[1] - 2
     for i in range(m):
         a = i * N_RAW
         o = i * N_PARAMS
@@ -199,8 +218,12 @@ def _pack_drive(raw, out, nCr, nRr, nRx, R):
         out[o + P_THIN] = thin
         _table_axes(out, o + P_TAB_S, r_eff, x, nCr, nRr, nRx)
         _table_axes(out, o + P_TAB_C, r_c, xc, nCr, nRr, nRx)
-        _curve(out, o + P_CURVE_S, o + P_TAB_S, R)
-        _curve(out, o + P_CURVE_C, o + P_TAB_C, R)
+        _curve(out, o + P_CURVE_S, o + P_TAB_S, RT)
+        _curve(out, o + P_CURVE_C, o + P_TAB_C, RT)
+        _conductor_curve(out, o + P_E1S, o + P_TAB_S, CT, 0)
+        _conductor_curve(out, o + P_E5S, o + P_TAB_S, CT, 1)
+        _conductor_curve(out, o + P_E6S, o + P_TAB_S, CT, 2)
+        _conductor_curve(out, o + P_E1C, o + P_TAB_C, CT, 0)
         # lobes that can be non-zero
         diel = 1.0 - M
         sc_any = raw[a + 6] > 0.0 or raw[a + 7] > 0.0 or raw[a + 8] > 0.0
@@ -216,18 +239,26 @@ pack_drive = numba.njit(cache=True, error_model="numpy")(_pack_drive)
 
 
 @kernel
-def layer_albedos(p, o, t, q, mu, C, x, ms):
-    """(E1, E5, E6, E) of a GGX layer whose table axes start at p[o + t] (P_TAB_S / P_TAB_C)
-    and whose collapsed dielectric curve at p[o + q]: the basis albedos and the dielectric
-    lobe's albedo with the multiple-scattering factor (0 at x = 0: index-matched)."""
-    E1, E5, E6 = conductor_basis_pre(C, int(p[o + t]), p[o + t + 1], p[o + t + 2], p[o + t + 3], p[o + t + 4], mu)
+def cubic_at(p, b, w0, w1, w2, w3):
+    return w0 * p[b] + w1 * p[b + 1] + w2 * p[b + 2] + w3 * p[b + 3]
+
+
+@kernel
+def layer_albedos(p, o, e1, e5, e6, q, mu, x, ms):
+    """(E1, E5, E6, E) of a GGX layer from its curves collapsed per material: the conductor
+    basis at p[o + e1], p[o + e5], p[o + e6] (P_E*), the dielectric ratio at p[o + q]
+    (P_CURVE_*): the basis albedos and the dielectric lobe's albedo with the
+    multiple-scattering factor (0 at x = 0: index-matched)."""
+    im, tm = node_at(mu, N_CCURVE - 2, MU_AXIS)
+    w0, w1, w2, w3 = catmull_rom_at(tm)
+    E1 = min(max(cubic_at(p, o + e1 + im, w0, w1, w2, w3), 0.0), 1.0)
+    E5 = max(cubic_at(p, o + e5 + im, w0, w1, w2, w3), 0.0)
+    E6 = max(cubic_at(p, o + e6 + im, w0, w1, w2, w3), 0.0)
     E = 0.0
     if x > 0.0:
         im, tm = node_at(mu, N_CURVE - 2, MU_AXIS)
         w0, w1, w2, w3 = catmull_rom_at(tm)
-        b = o + q + im
-        v = w0 * p[b] + w1 * p[b + 1] + w2 * p[b + 2] + w3 * p[b + 3]
-        E = min(max(v, 0.0), 1.0) * E1
+        E = min(max(cubic_at(p, o + q + im, w0, w1, w2, w3), 0.0), 1.0) * E1
     return E1, E5, E6, E * mf.multiscatter(x * x, E1, ms)
 
 
@@ -254,10 +285,10 @@ def row_state(p, o, mu, C, R, dmodel, ms, albedos=True):
     the thin-walled subsurface reflection (0 unless ``albedos``).  Layers that are off are
     not looked up.
     """
-    E1s, E5s, E6s, Es = layer_albedos(p, o, P_TAB_S, P_CURVE_S, mu, C, p[o + P_X_S], ms)
+    E1s, E5s, E6s, Es = layer_albedos(p, o, P_E1S, P_E5S, P_E6S, P_CURVE_S, mu, p[o + P_X_S], ms)
     E1c, Ec, Ef, Eq = 1.0, 0.0, 0.0, 0.0
     if p[o + P_COAT_W] > 0.0:
-        E1c, _, _, Ec = layer_albedos(p, o, P_TAB_C, P_CURVE_C, mu, C, p[o + P_X_C], ms)
+        E1c, _, _, Ec = layer_albedos(p, o, P_E1C, P_E1C, P_E1C, P_CURVE_C, mu, p[o + P_X_C], ms)
     if p[o + P_FUZZ_W] > 0.0:
         Ef = sheen_albedo(mu, p[o + P_FUZZ_R])
     eg, eh, avg = 0.0, 0.0, 0.0
@@ -697,8 +728,9 @@ def tables():
     from ..microfacet.tables import padded_tables
 
     C, R = padded_tables()
-    if R.shape[2] != N_CURVE:   # the parameter layout reserves N_CURVE mu nodes
-        raise RuntimeError(f"dielectric albedo table has {R.shape[2] - 2} mu nodes; N_CURVE expects {N_CURVE - 2}")
+    if R.shape[2] != N_CURVE or C.shape[1] != N_CCURVE:   # the parameter layout reserves them
+        raise RuntimeError(f"GGX albedo tables have {R.shape[2] - 2} and {C.shape[1] - 2} mu nodes; the "
+                           f"parameter layout expects {N_CURVE - 2} (N_CURVE) and {N_CCURVE - 2} (N_CCURVE)")
     return C, R
 
 

@@ -152,10 +152,9 @@ def pack_parameters(p, changed=None):
 
 @functools.cache
 def _pack_tables():
-    """The table arguments of ``pack_drive``: the conductor table's roughness nodes, the
-    dielectric table's roughness and x nodes, and the dielectric table (``sk.tables``)."""
-    C, R = sk.tables()
-    return C.shape[0] - 2, R.shape[0] - 2, R.shape[1] - 2, R
+    """The table arguments of ``pack_drive``: the padded conductor and dielectric tables
+    (``sk.tables``)."""
+    return sk.tables()
 
 
 #: offset and width of each RAW input in the flat row
