@@ -28,17 +28,30 @@ def clamp_roughness(r):
 
 
 @kernel
-def sheen_albedo(mu, r):
-    """Directional albedo R(mu_o, r) of the sheen lobe (Zeltner 2022 fit), floored at 0: the
-    fit dips to -1.9e-5 near mu_o = 0.9, r = 0.1, and a negative albedo would make the fuzz
-    lobe and its selection weight negative."""
-    x = min(max(mu, 0.0), 1.0)
+def sheen_albedo_fit(r):
+    """(s, m, o) of the albedo fit R(mu_o, r) = N(mu_o; m, s) + o at roughness r: the part
+    that depends on r alone (once per material in the surface)."""
     y = clamp_roughness(r)
     s = y * (0.0206607 + 1.58491 * y) / (0.0379424 + y * (1.32227 + y))
     m = y * (-0.193854 + y * (-1.14885 + y * (1.7932 - 0.95943 * y * y))) / (0.046391 + y)
     o = y * (0.000654023 + (-0.0207818 + 0.119681 * y) * y) / (1.26264 + y * (-1.92021 + y))
-    t = (x - m) / s
+    return s, m, o
+
+
+@kernel
+def sheen_albedo_at(mu, s, m, o):
+    """R(mu_o) from the fit's (s, m, o) (``sheen_albedo_fit``), floored at 0: the fit dips
+    to -1.9e-5 near mu_o = 0.9, r = 0.1, and a negative albedo would make the fuzz lobe and
+    its selection weight negative."""
+    t = (min(max(mu, 0.0), 1.0) - m) / s
     return max(math.exp(-0.5 * t * t) / (s * math.sqrt(2.0 * math.pi)) + o, 0.0)
+
+
+@kernel
+def sheen_albedo(mu, r):
+    """Directional albedo R(mu_o, r) of the sheen lobe (Zeltner 2022 fit), floored at 0."""
+    s, m, o = sheen_albedo_fit(r)
+    return sheen_albedo_at(mu, s, m, o)
 
 
 @kernel

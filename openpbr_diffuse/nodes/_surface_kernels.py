@@ -24,12 +24,13 @@ from .._jit import FASTMATH, INV_PI, kernel
 from .._launch import _F, _U, compiled, launch, rows
 from ..microfacet import fresnel
 from ..microfacet import kernels as mf
-from ..microfacet.sheen import sheen_albedo, sheen_density, sheen_sample
+from ..microfacet.sheen import sheen_albedo_at, sheen_albedo_fit, sheen_density, sheen_sample
 from ..microfacet.tables import MU_AXIS, R_AXIS, X_AXIS, catmull_rom_at, node_at
 from ..models.eon import eon_albedo_terms, eon_terms, rho_ms
+from ..models.fon import E_F_avg
 from ..models.qon import qon_AB, qon_albedo, qon_terms
 from ..sampling.ltc import from_frame, ltc_frame, to_frame
-from ..sampling.mis import eon_pdf, eon_sample
+from ..sampling.mis import eon_pdf, eon_sample, pow_tenth
 from ..sampling.simple import cosine_pdf, cosine_sample_local
 
 DIFFUSE, SPECULAR, METAL, TRANSMISSION, SUBSURFACE, SUBSURFACE_T, COAT, FUZZ = range(8)
@@ -87,7 +88,11 @@ P_E1S = P_CURVE_C + N_CURVE
 P_E5S = P_E1S + N_CCURVE
 P_E6S = P_E5S + N_CCURVE
 P_E1C = P_E6S + N_CCURVE
-N_PARAMS = P_E1C + N_CCURVE
+# values of one material that the per-row formulas would otherwise recompute
+P_R_TENTH = P_E1C + N_CCURVE   # base_diffuse_roughness^0.1 (the EON sampler's P_u)
+P_RHO_MS = P_R_TENTH + 1       # 3: rho_ms(base_color, <E_F>) of the EON lobe (Eq. 18)
+P_SHEEN_FIT = P_RHO_MS + 3     # 3: (s, m, o) of the fuzz albedo fit at fuzz_roughness
+N_PARAMS = P_SHEEN_FIT + 3
 
 
 # --------------------------------------------------------------------------- packing
@@ -198,6 +203,11 @@ def _pack_drive(raw, out, CT, RT):
             out[o + P_BASE_MUL + c] = (1.0 + C * c_dark * (dark - 1.0)) * (1.0 + C * (raw[a + 23 + c] - 1.0))
             out[o + P_FUZZ_COLOR + c] = raw[a + 30 + c]
         out[o + P_R_DIFF] = raw[a + 3]
+        out[o + P_R_TENTH] = pow_tenth(raw[a + 3])
+        avg = E_F_avg(raw[a + 3])
+        for c in range(3):
+            out[o + P_RHO_MS + c] = rho_ms(raw[a + c], avg)
+        out[o + P_SHEEN_FIT], out[o + P_SHEEN_FIT + 1], out[o + P_SHEEN_FIT + 2] = sheen_albedo_fit(raw[a + 33])
         out[o + P_BASE_WEIGHT] = bw
         out[o + P_METAL] = M
         out[o + P_SPEC_WEIGHT] = sw
@@ -290,7 +300,7 @@ def row_state(p, o, mu, C, R, dmodel, ms, albedos=True):
     if p[o + P_COAT_W] > 0.0:
         E1c, _, _, Ec = layer_albedos(p, o, P_E1C, P_E1C, P_E1C, P_CURVE_C, mu, p[o + P_X_C], ms)
     if p[o + P_FUZZ_W] > 0.0:
-        Ef = sheen_albedo(mu, p[o + P_FUZZ_R])
+        Ef = sheen_albedo_at(mu, p[o + P_SHEEN_FIT], p[o + P_SHEEN_FIT + 1], p[o + P_SHEEN_FIT + 2])
     eg, eh, avg = 0.0, 0.0, 0.0
     if albedos:   # the weights do not need the diffuse albedos (eval does not)
         eg, eh, avg = diffuse_albedo_terms(dmodel, mu, p[o + P_R_DIFF])
@@ -300,10 +310,10 @@ def row_state(p, o, mu, C, R, dmodel, ms, albedos=True):
 
 
 @kernel
-def diffuse_albedo(dmodel, rho, eg, eh, avg):
-    """One channel of the diffuse albedo from ``diffuse_albedo_terms``."""
+def diffuse_albedo(dmodel, rho, rms, eg, eh):
+    """One channel of the diffuse albedo from ``diffuse_albedo_terms``; rms = rho_ms(rho)."""
     if dmodel == D_EON:
-        return rho * eg + rho_ms(rho, avg) * eh
+        return rho * eg + rms * eh
     return rho * eg
 
 
@@ -352,19 +362,20 @@ def lobe_weight_albedo(k, c, p, o, st, mu, dmodel, ms):
         return opaque * S * 0.5 * color * (1.0 + g), color
     # DIFFUSE
     return (opaque * (1.0 - S) * p[o + P_BASE_WEIGHT],
-            diffuse_albedo(dmodel, p[o + P_BASE_COLOR + c], eg, eh, avg))
+            diffuse_albedo(dmodel, p[o + P_BASE_COLOR + c], p[o + P_RHO_MS + c], eg, eh))
 
 
 @kernel
-def diffuse_f(dmodel, r, rho, iz, oz, s):
-    """One channel of the diffuse lobe's BSDF (EON Eq. 16-19, QON Eq. 1, Lambert)."""
+def diffuse_gh(dmodel, r, iz, oz, s):
+    """(g, h) of the diffuse lobe's BSDF f = rho g + rho_ms h, channel-free: EON Eq. 16-19,
+    QON Eq. 1 or Lambert (h = 0 for both)."""
     if dmodel == D_EON:
-        g, h, avg = eon_terms(iz, oz, s, r, False)
-        return rho * g + rho_ms(rho, avg) * h
+        g, h, _ = eon_terms(iz, oz, s, r, False)
+        return g, h
     if dmodel == D_QON:
         A, B = qon_AB(r, 0.33)
-        return rho * qon_terms(iz, oz, s, A, B)
-    return rho * INV_PI
+        return qon_terms(iz, oz, s, A, B), 0.0
+    return INV_PI, 0.0
 
 
 @kernel
@@ -381,13 +392,11 @@ def lobe_f(k, p, o, st, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c):
         s = ix * ox + iy * oy + iz * oz - iz * oz
         r = p[o + P_R_DIFF]
         if k == SUBSURFACE:
-            dm = D_QON if p[o + P_THIN] > 0.0 else D_LAMBERT
-            cb = P_SSS_COLOR
-        else:
-            dm = dmodel
-            cb = P_BASE_COLOR
-        return (diffuse_f(dm, r, p[o + cb], iz, oz, s), diffuse_f(dm, r, p[o + cb + 1], iz, oz, s),
-                diffuse_f(dm, r, p[o + cb + 2], iz, oz, s))
+            g, _ = diffuse_gh(D_QON if p[o + P_THIN] > 0.0 else D_LAMBERT, r, iz, oz, s)
+            return p[o + P_SSS_COLOR] * g, p[o + P_SSS_COLOR + 1] * g, p[o + P_SSS_COLOR + 2] * g
+        g, h = diffuse_gh(dmodel, r, iz, oz, s)
+        return (p[o + P_BASE_COLOR] * g + p[o + P_RHO_MS] * h, p[o + P_BASE_COLOR + 1] * g + p[o + P_RHO_MS + 1] * h,
+                p[o + P_BASE_COLOR + 2] * g + p[o + P_RHO_MS + 2] * h)
     if k == SUBSURFACE_T:
         if iz < 0.0 and oz > 0.0:
             return p[o + P_SSS_COLOR] * INV_PI, p[o + P_SSS_COLOR + 1] * INV_PI, p[o + P_SSS_COLOR + 2] * INV_PI
@@ -429,13 +438,13 @@ def lobe_pdf(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, vndf, pdf_s):
     """Solid-angle pdf of ``lobe_sample`` producing wi given wo (wo above the horizon);
     ``pdf_s``: the GGX reflection pdf at the base specular's alpha (specular and metal)."""
     if k == DIFFUSE or k == SUBSURFACE:
-        if not iz > 0.0:
-            return 0.0
         if diffuse_uses_eon_sampler(k, dmodel):
             Xx, Xy = ltc_frame(ox, oy)
             lx, ly = to_frame(Xx, Xy, ix, iy)
-            return eon_pdf(lx, ly, iz, min(oz, 1.0), p[o + P_R_DIFF])
-        return cosine_pdf(iz)
+            q = eon_pdf(lx, ly, iz, min(oz, 1.0), p[o + P_R_DIFF], p[o + P_R_TENTH])
+        else:
+            q = cosine_pdf(iz)
+        return q if iz > 0.0 else 0.0   # a select: no branch on the direction
     if k == SUBSURFACE_T:
         return cosine_pdf(-iz)
     if k == FUZZ:
@@ -461,7 +470,7 @@ def lobe_sample(k, p, o, ox, oy, oz, u1, u2, dmodel, vndf):
     if k == DIFFUSE or k == SUBSURFACE or k == SUBSURFACE_T or k == FUZZ:
         Xx, Xy = ltc_frame(ox, oy)
         if diffuse_uses_eon_sampler(k, dmodel):
-            x, y, z, q = eon_sample(Xx, Xy, mu, p[o + P_R_DIFF], u1, u2)
+            x, y, z, q = eon_sample(Xx, Xy, mu, p[o + P_R_DIFF], p[o + P_R_TENTH], u1, u2)
             return x, y, z, q, True
         if k == FUZZ:
             lx, ly, z = sheen_sample(mu, p[o + P_FUZZ_R], u1, u2)

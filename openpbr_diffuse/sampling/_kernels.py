@@ -15,7 +15,7 @@ from numba import prange
 from .._jit import kernel
 from .._launch import _F, _U, compiled, launch, rows
 from .ltc import clip_fraction, from_frame, ltc_coeffs, ltc_frame, ltc_pdf_local, ltc_sample_local, to_frame
-from .mis import eon_pdf, eon_sample
+from .mis import eon_pdf, eon_sample, pow_tenth
 from .registry import CLTC, COSINE, EON, LTC, LTC_NONNEG, UNIFORM
 from .simple import INV_2PI, cosine_pdf, cosine_sample_local, uniform_sample
 
@@ -34,7 +34,7 @@ def strategy_pdf(strategy, ox, oy, oz, wx, wy, wz, r):
         Xx, Xy = ltc_frame(ox, oy)
         lx, ly = to_frame(Xx, Xy, wx, wy)
         if strategy == EON:
-            p = eon_pdf(lx, ly, wz, mu, r)
+            p = eon_pdf(lx, ly, wz, mu, r, pow_tenth(r))
         else:
             a, b, c, d = ltc_coeffs(mu, r)
             if strategy == LTC_NONNEG:
@@ -79,7 +79,7 @@ def sample_driver(strategy):
             else:
                 Xx, Xy = ltc_frame(ox, oy)
                 if strategy == EON:
-                    x, y, z, _ = eon_sample(Xx, Xy, mu, ri, u1, u2)
+                    x, y, z, _ = eon_sample(Xx, Xy, mu, ri, pow_tenth(ri), u1, u2)
                 else:
                     if strategy == COSINE:
                         lx, ly, z, _ = cosine_sample_local(u1, u2)

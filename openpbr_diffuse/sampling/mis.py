@@ -82,14 +82,16 @@ def pow_tenth(r):
 
 
 @kernel
-def uniform_probability(mu, r):
-    """P_u = r^0.1 (0.162925 + mu (-0.372058 + (0.538233 - 0.290822 mu) mu)) (Listing 4)."""
-    return pow_tenth(r) * (0.162925 + mu * (-0.372058 + (0.538233 - 0.290822 * mu) * mu))
+def uniform_probability(mu, r_tenth):
+    """P_u = r^0.1 (0.162925 + mu (-0.372058 + (0.538233 - 0.290822 mu) mu)) (Listing 4),
+    given r_tenth = r^0.1 (``pow_tenth(r)``: once per material when r is fixed)."""
+    return r_tenth * (0.162925 + mu * (-0.372058 + (0.538233 - 0.290822 * mu) * mu))
 
 
 @kernel
-def eon_sample(Xx, Xy, mu, r, u1, u2):
-    """Return (x, y, z, pdf) in the local frame: Listing 4 for the LTC frame X of wo.
+def eon_sample(Xx, Xy, mu, r, r_tenth, u1, u2):
+    """Return (x, y, z, pdf) in the local frame: Listing 4 for the LTC frame X of wo
+    (r_tenth = r^0.1, ``pow_tenth(r)``).
 
     The branch test is u1 < P_u (Listing 4 has <=; they differ only at u1 = P_u) so that
     P_u = 0 (r = 0) never selects the uniform lobe.  The rescaled (u1 - P_u)/P_c can round
@@ -101,7 +103,7 @@ def eon_sample(Xx, Xy, mu, r, u1, u2):
     """
     a, b, c, d = ltc_coeffs(mu, r)
     s = clip_fraction(d)
-    Pu = uniform_probability(mu, r)
+    Pu = uniform_probability(mu, r_tenth)
     Pc = 1.0 - Pu
     uniform = u1 < Pu
     # uniform lobe, in the local frame as in Listing 4; its CLTC density for the mixture
@@ -116,8 +118,9 @@ def eon_sample(Xx, Xy, mu, r, u1, u2):
 
 
 @kernel
-def eon_pdf(lx, ly, lz, mu, r):
-    """P_u/(2 pi) + P_c pdf_CLTC at the LTC-frame direction (lx, ly, lz), lz > 0."""
+def eon_pdf(lx, ly, lz, mu, r, r_tenth):
+    """P_u/(2 pi) + P_c pdf_CLTC at the LTC-frame direction (lx, ly, lz), lz > 0
+    (r_tenth = r^0.1, ``pow_tenth(r)``)."""
     a, b, c, d = ltc_coeffs(mu, r)
-    Pu = uniform_probability(mu, r)
+    Pu = uniform_probability(mu, r_tenth)
     return Pu * INV_2PI + (1.0 - Pu) * ltc_pdf_local(a, b, c, d, clip_fraction(d), lx, ly, lz)
