@@ -82,7 +82,7 @@ P_CURVE_S = 73
 P_CURVE_C = P_CURVE_S + N_CURVE
 # the conductor table collapsed on its roughness axis: E1, E5, E6 of the base specular's
 # roughness and E1 of the coat's at every (padded) mu node; per row only a 4-point cubic in
-# mu remains (``conductor_curves``)
+# mu remains (``_conductor_curve``)
 N_CCURVE = 67             # mu nodes of the conductor table + 2 ghost nodes
 P_E1S = P_CURVE_C + N_CURVE
 P_E5S = P_E1S + N_CCURVE
@@ -285,13 +285,13 @@ def diffuse_albedo_terms(dmodel, mu, r):
 
 
 @kernel
-def row_state(p, o, mu, C, R, dmodel, ms, albedos=True):
+def row_state(p, o, mu, dmodel, ms, albedos=True):
     """Per-row quantities shared by every lobe at mu_o: (E1_s, E5_s, E6_s, E_spec, E1_c,
-    E_coat, E_fuzz, e_g, e_h, <E_F>, E_qon).
+    E_coat, E_fuzz, e_g, e_h, E_qon).
 
     E1/E5/E6: GGX basis albedos of the base specular roughness; E_spec, E_coat: albedos of
     the dielectric specular and coat lobes (with the multiple-scattering factor); E_fuzz:
-    the sheen albedo; e_g, e_h, <E_F>: the diffuse albedo terms; E_qon: the QON albedo of
+    the sheen albedo; e_g, e_h: the diffuse albedo terms; E_qon: the QON albedo of
     the thin-walled subsurface reflection (0 unless ``albedos``).  Layers that are off are
     not looked up.
     """
@@ -301,12 +301,12 @@ def row_state(p, o, mu, C, R, dmodel, ms, albedos=True):
         E1c, _, _, Ec = layer_albedos(p, o, P_E1C, P_E1C, P_E1C, P_CURVE_C, mu, p[o + P_X_C], ms)
     if p[o + P_FUZZ_W] > 0.0:
         Ef = sheen_albedo_at(mu, p[o + P_SHEEN_FIT], p[o + P_SHEEN_FIT + 1], p[o + P_SHEEN_FIT + 2])
-    eg, eh, avg = 0.0, 0.0, 0.0
+    eg, eh = 0.0, 0.0
     if albedos:   # the weights do not need the diffuse albedos (eval does not)
-        eg, eh, avg = diffuse_albedo_terms(dmodel, mu, p[o + P_R_DIFF])
+        eg, eh, _ = diffuse_albedo_terms(dmodel, mu, p[o + P_R_DIFF])
     if albedos and p[o + P_THIN] > 0.0 and p[o + P_SSS_W] > 0.0:
         Eq, _, _ = diffuse_albedo_terms(D_QON, mu, p[o + P_R_DIFF])
-    return E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, avg, Eq
+    return E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, Eq
 
 
 @kernel
@@ -333,7 +333,7 @@ def lobe_weight_albedo(k, c, p, o, st, mu, dmodel, ms):
     attenuated by the coat (P_BASE_MUL); metal / dielectric by base_metalness; under the
     dielectric specular layer the substrate mixes transmission, subsurface and diffuse.
     """
-    E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, avg, Eq = st
+    E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, Eq = st
     Tf = 1.0 - p[o + P_FUZZ_W] * Ef
     if k == FUZZ:
         return p[o + P_FUZZ_W] * p[o + P_FUZZ_COLOR + c], Ef
@@ -384,7 +384,7 @@ def lobe_f(k, p, o, st, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c):
 
     (m, c): ``microfacet.kernels.reflection`` at the base specular's alpha, shared by the
     specular and metal lobes (computed once per row by the caller, ``base_ggx``)."""
-    E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, avg, Eq = st
+    E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, Eq = st
     up = iz > 0.0 and oz > 0.0
     if k == DIFFUSE or k == SUBSURFACE:
         if not up:
@@ -531,7 +531,7 @@ def probability(sk, S, K):
 # --------------------------------------------------------------------------- drivers
 
 
-def _lobes_drive(active, dmodel, sel, ms, C, R, p, ps, wo, W, E, P):
+def _lobes_drive(active, dmodel, sel, ms, p, ps, wo, W, E, P):
     """W, E (n*8*3), P (n*8): weight, albedo and probability of every lobe slot."""
     n = wo.shape[0] // 3
     for i in prange(n):
@@ -539,7 +539,7 @@ def _lobes_drive(active, dmodel, sel, ms, C, R, p, ps, wo, W, E, P):
         o = _U(i) * _U(ps)
         oz = _F(wo[j + _U(2)])
         mu = min(max(oz, 0.0), 1.0)
-        st = row_state(p, o, mu, C, R, dmodel, ms)
+        st = row_state(p, o, mu, dmodel, ms)
         up = oz > 0.0
         S = 0.0
         K = 0
@@ -565,14 +565,14 @@ def _lobes_drive(active, dmodel, sel, ms, C, R, p, ps, wo, W, E, P):
                 P[b] = probability(P[b], S, K)
 
 
-def _albedo_drive(active, dmodel, ms, C, R, p, ps, wo, out):
+def _albedo_drive(active, dmodel, ms, p, ps, wo, out):
     n = wo.shape[0] // 3
     for i in prange(n):
         j = _U(i) * _U(3)
         o = _U(i) * _U(ps)
         oz = _F(wo[j + _U(2)])
         mu = min(max(oz, 0.0), 1.0)
-        st = row_state(p, o, mu, C, R, dmodel, ms)
+        st = row_state(p, o, mu, dmodel, ms)
         a0 = a1 = a2 = 0.0
         if oz > 0.0:
             for k in range(N_LOBES):
@@ -588,7 +588,7 @@ def _albedo_drive(active, dmodel, ms, C, R, p, ps, wo, out):
         out[j + _U(2)] = a2
 
 
-def _eval_drive(active, only, dmodel, ms, C, R, p, ps, wi, wo, out):
+def _eval_drive(active, only, dmodel, ms, p, ps, wi, wo, out):
     """out (n*3) = sum_k w_k f_k, or the unweighted f_only when only >= 0."""
     n = wo.shape[0] // 3
     for i in prange(n):
@@ -597,7 +597,7 @@ def _eval_drive(active, only, dmodel, ms, C, R, p, ps, wi, wo, out):
         ix, iy, iz = _F(wi[j]), _F(wi[j + _U(1)]), _F(wi[j + _U(2)])
         ox, oy, oz = _F(wo[j]), _F(wo[j + _U(1)]), _F(wo[j + _U(2)])
         mu = min(max(oz, 0.0), 1.0)
-        st = row_state(p, o, mu, C, R, dmodel, ms, False)
+        st = row_state(p, o, mu, dmodel, ms, False)
         a0 = a1 = a2 = 0.0
         m, c = 0.0, 0.0
         if uses_base_ggx(active):
@@ -620,7 +620,7 @@ def _eval_drive(active, only, dmodel, ms, C, R, p, ps, wi, wo, out):
         out[j + _U(2)] = a2
 
 
-def _pdf_drive(active, dmodel, sel, ms, vndf, C, R, p, ps, wo, wi, out):
+def _pdf_drive(active, dmodel, sel, ms, vndf, p, ps, wo, wi, out):
     """out (n) = sum_k P_k pdf_k(wi | wo)."""
     n = wo.shape[0] // 3
     for i in prange(n):
@@ -633,7 +633,7 @@ def _pdf_drive(active, dmodel, sel, ms, vndf, C, R, p, ps, wo, wi, out):
         if oz > 0.0:
             # one pass: sum_k s_k pdf_k / sum_k s_k (uniform over the active lobes when every
             # score is 0), the mixture pdf with P_k = s_k / sum s
-            st = row_state(p, o, mu, C, R, dmodel, ms)
+            st = row_state(p, o, mu, dmodel, ms)
             num = 0.0
             pdf_s = 0.0
             if uses_base_ggx(active):
@@ -653,7 +653,7 @@ def _pdf_drive(active, dmodel, sel, ms, vndf, C, R, p, ps, wo, wi, out):
         out[i] = q
 
 
-def _sample_drive(active, dmodel, sel, ms, vndf, C, R, p, ps, wo, u, wi, out):
+def _sample_drive(active, dmodel, sel, ms, vndf, p, ps, wo, u, wi, out):
     """Pick lobe k with P_k (u[0]), sample it (u[1:3], or u[0] rescaled and u[1] when u has
     2 columns); wi (n*3), out (n) = the mixture pdf, with the chosen lobe's own pdf from its
     sampler; 0 marks a failed sample."""
@@ -665,7 +665,7 @@ def _sample_drive(active, dmodel, sel, ms, vndf, C, R, p, ps, wo, u, wi, out):
         ju = _U(i) * _U(ud)
         ox, oy, oz = _F(wo[j]), _F(wo[j + _U(1)]), _F(wo[j + _U(2)])
         mu = min(max(oz, 0.0), 1.0)
-        st = row_state(p, o, mu, C, R, dmodel, ms)
+        st = row_state(p, o, mu, dmodel, ms)
         ss = all_scores(active, p, o, st, mu, dmodel, ms, sel)
         S = 0.0
         K = 0
@@ -733,7 +733,9 @@ def _driver(f, n):
 
 @functools.cache
 def tables():
-    """(C, R): the padded GGX albedo tables (``microfacet.tables.padded_tables``)."""
+    """(C, R): the padded GGX albedo tables (``microfacet.tables.padded_tables``), read by
+    ``pack_drive`` only: it collapses them per material into the P_CURVE_* and P_E* curves
+    in mu that the per-row drivers interpolate."""
     from ..microfacet.tables import padded_tables
 
     C, R = padded_tables()
@@ -743,11 +745,22 @@ def tables():
     return C, R
 
 
+def _one_row(d):
+    """One row of a direction argument as the flat read-only buffer ``_launch.rows`` gives
+    (so that the serial driver keeps one compiled signature)."""
+    b = np.ascontiguousarray(d).reshape(-1).view()
+    b.flags.writeable = False
+    return b
+
+
 def _run(f, head, params, lead, dirs, outs):
     """Run driver f over the rows of ``lead``: ``params`` is one material (stride 0, never
     copied or tiled) or materials broadcasting to ``lead`` (stride N_PARAMS, expanded)."""
     n = math.prod(lead)
     if n == 0:
+        return
+    if params.ndim == 1 and n == 1:   # one material, one row (lobes(wo) of a material): no batch machinery
+        _DRIVERS[f][1](*head, params, 0, *(_one_row(d) for d, _ in dirs), *(o for o, _ in outs))
         return
     if params.ndim == 1:
         inputs = []
@@ -767,27 +780,27 @@ def lobes_rows(flags, params, wo, lead):
     W = np.empty(n * N_LOBES * 3)
     E = np.empty(n * N_LOBES * 3)
     P = np.empty(n * N_LOBES)
-    _run(_lobes_drive, (flags.active, flags.dmodel, flags.sel, flags.ms) + tables(), params, lead, [(wo, 3)],
+    _run(_lobes_drive, (flags.active, flags.dmodel, flags.sel, flags.ms), params, lead, [(wo, 3)],
          [(W, N_LOBES * 3), (E, N_LOBES * 3), (P, N_LOBES)])
     return W.reshape(lead + (N_LOBES, 3)), E.reshape(lead + (N_LOBES, 3)), P.reshape(lead + (N_LOBES,))
 
 
 def albedo_rows(flags, params, wo, lead):
     out = np.empty(math.prod(lead) * 3)
-    _run(_albedo_drive, (flags.active, flags.dmodel, flags.ms) + tables(), params, lead, [(wo, 3)], [(out, 3)])
+    _run(_albedo_drive, (flags.active, flags.dmodel, flags.ms), params, lead, [(wo, 3)], [(out, 3)])
     return out.reshape(lead + (3,))
 
 
 def eval_rows(flags, params, wi, wo, lead, only=-1):
     out = np.empty(math.prod(lead) * 3)
-    _run(_eval_drive, (flags.active, only, flags.dmodel, flags.ms) + tables(), params, lead, [(wi, 3), (wo, 3)],
+    _run(_eval_drive, (flags.active, only, flags.dmodel, flags.ms), params, lead, [(wi, 3), (wo, 3)],
          [(out, 3)])
     return out.reshape(lead + (3,))
 
 
 def pdf_rows(flags, params, wo, wi, lead):
     out = np.empty(math.prod(lead))
-    _run(_pdf_drive, (flags.active, flags.dmodel, flags.sel, flags.ms, flags.vndf) + tables(), params, lead,
+    _run(_pdf_drive, (flags.active, flags.dmodel, flags.sel, flags.ms, flags.vndf), params, lead,
          [(wo, 3), (wi, 3)], [(out, 1)])
     return out.reshape(lead)
 
@@ -796,6 +809,6 @@ def sample_rows(flags, params, wo, u, lead):
     n = math.prod(lead)
     wi = np.empty(n * 3)
     out = np.empty(n)
-    _run(_sample_drive, (flags.active, flags.dmodel, flags.sel, flags.ms, flags.vndf) + tables(), params, lead,
+    _run(_sample_drive, (flags.active, flags.dmodel, flags.sel, flags.ms, flags.vndf), params, lead,
          [(wo, 3), (u, u.shape[-1])], [(wi, 3), (out, 1)])
     return wi.reshape(lead + (3,)), out.reshape(lead)

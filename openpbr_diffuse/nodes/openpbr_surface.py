@@ -146,15 +146,8 @@ def pack_parameters(p, changed=None):
                               for v, (_, w) in zip(vals, sk.RAW)], axis=-1)
         raw = np.ascontiguousarray(raw, dtype=np.float64).reshape(-1)
     out = np.empty(lead + (sk.N_PARAMS,))
-    mask, warn = sk.pack_drive(raw, out.reshape(-1) if lead else out, *_pack_tables())
+    mask, warn = sk.pack_drive(raw, out.reshape(-1) if lead else out, *sk.tables())
     return out, mask, warn
-
-
-@functools.cache
-def _pack_tables():
-    """The table arguments of ``pack_drive``: the padded conductor and dielectric tables
-    (``sk.tables``)."""
-    return sk.tables()
 
 
 #: offset and width of each RAW input in the flat row
@@ -265,7 +258,7 @@ def _convert(iface, name, v):
     if bounds is not None:
         width, lo, hi = bounds
         if width == 1:
-            if type(v) in _PLAIN and math.isfinite(v) and lo <= v <= hi:
+            if type(v) in _PLAIN and _in(lo, hi, v):
                 return np.float64(v)
         elif (type(v) is tuple or type(v) is list) and len(v) == 3:
             a, b, c = v
@@ -280,17 +273,6 @@ def _slots(mask):
     """(slots, names) of the lobes in an active-lobe mask."""
     slots = tuple(k for k in range(len(LOBE_NAMES)) if mask & (1 << k))
     return slots, tuple(LOBE_NAMES[k] for k in slots)
-
-
-def _lobes_one(flags, params, wo):
-    """``sk.lobes_rows`` for one material (params (N_PARAMS,)) at one direction (wo (3,)):
-    the driver call ``launch`` makes for a single row, without the batch machinery."""
-    W, E, P = np.empty(sk.N_LOBES * 3), np.empty(sk.N_LOBES * 3), np.empty(sk.N_LOBES)
-    wo = np.ascontiguousarray(wo).view()
-    wo.flags.writeable = False   # as ``_launch.rows`` passes inputs: one compiled signature
-    sk._driver(sk._lobes_drive, 1)(flags.active, flags.dmodel, flags.sel, flags.ms, *sk.tables(), params, 0,
-                                   wo, W, E, P)
-    return W.reshape(sk.N_LOBES, 3), E.reshape(sk.N_LOBES, 3), P
 
 
 #: ``Lobe(name, weight, albedo, probability)`` from a tuple of the four, without the
@@ -427,11 +409,9 @@ class OpenPBRSurface(metaclass=NodeMeta):
         """
         wo = self._local("wo", wo)
         lead = self._lead(wo=wo.shape[:-1])
+        W, E, P = sk.lobes_rows(self._flags, self.params, wo, lead)
         if lead:
-            W, E, P = sk.lobes_rows(self._flags, self.params, wo, lead)
             W, E, P = np.moveaxis(W, -2, 0), np.moveaxis(E, -2, 0), np.moveaxis(P, -1, 0)   # lobe axis first
-        else:
-            W, E, P = _lobes_one(self._flags, self.params, wo)
         return [_new_lobe((LOBE_NAMES[k], W[k], E[k], P[k, ...])) for k in self._slots]
 
     def lobe_eval(self, name, wi, wo):
