@@ -2,8 +2,8 @@
 driver per verb.
 
 Lobes are plain values with the verbs of pbrt-v4's ``BxDF`` -- ``lobe_f`` (the lobe's own
-BSDF, weight not applied), ``lobe_sample``, ``lobe_pdf`` and ``lobe_weight_albedo`` (its
-mixture weight w_k(wo) and directional albedo E_k(wo)) -- selected by a lobe id.  A
+BSDF, weight not applied), ``lobe_sample`` and ``lobe_pdf`` -- selected by a lobe id, and
+``weights_albedos`` (every lobe's mixture weight w_k(wo) and directional albedo E_k(wo)).  A
 surface row is a flat vector of prepared parameters (layout ``P_*``, built once per
 material by ``openpbr_surface.pack_parameters``); the wo-dependent layer factors (the
 albedos of the specular, coat and fuzz layers, which scale what lies beneath) are looked up
@@ -325,44 +325,51 @@ def metal_albedo(p, o, c, E1, E5, E6, ms):
 
 
 @kernel
-def lobe_weight_albedo(k, c, p, o, st, mu, dmodel, ms):
-    """(w_k, E_k) of lobe k in channel c at mu_o: the mixture weight and the lobe's albedo.
+def weights_albedos(c, p, o, st, dmodel, ms):
+    """((w_0, ..., w_7), (E_0, ..., E_7)): the mixture weight w_k(wo) and the albedo E_k(wo)
+    of every lobe slot in channel c, in one pass down the layer chain.
 
     The weights follow the reference graph (open_pbr_surface.mtlx): fuzz over coat over the
     base, each layer passing 1 - weight E_layer(mu_o) (albedo scaling); the base
     attenuated by the coat (P_BASE_MUL); metal / dielectric by base_metalness; under the
     dielectric specular layer the substrate mixes transmission, subsurface and diffuse.
+    Slots that are not active get the values the formulas give (the drivers skip them).
     """
     E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, Eq = st
-    Tf = 1.0 - p[o + P_FUZZ_W] * Ef
-    if k == FUZZ:
-        return p[o + P_FUZZ_W] * p[o + P_FUZZ_COLOR + c], Ef
-    if k == COAT:
-        return Tf * p[o + P_COAT_W], Ec
-    base = Tf * (1.0 - p[o + P_COAT_W] * Ec) * p[o + P_BASE_MUL + c]
+    Fw = p[o + P_FUZZ_W]
+    Cw = p[o + P_COAT_W]
+    Tf = 1.0 - Fw * Ef
+    base = Tf * (1.0 - Cw * Ec) * p[o + P_BASE_MUL + c]
     M = p[o + P_METAL]
-    if k == METAL:
-        return base * M * p[o + P_SPEC_WEIGHT], metal_albedo(p, o, c, E1s, E5s, E6s, ms)
     diel = base * (1.0 - M)
-    if k == SPECULAR:
-        return diel * p[o + P_SPEC_COLOR + c], Es
     sub = diel * (1.0 - Es)
     Tw = p[o + P_TRANS_W]
-    if k == TRANSMISSION:
-        return sub * Tw, p[o + P_TRANS_TINT + c]
     opaque = sub * (1.0 - Tw)
     S = p[o + P_SSS_W]
     color = p[o + P_SSS_COLOR + c]
     g = p[o + P_SSS_ANISO]
-    if k == SUBSURFACE:
-        if p[o + P_THIN] > 0.0:   # reflection half of the thin-walled mix: QON, colour^2 (1 - g)/2
-            return opaque * S * 0.5 * color * (1.0 - g), color * Eq
-        return opaque * S, color
-    if k == SUBSURFACE_T:
-        return opaque * S * 0.5 * color * (1.0 + g), color
-    # DIFFUSE
-    return (opaque * (1.0 - S) * p[o + P_BASE_WEIGHT],
-            diffuse_albedo(dmodel, p[o + P_BASE_COLOR + c], p[o + P_RHO_MS + c], eg, eh))
+    thin = p[o + P_THIN] > 0.0
+    # subsurface: Lambert, or when thin-walled the reflection half of the thin-walled mix
+    # (QON, colour^2 (1 - g)/2)
+    w_sss = opaque * S * 0.5 * color * (1.0 - g) if thin else opaque * S
+    e_sss = color * Eq if thin else color
+    w = (opaque * (1.0 - S) * p[o + P_BASE_WEIGHT],          # DIFFUSE
+         diel * p[o + P_SPEC_COLOR + c],                      # SPECULAR
+         base * M * p[o + P_SPEC_WEIGHT],                     # METAL
+         sub * Tw,                                            # TRANSMISSION
+         w_sss,                                               # SUBSURFACE
+         opaque * S * 0.5 * color * (1.0 + g),                # SUBSURFACE_T
+         Tf * Cw,                                             # COAT
+         Fw * p[o + P_FUZZ_COLOR + c])                        # FUZZ
+    e = (diffuse_albedo(dmodel, p[o + P_BASE_COLOR + c], p[o + P_RHO_MS + c], eg, eh),
+         Es,
+         metal_albedo(p, o, c, E1s, E5s, E6s, ms),
+         p[o + P_TRANS_TINT + c],
+         e_sss,
+         color,
+         Ec,
+         Ef)
+    return w, e
 
 
 @kernel
@@ -501,25 +508,21 @@ def score(sel, w0, w1, w2, e0, e1, e2):
 
 
 @kernel
-def lobe_score(k, p, o, st, mu, dmodel, ms, sel):
-    w0, e0 = lobe_weight_albedo(k, 0, p, o, st, mu, dmodel, ms)
-    w1, e1 = lobe_weight_albedo(k, 1, p, o, st, mu, dmodel, ms)
-    w2, e2 = lobe_weight_albedo(k, 2, p, o, st, mu, dmodel, ms)
-    return score(sel, w0, w1, w2, e0, e1, e2)
+def all_scores(active, p, o, st, dmodel, ms, sel):
+    """The 8 lobe selection scores (0 for inactive slots) as a tuple, computed once per row
+    from one ``weights_albedos`` pass per channel."""
+    w0, e0 = weights_albedos(0, p, o, st, dmodel, ms)
+    w1, e1 = weights_albedos(1, p, o, st, dmodel, ms)
+    w2, e2 = weights_albedos(2, p, o, st, dmodel, ms)
+    return (_score_of(0, active, sel, w0, w1, w2, e0, e1, e2), _score_of(1, active, sel, w0, w1, w2, e0, e1, e2),
+            _score_of(2, active, sel, w0, w1, w2, e0, e1, e2), _score_of(3, active, sel, w0, w1, w2, e0, e1, e2),
+            _score_of(4, active, sel, w0, w1, w2, e0, e1, e2), _score_of(5, active, sel, w0, w1, w2, e0, e1, e2),
+            _score_of(6, active, sel, w0, w1, w2, e0, e1, e2), _score_of(7, active, sel, w0, w1, w2, e0, e1, e2))
 
 
 @kernel
-def _score_if(k, active, p, o, st, mu, dmodel, ms, sel):
-    return lobe_score(k, p, o, st, mu, dmodel, ms, sel) if active & (1 << k) else 0.0
-
-
-@kernel
-def all_scores(active, p, o, st, mu, dmodel, ms, sel):
-    """The 8 lobe scores (0 for inactive slots) as a tuple, computed once per row."""
-    return (_score_if(0, active, p, o, st, mu, dmodel, ms, sel), _score_if(1, active, p, o, st, mu, dmodel, ms, sel),
-            _score_if(2, active, p, o, st, mu, dmodel, ms, sel), _score_if(3, active, p, o, st, mu, dmodel, ms, sel),
-            _score_if(4, active, p, o, st, mu, dmodel, ms, sel), _score_if(5, active, p, o, st, mu, dmodel, ms, sel),
-            _score_if(6, active, p, o, st, mu, dmodel, ms, sel), _score_if(7, active, p, o, st, mu, dmodel, ms, sel))
+def _score_of(k, active, sel, w0, w1, w2, e0, e1, e2):
+    return score(sel, w0[k], w1[k], w2[k], e0[k], e1[k], e2[k]) if active & (1 << k) else 0.0
 
 
 @kernel
@@ -541,6 +544,9 @@ def _lobes_drive(active, dmodel, sel, ms, p, ps, wo, W, E, P):
         mu = min(max(oz, 0.0), 1.0)
         st = row_state(p, o, mu, dmodel, ms)
         up = oz > 0.0
+        w0, e0 = weights_albedos(0, p, o, st, dmodel, ms)
+        w1, e1 = weights_albedos(1, p, o, st, dmodel, ms)
+        w2, e2 = weights_albedos(2, p, o, st, dmodel, ms)
         S = 0.0
         K = 0
         for k in range(N_LOBES):
@@ -550,10 +556,9 @@ def _lobes_drive(active, dmodel, sel, ms, p, ps, wo, W, E, P):
                 E[b * _U(3) + _U(c)] = 0.0
             P[b] = 0.0
             if active & (1 << k):
-                for c in range(3):
-                    w, e = lobe_weight_albedo(k, c, p, o, st, mu, dmodel, ms)
-                    W[b * _U(3) + _U(c)] = w
-                    E[b * _U(3) + _U(c)] = e if up else 0.0
+                W[b * _U(3)], W[b * _U(3) + _U(1)], W[b * _U(3) + _U(2)] = w0[k], w1[k], w2[k]
+                if up:
+                    E[b * _U(3)], E[b * _U(3) + _U(1)], E[b * _U(3) + _U(2)] = e0[k], e1[k], e2[k]
                 s = score(sel, W[b * _U(3)], W[b * _U(3) + _U(1)], W[b * _U(3) + _U(2)],
                           E[b * _U(3)], E[b * _U(3) + _U(1)], E[b * _U(3) + _U(2)])
                 P[b] = s
@@ -575,14 +580,14 @@ def _albedo_drive(active, dmodel, ms, p, ps, wo, out):
         st = row_state(p, o, mu, dmodel, ms)
         a0 = a1 = a2 = 0.0
         if oz > 0.0:
+            w0, e0 = weights_albedos(0, p, o, st, dmodel, ms)
+            w1, e1 = weights_albedos(1, p, o, st, dmodel, ms)
+            w2, e2 = weights_albedos(2, p, o, st, dmodel, ms)
             for k in range(N_LOBES):
                 if active & (1 << k):
-                    w, e = lobe_weight_albedo(k, 0, p, o, st, mu, dmodel, ms)
-                    a0 += w * e
-                    w, e = lobe_weight_albedo(k, 1, p, o, st, mu, dmodel, ms)
-                    a1 += w * e
-                    w, e = lobe_weight_albedo(k, 2, p, o, st, mu, dmodel, ms)
-                    a2 += w * e
+                    a0 += w0[k] * e0[k]
+                    a1 += w1[k] * e1[k]
+                    a2 += w2[k] * e2[k]
         out[j] = a0
         out[j + _U(1)] = a1
         out[j + _U(2)] = a2
@@ -603,18 +608,18 @@ def _eval_drive(active, only, dmodel, ms, p, ps, wi, wo, out):
         if uses_base_ggx(active):
             m, c = mf.reflection(ix, iy, iz, ox, oy, oz, p[o + P_ALPHA_S])
         if oz > 0.0:
+            w0, _ = weights_albedos(0, p, o, st, dmodel, ms)
+            w1, _ = weights_albedos(1, p, o, st, dmodel, ms)
+            w2, _ = weights_albedos(2, p, o, st, dmodel, ms)
             for k in range(N_LOBES):
                 if (active & (1 << k)) and (only < 0 or only == k):
                     f0, f1, f2 = lobe_f(k, p, o, st, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c)
                     if only >= 0:
                         a0, a1, a2 = f0, f1, f2
                     else:
-                        w, _ = lobe_weight_albedo(k, 0, p, o, st, mu, dmodel, ms)
-                        a0 += w * f0
-                        w, _ = lobe_weight_albedo(k, 1, p, o, st, mu, dmodel, ms)
-                        a1 += w * f1
-                        w, _ = lobe_weight_albedo(k, 2, p, o, st, mu, dmodel, ms)
-                        a2 += w * f2
+                        a0 += w0[k] * f0
+                        a1 += w1[k] * f1
+                        a2 += w2[k] * f2
         out[j] = a0
         out[j + _U(1)] = a1
         out[j + _U(2)] = a2
@@ -638,15 +643,15 @@ def _pdf_drive(active, dmodel, sel, ms, vndf, p, ps, wo, wi, out):
             pdf_s = 0.0
             if uses_base_ggx(active):
                 pdf_s = mf.reflection_pdf(ix, iy, iz, ox, oy, oz, p[o + P_ALPHA_S], vndf)
+            ss = all_scores(active, p, o, st, dmodel, ms, sel)
             S = 0.0
             flat = 0.0
             K = 0
             for k in range(N_LOBES):
                 if active & (1 << k):
-                    sk_ = lobe_score(k, p, o, st, mu, dmodel, ms, sel)
                     pk = lobe_pdf(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, vndf, pdf_s)
-                    num += sk_ * pk
-                    S += sk_
+                    num += ss[k] * pk
+                    S += ss[k]
                     flat += pk
                     K += 1
             q = num / S if S > 0.0 else flat / K
@@ -666,7 +671,7 @@ def _sample_drive(active, dmodel, sel, ms, vndf, p, ps, wo, u, wi, out):
         ox, oy, oz = _F(wo[j]), _F(wo[j + _U(1)]), _F(wo[j + _U(2)])
         mu = min(max(oz, 0.0), 1.0)
         st = row_state(p, o, mu, dmodel, ms)
-        ss = all_scores(active, p, o, st, mu, dmodel, ms, sel)
+        ss = all_scores(active, p, o, st, dmodel, ms, sel)
         S = 0.0
         K = 0
         for k in range(N_LOBES):
