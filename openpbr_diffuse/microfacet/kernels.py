@@ -73,34 +73,44 @@ def reflection_pdf(ix, iy, iz, ox, oy, oz, alpha, vndf):
 
 
 @kernel
+def ggx_visible_normal(vx, vy, vz, alpha, u1, u2):
+    """A GGX microfacet normal h drawn from the visible normals D_v(h) ~ <v, h>_+ D(h) of the
+    unit direction v, from (u1, u2) in [0, 1)^2 (Heitz 2018, "Sampling the GGX distribution
+    of visible normals", Listing 1): stretch v to alpha = 1, sample the projected
+    hemisphere, unstretch.  Exact for v below the horizon too (the microsurface walks of
+    ``simulation.smith`` use that)."""
+    sx, sy, sz = alpha * vx, alpha * vy, vz
+    inv = 1.0 / math.sqrt(sx * sx + sy * sy + sz * sz)
+    sx, sy, sz = sx * inv, sy * inv, sz * inv
+    lensq = sx * sx + sy * sy
+    if lensq > 0.0:
+        il = 1.0 / math.sqrt(lensq)
+        t1x, t1y, t1z = -sy * il, sx * il, 0.0
+    else:
+        t1x, t1y, t1z = 1.0, 0.0, 0.0
+    t2x, t2y, t2z = sy * t1z - sz * t1y, sz * t1x - sx * t1z, sx * t1y - sy * t1x
+    r = math.sqrt(u1)
+    cp, sp = cos_sin_2pi(u2)
+    p1 = r * cp
+    p2 = r * sp
+    s = 0.5 * (1.0 + sz)
+    p2 = (1.0 - s) * math.sqrt(max(0.0, 1.0 - p1 * p1)) + s * p2
+    p3 = math.sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2))
+    nx = p1 * t1x + p2 * t2x + p3 * sx
+    ny = p1 * t1y + p2 * t2y + p3 * sy
+    nz = p1 * t1z + p2 * t2z + p3 * sz
+    hx, hy, hz = alpha * nx, alpha * ny, max(0.0, nz)
+    inv = 1.0 / math.sqrt(hx * hx + hy * hy + hz * hz)
+    return hx * inv, hy * inv, hz * inv
+
+
+@kernel
 def sample_reflection(ox, oy, oz, alpha, u1, u2, vndf):
     """(wi.x, wi.y, wi.z, ok): wi = reflect(wo, h), h from the visible normals (Heitz 2018,
     Listing 1) or the NDF (Walter 2007 Eq. 35-36).  ok is False when the sample fails
     (NDF: h facing away from wo); wi may lie below the horizon (f = 0 there)."""
     if vndf:
-        vx, vy, vz = alpha * ox, alpha * oy, oz
-        inv = 1.0 / math.sqrt(vx * vx + vy * vy + vz * vz)
-        vx, vy, vz = vx * inv, vy * inv, vz * inv
-        lensq = vx * vx + vy * vy
-        if lensq > 0.0:
-            il = 1.0 / math.sqrt(lensq)
-            t1x, t1y, t1z = -vy * il, vx * il, 0.0
-        else:
-            t1x, t1y, t1z = 1.0, 0.0, 0.0
-        t2x, t2y, t2z = vy * t1z - vz * t1y, vz * t1x - vx * t1z, vx * t1y - vy * t1x
-        r = math.sqrt(u1)
-        cp, sp = cos_sin_2pi(u2)
-        p1 = r * cp
-        p2 = r * sp
-        s = 0.5 * (1.0 + vz)
-        p2 = (1.0 - s) * math.sqrt(max(0.0, 1.0 - p1 * p1)) + s * p2
-        p3 = math.sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2))
-        nx = p1 * t1x + p2 * t2x + p3 * vx
-        ny = p1 * t1y + p2 * t2y + p3 * vy
-        nz = p1 * t1z + p2 * t2z + p3 * vz
-        hx, hy, hz = alpha * nx, alpha * ny, max(0.0, nz)
-        inv = 1.0 / math.sqrt(hx * hx + hy * hy + hz * hz)
-        hx, hy, hz = hx * inv, hy * inv, hz * inv
+        hx, hy, hz = ggx_visible_normal(ox, oy, oz, alpha, u1, u2)
     else:
         a2 = alpha * alpha
         cos2 = (1.0 - u1) / (1.0 + (a2 - 1.0) * u1)

@@ -31,6 +31,7 @@ import math
 
 import numpy as np
 
+from ..microfacet.kernels import ggx_visible_normal
 from ._common import INV_PI, PI, cosine_about, inline, order_class
 
 BECKMANN = 0
@@ -137,6 +138,8 @@ def _beckmann_visible_slope_x(cos_t, sin_t):
 @inline
 def sample_visible_normal(vx, vy, vz, alpha, dist):
     """A microfacet normal drawn from D_v(m) ~ <v, m>_+ D(m) (v may point downwards)."""
+    if dist == GGX:
+        return ggx_visible_normal(vx, vy, vz, alpha, np.random.random(), np.random.random())
     # stretch to alpha = 1
     sx = alpha * vx
     sy = alpha * vy
@@ -144,31 +147,6 @@ def sample_visible_normal(vx, vy, vz, alpha, dist):
     sx /= n
     sy /= n
     sz = vz / n
-    if dist == GGX:
-        lensq = sx * sx + sy * sy
-        if lensq > 0.0:
-            il = 1.0 / math.sqrt(lensq)
-            t1x, t1y, t1z = -sy * il, sx * il, 0.0
-        else:
-            t1x, t1y, t1z = 1.0, 0.0, 0.0
-        t2x = sy * t1z - sz * t1y
-        t2y = sz * t1x - sx * t1z
-        t2z = sx * t1y - sy * t1x
-        r = math.sqrt(np.random.random())
-        phi = 2.0 * PI * np.random.random()
-        a = r * math.cos(phi)
-        b = r * math.sin(phi)
-        s = 0.5 * (1.0 + sz)
-        b = (1.0 - s) * math.sqrt(max(0.0, 1.0 - a * a)) + s * b
-        w = math.sqrt(max(0.0, 1.0 - a * a - b * b))
-        nx = a * t1x + b * t2x + w * sx
-        ny = a * t1y + b * t2y + w * sy
-        nz = a * t1z + b * t2z + w * sz
-        mx = alpha * nx
-        my = alpha * ny
-        mz = max(nz, 0.0)
-        il = 1.0 / math.sqrt(mx * mx + my * my + mz * mz)
-        return mx * il, my * il, mz * il
     # Beckmann: visible slope in the frame of the stretched view, then rotate and unstretch
     sin_t = math.sqrt(sx * sx + sy * sy)
     x = _beckmann_visible_slope_x(sz, sin_t)
