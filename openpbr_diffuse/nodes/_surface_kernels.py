@@ -508,12 +508,20 @@ def score(sel, w0, w1, w2, e0, e1, e2):
 
 
 @kernel
-def all_scores(active, p, o, st, dmodel, ms, sel):
-    """The 8 lobe selection scores (0 for inactive slots) as a tuple, computed once per row
-    from one ``weights_albedos`` pass per channel."""
+def weights_albedos_rgb(p, o, st, dmodel, ms):
+    """``weights_albedos`` in the three channels: (w_r, w_g, w_b, E_r, E_g, E_b), each a
+    tuple over the 8 lobe slots."""
     w0, e0 = weights_albedos(0, p, o, st, dmodel, ms)
     w1, e1 = weights_albedos(1, p, o, st, dmodel, ms)
     w2, e2 = weights_albedos(2, p, o, st, dmodel, ms)
+    return w0, w1, w2, e0, e1, e2
+
+
+@kernel
+def all_scores(active, p, o, st, dmodel, ms, sel):
+    """The 8 lobe selection scores (0 for inactive slots) as a tuple, computed once per row
+    from one ``weights_albedos`` pass per channel."""
+    w0, w1, w2, e0, e1, e2 = weights_albedos_rgb(p, o, st, dmodel, ms)
     return (_score_of(0, active, sel, w0, w1, w2, e0, e1, e2), _score_of(1, active, sel, w0, w1, w2, e0, e1, e2),
             _score_of(2, active, sel, w0, w1, w2, e0, e1, e2), _score_of(3, active, sel, w0, w1, w2, e0, e1, e2),
             _score_of(4, active, sel, w0, w1, w2, e0, e1, e2), _score_of(5, active, sel, w0, w1, w2, e0, e1, e2),
@@ -544,9 +552,7 @@ def _lobes_drive(active, dmodel, sel, ms, p, ps, wo, W, E, P):
         mu = min(max(oz, 0.0), 1.0)
         st = row_state(p, o, mu, dmodel, ms)
         up = oz > 0.0
-        w0, e0 = weights_albedos(0, p, o, st, dmodel, ms)
-        w1, e1 = weights_albedos(1, p, o, st, dmodel, ms)
-        w2, e2 = weights_albedos(2, p, o, st, dmodel, ms)
+        w0, w1, w2, e0, e1, e2 = weights_albedos_rgb(p, o, st, dmodel, ms)
         S = 0.0
         K = 0
         for k in range(N_LOBES):
@@ -580,9 +586,7 @@ def _albedo_drive(active, dmodel, ms, p, ps, wo, out):
         st = row_state(p, o, mu, dmodel, ms)
         a0 = a1 = a2 = 0.0
         if oz > 0.0:
-            w0, e0 = weights_albedos(0, p, o, st, dmodel, ms)
-            w1, e1 = weights_albedos(1, p, o, st, dmodel, ms)
-            w2, e2 = weights_albedos(2, p, o, st, dmodel, ms)
+            w0, w1, w2, e0, e1, e2 = weights_albedos_rgb(p, o, st, dmodel, ms)
             for k in range(N_LOBES):
                 if active & (1 << k):
                     a0 += w0[k] * e0[k]
@@ -608,9 +612,7 @@ def _eval_drive(active, only, dmodel, ms, p, ps, wi, wo, out):
         if uses_base_ggx(active):
             m, c = mf.reflection(ix, iy, iz, ox, oy, oz, p[o + P_ALPHA_S])
         if oz > 0.0:
-            w0, _ = weights_albedos(0, p, o, st, dmodel, ms)
-            w1, _ = weights_albedos(1, p, o, st, dmodel, ms)
-            w2, _ = weights_albedos(2, p, o, st, dmodel, ms)
+            w0, w1, w2, _, _, _ = weights_albedos_rgb(p, o, st, dmodel, ms)
             for k in range(N_LOBES):
                 if (active & (1 << k)) and (only < 0 or only == k):
                     f0, f1, f2 = lobe_f(k, p, o, st, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c)
@@ -750,14 +752,6 @@ def tables():
     return C, R
 
 
-def _one_row(d):
-    """One row of a direction argument as the flat read-only buffer ``_launch.rows`` gives
-    (so that the serial driver keeps one compiled signature)."""
-    b = np.ascontiguousarray(d).reshape(-1).view()
-    b.flags.writeable = False
-    return b
-
-
 def _run(f, head, params, lead, dirs, outs):
     """Run driver f over the rows of ``lead``: ``params`` is one material (stride 0, never
     copied or tiled) or materials broadcasting to ``lead`` (stride N_PARAMS, expanded)."""
@@ -765,7 +759,7 @@ def _run(f, head, params, lead, dirs, outs):
     if n == 0:
         return
     if params.ndim == 1 and n == 1:   # one material, one row (lobes(wo) of a material): no batch machinery
-        _DRIVERS[f][1](*head, params, 0, *(_one_row(d) for d, _ in dirs), *(o for o, _ in outs))
+        _DRIVERS[f][1](*head, params, 0, *(rows(d, lead, k)[0] for d, k in dirs), *(o for o, _ in outs))
         return
     if params.ndim == 1:
         inputs = []
