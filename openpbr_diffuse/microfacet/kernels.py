@@ -9,6 +9,12 @@ checks these against the NumPy forms and both against quadrature.
 - Lambda(mu) = (sqrt(1 + alpha^2 (1 - mu^2)/mu^2) - 1)/2, G2 = 1/(1 + Lambda_i + Lambda_o)
 - f = F(wo.h) D G2 / (4 mu_i mu_o); visible-normal sampling (Heitz 2018, Listing 1) with
   pdf G1(wo) D / (4 mu_o), or NDF sampling with pdf D mu_h / (4 wo.h).
+
+The kernels write these with the fewest divisions and square roots (they bound the
+per-row cost of the surface's drivers, which are not vectorised): D of an unnormalised half
+vector (``ndf_fraction``), Lambda as mu (1 + 2 Lambda) = sqrt(mu^2 + alpha^2 (1 - mu^2))
+(``lambda_root``), and each verb's factors folded into one division.  ``ggx`` (NumPy, the
+textbook forms) is the independent check.
 """
 import math
 
@@ -24,68 +30,74 @@ def alpha_of(roughness):
 
 
 @kernel
-def ndf(mu_h, alpha):
-    """GGX D(h) for mu_h = h.z (0 for mu_h <= 0)."""
-    a2 = alpha * alpha
-    d = mu_h * mu_h * (a2 - 1.0) + 1.0
-    return a2 * INV_PI / (d * d) if mu_h > 0.0 else 0.0
+def ndf_fraction(hx, hy, hz, a2):
+    """(num, den) with the GGX D(h) = num / den for the half vector h = (hx, hy, hz) of any
+    length, hz > 0, alpha^2 = a2; callers fold den into their one division.
+
+    D = a2 / (pi (mu_h^2 (a2 - 1) + 1)^2) with mu_h = hz/|h| is, multiplied out by |h|^4,
+    a2 |h|^4 / (pi (hx^2 + hy^2 + a2 hz^2)^2): h needs no normalising, and the denominator
+    has no cancellation when h is near the normal and alpha is small."""
+    n2 = hx * hx + hy * hy + hz * hz
+    dd = hx * hx + hy * hy + a2 * hz * hz
+    return a2 * INV_PI * (n2 * n2), dd * dd
 
 
 @kernel
-def smith_lambda(mu, alpha):
-    """Smith Lambda of GGX for mu > 0."""
-    mu2 = mu * mu
-    return 0.5 * (math.sqrt(1.0 + alpha * alpha * (1.0 - mu2) / mu2) - 1.0)
+def lambda_root(mu, a2):
+    """sqrt(mu^2 + a2 (1 - mu^2)) = mu (1 + 2 Lambda(mu)) for mu > 0: Smith's Lambda without
+    its division by mu."""
+    return math.sqrt(mu * mu + a2 * (1.0 - mu * mu))
 
 
 @kernel
 def reflection(ix, iy, iz, ox, oy, oz, alpha):
     """(D G2 / (4 mu_i mu_o), wo.h): the GGX BRDF without its Fresnel factor, and the cosine
-    for the Fresnel factor; 0 unless both directions and the half vector are above the horizon."""
+    for the Fresnel factor; 0 unless both directions and the half vector are above the horizon.
+
+    With the height-correlated G2 = 1/(1 + Lambda_i + Lambda_o) and mu (1 + 2 Lambda(mu))
+    = ``lambda_root``, G2 / (4 mu_i mu_o) = 1 / (2 (mu_o root_i + mu_i root_o))."""
     hx, hy, hz = ix + ox, iy + oy, iz + oz
     n2 = hx * hx + hy * hy + hz * hz
     if not (iz > 0.0 and oz > 0.0 and n2 > 0.0):
         return 0.0, 0.0
-    inv = 1.0 / math.sqrt(n2)
-    mu_h = hz * inv
-    c = min(max((ox * hx + oy * hy + oz * hz) * inv, 0.0), 1.0)
-    g2 = 1.0 / (1.0 + smith_lambda(iz, alpha) + smith_lambda(oz, alpha))
-    return ndf(mu_h, alpha) * g2 / (4.0 * iz * oz), c
+    a2 = alpha * alpha
+    c = min(max((ox * hx + oy * hy + oz * hz) / math.sqrt(n2), 0.0), 1.0)
+    num, den = ndf_fraction(hx, hy, hz, a2)
+    return num / (den * 2.0 * (oz * lambda_root(iz, a2) + iz * lambda_root(oz, a2))), c
 
 
 @kernel
 def reflection_pdf(ix, iy, iz, ox, oy, oz, alpha, vndf):
     """Solid-angle pdf of the reflected direction wi (whole sphere) given wo; 0 if mu_o <= 0
-    or the half vector is below the horizon or faces away from wo."""
+    or the half vector is below the horizon or faces away from wo.
+
+    VNDF: G1(wo) D / (4 mu_o) = D / (2 (mu_o + root_o)) (``lambda_root``); NDF: D mu_h /
+    (4 wo.h) = D h.z / (4 wo.(h |h|)), h unnormalised: one division, no square root but
+    Lambda's."""
     hx, hy, hz = ix + ox, iy + oy, iz + oz
-    n2 = hx * hx + hy * hy + hz * hz
-    if not (oz > 0.0 and n2 > 0.0):
+    oh = ox * hx + oy * hy + oz * hz
+    if not (oz > 0.0 and hz > 0.0 and oh > 0.0):
         return 0.0
-    inv = 1.0 / math.sqrt(n2)
-    mu_h = hz * inv
-    c = (ox * hx + oy * hy + oz * hz) * inv
-    if not (mu_h > 0.0 and c > 0.0):
-        return 0.0
-    D = ndf(mu_h, alpha)
+    a2 = alpha * alpha
+    num, den = ndf_fraction(hx, hy, hz, a2)
     if vndf:
-        return D / ((1.0 + smith_lambda(oz, alpha)) * 4.0 * oz)
-    return D * mu_h / (4.0 * c)
+        return num / (den * 2.0 * (oz + lambda_root(oz, a2)))
+    return num * hz / (den * 4.0 * oh)
 
 
 @kernel
-def ggx_visible_normal(vx, vy, vz, alpha, u1, u2):
-    """A GGX microfacet normal h drawn from the visible normals D_v(h) ~ <v, h>_+ D(h) of the
-    unit direction v, from (u1, u2) in [0, 1)^2 (Heitz 2018, "Sampling the GGX distribution
-    of visible normals", Listing 1): stretch v to alpha = 1, sample the projected
-    hemisphere, unstretch.  Exact for v below the horizon too (the microsurface walks of
-    ``simulation.smith`` use that)."""
+def ggx_visible_normal_h(vx, vy, vz, alpha, u1, u2):
+    """(hx, hy, hz, |h|^2): the microfacet normal of ``ggx_visible_normal`` before its final
+    normalisation (a caller that reflects about it divides by |h|^2 instead)."""
     sx, sy, sz = alpha * vx, alpha * vy, vz
     inv = 1.0 / math.sqrt(sx * sx + sy * sy + sz * sz)
     sx, sy, sz = sx * inv, sy * inv, sz * inv
-    lensq = sx * sx + sy * sy
+    # T1 = (-s.y, s.x, 0)/|s.xy| = (-v.y, v.x, 0)/|v.xy|: from v, so that its square root
+    # and division run beside the stretch's, not after them
+    lensq = vx * vx + vy * vy
     if lensq > 0.0:
         il = 1.0 / math.sqrt(lensq)
-        t1x, t1y, t1z = -sy * il, sx * il, 0.0
+        t1x, t1y, t1z = -vy * il, vx * il, 0.0
     else:
         t1x, t1y, t1z = 1.0, 0.0, 0.0
     t2x, t2y, t2z = sy * t1z - sz * t1y, sz * t1x - sx * t1z, sx * t1y - sy * t1x
@@ -100,7 +112,18 @@ def ggx_visible_normal(vx, vy, vz, alpha, u1, u2):
     ny = p1 * t1y + p2 * t2y + p3 * sy
     nz = p1 * t1z + p2 * t2z + p3 * sz
     hx, hy, hz = alpha * nx, alpha * ny, max(0.0, nz)
-    inv = 1.0 / math.sqrt(hx * hx + hy * hy + hz * hz)
+    return hx, hy, hz, hx * hx + hy * hy + hz * hz
+
+
+@kernel
+def ggx_visible_normal(vx, vy, vz, alpha, u1, u2):
+    """A GGX microfacet normal h drawn from the visible normals D_v(h) ~ <v, h>_+ D(h) of the
+    unit direction v, from (u1, u2) in [0, 1)^2 (Heitz 2018, "Sampling the GGX distribution
+    of visible normals", Listing 1): stretch v to alpha = 1, sample the projected
+    hemisphere, unstretch.  Exact for v below the horizon too (the microsurface walks of
+    ``simulation.smith`` use that)."""
+    hx, hy, hz, n2 = ggx_visible_normal_h(vx, vy, vz, alpha, u1, u2)
+    inv = 1.0 / math.sqrt(n2)
     return hx * inv, hy * inv, hz * inv
 
 
@@ -108,23 +131,25 @@ def ggx_visible_normal(vx, vy, vz, alpha, u1, u2):
 def sample_reflection(ox, oy, oz, alpha, u1, u2, vndf):
     """(wi.x, wi.y, wi.z, ok): wi = reflect(wo, h), h from the visible normals (Heitz 2018,
     Listing 1) or the NDF (Walter 2007 Eq. 35-36).  ok is False when the sample fails
-    (NDF: h facing away from wo); wi may lie below the horizon (f = 0 there)."""
+    (NDF: h facing away from wo); wi may lie below the horizon (f = 0 there).
+
+    wi = 2 (wo.h) h / |h|^2 - wo for the unnormalised h: one division, and wi is a unit
+    vector to rounding (|wo| = 1), so it is not normalised again."""
     if vndf:
-        hx, hy, hz = ggx_visible_normal(ox, oy, oz, alpha, u1, u2)
+        hx, hy, hz, n2 = ggx_visible_normal_h(ox, oy, oz, alpha, u1, u2)
     else:
         a2 = alpha * alpha
         cos2 = (1.0 - u1) / (1.0 + (a2 - 1.0) * u1)
         ct = math.sqrt(cos2)
         st = math.sqrt(max(0.0, 1.0 - cos2))
         cp, sp = cos_sin_2pi(u2)
-        hx, hy, hz = st * cp, st * sp, ct
+        hx, hy, hz, n2 = st * cp, st * sp, ct, 1.0
     d = ox * hx + oy * hy + oz * hz
-    x, y, z = 2.0 * d * hx - ox, 2.0 * d * hy - oy, 2.0 * d * hz - oz
-    inv = 1.0 / math.sqrt(x * x + y * y + z * z)
-    return x * inv, y * inv, z * inv, d > 0.0
+    f = 2.0 * d / n2
+    return f * hx - ox, f * hy - oy, f * hz - oz, d > 0.0
 
 
 @kernel
 def multiscatter(F0, E1, on):
     """Turquin 2019 factor 1 + F0 (1 - E1)/E1 (1 when ``on`` is False)."""
-    return 1.0 + F0 * (1.0 - E1) / E1 if on else 1.0
+    return 1.0 + F0 * ((1.0 - E1) / E1) if on else 1.0

@@ -11,7 +11,7 @@ f_EON = f_FON + f_ms with
 single-scattering FON term is the same in both.
 """
 from .._jit import EPS, INV_PI, kernel
-from .fon import E_F, E_F_avg, E_F_avg_of, fon_terms
+from .fon import E_F, E_F_avg, E_F_avg_of, fon_A, fon_shape_albedo, fon_terms
 
 
 @kernel
@@ -31,6 +31,23 @@ def eon_terms(mu_i, mu_o, s, r, approx):
 
 
 @kernel
+def eon_albedo_fit(r):
+    """(A_F, B_F = r A_F, s_h): the part of the exact E_EON(mu) (Eq. 20) that depends on r
+    alone, for ``eon_albedo_at`` (once per material when r is fixed): E_F = A_F + B_F G_F/pi
+    (Eq. 12-13) and e_h = max(eps, 1 - E_F) s_h, s_h = (1 - <E_F>) / max(eps, 1 - <E_F>)."""
+    A = fon_A(r)
+    avg = E_F_avg(r)
+    return A, r * A, (1.0 - avg) / max(EPS, 1.0 - avg)
+
+
+@kernel
+def eon_albedo_at(mu, A, B, s_h):
+    """(e_g, e_h) of E_EON(mu) = rho e_g + rho_ms e_h (Eq. 20) from ``eon_albedo_fit``."""
+    e = fon_shape_albedo(mu, A, B)
+    return e, max(EPS, 1.0 - e) * s_h
+
+
+@kernel
 def eon_albedo_terms(mu, r, approx):
     """Return (e_g, e_h, <E_F>) with E_EON(mu) = rho e_g + rho_ms e_h.
 
@@ -43,8 +60,11 @@ def eon_albedo_terms(mu, r, approx):
     fit exceeds 1, which this closed form ignores (4e-10, resolved in the reference tables).
     """
     avg = E_F_avg(r)
-    e_used = E_F(mu, r, approx)
-    e_h = max(EPS, 1.0 - e_used) * (1.0 - E_F_avg_of(r, approx)) / max(EPS, 1.0 - avg)
+    if not approx:
+        A, B, s_h = eon_albedo_fit(r)
+        e_g, e_h = eon_albedo_at(mu, A, B, s_h)
+        return e_g, e_h, avg
+    e_h = max(EPS, 1.0 - E_F(mu, r, approx)) * (1.0 - E_F_avg_of(r, approx)) / max(EPS, 1.0 - avg)
     return E_F(mu, r, False), e_h, avg
 
 

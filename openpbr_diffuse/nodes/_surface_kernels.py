@@ -26,12 +26,12 @@ from ..microfacet import fresnel
 from ..microfacet import kernels as mf
 from ..microfacet.sheen import sheen_albedo_at, sheen_albedo_fit, sheen_density, sheen_sample
 from ..microfacet.tables import MU_AXIS, R_AXIS, X_AXIS, catmull_rom_at, node_at
-from ..models.eon import eon_albedo_terms, eon_terms, rho_ms
+from ..models.eon import eon_albedo_at, eon_albedo_fit, eon_terms, rho_ms
 from ..models.fon import E_F_avg
 from ..models.qon import qon_AB, qon_albedo, qon_terms
 from ..sampling.ltc import from_frame, ltc_frame, to_frame
 from ..sampling.mis import eon_pdf, eon_sample, pow_tenth
-from ..sampling.simple import cosine_pdf, cosine_sample_local
+from ..sampling.simple import U_MAX, cosine_pdf, cosine_sample_local
 
 DIFFUSE, SPECULAR, METAL, TRANSMISSION, SUBSURFACE, SUBSURFACE_T, COAT, FUZZ = range(8)
 N_LOBES = 8
@@ -92,7 +92,16 @@ P_E1C = P_E6S + N_CCURVE
 P_R_TENTH = P_E1C + N_CCURVE   # base_diffuse_roughness^0.1 (the EON sampler's P_u)
 P_RHO_MS = P_R_TENTH + 1       # 3: rho_ms(base_color, <E_F>) of the EON lobe (Eq. 18)
 P_SHEEN_FIT = P_RHO_MS + 3     # 3: (s, m, o) of the fuzz albedo fit at fuzz_roughness
-N_PARAMS = P_SHEEN_FIT + 3
+# every lobe's weight is a layer factor of mu_o times a constant of the material,
+# w_k[c](wo) = L_k(wo) K_k[c] (``layer_factors``); the selection scores |w_k E_k| then
+# reduce to constants of the material times functions of mu_o (``all_scores``)
+P_K = P_SHEEN_FIT + 3          # 8 x 3: K_k[c]
+P_SC = P_K + 3 * N_LOBES       # 8 x 2: |K_k e_k| and max_c |K_k[c] e_k[c]| for the lobes whose albedo is
+                               # a constant colour e_k or a scalar times 1 (e_k = 1)
+P_DQ = P_SC + 2 * N_LOBES      # 3: |K rho|^2, (K rho).(K rho_ms), |K rho_ms|^2 of the diffuse lobe
+P_EON_FIT = P_DQ + 3           # 3: (A_F, B_F, s_h) of the EON albedo at base_diffuse_roughness
+P_QON_AB = P_EON_FIT + 3       # 2: QON's (A, B) at base_diffuse_roughness (QON diffuse, thin-walled subsurface)
+N_PARAMS = P_QON_AB + 2
 
 
 # --------------------------------------------------------------------------- packing
@@ -149,6 +158,55 @@ def _conductor_curve(out, q, t, C, c):
     for m in range(N_CCURVE):
         out[q + m] = (out[t + 1] * C[ir, m, c] + out[t + 2] * C[ir + 1, m, c] + out[t + 3] * C[ir + 2, m, c]
                       + out[t + 4] * C[ir + 3, m, c])
+
+
+@kernel
+def _pack_weights(out, o):
+    """The material part K_k[c] of every lobe's weight (P_K), following the reference graph
+    (open_pbr_surface.mtlx): the base attenuated by the coat (P_BASE_MUL); metal /
+    dielectric by base_metalness; under the dielectric specular layer the substrate mixes
+    transmission, subsurface and diffuse; the subsurface lobe is Lambert, or when thin-walled
+    the reflection half of the thin-walled mix (QON, colour^2 (1 - g)/2) and SUBSURFACE_T its
+    translucent half.  Then the score constants (P_SC, P_DQ) of ``all_scores``."""
+    M, T, S, g = out[o + P_METAL], out[o + P_TRANS_W], out[o + P_SSS_W], out[o + P_SSS_ANISO]
+    thin = out[o + P_THIN] > 0.0
+    for c in range(3):
+        base = out[o + P_BASE_MUL + c]
+        diel = base * (1.0 - M)
+        opaque = diel * (1.0 - T)
+        color = out[o + P_SSS_COLOR + c]
+        K = (opaque * (1.0 - S) * out[o + P_BASE_WEIGHT],              # DIFFUSE
+             diel * out[o + P_SPEC_COLOR + c],                          # SPECULAR
+             base * M * out[o + P_SPEC_WEIGHT],                         # METAL
+             diel * T,                                                  # TRANSMISSION
+             opaque * S * 0.5 * color * (1.0 - g) if thin else opaque * S,   # SUBSURFACE
+             opaque * S * 0.5 * color * (1.0 + g),                      # SUBSURFACE_T
+             out[o + P_COAT_W],                                         # COAT
+             out[o + P_FUZZ_W] * out[o + P_FUZZ_COLOR + c])             # FUZZ
+        for k in range(N_LOBES):
+            out[o + P_K + 3 * k + c] = K[k]
+    for k in range(N_LOBES):
+        n2 = 0.0
+        mx = 0.0
+        for c in range(3):
+            e = 1.0   # SPECULAR, COAT, FUZZ (scalar albedos), and DIFFUSE, METAL (unused)
+            if k == TRANSMISSION:
+                e = out[o + P_TRANS_TINT + c]
+            elif k == SUBSURFACE or k == SUBSURFACE_T:
+                e = out[o + P_SSS_COLOR + c]
+            v = out[o + P_K + 3 * k + c] * e
+            n2 += v * v
+            mx = max(mx, abs(v))
+        out[o + P_SC + 2 * k] = math.sqrt(n2)
+        out[o + P_SC + 2 * k + 1] = mx
+    a = b = d = 0.0
+    for c in range(3):
+        x = out[o + P_K + c] * out[o + P_BASE_COLOR + c]
+        y = out[o + P_K + c] * out[o + P_RHO_MS + c]
+        a += x * x
+        b += x * y
+        d += y * y
+    out[o + P_DQ], out[o + P_DQ + 1], out[o + P_DQ + 2] = a, b, d
 
 
 def _pack_drive(raw, out, CT, RT):
@@ -208,6 +266,8 @@ def _pack_drive(raw, out, CT, RT):
         for c in range(3):
             out[o + P_RHO_MS + c] = rho_ms(raw[a + c], avg)
         out[o + P_SHEEN_FIT], out[o + P_SHEEN_FIT + 1], out[o + P_SHEEN_FIT + 2] = sheen_albedo_fit(raw[a + 33])
+        out[o + P_EON_FIT], out[o + P_EON_FIT + 1], out[o + P_EON_FIT + 2] = eon_albedo_fit(raw[a + 3])
+        out[o + P_QON_AB], out[o + P_QON_AB + 1] = qon_AB(raw[a + 3], 0.33)
         out[o + P_BASE_WEIGHT] = bw
         out[o + P_METAL] = M
         out[o + P_SPEC_WEIGHT] = sw
@@ -234,6 +294,7 @@ def _pack_drive(raw, out, CT, RT):
         _conductor_curve(out, o + P_E5S, o + P_TAB_S, CT, 1)
         _conductor_curve(out, o + P_E6S, o + P_TAB_S, CT, 2)
         _conductor_curve(out, o + P_E1C, o + P_TAB_C, CT, 0)
+        _pack_weights(out, o)
         # lobes that can be non-zero
         diel = 1.0 - M
         sc_any = raw[a + 6] > 0.0 or raw[a + 7] > 0.0 or raw[a + 8] > 0.0
@@ -273,15 +334,15 @@ def layer_albedos(p, o, e1, e5, e6, q, mu, x, ms):
 
 
 @kernel
-def diffuse_albedo_terms(dmodel, mu, r):
-    """(e_g, e_h, <E_F>) of the diffuse lobe's albedo rho e_g + m(rho) e_h (channel-free):
-    EON Eq. 20 (m = rho_ms), QON Eq. 8 or Lambert (m = 0)."""
+def diffuse_albedo_terms(dmodel, p, o, mu):
+    """(e_g, e_h) of the diffuse lobe's albedo rho e_g + m(rho) e_h (channel-free): EON
+    Eq. 20 (m = rho_ms), QON Eq. 8 or Lambert (m = 0), from the material's fits (P_EON_FIT,
+    P_QON_AB)."""
     if dmodel == D_EON:
-        return eon_albedo_terms(mu, r, False)
+        return eon_albedo_at(mu, p[o + P_EON_FIT], p[o + P_EON_FIT + 1], p[o + P_EON_FIT + 2])
     if dmodel == D_QON:
-        A, B = qon_AB(r, 0.33)
-        return qon_albedo(mu, A, B), 0.0, 0.0
-    return 1.0, 0.0, 0.0
+        return qon_albedo(mu, p[o + P_QON_AB], p[o + P_QON_AB + 1]), 0.0
+    return 1.0, 0.0
 
 
 @kernel
@@ -303,9 +364,9 @@ def row_state(p, o, mu, dmodel, ms, albedos=True):
         Ef = sheen_albedo_at(mu, p[o + P_SHEEN_FIT], p[o + P_SHEEN_FIT + 1], p[o + P_SHEEN_FIT + 2])
     eg, eh = 0.0, 0.0
     if albedos:   # the weights do not need the diffuse albedos (eval does not)
-        eg, eh, _ = diffuse_albedo_terms(dmodel, mu, p[o + P_R_DIFF])
+        eg, eh = diffuse_albedo_terms(dmodel, p, o, mu)
     if albedos and p[o + P_THIN] > 0.0 and p[o + P_SSS_W] > 0.0:
-        Eq, _, _ = diffuse_albedo_terms(D_QON, mu, p[o + P_R_DIFF])
+        Eq, _ = diffuse_albedo_terms(D_QON, p, o, mu)
     return E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, Eq
 
 
@@ -325,63 +386,55 @@ def metal_albedo(p, o, c, E1, E5, E6, ms):
 
 
 @kernel
-def weights_albedos(c, p, o, st, dmodel, ms):
-    """((w_0, ..., w_7), (E_0, ..., E_7)): the mixture weight w_k(wo) and the albedo E_k(wo)
-    of every lobe slot in channel c, in one pass down the layer chain.
+def layer_factors(p, o, st):
+    """(L_0, ..., L_7): the part of each lobe's weight that depends on wo, w_k[c] = L_k K_k[c].
 
-    The weights follow the reference graph (open_pbr_surface.mtlx): fuzz over coat over the
-    base, each layer passing 1 - weight E_layer(mu_o) (albedo scaling); the base
-    attenuated by the coat (P_BASE_MUL); metal / dielectric by base_metalness; under the
-    dielectric specular layer the substrate mixes transmission, subsurface and diffuse.
-    Slots that are not active get the values the formulas give (the drivers skip them).
-    """
-    E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, Eq = st
-    Fw = p[o + P_FUZZ_W]
-    Cw = p[o + P_COAT_W]
-    Tf = 1.0 - Fw * Ef
-    base = Tf * (1.0 - Cw * Ec) * p[o + P_BASE_MUL + c]
-    M = p[o + P_METAL]
-    diel = base * (1.0 - M)
-    sub = diel * (1.0 - Es)
-    Tw = p[o + P_TRANS_W]
-    opaque = sub * (1.0 - Tw)
-    S = p[o + P_SSS_W]
-    color = p[o + P_SSS_COLOR + c]
-    g = p[o + P_SSS_ANISO]
-    thin = p[o + P_THIN] > 0.0
-    # subsurface: Lambert, or when thin-walled the reflection half of the thin-walled mix
-    # (QON, colour^2 (1 - g)/2)
-    w_sss = opaque * S * 0.5 * color * (1.0 - g) if thin else opaque * S
-    e_sss = color * Eq if thin else color
-    w = (opaque * (1.0 - S) * p[o + P_BASE_WEIGHT],          # DIFFUSE
-         diel * p[o + P_SPEC_COLOR + c],                      # SPECULAR
-         base * M * p[o + P_SPEC_WEIGHT],                     # METAL
-         sub * Tw,                                            # TRANSMISSION
-         w_sss,                                               # SUBSURFACE
-         opaque * S * 0.5 * color * (1.0 + g),                # SUBSURFACE_T
-         Tf * Cw,                                             # COAT
-         Fw * p[o + P_FUZZ_COLOR + c])                        # FUZZ
-    e = (diffuse_albedo(dmodel, p[o + P_BASE_COLOR + c], p[o + P_RHO_MS + c], eg, eh),
-         Es,
-         metal_albedo(p, o, c, E1s, E5s, E6s, ms),
-         p[o + P_TRANS_TINT + c],
-         e_sss,
-         color,
-         Ec,
-         Ef)
-    return w, e
+    Each layer passes 1 - weight E_layer(mu_o) of what lies beneath (albedo scaling): fuzz
+    over coat over the base, and the dielectric specular layer over transmission,
+    subsurface and diffuse (``_pack_weights`` holds the material part)."""
+    Es, Ec, Ef = st[3], st[5], st[6]
+    Tf = 1.0 - p[o + P_FUZZ_W] * Ef
+    Tb = Tf * (1.0 - p[o + P_COAT_W] * Ec)
+    Tu = Tb * (1.0 - Es)
+    return Tu, Tb, Tb, Tu, Tu, Tu, Tf, 1.0
 
 
 @kernel
-def diffuse_gh(dmodel, r, iz, oz, s):
+def lobe_albedos(c, p, o, st, dmodel, ms):
+    """(E_0, ..., E_7): the directional albedo E_k(wo) of every lobe slot in channel c."""
+    E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, Eq = st
+    color = p[o + P_SSS_COLOR + c]
+    return (diffuse_albedo(dmodel, p[o + P_BASE_COLOR + c], p[o + P_RHO_MS + c], eg, eh),
+            Es,
+            metal_albedo(p, o, c, E1s, E5s, E6s, ms),
+            p[o + P_TRANS_TINT + c],
+            color * Eq if p[o + P_THIN] > 0.0 else color,
+            color,
+            Ec,
+            Ef)
+
+
+@kernel
+def weights_albedos(c, p, o, st, dmodel, ms):
+    """((w_0, ..., w_7), (E_0, ..., E_7)): the mixture weight w_k(wo) = L_k K_k[c] and the
+    albedo E_k(wo) of every lobe slot in channel c.  Slots that are not active get the values
+    the formulas give (the drivers skip them)."""
+    L = layer_factors(p, o, st)
+    q = o + P_K + c
+    w = (L[0] * p[q], L[1] * p[q + 3], L[2] * p[q + 6], L[3] * p[q + 9], L[4] * p[q + 12], L[5] * p[q + 15],
+         L[6] * p[q + 18], L[7] * p[q + 21])
+    return w, lobe_albedos(c, p, o, st, dmodel, ms)
+
+
+@kernel
+def diffuse_gh(dmodel, p, o, iz, oz, s):
     """(g, h) of the diffuse lobe's BSDF f = rho g + rho_ms h, channel-free: EON Eq. 16-19,
-    QON Eq. 1 or Lambert (h = 0 for both)."""
+    QON Eq. 1 (the material's A, B: P_QON_AB) or Lambert (h = 0 for both)."""
     if dmodel == D_EON:
-        g, h, _ = eon_terms(iz, oz, s, r, False)
+        g, h, _ = eon_terms(iz, oz, s, p[o + P_R_DIFF], False)
         return g, h
     if dmodel == D_QON:
-        A, B = qon_AB(r, 0.33)
-        return qon_terms(iz, oz, s, A, B), 0.0
+        return qon_terms(iz, oz, s, p[o + P_QON_AB], p[o + P_QON_AB + 1]), 0.0
     return INV_PI, 0.0
 
 
@@ -397,11 +450,10 @@ def lobe_f(k, p, o, st, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c):
         if not up:
             return 0.0, 0.0, 0.0
         s = ix * ox + iy * oy + iz * oz - iz * oz
-        r = p[o + P_R_DIFF]
         if k == SUBSURFACE:
-            g, _ = diffuse_gh(D_QON if p[o + P_THIN] > 0.0 else D_LAMBERT, r, iz, oz, s)
+            g, _ = diffuse_gh(D_QON if p[o + P_THIN] > 0.0 else D_LAMBERT, p, o, iz, oz, s)
             return p[o + P_SSS_COLOR] * g, p[o + P_SSS_COLOR + 1] * g, p[o + P_SSS_COLOR + 2] * g
-        g, h = diffuse_gh(dmodel, r, iz, oz, s)
+        g, h = diffuse_gh(dmodel, p, o, iz, oz, s)
         return (p[o + P_BASE_COLOR] * g + p[o + P_RHO_MS] * h, p[o + P_BASE_COLOR + 1] * g + p[o + P_RHO_MS + 1] * h,
                 p[o + P_BASE_COLOR + 2] * g + p[o + P_RHO_MS + 2] * h)
     if k == SUBSURFACE_T:
@@ -470,9 +522,15 @@ def uses_base_ggx(active):
     return (active & ((1 << SPECULAR) | (1 << METAL))) != 0
 
 
+#: the lobes sampled through GGX visible normals (or the NDF): their sampler has no
+#: cheaper pdf than ``lobe_pdf``, which the mixture evaluates for every lobe anyway
+GGX_LOBES = (1 << SPECULAR) | (1 << METAL) | (1 << TRANSMISSION) | (1 << COAT)
+
+
 @kernel
 def lobe_sample(k, p, o, ox, oy, oz, u1, u2, dmodel, vndf):
-    """(x, y, z, pdf, ok): a direction from lobe k and its pdf (that of ``lobe_pdf``)."""
+    """(x, y, z, own, ok): a direction from lobe k and, outside ``GGX_LOBES``, the density
+    its sampler computed with it (that of ``lobe_pdf``; 0 for the GGX lobes)."""
     mu = min(max(oz, 0.0), 1.0)
     if k == DIFFUSE or k == SUBSURFACE or k == SUBSURFACE_T or k == FUZZ:
         Xx, Xy = ltc_frame(ox, oy)
@@ -490,21 +548,9 @@ def lobe_sample(k, p, o, ox, oy, oz, u1, u2, dmodel, vndf):
         return x, y, z, q, True
     alpha = p[o + P_ALPHA_C] if k == COAT else p[o + P_ALPHA_S]
     x, y, z, ok = mf.sample_reflection(ox, oy, oz, alpha, u1, u2, vndf)
-    q = mf.reflection_pdf(x, y, z, ox, oy, oz, alpha, vndf)
     if k == TRANSMISSION:
         z = -z
-    return x, y, z, q, ok
-
-
-@kernel
-def score(sel, w0, w1, w2, e0, e1, e2):
-    """Selection score |w * E| of a lobe: RGB length, largest component, or 1."""
-    a, b, c = w0 * e0, w1 * e1, w2 * e2
-    if sel == SEL_LENGTH:
-        return (a * a + b * b + c * c) ** 0.5
-    if sel == SEL_MAX:
-        return max(max(abs(a), abs(b)), abs(c))
-    return 1.0
+    return x, y, z, 0.0, ok
 
 
 @kernel
@@ -518,25 +564,68 @@ def weights_albedos_rgb(p, o, st, dmodel, ms):
 
 
 @kernel
-def all_scores(active, p, o, st, dmodel, ms, sel):
-    """The 8 lobe selection scores (0 for inactive slots) as a tuple, computed once per row
-    from one ``weights_albedos`` pass per channel."""
-    w0, w1, w2, e0, e1, e2 = weights_albedos_rgb(p, o, st, dmodel, ms)
-    return (_score_of(0, active, sel, w0, w1, w2, e0, e1, e2), _score_of(1, active, sel, w0, w1, w2, e0, e1, e2),
-            _score_of(2, active, sel, w0, w1, w2, e0, e1, e2), _score_of(3, active, sel, w0, w1, w2, e0, e1, e2),
-            _score_of(4, active, sel, w0, w1, w2, e0, e1, e2), _score_of(5, active, sel, w0, w1, w2, e0, e1, e2),
-            _score_of(6, active, sel, w0, w1, w2, e0, e1, e2), _score_of(7, active, sel, w0, w1, w2, e0, e1, e2))
+def _norm_or_max(mx, a, b, c):
+    """|(a, b, c)| (RGB length), or its largest component's magnitude when ``mx``."""
+    return max(max(abs(a), abs(b)), abs(c)) if mx else math.sqrt(a * a + b * b + c * c)
 
 
 @kernel
-def _score_of(k, active, sel, w0, w1, w2, e0, e1, e2):
-    return score(sel, w0[k], w1[k], w2[k], e0[k], e1[k], e2[k]) if active & (1 << k) else 0.0
+def all_scores(active, p, o, st, dmodel, ms, sel):
+    """The 8 lobe selection scores s_k = |w_k E_k| (0 for inactive slots) as a tuple: the RGB
+    length (SEL_LENGTH), the largest component (SEL_MAX) or 1 (SEL_UNIFORM).
+
+    With w_k = L_k K_k (``layer_factors``) most reduce to constants of the material
+    (``_pack_weights``): s_k = |L_k| E_k |K_k| for the lobes whose albedo is a scalar
+    (specular, coat, fuzz; the thin-walled subsurface's QON factor), |L_k| |K_k e_k| for a
+    constant colour e_k (transmission, subsurface), and for the diffuse lobe, whose albedo
+    is rho e_g + rho_ms e_h (Eq. 20), |L_0| sqrt(|K rho|^2 e_g^2 + 2 (K rho).(K rho_ms) e_g e_h
+    + |K rho_ms|^2 e_h^2) by length; only the metal lobe (and the diffuse one by max) is
+    summed over channels."""
+    E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, Eq = st
+    L = layer_factors(p, o, st)
+    uni = sel == SEL_UNIFORM
+    mx = sel == SEL_MAX
+    q = o + P_K
+    m = 1 if mx else 0
+    if mx:
+        sd = _norm_or_max(True, p[q] * diffuse_albedo(dmodel, p[o + P_BASE_COLOR], p[o + P_RHO_MS], eg, eh),
+                          p[q + 1] * diffuse_albedo(dmodel, p[o + P_BASE_COLOR + 1], p[o + P_RHO_MS + 1], eg, eh),
+                          p[q + 2] * diffuse_albedo(dmodel, p[o + P_BASE_COLOR + 2], p[o + P_RHO_MS + 2], eg, eh))
+    else:
+        sd = math.sqrt(max(p[o + P_DQ] * eg * eg + 2.0 * p[o + P_DQ + 1] * eg * eh + p[o + P_DQ + 2] * eh * eh, 0.0))
+    sm = 0.0
+    if active & (1 << METAL):
+        sm = _norm_or_max(mx, p[q + 6] * metal_albedo(p, o, 0, E1s, E5s, E6s, ms),
+                          p[q + 7] * metal_albedo(p, o, 1, E1s, E5s, E6s, ms),
+                          p[q + 8] * metal_albedo(p, o, 2, E1s, E5s, E6s, ms))
+    c = o + P_SC + m
+    s = (sd, Es * p[c + 2], sm, p[c + 6], p[c + 8] * (Eq if p[o + P_THIN] > 0.0 else 1.0), p[c + 10],
+         Ec * p[c + 12], Ef * p[c + 14])
+    return (_score_of(0, active, uni, L, s), _score_of(1, active, uni, L, s), _score_of(2, active, uni, L, s),
+            _score_of(3, active, uni, L, s), _score_of(4, active, uni, L, s), _score_of(5, active, uni, L, s),
+            _score_of(6, active, uni, L, s), _score_of(7, active, uni, L, s))
+
+
+@kernel
+def _score_of(k, active, uni, L, s):
+    if not active & (1 << k):
+        return 0.0
+    return 1.0 if uni else abs(L[k]) * s[k]
 
 
 @kernel
 def probability(sk, S, K):
     """P_k = s_k / S; 1/K when every score is 0 (black surface: any distribution will do)."""
     return sk / S if S > 0.0 else 1.0 / K
+
+
+@kernel
+def active_count(active):
+    """K: the number of active lobe slots."""
+    K = 0
+    for k in range(N_LOBES):
+        K += 1 if active & (1 << k) else 0
+    return K
 
 
 # --------------------------------------------------------------------------- drivers
@@ -553,6 +642,7 @@ def _lobes_drive(active, dmodel, sel, ms, p, ps, wo, W, E, P):
         st = row_state(p, o, mu, dmodel, ms)
         up = oz > 0.0
         w0, w1, w2, e0, e1, e2 = weights_albedos_rgb(p, o, st, dmodel, ms)
+        ss = all_scores(active, p, o, st, dmodel, ms, sel)
         S = 0.0
         K = 0
         for k in range(N_LOBES):
@@ -563,10 +653,11 @@ def _lobes_drive(active, dmodel, sel, ms, p, ps, wo, W, E, P):
             P[b] = 0.0
             if active & (1 << k):
                 W[b * _U(3)], W[b * _U(3) + _U(1)], W[b * _U(3) + _U(2)] = w0[k], w1[k], w2[k]
+                # below the horizon nothing is reflected: E = 0 (and the probabilities uniform,
+                # SEL_UNIFORM's as well)
                 if up:
                     E[b * _U(3)], E[b * _U(3) + _U(1)], E[b * _U(3) + _U(2)] = e0[k], e1[k], e2[k]
-                s = score(sel, W[b * _U(3)], W[b * _U(3) + _U(1)], W[b * _U(3) + _U(2)],
-                          E[b * _U(3)], E[b * _U(3) + _U(1)], E[b * _U(3) + _U(2)])
+                s = ss[k] if up else 0.0
                 P[b] = s
                 S += s
                 K += 1
@@ -663,9 +754,10 @@ def _pdf_drive(active, dmodel, sel, ms, vndf, p, ps, wo, wi, out):
 def _sample_drive(active, dmodel, sel, ms, vndf, p, ps, wo, u, wi, out):
     """Pick lobe k with P_k (u[0]), sample it (u[1:3], or u[0] rescaled and u[1] when u has
     2 columns); wi (n*3), out (n) = the mixture pdf, with the chosen lobe's own pdf from its
-    sampler; 0 marks a failed sample."""
+    sampler (outside ``GGX_LOBES``); 0 marks a failed sample."""
     n = wo.shape[0] // 3
     ud = u.shape[0] // n
+    K = active_count(active)
     for i in prange(n):
         j = _U(i) * _U(3)
         o = _U(i) * _U(ps)
@@ -675,10 +767,8 @@ def _sample_drive(active, dmodel, sel, ms, vndf, p, ps, wo, u, wi, out):
         st = row_state(p, o, mu, dmodel, ms)
         ss = all_scores(active, p, o, st, dmodel, ms, sel)
         S = 0.0
-        K = 0
         for k in range(N_LOBES):
             S += ss[k]
-            K += 1 if active & (1 << k) else 0
         u0 = _F(u[ju])
         # choose the lobe: the first whose cumulative probability exceeds u0
         chosen = -1
@@ -701,21 +791,27 @@ def _sample_drive(active, dmodel, sel, ms, vndf, p, ps, wo, u, wi, out):
         if ud == 3:
             u1, u2 = _F(u[ju + _U(1)]), _F(u[ju + _U(2)])
         else:
-            u1 = min(max((u0 - lo) / Pc, 0.0), 0.9999999999999999) if Pc > 0.0 else 0.0
+            u1 = min(max((u0 - lo) / Pc, 0.0), U_MAX) if Pc > 0.0 else 0.0
             u2 = _F(u[ju + _U(1)])
         x, y, z, own, ok = lobe_sample(chosen, p, o, ox, oy, oz, u1, u2, dmodel, vndf)
+        ggx = (GGX_LOBES & (1 << chosen)) != 0
         q = 0.0
-        if oz > 0.0 and ok and own > 0.0:
+        if oz > 0.0 and ok and (ggx or own > 0.0):
             pdf_s = 0.0
             if uses_base_ggx(active):
                 pdf_s = mf.reflection_pdf(x, y, z, ox, oy, oz, p[o + P_ALPHA_S], vndf)
+            mine = 0.0
             for k in range(N_LOBES):
                 if active & (1 << k):
                     Pk = probability(ss[k], S, K)
-                    if k == chosen:
+                    if k == chosen and not ggx:
                         q += Pk * own
-                    elif Pk > 0.0:
-                        q += Pk * lobe_pdf(k, p, o, x, y, z, ox, oy, oz, dmodel, vndf, pdf_s)
+                    elif Pk > 0.0 or k == chosen:
+                        pk = lobe_pdf(k, p, o, x, y, z, ox, oy, oz, dmodel, vndf, pdf_s)
+                        q += Pk * pk
+                        mine = pk if k == chosen else mine
+            if ggx and not mine > 0.0:   # the GGX lobe's own pdf: 0 marks a failed sample
+                q = 0.0
         if not oz > 0.0:
             x, y, z = 0.0, 0.0, 1.0
         wi[j] = x

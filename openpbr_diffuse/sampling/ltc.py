@@ -35,13 +35,35 @@ from .simple import cos_sin_2pi
 
 
 @kernel
+def _ltc_parts(mu, r):
+    """(a, b_num, b_den, c, d_num, d_den) of the Listing 2 fit: b = b_num / b_den, d = d_num / d_den."""
+    a = 1.0 + r * (0.303392 + (-0.518982 + 0.111709 * mu) * mu + (-0.276266 + 0.335918 * mu) * r)
+    bn = r * (-1.16407 + 1.15859 * mu + (0.150815 - 0.150105 * mu) * r)
+    bd = mu * mu * mu - 1.43545
+    c = 1.0 + (0.20013 + (-0.506373 + 0.261777 * mu) * mu) * r
+    dn = (0.540852 + (-1.01625 + 0.475392 * mu) * mu) * r
+    dd = -1.0743 + mu * (0.0725628 + mu)
+    return a, bn, bd, c, dn, dd
+
+
+@kernel
 def ltc_coeffs(mu, r):
     """Return (a, b, c, d) of the LTC matrix M (Eq. 25) for mu = mu_o, roughness r (Listing 2)."""
-    a = 1.0 + r * (0.303392 + (-0.518982 + 0.111709 * mu) * mu + (-0.276266 + 0.335918 * mu) * r)
-    b = r * (-1.16407 + 1.15859 * mu + (0.150815 - 0.150105 * mu) * r) / (mu * mu * mu - 1.43545)
-    c = 1.0 + (0.20013 + (-0.506373 + 0.261777 * mu) * mu) * r
-    d = (0.540852 + (-1.01625 + 0.475392 * mu) * mu) * r / (-1.0743 + mu * (0.0725628 + mu))
-    return a, b, c, d
+    a, bn, bd, c, dn, dd = _ltc_parts(mu, r)
+    inv = 1.0 / (bd * dd)   # both denominators are < 0 on [0, 1]: one division for b and d
+    return a, bn * dd * inv, c, dn * bd * inv
+
+
+@kernel
+def cltc_coeffs(mu, r):
+    """(a, b, c, d, s): ``ltc_coeffs`` and the CLTC's ``clip_fraction(d)``, with
+    1/sqrt(1 + d^2) = |d_den| / sqrt(d_num^2 + d_den^2) so that s does not wait for d's
+    division (the EON sampler's chain of square roots and divisions is a row's latency in
+    the surface's scalar drivers)."""
+    a, bn, bd, c, dn, dd = _ltc_parts(mu, r)
+    inv = 1.0 / (bd * dd)
+    s = 0.5 * (1.0 + abs(dd) / math.sqrt(dn * dn + dd * dd))
+    return a, bn * dd * inv, c, dn * bd * inv, s
 
 
 @kernel
@@ -102,7 +124,8 @@ def ltc_sample_local(a, b, c, d, s, u1, u2):
     wz = d * x + hz
     l2 = wx * wx + wy * wy + wz * wz
     inv = 1.0 / math.sqrt(l2)
-    pdf = hz * (l2 * l2 * inv) / (PI * s * (c * (a - b * d)))  # one division: the costliest vector op
+    # 1/(pi s det M) does not depend on u: its division runs while the sample is mapped
+    pdf = hz * (l2 * l2 * inv) * (1.0 / (PI * s * (c * (a - b * d))))
     return wx * inv, wy * inv, wz * inv, pdf
 
 

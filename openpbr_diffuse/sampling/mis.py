@@ -6,7 +6,7 @@ makes the estimator unbiased where CLTC misses a lune and bounds the throughput 
 At r = 0, P_u = 0 and M = I: the sampler is cosine sampling.
 """
 from .._jit import kernel
-from .ltc import clip_fraction, from_frame, ltc_coeffs, ltc_pdf_local, ltc_sample_local, to_frame
+from .ltc import cltc_coeffs, from_frame, ltc_pdf_local, ltc_sample_local, to_frame
 from .simple import INV_2PI, U_MAX, uniform_sample
 
 
@@ -101,8 +101,7 @@ def eon_sample(Xx, Xy, mu, r, r_tenth, u1, u2):
     Both lobes are computed and one is selected: branch-free, the batch loop vectorises
     (the uniform branch's division by P_u = 0 then gives a discarded inf).
     """
-    a, b, c, d = ltc_coeffs(mu, r)
-    s = clip_fraction(d)
+    a, b, c, d, s = cltc_coeffs(mu, r)
     Pu = uniform_probability(mu, r_tenth)
     Pc = 1.0 - Pu
     uniform = u1 < Pu
@@ -121,6 +120,6 @@ def eon_sample(Xx, Xy, mu, r, r_tenth, u1, u2):
 def eon_pdf(lx, ly, lz, mu, r, r_tenth):
     """P_u/(2 pi) + P_c pdf_CLTC at the LTC-frame direction (lx, ly, lz), lz > 0
     (r_tenth = r^0.1, ``pow_tenth(r)``)."""
-    a, b, c, d = ltc_coeffs(mu, r)
+    a, b, c, d, s = cltc_coeffs(mu, r)
     Pu = uniform_probability(mu, r_tenth)
-    return Pu * INV_2PI + (1.0 - Pu) * ltc_pdf_local(a, b, c, d, clip_fraction(d), lx, ly, lz)
+    return Pu * INV_2PI + (1.0 - Pu) * ltc_pdf_local(a, b, c, d, s, lx, ly, lz)
