@@ -5,6 +5,7 @@ References: the NumPy GGX forms (``microfacet.ggx``, graded against quadrature i
 against their densities (``_chi2``), and the NumPy table interpolation.
 """
 import math
+from decimal import Decimal, getcontext
 
 import numpy as np
 import pytest
@@ -34,6 +35,30 @@ def test_reflection_kernel_equals_the_numpy_form(rng):
         for vndf, name in ((True, "vndf"), (False, "ndf")):
             pk = np.array([kernels.reflection_pdf(*a, *b, alpha, vndf) for a, b in zip(wi, wo)])
             assert np.allclose(pk, ggx.reflection_pdf(wo, wi, alpha, name), rtol=1e-12)
+
+
+@pytest.mark.parametrize("alpha", (ggx.ALPHA_MIN, 1e-3))
+def test_reflection_pdf_near_the_mirror_direction_at_small_alpha(alpha):
+    """Near the mirror direction at the smallest alpha, D = a2 / (pi (mu_h^2 (a2 - 1) + 1)^2)
+    in float64 cancels (1 - mu_h^2 (1 - a2) ~ a2 + 2 delta): the kernels write D of the
+    unnormalised half vector without that cancellation.  Reference: the textbook VNDF pdf
+    G1(wo) D / (4 mu_o) in 50-digit decimal arithmetic on the same float64 directions."""
+    getcontext().prec = 50
+    mu = 0.7
+    wo = np.array([math.sqrt(1 - mu * mu), 0.0, mu])
+    for off in (1e-7, 1e-6, 1e-5, 1e-4, 1e-3):
+        t = math.acos(mu) + off                      # wi: the mirror direction turned by `off`
+        wi = np.array([-math.sin(t), 0.0, math.cos(t)])
+        h = [Decimal(float(a)) + Decimal(float(b)) for a, b in zip(wi, wo)]
+        mu_h = h[2] / (h[0] ** 2 + h[1] ** 2 + h[2] ** 2).sqrt()
+        a2 = Decimal(alpha) * Decimal(alpha)
+        pi = Decimal(math.pi)
+        D = a2 / (pi * (mu_h * mu_h * (a2 - 1) + 1) ** 2)
+        m = Decimal(float(wo[2]))
+        lam = ((1 + a2 * (1 - m * m) / (m * m)).sqrt() - 1) / 2
+        want = D / ((1 + lam) * 4 * m)
+        got = kernels.reflection_pdf(*wi, *wo, alpha, True)
+        assert got == pytest.approx(float(want), rel=1e-13), off
 
 
 @pytest.mark.parametrize("mu, alpha, vndf", [(0.3, 0.2, True), (0.8, 0.6, True), (0.5, 0.4, False)])

@@ -148,6 +148,20 @@ def paired_best_time(fa, fb, reps):
     return ba, bb
 
 
+def interleaved_best_times(fns, reps):
+    """Best wall time of each call in ``fns``, all timed in turn within every repetition (so
+    that a change of machine load hits them alike: the ratios of the surface rows)."""
+    for f in fns:
+        f()
+    best = [np.inf] * len(fns)
+    for _ in range(reps):
+        for k, f in enumerate(fns):
+            t = time.perf_counter()
+            f()
+            best[k] = min(best[k], time.perf_counter() - t)
+    return best
+
+
 def _nbytes(result):
     if isinstance(result, tuple):
         return sum(a.nbytes for a in result)
@@ -311,9 +325,13 @@ def surface_rows(n, reps):
                      "rate_per_s": 1.0 / t, "mem_extra_x": None, "ref": None, "ratio": None,
                      "target": f"< {TARGET_SURFACE_BUILD_S * 1e6:g} us", "ok": t < TARGET_SURFACE_BUILD_S})
     for verb, call in verbs.items():
-        ref = best_time(lambda: call(node), reps) / n * 1e9
-        for label, (s, bound) in surfaces.items():
-            t = best_time(lambda: call(s) if verb != "sample" else s.sample(x["wo"], u3), reps)
+        # the node and both surfaces in turn within each repetition: the ratios compare
+        # calls made under the same machine load (this VM's speed drifts by tens of percent)
+        calls = [lambda: call(node)] + [(lambda s=s: call(s) if verb != "sample" else s.sample(x["wo"], u3))
+                                        for s, _ in surfaces.values()]
+        times = interleaved_best_times(calls, reps)
+        ref = times[0] / n * 1e9
+        for (label, (s, bound)), t in zip(surfaces.items(), times[1:]):
             ns = t / n * 1e9
             rows.append({"kind": f"surface.{verb}", "name": label, "dtype": "float64", "n": n, "ns": ns,
                          "rate_per_s": n / t, "mem_extra_x": None, "ref": "OrenNayarDiffuseBSDF",
