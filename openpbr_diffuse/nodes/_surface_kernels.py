@@ -15,6 +15,7 @@ reflection part when thin-walled), SUBSURFACE_T (thin-walled translucency), COAT
 """
 import functools
 import math
+import types
 
 import numba
 import numpy as np
@@ -826,7 +827,25 @@ def _sample_drive(active, dmodel, sel, ms, vndf, p, ps, wo, u, wi, out):
 #: more than a small batch (a single material's lobes(wo) is the common case).
 SERIAL_ROWS = 4096
 _serial = numba.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
-_DRIVERS = {f: (compiled(f), _serial(f)) for f in (_lobes_drive, _albedo_drive, _eval_drive, _pdf_drive, _sample_drive)}
+
+
+def serial_build(f):
+    """The serial build of driver f, compiled from a copy of f named ``<name>_serial``.
+
+    numba's disk cache files a function under its module, qualified name and first line,
+    and keys its entries by signature and CPU only, not by the compile options: a serial and
+    a parallel build of the same function share one entry, and whichever a process compiled
+    first is loaded for both.  (So it was: after a process had evaluated one row, every
+    later process's 10^6-row call ran the serial code on one thread.)"""
+    g = types.FunctionType(f.__code__, f.__globals__, f.__name__ + "_serial", f.__defaults__, f.__closure__)
+    g.__qualname__ = f.__qualname__ + "_serial"
+    g.__module__ = f.__module__
+    g.__doc__ = f.__doc__
+    return _serial(g)
+
+
+_DRIVERS = {f: (compiled(f), serial_build(f))
+            for f in (_lobes_drive, _albedo_drive, _eval_drive, _pdf_drive, _sample_drive)}
 
 
 def _driver(f, n):
