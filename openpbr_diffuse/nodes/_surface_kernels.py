@@ -7,8 +7,15 @@ BSDF, weight not applied), ``lobe_sample`` and ``lobe_pdf`` -- selected by a lob
 surface row is a flat vector of prepared parameters (layout ``P_*``, built once per
 material by ``openpbr_surface.pack_parameters``); the wo-dependent layer factors (the
 albedos of the specular, coat and fuzz layers, which scale what lies beneath) are looked up
-once per row (``row_state``) and shared by every lobe.  No input is checked here: the
-public class checks its inputs once, at construction and on each call's directions.
+once per row (``row_state``) and shared by every lobe.  Each weight is such a layer factor
+times a colour of the material, w_k[c] = L_k(wo) K_k[c] (``layer_factors``,
+``_pack_weights``), so that the lobe selection scores |w_k E_k| are constants of the material
+times functions of mu_o (``all_scores``).  No input is checked here: the public class checks
+its inputs once, at construction and on each call's directions.
+
+The per-row code does not vectorise (it switches between lobes); its time is the latency of
+chains of square roots and divisions, so the kernels it calls are written with as few of
+them on a row's path as the formulas allow (``microfacet.kernels``, ``sampling.ltc``).
 
 Lobe ids (slots): DIFFUSE, SPECULAR, METAL, TRANSMISSION, SUBSURFACE (the thin-walled
 reflection part when thin-walled), SUBSURFACE_T (thin-walled translucency), COAT, FUZZ.
