@@ -17,13 +17,16 @@ from openpbr_diffuse.nodes import _surface_kernels as sk
 
 
 def test_each_build_has_its_own_cache_file():
-    names = set()
+    """No cache file holds both a parallel and a serial build.  (The pdf and sample drivers
+    are closures over their slot bound: their two variants of each build share a file, with
+    entries told apart by the closure's value, which numba's cache keys do include.)"""
+    parallel_files, serial_files = set(), set()
     for f, (parallel, serial) in sk._DRIVERS.items():
         assert parallel.targetoptions.get("parallel") and not serial.targetoptions.get("parallel")
-        a, b = parallel._cache._cache_file._index_path, serial._cache._cache_file._index_path
-        assert a != b, f.__name__
-        names.update((a, b))
-    assert len(names) == 2 * len(sk._DRIVERS)
+        parallel_files.add(parallel._cache._cache_file._index_path)
+        serial_files.add(serial._cache._cache_file._index_path)
+    assert not parallel_files & serial_files
+    assert len(parallel_files) == len(serial_files) == 5   # lobes, albedo, eval, pdf, sample
 
 
 @pytest.mark.slow
