@@ -136,16 +136,7 @@ def best_time(fn, reps):
 
 def paired_best_time(fa, fb, reps):
     """Best wall times of two calls timed in alternation (so that both see the same load)."""
-    fa(), fb()
-    ba = bb = np.inf
-    for _ in range(reps):
-        t = time.perf_counter()
-        fa()
-        t1 = time.perf_counter()
-        fb()
-        t2 = time.perf_counter()
-        ba, bb = min(ba, t1 - t), min(bb, t2 - t1)
-    return ba, bb
+    return tuple(interleaved_best_times([fa, fb], reps))
 
 
 def interleaved_best_times(fns, reps):

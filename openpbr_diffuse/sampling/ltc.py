@@ -56,14 +56,13 @@ def ltc_coeffs(mu, r):
 
 @kernel
 def cltc_coeffs(mu, r):
-    """(a, b, c, d, s): ``ltc_coeffs`` and the CLTC's ``clip_fraction(d)``, with
-    1/sqrt(1 + d^2) = |d_den| / sqrt(d_num^2 + d_den^2) so that s does not wait for d's
-    division (the EON sampler's chain of square roots and divisions is a row's latency in
-    the surface's scalar drivers)."""
-    a, bn, bd, c, dn, dd = _ltc_parts(mu, r)
-    inv = 1.0 / (bd * dd)
-    s = 0.5 * (1.0 + abs(dd) / math.sqrt(dn * dn + dd * dd))
-    return a, bn * dd * inv, c, dn * bd * inv, s
+    """(a, b, c, d, s): ``ltc_coeffs`` and the CLTC's clip fraction s, taken from d's numerator
+    and denominator (``clip_fraction_of``) so that s does not wait for d's division (the EON
+    sampler's chain of square roots and divisions is a row's latency in the surface's scalar
+    drivers)."""
+    a, b, c, d = ltc_coeffs(mu, r)
+    _, _, _, _, dn, dd = _ltc_parts(mu, r)   # the same values: inlined, computed once
+    return a, b, c, d, clip_fraction_of(dn, dd)
 
 
 @kernel
@@ -88,9 +87,16 @@ def from_frame(Xx, Xy, lx, ly):
 
 
 @kernel
+def clip_fraction_of(dn, dd):
+    """s = (1 + vz)/2, vz = 1/sqrt(1 + d^2): cosine mass kept by the CLTC clipping (Eq. 28), for
+    d = dn / dd (vz = |dd| / sqrt(dn^2 + dd^2): no division by dd first)."""
+    return 0.5 * (1.0 + abs(dd) / math.sqrt(dn * dn + dd * dd))
+
+
+@kernel
 def clip_fraction(d):
     """s = (1 + vz)/2, vz = 1/sqrt(1 + d^2): cosine mass kept by the CLTC clipping (Eq. 28)."""
-    return 0.5 * (1.0 + 1.0 / math.sqrt(d * d + 1.0))
+    return clip_fraction_of(d, 1.0)
 
 
 @kernel
