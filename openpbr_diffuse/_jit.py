@@ -85,3 +85,52 @@ def acos(x):
     t = near if a <= 0.5 else far
     t = t if a <= 1.0 else math.nan
     return t if x >= 0.0 else PI - t
+
+
+def stack_buffer(size, dtype=numba.float64):
+    """A compiled function returning a 1-D array of ``size`` elements (uninitialised) in the
+    stack frame of the compiled function that calls it, as ``np.empty(size)`` would on the
+    heap.
+
+    What it is for: LLVM knows that such a buffer aliases no other pointer, so a loop that
+    stores into it can keep the loads of its other arrays out of the loop (hoisted, when their
+    addresses do not change) and vectorise; with a heap buffer it must assume that the stores
+    may change them.  The surface's block drivers keep their scratch and their copy of one
+    material's parameters in such buffers (``nodes._surface_drivers``).  ``size`` is a
+    constant: the frame is sized when the function is compiled (keep it to some kilobytes)."""
+    from numba.core import cgutils
+    from numba.extending import intrinsic
+
+    @intrinsic
+    def _alloca(typingctx):
+        def codegen(context, builder, signature, args):
+            return cgutils.alloca_once(builder, context.get_value_type(dtype), size=size)
+        return numba.types.CPointer(dtype)(), codegen
+
+    @numba.njit(inline="always")
+    def buffer():
+        return numba.carray(_alloca(), size)
+
+    return buffer
+
+
+def _opaque_intrinsic():
+    from numba.extending import intrinsic
+
+    @intrinsic
+    def opaque(typingctx, x):
+        """x, typed without its literal value (``types.unliteral``).
+
+        numba compiles a function once per distinct literal argument of its call sites: the
+        surface's block passes, called once per lobe slot with the slot a constant, were
+        compiled eight to ten times each (and every kernel they call with it).  Passing
+        ``opaque(k)`` compiles them once; LLVM still folds the constant once the pass is
+        inlined into its driver, so the code is the same."""
+        def codegen(context, builder, signature, args):
+            return args[0]
+        return numba.types.unliteral(x)(x), codegen
+
+    return opaque
+
+
+opaque = _opaque_intrinsic()

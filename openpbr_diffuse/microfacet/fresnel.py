@@ -36,15 +36,16 @@ def dielectric(c, eta):
     index-matched interface, whose g^2 = c^2 vanishes at grazing c = 0 but which reflects
     nothing).
     """
-    if eta == 1.0:
-        return 0.0
     g2 = eta * eta - 1.0 + c * c
-    if not g2 > 0.0:
-        return 1.0
-    g = math.sqrt(g2)
-    a = (g - c) / (g + c)
+    g = math.sqrt(max(g2, 0.0))
+    # g + c = 0 only where a select below discards the value (eta = 1 at c = 0, or total
+    # internal reflection); the floor keeps it finite there (no 0/0, no FP warning)
+    a = (g - c) / max(g + c, 1e-300)
     b = (c * (g + c) - 1.0) / (c * (g - c) + 1.0)
-    return 0.5 * a * a * (1.0 + b * b)
+    F = 0.5 * a * a * (1.0 + b * b)
+    # selects, not branches: a batch loop over rows that inlines this stays vectorisable
+    F = F if g2 > 0.0 else 1.0
+    return F if eta != 1.0 else 0.0
 
 
 @kernel

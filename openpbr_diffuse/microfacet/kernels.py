@@ -58,12 +58,12 @@ def reflection(ix, iy, iz, ox, oy, oz, alpha):
     = ``lambda_root``, G2 / (4 mu_i mu_o) = 1 / (2 (mu_o root_i + mu_i root_o))."""
     hx, hy, hz = ix + ox, iy + oy, iz + oz
     n2 = hx * hx + hy * hy + hz * hz
-    if not (iz > 0.0 and oz > 0.0 and n2 > 0.0):
-        return 0.0, 0.0
     a2 = alpha * alpha
     c = min(max((ox * hx + oy * hy + oz * hz) / math.sqrt(n2), 0.0), 1.0)
     num, den = ndf_fraction(hx, hy, hz, a2)
-    return num / (den * 2.0 * (oz * lambda_root(iz, a2) + iz * lambda_root(oz, a2))), c
+    f = num / (den * 2.0 * (oz * lambda_root(iz, a2) + iz * lambda_root(oz, a2)))
+    ok = (iz > 0.0) & (oz > 0.0) & (n2 > 0.0)   # selects: the rows' loop stays vectorisable
+    return (f if ok else 0.0), (c if ok else 0.0)
 
 
 @kernel
@@ -76,13 +76,11 @@ def reflection_pdf(ix, iy, iz, ox, oy, oz, alpha, vndf):
     Lambda's."""
     hx, hy, hz = ix + ox, iy + oy, iz + oz
     oh = ox * hx + oy * hy + oz * hz
-    if not (oz > 0.0 and hz > 0.0 and oh > 0.0):
-        return 0.0
     a2 = alpha * alpha
     num, den = ndf_fraction(hx, hy, hz, a2)
-    if vndf:
-        return num / (den * 2.0 * (oz + lambda_root(oz, a2)))
-    return num * hz / (den * 4.0 * oh)
+    q = num / (den * 2.0 * (oz + lambda_root(oz, a2))) if vndf else num * hz / (den * 4.0 * oh)
+    ok = (oz > 0.0) & (hz > 0.0) & (oh > 0.0)   # selects: the rows' loop stays vectorisable
+    return q if ok else 0.0
 
 
 @kernel
@@ -95,11 +93,9 @@ def ggx_visible_normal_h(vx, vy, vz, alpha, u1, u2):
     # T1 = (-s.y, s.x, 0)/|s.xy| = (-v.y, v.x, 0)/|v.xy|: from v, so that its square root
     # and division run beside the stretch's, not after them
     lensq = vx * vx + vy * vy
-    if lensq > 0.0:
-        il = 1.0 / math.sqrt(lensq)
-        t1x, t1y, t1z = -vy * il, vx * il, 0.0
-    else:
-        t1x, t1y, t1z = 1.0, 0.0, 0.0
+    il = 1.0 / math.sqrt(lensq)   # inf at the normal, not selected there
+    side = lensq > 0.0
+    t1x, t1y, t1z = (-vy * il if side else 1.0), (vx * il if side else 0.0), 0.0
     t2x, t2y, t2z = sy * t1z - sz * t1y, sz * t1x - sx * t1z, sx * t1y - sy * t1x
     r = math.sqrt(u1)
     cp, sp = cos_sin_2pi(u2)
@@ -128,6 +124,17 @@ def ggx_visible_normal(vx, vy, vz, alpha, u1, u2):
 
 
 @kernel
+def ggx_normal(alpha, u1, u2):
+    """(hx, hy, hz, 1): a microfacet normal drawn from D(h) mu_h (Walter 2007 Eq. 35-36)."""
+    a2 = alpha * alpha
+    cos2 = (1.0 - u1) / (1.0 + (a2 - 1.0) * u1)
+    ct = math.sqrt(cos2)
+    st = math.sqrt(max(0.0, 1.0 - cos2))
+    cp, sp = cos_sin_2pi(u2)
+    return st * cp, st * sp, ct, 1.0
+
+
+@kernel
 def sample_reflection(ox, oy, oz, alpha, u1, u2, vndf):
     """(wi.x, wi.y, wi.z, ok): wi = reflect(wo, h), h from the visible normals (Heitz 2018,
     Listing 1) or the NDF (Walter 2007 Eq. 35-36).  ok is False when the sample fails
@@ -138,12 +145,7 @@ def sample_reflection(ox, oy, oz, alpha, u1, u2, vndf):
     if vndf:
         hx, hy, hz, n2 = ggx_visible_normal_h(ox, oy, oz, alpha, u1, u2)
     else:
-        a2 = alpha * alpha
-        cos2 = (1.0 - u1) / (1.0 + (a2 - 1.0) * u1)
-        ct = math.sqrt(cos2)
-        st = math.sqrt(max(0.0, 1.0 - cos2))
-        cp, sp = cos_sin_2pi(u2)
-        hx, hy, hz, n2 = st * cp, st * sp, ct, 1.0
+        hx, hy, hz, n2 = ggx_normal(alpha, u1, u2)
     d = ox * hx + oy * hy + oz * hz
     f = 2.0 * d / n2
     return f * hx - ox, f * hy - oy, f * hz - oz, d > 0.0

@@ -67,13 +67,11 @@ def ltc_inverse(mu, r):
 @kernel
 def sheen_density(lx, ly, lz, mu, r):
     """D(w) at the direction (lx, ly, lz) of the wo frame (X towards wo); 0 for lz <= 0."""
-    if not lz > 0.0:
-        return 0.0
     a, b = ltc_inverse(mu, r)
     x, y, z = a * lx + b * lz, a * ly, lz
     len2 = x * x + y * y + z * z
     q = a / len2
-    return z * INV_PI * q * q
+    return z * INV_PI * q * q if lz > 0.0 else 0.0   # a select: the rows' loop stays vectorisable
 
 
 @kernel

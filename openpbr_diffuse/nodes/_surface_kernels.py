@@ -1,45 +1,40 @@
-"""The compiled path of ``OpenPBRSurface``: its lobes as scalar functions, and one batch
-driver per verb.
+"""The lobes of ``OpenPBRSurface`` as scalar compiled functions, and the packing of a
+material's inputs into its parameter vector.
 
 Lobes are plain values with the verbs of pbrt-v4's ``BxDF`` -- ``lobe_f`` (the lobe's own
-BSDF, weight not applied), ``lobe_sample`` and ``lobe_pdf`` -- selected by a lobe id, and
-``weights_albedos`` (every lobe's mixture weight w_k(wo) and directional albedo E_k(wo)).  A
-surface row is a flat vector of prepared parameters (layout ``P_*``, built once per
-material by ``openpbr_surface.pack_parameters``); the wo-dependent layer factors (the
-albedos of the specular, coat and fuzz layers, which scale what lies beneath) are looked up
-once per row (``row_state``) and shared by every lobe.  Each weight is such a layer factor
-times a colour of the material, w_k[c] = L_k(wo) K_k[c] (``layer_factors``,
-``_pack_weights``), so that the lobe selection scores |w_k E_k| are constants of the material
-times functions of mu_o (``all_scores``).  No input is checked here: the public class checks
-its inputs once, at construction and on each call's directions.
+BSDF, weight not applied), ``lobe_sample`` and ``lobe_pdf`` -- selected by a lobe id, with
+``lobe_albedo`` (its directional albedo E_k(wo)), ``layer_factor`` and ``lobe_score`` (its
+selection score |w_k E_k|).  A surface row is a flat vector of prepared parameters (layout
+``P_*``, built once per material by ``pack_drive``).  Each weight is a layer factor of mu_o
+(the albedos of the specular, coat and fuzz layers, which scale what lies beneath) times a
+colour of the material, w_k[c] = L_k(mu_o) K_k[c] (``layer_factor``, ``_pack_weights``), so
+that the selection scores are constants of the material times functions of mu_o.  No input
+is checked here: the public class checks its inputs once, at construction and on each
+call's directions.
 
-The per-row code does not vectorise (it switches between lobes); its time is the latency of
-chains of square roots and divisions, so the kernels it calls are written with as few of
-them on a row's path as the formulas allow (``microfacet.kernels``, ``sampling.ltc``).
+The batch drivers (``_surface_drivers``) call these one lobe at a time over blocks of rows
+(``_surface_passes``), with the lobe id a constant: each kernel folds to one lobe's formula,
+and the kernels branch on directions only through selects, so the loops vectorise.
 
 Lobe ids (slots): DIFFUSE, SPECULAR, METAL, TRANSMISSION, SUBSURFACE (the thin-walled
 reflection part when thin-walled), SUBSURFACE_T (thin-walled translucency), COAT, FUZZ.
 """
-import functools
 import math
-import types
 
 import numba
 import numpy as np
-from numba import prange
 
-from .._jit import FASTMATH, INV_PI, kernel
-from .._launch import _F, _U, compiled, launch, rows
+from .._jit import INV_PI, kernel
 from ..microfacet import fresnel
 from ..microfacet import kernels as mf
-from ..microfacet.sheen import sheen_albedo_at, sheen_albedo_fit, sheen_density, sheen_sample
+from ..microfacet.sheen import sheen_albedo_fit, sheen_density, sheen_sample
 from ..microfacet.tables import MU_AXIS, R_AXIS, X_AXIS, catmull_rom_at, node_at
 from ..models.eon import eon_albedo_at, eon_albedo_fit, eon_terms, rho_ms
 from ..models.fon import E_F_avg
 from ..models.qon import qon_AB, qon_albedo, qon_terms
 from ..sampling.ltc import from_frame, ltc_frame, to_frame
 from ..sampling.mis import eon_pdf, eon_sample, pow_tenth
-from ..sampling.simple import U_MAX, cosine_pdf, cosine_sample_local
+from ..sampling.simple import cosine_pdf, cosine_sample_local
 
 DIFFUSE, SPECULAR, METAL, TRANSMISSION, SUBSURFACE, SUBSURFACE_T, COAT, FUZZ = range(8)
 N_LOBES = 8
@@ -102,7 +97,7 @@ P_RHO_MS = P_R_TENTH + 1       # 3: rho_ms(base_color, <E_F>) of the EON lobe (E
 P_SHEEN_FIT = P_RHO_MS + 3     # 3: (s, m, o) of the fuzz albedo fit at fuzz_roughness
 # every lobe's weight is a layer factor of mu_o times a constant of the material,
 # w_k[c](wo) = L_k(wo) K_k[c] (``layer_factors``); the selection scores |w_k E_k| then
-# reduce to constants of the material times functions of mu_o (``all_scores``)
+# reduce to constants of the material times functions of mu_o (``lobe_score``)
 P_K = P_SHEEN_FIT + 3          # 8 x 3: K_k[c]
 P_SC = P_K + 3 * N_LOBES       # 8 x 2: |K_k e_k| and max_c |K_k[c] e_k[c]| for the lobes whose albedo is
                                # a constant colour e_k or a scalar times 1 (e_k = 1)
@@ -175,7 +170,7 @@ def _pack_weights(out, o):
     dielectric by base_metalness; under the dielectric specular layer the substrate mixes
     transmission, subsurface and diffuse; the subsurface lobe is Lambert, or when thin-walled
     the reflection half of the thin-walled mix (QON, colour^2 (1 - g)/2) and SUBSURFACE_T its
-    translucent half.  Then the score constants (P_SC, P_DQ) of ``all_scores``."""
+    translucent half.  Then the score constants (P_SC, P_DQ) of ``lobe_score``."""
     M, T, S, g = out[o + P_METAL], out[o + P_TRANS_W], out[o + P_SSS_W], out[o + P_SSS_ANISO]
     thin = out[o + P_THIN] > 0.0
     for c in range(3):
@@ -333,11 +328,10 @@ def layer_albedos(p, o, e1, e5, e6, q, mu, x, ms):
     E1 = min(max(cubic_at(p, o + e1 + im, w0, w1, w2, w3), 0.0), 1.0)
     E5 = max(cubic_at(p, o + e5 + im, w0, w1, w2, w3), 0.0)
     E6 = max(cubic_at(p, o + e6 + im, w0, w1, w2, w3), 0.0)
-    E = 0.0
-    if x > 0.0:
-        im, tm = node_at(mu, N_CURVE - 2, MU_AXIS)
-        w0, w1, w2, w3 = catmull_rom_at(tm)
-        E = min(max(cubic_at(p, o + q + im, w0, w1, w2, w3), 0.0), 1.0) * E1
+    im, tm = node_at(mu, N_CURVE - 2, MU_AXIS)
+    w0, w1, w2, w3 = catmull_rom_at(tm)
+    E = min(max(cubic_at(p, o + q + im, w0, w1, w2, w3), 0.0), 1.0) * E1
+    E = E if x > 0.0 else 0.0   # a select: a loop over rows calling this stays branch-free
     return E1, E5, E6, E * mf.multiscatter(x * x, E1, ms)
 
 
@@ -351,31 +345,6 @@ def diffuse_albedo_terms(dmodel, p, o, mu):
     if dmodel == D_QON:
         return qon_albedo(mu, p[o + P_QON_AB], p[o + P_QON_AB + 1]), 0.0
     return 1.0, 0.0
-
-
-@kernel
-def row_state(p, o, mu, dmodel, ms, albedos=True):
-    """Per-row quantities shared by every lobe at mu_o: (E1_s, E5_s, E6_s, E_spec, E1_c,
-    E_coat, E_fuzz, e_g, e_h, E_qon).
-
-    E1/E5/E6: GGX basis albedos of the base specular roughness; E_spec, E_coat: albedos of
-    the dielectric specular and coat lobes (with the multiple-scattering factor); E_fuzz:
-    the sheen albedo; e_g, e_h: the diffuse albedo terms; E_qon: the QON albedo of
-    the thin-walled subsurface reflection (0 unless ``albedos``).  Layers that are off are
-    not looked up.
-    """
-    E1s, E5s, E6s, Es = layer_albedos(p, o, P_E1S, P_E5S, P_E6S, P_CURVE_S, mu, p[o + P_X_S], ms)
-    E1c, Ec, Ef, Eq = 1.0, 0.0, 0.0, 0.0
-    if p[o + P_COAT_W] > 0.0:
-        E1c, _, _, Ec = layer_albedos(p, o, P_E1C, P_E1C, P_E1C, P_CURVE_C, mu, p[o + P_X_C], ms)
-    if p[o + P_FUZZ_W] > 0.0:
-        Ef = sheen_albedo_at(mu, p[o + P_SHEEN_FIT], p[o + P_SHEEN_FIT + 1], p[o + P_SHEEN_FIT + 2])
-    eg, eh = 0.0, 0.0
-    if albedos:   # the weights do not need the diffuse albedos (eval does not)
-        eg, eh = diffuse_albedo_terms(dmodel, p, o, mu)
-    if albedos and p[o + P_THIN] > 0.0 and p[o + P_SSS_W] > 0.0:
-        Eq, _ = diffuse_albedo_terms(D_QON, p, o, mu)
-    return E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, Eq
 
 
 @kernel
@@ -394,44 +363,91 @@ def metal_albedo(p, o, c, E1, E5, E6, ms):
 
 
 @kernel
-def layer_factors(p, o, st):
-    """(L_0, ..., L_7): the part of each lobe's weight that depends on wo, w_k[c] = L_k K_k[c].
+def layer_factor(k, Tu, Tb, Tf):
+    """L_k, the part of lobe k's weight that depends on wo: w_k[c] = L_k K_k[c].
 
     Each layer passes 1 - weight E_layer(mu_o) of what lies beneath (albedo scaling): fuzz
-    over coat over the base, and the dielectric specular layer over transmission,
-    subsurface and diffuse (``_pack_weights`` holds the material part)."""
-    Es, Ec, Ef = st[3], st[5], st[6]
-    Tf = 1.0 - p[o + P_FUZZ_W] * Ef
-    Tb = Tf * (1.0 - p[o + P_COAT_W] * Ec)
-    Tu = Tb * (1.0 - Es)
-    return Tu, Tb, Tb, Tu, Tu, Tu, Tf, 1.0
+    (Tf = 1 - F E_fuzz) over coat (Tb = Tf (1 - C E_coat)) over the base, and the dielectric
+    specular layer (Tu = Tb (1 - E_spec)) over transmission, subsurface and diffuse
+    (``_pack_weights`` holds the material part K_k)."""
+    if k == FUZZ:
+        return 1.0
+    if k == COAT:
+        return Tf
+    if k == SPECULAR or k == METAL:
+        return Tb
+    return Tu
 
 
 @kernel
-def lobe_albedos(c, p, o, st, dmodel, ms):
-    """(E_0, ..., E_7): the directional albedo E_k(wo) of every lobe slot in channel c."""
-    E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, Eq = st
-    color = p[o + P_SSS_COLOR + c]
-    return (diffuse_albedo(dmodel, p[o + P_BASE_COLOR + c], p[o + P_RHO_MS + c], eg, eh),
-            Es,
-            metal_albedo(p, o, c, E1s, E5s, E6s, ms),
-            p[o + P_TRANS_TINT + c],
-            color * Eq if p[o + P_THIN] > 0.0 else color,
-            color,
-            Ec,
-            Ef)
+def lobe_albedo(k, c, p, o, dmodel, ms, E1s, E5s, E6s, Es, Ec, Ef, eg, eh, Eq):
+    """E_k(wo), the directional albedo of lobe slot k in channel c, from the row's layer
+    albedos (E1/E5/E6/E_spec of the base specular, E_coat, E_fuzz), the diffuse albedo terms
+    (e_g, e_h) and Eq, the QON albedo of the thin-walled subsurface reflection (1 when not
+    thin-walled)."""
+    if k == DIFFUSE:
+        return diffuse_albedo(dmodel, p[o + P_BASE_COLOR + c], p[o + P_RHO_MS + c], eg, eh)
+    if k == SPECULAR:
+        return Es
+    if k == METAL:
+        return metal_albedo(p, o, c, E1s, E5s, E6s, ms)
+    if k == TRANSMISSION:
+        return p[o + P_TRANS_TINT + c]
+    if k == SUBSURFACE:
+        return p[o + P_SSS_COLOR + c] * Eq
+    if k == SUBSURFACE_T:
+        return p[o + P_SSS_COLOR + c]
+    if k == COAT:
+        return Ec
+    return Ef
 
 
 @kernel
-def weights_albedos(c, p, o, st, dmodel, ms):
-    """((w_0, ..., w_7), (E_0, ..., E_7)): the mixture weight w_k(wo) = L_k K_k[c] and the
-    albedo E_k(wo) of every lobe slot in channel c.  Slots that are not active get the values
-    the formulas give (the drivers skip them)."""
-    L = layer_factors(p, o, st)
-    q = o + P_K + c
-    w = (L[0] * p[q], L[1] * p[q + 3], L[2] * p[q + 6], L[3] * p[q + 9], L[4] * p[q + 12], L[5] * p[q + 15],
-         L[6] * p[q + 18], L[7] * p[q + 21])
-    return w, lobe_albedos(c, p, o, st, dmodel, ms)
+def _norm_or_max(mx, a, b, c):
+    """|(a, b, c)| (RGB length), or its largest component's magnitude when ``mx``."""
+    return max(max(abs(a), abs(b)), abs(c)) if mx else math.sqrt(a * a + b * b + c * c)
+
+
+@kernel
+def lobe_score(k, sel, p, o, ms, L, E1s, E5s, E6s, Es, Ec, Ef, eg, eh, Eq):
+    """The selection score s_k = |w_k E_k| of lobe slot k (L = its ``layer_factor``): the RGB
+    length (SEL_LENGTH), the largest component (SEL_MAX) or 1 (SEL_UNIFORM).
+
+    With w_k = L_k K_k most reduce to constants of the material (``_pack_weights``):
+    s_k = |L_k| E_k |K_k| for the lobes whose albedo is a scalar (specular, coat, fuzz; the
+    thin-walled subsurface's QON factor), |L_k| |K_k e_k| for a constant colour e_k
+    (transmission, subsurface), and for the diffuse lobe, whose albedo is rho e_g +
+    rho_ms e_h (Eq. 20; e_h = 0 for QON and Lambert), |L_0| sqrt(|K rho|^2 e_g^2 +
+    2 (K rho).(K rho_ms) e_g e_h + |K rho_ms|^2 e_h^2) by length; only the metal lobe (and the
+    diffuse one by max) is summed over channels.  Both rules are computed and one selected:
+    a loop over rows calling it for one k has no branch."""
+    mx = sel == SEL_MAX
+    q = o + P_K + 3 * k
+    if k == DIFFUSE:
+        d0 = p[q] * diffuse_albedo(D_EON, p[o + P_BASE_COLOR], p[o + P_RHO_MS], eg, eh)
+        d1 = p[q + 1] * diffuse_albedo(D_EON, p[o + P_BASE_COLOR + 1], p[o + P_RHO_MS + 1], eg, eh)
+        d2 = p[q + 2] * diffuse_albedo(D_EON, p[o + P_BASE_COLOR + 2], p[o + P_RHO_MS + 2], eg, eh)
+        q2 = p[o + P_DQ] * eg * eg + 2.0 * p[o + P_DQ + 1] * eg * eh + p[o + P_DQ + 2] * eh * eh
+        s = _norm_or_max(True, d0, d1, d2) if mx else math.sqrt(max(q2, 0.0))
+    elif k == METAL:
+        m0 = p[q] * metal_albedo(p, o, 0, E1s, E5s, E6s, ms)
+        m1 = p[q + 1] * metal_albedo(p, o, 1, E1s, E5s, E6s, ms)
+        m2 = p[q + 2] * metal_albedo(p, o, 2, E1s, E5s, E6s, ms)
+        s = _norm_or_max(True, m0, m1, m2) if mx else _norm_or_max(False, m0, m1, m2)
+    else:
+        cl, cm = p[o + P_SC + 2 * k], p[o + P_SC + 2 * k + 1]
+        c = cm if mx else cl
+        if k == SPECULAR:
+            s = Es * c
+        elif k == COAT:
+            s = Ec * c
+        elif k == FUZZ:
+            s = Ef * c
+        elif k == SUBSURFACE:
+            s = Eq * c
+        else:   # TRANSMISSION, SUBSURFACE_T: constant colours
+            s = c
+    return 1.0 if sel == SEL_UNIFORM else abs(L) * s
 
 
 @kernel
@@ -447,33 +463,36 @@ def diffuse_gh(dmodel, p, o, iz, oz, s):
 
 
 @kernel
-def lobe_f(k, p, o, st, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c):
+def lobe_f(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
     """The lobe's own BSDF (f0, f1, f2), weight not applied; 0 outside the lobe's hemisphere.
 
     (m, c): ``microfacet.kernels.reflection`` at the base specular's alpha, shared by the
-    specular and metal lobes (computed once per row by the caller, ``base_ggx``)."""
-    E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, Eq = st
-    up = iz > 0.0 and oz > 0.0
+    specular and metal lobes (computed once per row by the caller); E1s, E1c: the GGX albedo
+    E1 of the base specular and the coat (multiple-scattering factors, the transmission's
+    normalisation); Ef: the fuzz albedo.  Branches on the directions are selects, so that
+    a loop over rows calling it for one lobe k vectorises."""
+    up = (iz > 0.0) & (oz > 0.0)
     if k == DIFFUSE or k == SUBSURFACE:
-        if not up:
-            return 0.0, 0.0, 0.0
         s = ix * ox + iy * oy + iz * oz - iz * oz
-        if k == SUBSURFACE:
-            g, _ = diffuse_gh(D_QON if p[o + P_THIN] > 0.0 else D_LAMBERT, p, o, iz, oz, s)
+        if k == SUBSURFACE:   # QON when thin-walled (its reflection half), else Lambert
+            q = qon_terms(iz, oz, s, p[o + P_QON_AB], p[o + P_QON_AB + 1])
+            thin = p[o + P_THIN] > 0.0
+            g = q if thin else INV_PI
+            g = g if up else 0.0
             return p[o + P_SSS_COLOR] * g, p[o + P_SSS_COLOR + 1] * g, p[o + P_SSS_COLOR + 2] * g
         g, h = diffuse_gh(dmodel, p, o, iz, oz, s)
+        g = g if up else 0.0
+        h = h if up else 0.0
         return (p[o + P_BASE_COLOR] * g + p[o + P_RHO_MS] * h, p[o + P_BASE_COLOR + 1] * g + p[o + P_RHO_MS + 1] * h,
                 p[o + P_BASE_COLOR + 2] * g + p[o + P_RHO_MS + 2] * h)
     if k == SUBSURFACE_T:
-        if iz < 0.0 and oz > 0.0:
-            return p[o + P_SSS_COLOR] * INV_PI, p[o + P_SSS_COLOR + 1] * INV_PI, p[o + P_SSS_COLOR + 2] * INV_PI
-        return 0.0, 0.0, 0.0
+        g = INV_PI if (iz < 0.0) & (oz > 0.0) else 0.0
+        return p[o + P_SSS_COLOR] * g, p[o + P_SSS_COLOR + 1] * g, p[o + P_SSS_COLOR + 2] * g
     if k == FUZZ:
-        if not up:
-            return 0.0, 0.0, 0.0
         Xx, Xy = ltc_frame(ox, oy)
         lx, ly = to_frame(Xx, Xy, ix, iy)
         v = Ef * sheen_density(lx, ly, iz, oz, p[o + P_FUZZ_R]) / iz
+        v = v if up else 0.0
         return v, v, v
     if k == TRANSMISSION:   # the GGX lobe mirrored below the surface, normalised by E1
         mt, _ = mf.reflection(ix, iy, -iz, ox, oy, oz, p[o + P_ALPHA_S])
@@ -530,428 +549,53 @@ def uses_base_ggx(active):
     return (active & ((1 << SPECULAR) | (1 << METAL))) != 0
 
 
-#: the lobes sampled through GGX visible normals (or the NDF): their sampler has no
-#: cheaper pdf than ``lobe_pdf``, which the mixture evaluates for every lobe anyway
-GGX_LOBES = (1 << SPECULAR) | (1 << METAL) | (1 << TRANSMISSION) | (1 << COAT)
+#: The samplers of the lobes (``sampler_of``): the EON sampler (EON paper Listing 4; the EON
+#: diffuse lobe), cosine sampling (the other diffuse models, subsurface, translucency),
+#: GGX (visible normals or the NDF: specular, metal, transmission, coat) and the fuzz
+#: lobe's LTC.
+S_EON, S_COSINE, S_GGX, S_SHEEN = range(4)
+N_SAMPLERS = 4
+
+#: The floor of |wi.z| of the hemisphere samplers: the smallest normal float64.
+Z_MIN = float(np.finfo(np.float64).tiny)
 
 
 @kernel
-def lobe_sample(k, p, o, ox, oy, oz, u1, u2, dmodel, vndf):
-    """(x, y, z, own, ok): a direction from lobe k and, outside ``GGX_LOBES``, the density
-    its sampler computed with it (that of ``lobe_pdf``; 0 for the GGX lobes)."""
+def sampler_of(k, dmodel):
+    """The sampler of lobe slot k."""
+    if k == DIFFUSE:
+        return S_EON if dmodel == D_EON else S_COSINE
+    if k == SUBSURFACE or k == SUBSURFACE_T:
+        return S_COSINE
+    if k == FUZZ:
+        return S_SHEEN
+    return S_GGX
+
+
+@kernel
+def lobe_sample(sampler, k, p, o, ox, oy, oz, u1, u2, vndf):
+    """(x, y, z, ok): a direction from lobe slot k (a float: the row's chosen lobe) drawn by its
+    ``sampler`` (a constant of the caller's loop; the lobe only selects the GGX width and the
+    side of the surface); ok is False when the sampler failed (a GGX NDF normal facing away
+    from wo).
+
+    The hemisphere samplers never return z = 0: as in ``sampling`` (``sample``), |z| is
+    floored at ``Z_MIN``, which only rounding reaches (the uniform lobe's z = u1 at u1 = 0,
+    a CLTC direction on the clipped boundary), so that the sample lies in its lobe and its
+    pdf is the lobe's pdf there."""
+    if sampler == S_GGX:
+        a_s, a_c = p[o + P_ALPHA_S], p[o + P_ALPHA_C]
+        x, y, z, ok = mf.sample_reflection(ox, oy, oz, a_c if k == COAT else a_s, u1, u2, vndf)
+        return x, y, (-z if k == TRANSMISSION else z), ok
     mu = min(max(oz, 0.0), 1.0)
-    if k == DIFFUSE or k == SUBSURFACE or k == SUBSURFACE_T or k == FUZZ:
-        Xx, Xy = ltc_frame(ox, oy)
-        if diffuse_uses_eon_sampler(k, dmodel):
-            x, y, z, q = eon_sample(Xx, Xy, mu, p[o + P_R_DIFF], p[o + P_R_TENTH], u1, u2)
-            return x, y, z, q, True
-        if k == FUZZ:
-            lx, ly, z = sheen_sample(mu, p[o + P_FUZZ_R], u1, u2)
-            x, y = from_frame(Xx, Xy, lx, ly)
-            return x, y, z, sheen_density(lx, ly, z, mu, p[o + P_FUZZ_R]), True
-        lx, ly, z, q = cosine_sample_local(u1, u2)
-        x, y = from_frame(Xx, Xy, lx, ly)
-        if k == SUBSURFACE_T:
-            z = -z
-        return x, y, z, q, True
-    alpha = p[o + P_ALPHA_C] if k == COAT else p[o + P_ALPHA_S]
-    x, y, z, ok = mf.sample_reflection(ox, oy, oz, alpha, u1, u2, vndf)
-    if k == TRANSMISSION:
-        z = -z
-    return x, y, z, 0.0, ok
-
-
-@kernel
-def weights_albedos_rgb(p, o, st, dmodel, ms):
-    """``weights_albedos`` in the three channels: (w_r, w_g, w_b, E_r, E_g, E_b), each a
-    tuple over the 8 lobe slots."""
-    w0, e0 = weights_albedos(0, p, o, st, dmodel, ms)
-    w1, e1 = weights_albedos(1, p, o, st, dmodel, ms)
-    w2, e2 = weights_albedos(2, p, o, st, dmodel, ms)
-    return w0, w1, w2, e0, e1, e2
-
-
-@kernel
-def _norm_or_max(mx, a, b, c):
-    """|(a, b, c)| (RGB length), or its largest component's magnitude when ``mx``."""
-    return max(max(abs(a), abs(b)), abs(c)) if mx else math.sqrt(a * a + b * b + c * c)
-
-
-@kernel
-def all_scores(active, p, o, st, dmodel, ms, sel):
-    """The 8 lobe selection scores s_k = |w_k E_k| (0 for inactive slots) as a tuple: the RGB
-    length (SEL_LENGTH), the largest component (SEL_MAX) or 1 (SEL_UNIFORM).
-
-    With w_k = L_k K_k (``layer_factors``) most reduce to constants of the material
-    (``_pack_weights``): s_k = |L_k| E_k |K_k| for the lobes whose albedo is a scalar
-    (specular, coat, fuzz; the thin-walled subsurface's QON factor), |L_k| |K_k e_k| for a
-    constant colour e_k (transmission, subsurface), and for the diffuse lobe, whose albedo
-    is rho e_g + rho_ms e_h (Eq. 20), |L_0| sqrt(|K rho|^2 e_g^2 + 2 (K rho).(K rho_ms) e_g e_h
-    + |K rho_ms|^2 e_h^2) by length; only the metal lobe (and the diffuse one by max) is
-    summed over channels."""
-    E1s, E5s, E6s, Es, E1c, Ec, Ef, eg, eh, Eq = st
-    L = layer_factors(p, o, st)
-    uni = sel == SEL_UNIFORM
-    mx = sel == SEL_MAX
-    q = o + P_K
-    m = 1 if mx else 0
-    if mx:
-        sd = _norm_or_max(True, p[q] * diffuse_albedo(dmodel, p[o + P_BASE_COLOR], p[o + P_RHO_MS], eg, eh),
-                          p[q + 1] * diffuse_albedo(dmodel, p[o + P_BASE_COLOR + 1], p[o + P_RHO_MS + 1], eg, eh),
-                          p[q + 2] * diffuse_albedo(dmodel, p[o + P_BASE_COLOR + 2], p[o + P_RHO_MS + 2], eg, eh))
+    Xx, Xy = ltc_frame(ox, oy)
+    if sampler == S_EON:
+        x, y, z, _ = eon_sample(Xx, Xy, mu, p[o + P_R_DIFF], p[o + P_R_TENTH], u1, u2)
+        return x, y, max(z, Z_MIN), True
+    if sampler == S_SHEEN:
+        lx, ly, z = sheen_sample(mu, p[o + P_FUZZ_R], u1, u2)
     else:
-        sd = math.sqrt(max(p[o + P_DQ] * eg * eg + 2.0 * p[o + P_DQ + 1] * eg * eh + p[o + P_DQ + 2] * eh * eh, 0.0))
-    sm = 0.0
-    if active & (1 << METAL):
-        sm = _norm_or_max(mx, p[q + 6] * metal_albedo(p, o, 0, E1s, E5s, E6s, ms),
-                          p[q + 7] * metal_albedo(p, o, 1, E1s, E5s, E6s, ms),
-                          p[q + 8] * metal_albedo(p, o, 2, E1s, E5s, E6s, ms))
-    c = o + P_SC + m
-    s = (sd, Es * p[c + 2], sm, p[c + 6], p[c + 8] * (Eq if p[o + P_THIN] > 0.0 else 1.0), p[c + 10],
-         Ec * p[c + 12], Ef * p[c + 14])
-    return (_score_of(0, active, uni, L, s), _score_of(1, active, uni, L, s), _score_of(2, active, uni, L, s),
-            _score_of(3, active, uni, L, s), _score_of(4, active, uni, L, s), _score_of(5, active, uni, L, s),
-            _score_of(6, active, uni, L, s), _score_of(7, active, uni, L, s))
-
-
-@kernel
-def _score_of(k, active, uni, L, s):
-    if not active & (1 << k):
-        return 0.0
-    return 1.0 if uni else abs(L[k]) * s[k]
-
-
-@kernel
-def probability(sk, S, K):
-    """P_k = s_k / S; 1/K when every score is 0 (black surface: any distribution will do)."""
-    return sk / S if S > 0.0 else 1.0 / K
-
-
-@kernel
-def active_count(active):
-    """K: the number of active lobe slots."""
-    K = 0
-    for k in range(N_LOBES):
-        K += 1 if active & (1 << k) else 0
-    return K
-
-
-# --------------------------------------------------------------------------- drivers
-
-
-def _lobes_drive(active, dmodel, sel, ms, p, ps, wo, W, E, P):
-    """W, E (n*8*3), P (n*8): weight, albedo and probability of every lobe slot."""
-    n = wo.shape[0] // 3
-    for i in prange(n):
-        j = _U(i) * _U(3)
-        o = _U(i) * _U(ps)
-        oz = _F(wo[j + _U(2)])
-        mu = min(max(oz, 0.0), 1.0)
-        st = row_state(p, o, mu, dmodel, ms)
-        up = oz > 0.0
-        w0, w1, w2, e0, e1, e2 = weights_albedos_rgb(p, o, st, dmodel, ms)
-        ss = all_scores(active, p, o, st, dmodel, ms, sel)
-        S = 0.0
-        K = 0
-        for k in range(N_LOBES):
-            b = (_U(i) * _U(N_LOBES) + _U(k))
-            for c in range(3):
-                W[b * _U(3) + _U(c)] = 0.0
-                E[b * _U(3) + _U(c)] = 0.0
-            P[b] = 0.0
-            if active & (1 << k):
-                W[b * _U(3)], W[b * _U(3) + _U(1)], W[b * _U(3) + _U(2)] = w0[k], w1[k], w2[k]
-                # below the horizon nothing is reflected: E = 0 (and the probabilities uniform,
-                # SEL_UNIFORM's as well)
-                if up:
-                    E[b * _U(3)], E[b * _U(3) + _U(1)], E[b * _U(3) + _U(2)] = e0[k], e1[k], e2[k]
-                s = ss[k] if up else 0.0
-                P[b] = s
-                S += s
-                K += 1
-        for k in range(N_LOBES):
-            b = _U(i) * _U(N_LOBES) + _U(k)
-            if active & (1 << k):
-                P[b] = probability(P[b], S, K)
-
-
-def _albedo_drive(active, dmodel, ms, p, ps, wo, out):
-    n = wo.shape[0] // 3
-    for i in prange(n):
-        j = _U(i) * _U(3)
-        o = _U(i) * _U(ps)
-        oz = _F(wo[j + _U(2)])
-        mu = min(max(oz, 0.0), 1.0)
-        st = row_state(p, o, mu, dmodel, ms)
-        a0 = a1 = a2 = 0.0
-        if oz > 0.0:
-            w0, w1, w2, e0, e1, e2 = weights_albedos_rgb(p, o, st, dmodel, ms)
-            for k in range(N_LOBES):
-                if active & (1 << k):
-                    a0 += w0[k] * e0[k]
-                    a1 += w1[k] * e1[k]
-                    a2 += w2[k] * e2[k]
-        out[j] = a0
-        out[j + _U(1)] = a1
-        out[j + _U(2)] = a2
-
-
-def _eval_drive(active, only, dmodel, ms, p, ps, wi, wo, out):
-    """out (n*3) = sum_k w_k f_k, or the unweighted f_only when only >= 0."""
-    n = wo.shape[0] // 3
-    for i in prange(n):
-        j = _U(i) * _U(3)
-        o = _U(i) * _U(ps)
-        ix, iy, iz = _F(wi[j]), _F(wi[j + _U(1)]), _F(wi[j + _U(2)])
-        ox, oy, oz = _F(wo[j]), _F(wo[j + _U(1)]), _F(wo[j + _U(2)])
-        mu = min(max(oz, 0.0), 1.0)
-        st = row_state(p, o, mu, dmodel, ms, False)
-        a0 = a1 = a2 = 0.0
-        m, c = 0.0, 0.0
-        if uses_base_ggx(active):
-            m, c = mf.reflection(ix, iy, iz, ox, oy, oz, p[o + P_ALPHA_S])
-        if oz > 0.0:
-            w0, w1, w2, _, _, _ = weights_albedos_rgb(p, o, st, dmodel, ms)
-            for k in range(N_LOBES):
-                if (active & (1 << k)) and (only < 0 or only == k):
-                    f0, f1, f2 = lobe_f(k, p, o, st, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c)
-                    if only >= 0:
-                        a0, a1, a2 = f0, f1, f2
-                    else:
-                        a0 += w0[k] * f0
-                        a1 += w1[k] * f1
-                        a2 += w2[k] * f2
-        out[j] = a0
-        out[j + _U(1)] = a1
-        out[j + _U(2)] = a2
-
-
-#: The lobe slots the pdf and sample drivers loop over, a constant of each build: the base
-#: lobes (diffuse, specular, metal: the first BASE_SLOTS slots), or all of them.  With the
-#: bound fixed, LLVM unrolls the lobe loops and folds each lobe's switch; a base surface's
-#: sample measured 15 % faster with 3 slots than with 8 (serial builds, interleaved).
-BASE_SLOTS = 3
-
-
-def slots_of(active):
-    """The slot bound of the drivers that serve the lobe mask ``active``."""
-    return BASE_SLOTS if active < (1 << BASE_SLOTS) else N_LOBES
-
-
-def _pdf_driver(NL):
-    """The pdf driver over the first NL lobe slots."""
-    def _pdf_drive(active, dmodel, sel, ms, vndf, p, ps, wo, wi, out):
-        """out (n) = sum_k P_k pdf_k(wi | wo)."""
-        n = wo.shape[0] // 3
-        for i in prange(n):
-            j = _U(i) * _U(3)
-            o = _U(i) * _U(ps)
-            ix, iy, iz = _F(wi[j]), _F(wi[j + _U(1)]), _F(wi[j + _U(2)])
-            ox, oy, oz = _F(wo[j]), _F(wo[j + _U(1)]), _F(wo[j + _U(2)])
-            mu = min(max(oz, 0.0), 1.0)
-            q = 0.0
-            if oz > 0.0:
-                # one pass: sum_k s_k pdf_k / sum_k s_k (uniform over the active lobes when every
-                # score is 0), the mixture pdf with P_k = s_k / sum s
-                st = row_state(p, o, mu, dmodel, ms)
-                num = 0.0
-                pdf_s = 0.0
-                if uses_base_ggx(active):
-                    pdf_s = mf.reflection_pdf(ix, iy, iz, ox, oy, oz, p[o + P_ALPHA_S], vndf)
-                ss = all_scores(active, p, o, st, dmodel, ms, sel)
-                S = 0.0
-                flat = 0.0
-                K = 0
-                for k in range(NL):
-                    if active & (1 << k):
-                        pk = lobe_pdf(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, vndf, pdf_s)
-                        num += ss[k] * pk
-                        S += ss[k]
-                        flat += pk
-                        K += 1
-                q = num / S if S > 0.0 else flat / K
-            out[i] = q
-    return _pdf_drive
-
-
-def _sample_driver(NL):
-    """The sample driver over the first NL lobe slots."""
-    def _sample_drive(active, dmodel, sel, ms, vndf, p, ps, wo, u, wi, out):
-        """Pick lobe k with P_k (u[0]), sample it (u[1:3], or u[0] rescaled and u[1] when u has
-        2 columns); wi (n*3), out (n) = the mixture pdf, with the chosen lobe's own pdf from its
-        sampler (outside ``GGX_LOBES``); 0 marks a failed sample."""
-        n = wo.shape[0] // 3
-        ud = u.shape[0] // n
-        K = active_count(active)
-        for i in prange(n):
-            j = _U(i) * _U(3)
-            o = _U(i) * _U(ps)
-            ju = _U(i) * _U(ud)
-            ox, oy, oz = _F(wo[j]), _F(wo[j + _U(1)]), _F(wo[j + _U(2)])
-            mu = min(max(oz, 0.0), 1.0)
-            st = row_state(p, o, mu, dmodel, ms)
-            ss = all_scores(active, p, o, st, dmodel, ms, sel)
-            S = 0.0
-            for k in range(NL):
-                S += ss[k]
-            u0 = _F(u[ju])
-            # choose the lobe: the first whose cumulative probability exceeds u0
-            chosen = -1
-            last = -1
-            lo = 0.0
-            Pc = 0.0
-            for k in range(NL):
-                if active & (1 << k):
-                    last = k
-                    if chosen < 0:
-                        Pk = probability(ss[k], S, K)
-                        if u0 < lo + Pk:
-                            chosen = k
-                            Pc = Pk
-                        else:
-                            lo += Pk
-            if chosen < 0:   # rounding left the CDF's end below u0
-                chosen = last
-                Pc = probability(ss[last], S, K)
-            if ud == 3:
-                u1, u2 = _F(u[ju + _U(1)]), _F(u[ju + _U(2)])
-            else:
-                u1 = min(max((u0 - lo) / Pc, 0.0), U_MAX) if Pc > 0.0 else 0.0
-                u2 = _F(u[ju + _U(1)])
-            x, y, z, own, ok = lobe_sample(chosen, p, o, ox, oy, oz, u1, u2, dmodel, vndf)
-            ggx = (GGX_LOBES & (1 << chosen)) != 0
-            q = 0.0
-            if oz > 0.0 and ok and (ggx or own > 0.0):
-                pdf_s = 0.0
-                if uses_base_ggx(active):
-                    pdf_s = mf.reflection_pdf(x, y, z, ox, oy, oz, p[o + P_ALPHA_S], vndf)
-                mine = 0.0
-                for k in range(NL):
-                    if active & (1 << k):
-                        Pk = probability(ss[k], S, K)
-                        if k == chosen and not ggx:
-                            q += Pk * own
-                        elif Pk > 0.0 or k == chosen:
-                            pk = lobe_pdf(k, p, o, x, y, z, ox, oy, oz, dmodel, vndf, pdf_s)
-                            q += Pk * pk
-                            mine = pk if k == chosen else mine
-                if ggx and not mine > 0.0:   # the GGX lobe's own pdf: 0 marks a failed sample
-                    q = 0.0
-            if not oz > 0.0:
-                x, y, z = 0.0, 0.0, 1.0
-            wi[j] = x
-            wi[j + _U(1)] = y
-            wi[j + _U(2)] = z
-            out[i] = q
-    return _sample_drive
-
-
-PDF_DRIVES = {nl: _pdf_driver(nl) for nl in (BASE_SLOTS, N_LOBES)}
-SAMPLE_DRIVES = {nl: _sample_driver(nl) for nl in (BASE_SLOTS, N_LOBES)}
-
-
-# --------------------------------------------------------------------------- batch calls
-
-#: Below this many rows the serial build of a driver runs: waking the thread pool costs
-#: more than a small batch (a single material's lobes(wo) is the common case).
-SERIAL_ROWS = 4096
-_serial = numba.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
-
-
-def serial_build(f):
-    """The serial build of driver f, compiled from a copy of f named ``<name>_serial``.
-
-    numba's disk cache files a function under its module, qualified name and first line,
-    and keys its entries by signature and CPU only, not by the compile options: a serial and
-    a parallel build of the same function share one entry, and whichever a process compiled
-    first is loaded for both.  (So it was: after a process had evaluated one row, every
-    later process's 10^6-row call ran the serial code on one thread.)"""
-    g = types.FunctionType(f.__code__, f.__globals__, f.__name__ + "_serial", f.__defaults__, f.__closure__)
-    g.__qualname__ = f.__qualname__ + "_serial"
-    g.__module__ = f.__module__
-    g.__doc__ = f.__doc__
-    return _serial(g)
-
-
-_DRIVERS = {f: (compiled(f), serial_build(f))
-            for f in (_lobes_drive, _albedo_drive, _eval_drive, *PDF_DRIVES.values(), *SAMPLE_DRIVES.values())}
-
-
-def _driver(f, n):
-    parallel, serial = _DRIVERS[f]
-    return serial if n < SERIAL_ROWS else parallel
-
-
-@functools.cache
-def tables():
-    """(C, R): the padded GGX albedo tables (``microfacet.tables.padded_tables``), read by
-    ``pack_drive`` only: it collapses them per material into the P_CURVE_* and P_E* curves
-    in mu that the per-row drivers interpolate."""
-    from ..microfacet.tables import padded_tables
-
-    C, R = padded_tables()
-    if R.shape[2] != N_CURVE or C.shape[1] != N_CCURVE:   # the parameter layout reserves them
-        raise RuntimeError(f"GGX albedo tables have {R.shape[2] - 2} and {C.shape[1] - 2} mu nodes; the "
-                           f"parameter layout expects {N_CURVE - 2} (N_CURVE) and {N_CCURVE - 2} (N_CCURVE)")
-    return C, R
-
-
-def _run(f, head, params, lead, dirs, outs):
-    """Run driver f over the rows of ``lead``: ``params`` is one material (stride 0, never
-    copied or tiled) or materials broadcasting to ``lead`` (stride N_PARAMS, expanded)."""
-    n = math.prod(lead)
-    if n == 0:
-        return
-    if params.ndim == 1 and n == 1:   # one material, one row (lobes(wo) of a material): no batch machinery
-        _DRIVERS[f][1](*head, params, 0, *(rows(d, lead, k)[0] for d, k in dirs), *(o for o, _ in outs))
-        return
-    if params.ndim == 1:
-        inputs = []
-        for d, k in dirs:
-            b, t = rows(d, lead, k)
-            inputs.append((b, k, t))
-        launch(_driver(f, n), head + (params, 0), inputs, outs, n)
-        return
-    p = np.ascontiguousarray(np.broadcast_to(params, lead + (N_PARAMS,))).reshape(-1)
-    full = [np.ascontiguousarray(np.broadcast_to(d, lead + (k,))).reshape(-1) for d, k in dirs]
-    _driver(f, n)(*head, p, N_PARAMS, *full, *(o for o, _ in outs))
-
-
-def lobes_rows(flags, params, wo, lead):
-    """(W (..., 8, 3), E (..., 8, 3), P (..., 8)) for float64 arrays broadcasting to ``lead``."""
-    n = math.prod(lead)
-    W = np.empty(n * N_LOBES * 3)
-    E = np.empty(n * N_LOBES * 3)
-    P = np.empty(n * N_LOBES)
-    _run(_lobes_drive, (flags.active, flags.dmodel, flags.sel, flags.ms), params, lead, [(wo, 3)],
-         [(W, N_LOBES * 3), (E, N_LOBES * 3), (P, N_LOBES)])
-    return W.reshape(lead + (N_LOBES, 3)), E.reshape(lead + (N_LOBES, 3)), P.reshape(lead + (N_LOBES,))
-
-
-def albedo_rows(flags, params, wo, lead):
-    out = np.empty(math.prod(lead) * 3)
-    _run(_albedo_drive, (flags.active, flags.dmodel, flags.ms), params, lead, [(wo, 3)], [(out, 3)])
-    return out.reshape(lead + (3,))
-
-
-def eval_rows(flags, params, wi, wo, lead, only=-1):
-    out = np.empty(math.prod(lead) * 3)
-    _run(_eval_drive, (flags.active, only, flags.dmodel, flags.ms), params, lead, [(wi, 3), (wo, 3)],
-         [(out, 3)])
-    return out.reshape(lead + (3,))
-
-
-def pdf_rows(flags, params, wo, wi, lead):
-    out = np.empty(math.prod(lead))
-    _run(PDF_DRIVES[slots_of(flags.active)], (flags.active, flags.dmodel, flags.sel, flags.ms, flags.vndf), params, lead,
-         [(wo, 3), (wi, 3)], [(out, 1)])
-    return out.reshape(lead)
-
-
-def sample_rows(flags, params, wo, u, lead):
-    n = math.prod(lead)
-    wi = np.empty(n * 3)
-    out = np.empty(n)
-    _run(SAMPLE_DRIVES[slots_of(flags.active)], (flags.active, flags.dmodel, flags.sel, flags.ms, flags.vndf), params, lead,
-         [(wo, 3), (u, u.shape[-1])], [(wi, 3), (out, 1)])
-    return wi.reshape(lead + (3,)), out.reshape(lead)
+        lx, ly, z, _ = cosine_sample_local(u1, u2)
+    x, y = from_frame(Xx, Xy, lx, ly)
+    z = max(z, Z_MIN)
+    return x, y, (-z if k == SUBSURFACE_T else z), True

@@ -63,8 +63,10 @@ tangent / coat-normal inputs.  specular_ior or coat_ior < 1: total internal refl
 not modelled, the Fresnel factor of the reciprocal index (same F0) is used, with a warning.
 The F82-tint Fresnel is the published formula, unclamped (warned when it dips below 0).
 
-Speed: every verb is one compiled loop over rows (``_surface_kernels``); the material's
-inputs are packed once into a parameter vector per material.  Building a surface from plain
+Speed: every verb is one compiled driver (``_surface_drivers``) that runs blocks of rows one
+lobe at a time, each pass a vectorised loop (``_surface_passes``; the lobes themselves are
+``_surface_kernels``); the material's inputs are packed once into a parameter vector per
+material.  Building a surface from plain
 Python numbers and 3-tuples skips NumPy's input conversion (same checks, same values), and
 ``lobes`` at one direction of one material calls the serial driver directly.
 """
@@ -78,6 +80,7 @@ import numpy as np
 
 from .. import _arrays as ar
 from ..microfacet import ggx
+from . import _surface_drivers as sd
 from . import _surface_kernels as sk
 from ._node import NodeMeta, bind_inputs, convert_input, is_default, node_signature
 from .frame import Frame
@@ -146,7 +149,7 @@ def pack_parameters(p, changed=None):
                               for v, (_, w) in zip(vals, sk.RAW)], axis=-1)
         raw = np.ascontiguousarray(raw, dtype=np.float64).reshape(-1)
     out = np.empty(lead + (sk.N_PARAMS,))
-    mask, warn = sk.pack_drive(raw, out.reshape(-1) if lead else out, *sk.tables())
+    mask, warn = sk.pack_drive(raw, out.reshape(-1) if lead else out, *sd.tables())
     return out, mask, warn
 
 
@@ -409,7 +412,7 @@ class OpenPBRSurface(metaclass=NodeMeta):
         """
         wo = self._local("wo", wo)
         lead = self._lead(wo=wo.shape[:-1])
-        W, E, P = sk.lobes_rows(self._flags, self.params, wo, lead)
+        W, E, P = sd.lobes_rows(self._flags, self.params, wo, lead)
         if lead:
             W, E, P = np.moveaxis(W, -2, 0), np.moveaxis(E, -2, 0), np.moveaxis(P, -1, 0)   # lobe axis first
         return [_new_lobe((LOBE_NAMES[k], W[k], E[k], P[k, ...])) for k in self._slots]
@@ -425,7 +428,7 @@ class OpenPBRSurface(metaclass=NodeMeta):
         dtype = ar.result_dtype(wi, wo)
         wi, wo = self._local("wi", wi), self._local("wo", wo)
         lead = self._lead(wi=wi.shape[:-1], wo=wo.shape[:-1])
-        return sk.eval_rows(self._flags, self.params, wi, wo, lead, LOBE_NAMES.index(name)).astype(dtype, copy=False)
+        return sd.eval_rows(self._flags, self.params, wi, wo, lead, LOBE_NAMES.index(name)).astype(dtype, copy=False)
 
     def eval(self, wi, wo):
         """BSDF value sum_k w_k(wo) f_k(wi, wo) without the cosine factor, shape (..., 3).
@@ -436,20 +439,20 @@ class OpenPBRSurface(metaclass=NodeMeta):
         dtype = ar.result_dtype(wi, wo)
         wi, wo = self._local("wi", wi), self._local("wo", wo)
         lead = self._lead(wi=wi.shape[:-1], wo=wo.shape[:-1])
-        return sk.eval_rows(self._flags, self.params, wi, wo, lead).astype(dtype, copy=False)
+        return sd.eval_rows(self._flags, self.params, wi, wo, lead).astype(dtype, copy=False)
 
     def albedo(self, wo):
         """Directional albedo sum_k w_k E_k(wo) (reflected and transmitted), shape (..., 3)."""
         dtype = ar.result_dtype(wo)
         wo = self._local("wo", wo)
-        return sk.albedo_rows(self._flags, self.params, wo, self._lead(wo=wo.shape[:-1])).astype(dtype, copy=False)
+        return sd.albedo_rows(self._flags, self.params, wo, self._lead(wo=wo.shape[:-1])).astype(dtype, copy=False)
 
     def pdf(self, wo, wi):
         """One-sample mixture pdf sum_k P_k(wo) pdf_k(wi | wo) (solid angle, whole sphere)."""
         dtype = ar.result_dtype(wo, wi)
         wo, wi = self._local("wo", wo), self._local("wi", wi)
         lead = self._lead(wo=wo.shape[:-1], wi=wi.shape[:-1])
-        return sk.pdf_rows(self._flags, self.params, wo, wi, lead).astype(dtype, copy=False)
+        return sd.pdf_rows(self._flags, self.params, wo, wi, lead).astype(dtype, copy=False)
 
     def sample(self, wo, u):
         """Pick a lobe with probability P_k and sample it: returns (wi, pdf).
@@ -466,11 +469,13 @@ class OpenPBRSurface(metaclass=NodeMeta):
         Returns
         -------
         wi : (..., 3)
-            May lie below the horizon (GGX reflections, where f = 0; transmission).
+            May lie below the horizon (GGX reflections, where f = 0; transmission).  The
+            hemisphere lobes (diffuse, subsurface, fuzz) never return wi.z = 0: |wi.z| is
+            floored at the smallest normal float64, which only rounding reaches.
         pdf : (...)
-            The mixture pdf ``pdf(wo, wi)``, with the chosen lobe's term from its sampler;
-            0 marks a failed sample (to be discarded): wo below the horizon, or with
-            ``specular_sampling="ndf"`` a microfacet normal facing away from wo.
+            The mixture pdf ``pdf(wo, wi)`` of the returned wi (the same computation, to
+            the bit); 0 marks a failed sample (to be discarded): wo below the horizon, or
+            with ``specular_sampling="ndf"`` a microfacet normal facing away from wo.
         """
         dtype = ar.result_dtype(wo, u)
         wo = self._local("wo", wo)
@@ -478,7 +483,7 @@ class OpenPBRSurface(metaclass=NodeMeta):
         if u.ndim == 0 or u.shape[-1] not in (2, 3):
             raise ValueError(f"u must have shape (..., 3) or (..., 2), got shape {u.shape}")
         lead = self._lead(wo=wo.shape[:-1], u=u.shape[:-1])
-        wi, pdf = sk.sample_rows(self._flags, self.params, wo, u, lead)
+        wi, pdf = sd.sample_rows(self._flags, self.params, wo, u, lead)
         return self.frame.to_world(wi).astype(dtype, copy=False), pdf.astype(dtype, copy=False)
 
     def __repr__(self):

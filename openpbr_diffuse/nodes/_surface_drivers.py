@@ -1,0 +1,468 @@
+"""The batch drivers of ``OpenPBRSurface``: one per verb (lobes, albedo, eval, pdf, sample),
+and the calls that run them over the rows of a request.
+
+A driver splits its rows into blocks of ``B`` and runs the block passes of
+``_surface_passes`` on each: the state of mu_o, then one pass per active lobe with the lobe
+id a constant, so that every pass is a vectorised loop (the lobe-at-a-time order of a
+wavefront renderer).  ``sample`` chooses the lobe of each row, gathers the rows of each lobe
+(``compact``) and runs that lobe's sampler on them only, then evaluates the mixture pdf at
+the sampled directions with the same passes as ``pdf``: the pdf returned with a sample is
+``pdf(wo, wi)`` of the returned wi, computed by the same code.
+
+Each driver is built for a parameter stride (0: one material for every row; N_PARAMS: a
+material per row) as a compile-time constant, in a parallel build (blocks spread over the
+threads) and, for one material, a serial build for small batches (``SERIAL_ROWS``).
+No input is checked here: the public class checks its inputs once, at construction and on
+each call's directions.
+"""
+import concurrent.futures
+import functools
+import math
+import os
+import threading
+
+import numba
+import numpy as np
+
+from .._jit import FASTMATH, kernel, opaque, stack_buffer
+from .._launch import _U, launch, rows
+from ._surface_kernels import (COAT, D_EON, D_LAMBERT, D_QON, DIFFUSE, FUZZ, METAL, N_CCURVE, N_CURVE, N_LOBES,
+                               N_PARAMS, N_SAMPLERS, S_COSINE, S_EON, S_GGX, S_SHEEN, SPECULAR, SUBSURFACE,
+                               SUBSURFACE_T, TRANSMISSION)
+from ._surface_passes import (A0, A1, A2, load_u_pass, IX, MINE, NROWS, OK, OX, OZ, Q, B, albedo_lobe_pass, at,
+                              choose_pass, compact, eval_lobe_pass, fill_pass, ggx_pass, ggx_pdf_pass, is_on,
+                              load_pass, lobe_outputs_pass, pdf_lobe_pass, probability_pass, rgb_out_pass,
+                              sample_pass, state_passes)
+
+# --------------------------------------------------------------------------- buffers
+# Each run of blocks keeps its scratch, its compaction lists and (one material) a copy of the
+# material's parameters in stack buffers: loads of the parameters then leave the passes'
+# loops, which vectorise (``_jit.stack_buffer``).
+_scratch = stack_buffer(NROWS * B)
+_lists = stack_buffer(N_SAMPLERS * B, numba.int64)
+_counts = stack_buffer(N_SAMPLERS, numba.int64)
+_param_buffer = stack_buffer(N_PARAMS)
+
+
+@numba.njit(inline="always")
+def _local_params(p):
+    """One material's parameters, copied to a stack buffer."""
+    q = _param_buffer()
+    for i in range(N_PARAMS):
+        q[i] = p[i]
+    return q
+
+
+# --------------------------------------------------------------------------- lobe loops
+# One block pass per active lobe slot, the slot a literal constant (and the diffuse model
+# too, for the diffuse slot's pass).
+
+@kernel
+def _each_eval(active, dmodel, weighted, ms, p, ps, s0, m, f):
+    """``eval_lobe_pass`` of every active lobe."""
+    if is_on(active, DIFFUSE):
+        if dmodel == D_EON:
+            eval_lobe_pass(DIFFUSE, D_EON, weighted, ms, p, ps, s0, m, f)
+        elif dmodel == D_QON:
+            eval_lobe_pass(DIFFUSE, D_QON, weighted, ms, p, ps, s0, m, f)
+        else:
+            eval_lobe_pass(DIFFUSE, D_LAMBERT, weighted, ms, p, ps, s0, m, f)
+    if is_on(active, SPECULAR):
+        eval_lobe_pass(SPECULAR, D_EON, weighted, ms, p, ps, s0, m, f)
+    if is_on(active, METAL):
+        eval_lobe_pass(METAL, D_EON, weighted, ms, p, ps, s0, m, f)
+    if is_on(active, TRANSMISSION):
+        eval_lobe_pass(TRANSMISSION, D_EON, weighted, ms, p, ps, s0, m, f)
+    if is_on(active, SUBSURFACE):
+        eval_lobe_pass(SUBSURFACE, D_EON, weighted, ms, p, ps, s0, m, f)
+    if is_on(active, SUBSURFACE_T):
+        eval_lobe_pass(SUBSURFACE_T, D_EON, weighted, ms, p, ps, s0, m, f)
+    if is_on(active, COAT):
+        eval_lobe_pass(COAT, D_EON, weighted, ms, p, ps, s0, m, f)
+    if is_on(active, FUZZ):
+        eval_lobe_pass(FUZZ, D_EON, weighted, ms, p, ps, s0, m, f)
+
+
+@kernel
+def _each_pdf(active, dmodel, track, vndf, p, ps, s0, m, f):
+    """``pdf_lobe_pass`` of every active lobe."""
+    if is_on(active, DIFFUSE):
+        if dmodel == D_EON:
+            pdf_lobe_pass(opaque(DIFFUSE), opaque(D_EON), track, vndf, p, ps, s0, m, f)
+        elif dmodel == D_QON:
+            pdf_lobe_pass(opaque(DIFFUSE), opaque(D_QON), track, vndf, p, ps, s0, m, f)
+        else:
+            pdf_lobe_pass(opaque(DIFFUSE), opaque(D_LAMBERT), track, vndf, p, ps, s0, m, f)
+    if is_on(active, SPECULAR):
+        pdf_lobe_pass(opaque(SPECULAR), opaque(D_EON), track, vndf, p, ps, s0, m, f)
+    if is_on(active, METAL):
+        pdf_lobe_pass(opaque(METAL), opaque(D_EON), track, vndf, p, ps, s0, m, f)
+    if is_on(active, TRANSMISSION):
+        pdf_lobe_pass(opaque(TRANSMISSION), opaque(D_EON), track, vndf, p, ps, s0, m, f)
+    if is_on(active, SUBSURFACE):
+        pdf_lobe_pass(opaque(SUBSURFACE), opaque(D_EON), track, vndf, p, ps, s0, m, f)
+    if is_on(active, SUBSURFACE_T):
+        pdf_lobe_pass(opaque(SUBSURFACE_T), opaque(D_EON), track, vndf, p, ps, s0, m, f)
+    if is_on(active, COAT):
+        pdf_lobe_pass(opaque(COAT), opaque(D_EON), track, vndf, p, ps, s0, m, f)
+    if is_on(active, FUZZ):
+        pdf_lobe_pass(opaque(FUZZ), opaque(D_EON), track, vndf, p, ps, s0, m, f)
+
+
+@kernel
+def _each_albedo(active, dmodel, ms, p, ps, s0, m, f):
+    """``albedo_lobe_pass`` of every active lobe."""
+    if is_on(active, DIFFUSE):
+        if dmodel == D_EON:
+            albedo_lobe_pass(opaque(DIFFUSE), opaque(D_EON), ms, p, ps, s0, m, f)
+        elif dmodel == D_QON:
+            albedo_lobe_pass(opaque(DIFFUSE), opaque(D_QON), ms, p, ps, s0, m, f)
+        else:
+            albedo_lobe_pass(opaque(DIFFUSE), opaque(D_LAMBERT), ms, p, ps, s0, m, f)
+    if is_on(active, SPECULAR):
+        albedo_lobe_pass(opaque(SPECULAR), opaque(D_EON), ms, p, ps, s0, m, f)
+    if is_on(active, METAL):
+        albedo_lobe_pass(opaque(METAL), opaque(D_EON), ms, p, ps, s0, m, f)
+    if is_on(active, TRANSMISSION):
+        albedo_lobe_pass(opaque(TRANSMISSION), opaque(D_EON), ms, p, ps, s0, m, f)
+    if is_on(active, SUBSURFACE):
+        albedo_lobe_pass(opaque(SUBSURFACE), opaque(D_EON), ms, p, ps, s0, m, f)
+    if is_on(active, SUBSURFACE_T):
+        albedo_lobe_pass(opaque(SUBSURFACE_T), opaque(D_EON), ms, p, ps, s0, m, f)
+    if is_on(active, COAT):
+        albedo_lobe_pass(opaque(COAT), opaque(D_EON), ms, p, ps, s0, m, f)
+    if is_on(active, FUZZ):
+        albedo_lobe_pass(opaque(FUZZ), opaque(D_EON), ms, p, ps, s0, m, f)
+
+
+@kernel
+def _each_sampler(vndf, p, ps, s0, f, idx, cnt):
+    """``sample_pass`` of every sampler that some row of the block uses (vndf a constant of the
+    GGX pass: ``sample_reflection`` branches on it)."""
+    if cnt[S_EON]:
+        sample_pass(opaque(S_EON), opaque(vndf), p, ps, s0, f, idx, cnt)
+    if cnt[S_COSINE]:
+        sample_pass(opaque(S_COSINE), opaque(vndf), p, ps, s0, f, idx, cnt)
+    if cnt[S_GGX]:
+        if vndf:
+            sample_pass(opaque(S_GGX), opaque(True), p, ps, s0, f, idx, cnt)
+        else:
+            sample_pass(opaque(S_GGX), opaque(False), p, ps, s0, f, idx, cnt)
+    if cnt[S_SHEEN]:
+        sample_pass(opaque(S_SHEEN), opaque(vndf), p, ps, s0, f, idx, cnt)
+
+
+@kernel
+def _choose(ud, u, s0, m, f):
+    if ud == 3:
+        load_u_pass(3, u, s0, m, f)
+        choose_pass(3, B, f)
+    else:
+        load_u_pass(2, u, s0, m, f)
+        choose_pass(2, B, f)
+
+
+# --------------------------------------------------------------------------- block runs
+# ``run(t, nt, ...)`` processes the t-th of nt runs of blocks: the rows' blocks
+# [t nb / nt, (t + 1) nb / nt).  It is compiled once per verb and parameter stride and
+# called by both builds of the driver (``_Builds``), so that the serial and the parallel
+# driver share one compiled body.
+
+_jit_run = numba.njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
+
+
+@numba.njit(inline="always")
+def _block_range(t, nt, n):
+    nb = (n + B - 1) // B
+    return t * nb // nt, (t + 1) * nb // nt
+
+
+def _lobes_run(ps):
+    @_jit_run
+    def lobes_run(t, nt, active, dmodel, sel, ms, p, wo, W, E, P):
+        """W, E (n*8*3), P (n*8): weight, albedo and probability of every lobe slot."""
+        n = wo.shape[0] // 3
+        f = _scratch()
+        if ps == 0:   # one material: a local copy (ps is a constant: the other branch is pruned)
+            q = _local_params(p)
+        else:         # a material per row: read where they are
+            q = p
+        b0, b1 = _block_range(t, nt, n)
+        for b in range(b0, b1):
+            s0 = b * B
+            m = min(B, n - s0)
+            load_pass(wo, s0, m, f, OX)
+            state_passes(active, dmodel, ms, True, True, q, ps, s0, B, f)
+            probability_pass(active, sel, q, ps, s0, B, f, ms)
+            for k in range(N_LOBES):
+                lobe_outputs_pass(k, is_on(active, k), ms, q, ps, s0, m, f, W, E, P)
+    return lobes_run
+
+
+def _albedo_run(ps):
+    @_jit_run
+    def albedo_run(t, nt, active, dmodel, ms, p, wo, out):
+        """out (n*3) = sum_k w_k E_k."""
+        n = wo.shape[0] // 3
+        f = _scratch()
+        if ps == 0:   # one material: a local copy (ps is a constant: the other branch is pruned)
+            q = _local_params(p)
+        else:         # a material per row: read where they are
+            q = p
+        b0, b1 = _block_range(t, nt, n)
+        for b in range(b0, b1):
+            s0 = b * B
+            m = min(B, n - s0)
+            load_pass(wo, s0, m, f, OX)
+            state_passes(active, dmodel, ms, True, True, q, ps, s0, B, f)
+            fill_pass(f, A0, B, 0.0)
+            fill_pass(f, A1, B, 0.0)
+            fill_pass(f, A2, B, 0.0)
+            _each_albedo(active, dmodel, ms, q, ps, s0, B, f)
+            rgb_out_pass(s0, m, f, out)
+    return albedo_run
+
+
+def _eval_run(ps):
+    @_jit_run
+    def eval_run(t, nt, active, only, dmodel, ms, p, wi, wo, out):
+        """out (n*3) = sum_k w_k f_k, or the unweighted f_only when only >= 0."""
+        n = wo.shape[0] // 3
+        lobes = active if only < 0 else active & (1 << only)
+        f = _scratch()
+        if ps == 0:   # one material: a local copy (ps is a constant: the other branch is pruned)
+            q = _local_params(p)
+        else:         # a material per row: read where they are
+            q = p
+        b0, b1 = _block_range(t, nt, n)
+        for b in range(b0, b1):
+            s0 = b * B
+            m = min(B, n - s0)
+            load_pass(wo, s0, m, f, OX)
+            load_pass(wi, s0, m, f, IX)
+            state_passes(active, dmodel, ms, False, False, q, ps, s0, B, f)
+            ggx_pass(lobes, q, ps, s0, B, f)
+            fill_pass(f, A0, B, 0.0)
+            fill_pass(f, A1, B, 0.0)
+            fill_pass(f, A2, B, 0.0)
+            _each_eval(lobes, dmodel, only < 0, ms, q, ps, s0, B, f)
+            rgb_out_pass(s0, m, f, out)
+    return eval_run
+
+
+def _pdf_run(ps):
+    @_jit_run
+    def pdf_run(t, nt, active, dmodel, sel, ms, vndf, p, wo, wi, out):
+        """out (n) = sum_k P_k pdf_k(wi | wo); 0 where wo is below the horizon."""
+        n = wo.shape[0] // 3
+        f = _scratch()
+        if ps == 0:   # one material: a local copy (ps is a constant: the other branch is pruned)
+            q = _local_params(p)
+        else:         # a material per row: read where they are
+            q = p
+        b0, b1 = _block_range(t, nt, n)
+        for b in range(b0, b1):
+            s0 = b * B
+            m = min(B, n - s0)
+            load_pass(wo, s0, m, f, OX)
+            load_pass(wi, s0, m, f, IX)
+            state_passes(active, dmodel, ms, True, True, q, ps, s0, B, f)
+            probability_pass(active, sel, q, ps, s0, B, f, ms)
+            ggx_pdf_pass(active, vndf, q, ps, s0, B, f)
+            fill_pass(f, Q, B, 0.0)
+            _each_pdf(active, dmodel, False, vndf, q, ps, s0, B, f)
+            for r in range(m):
+                out[_U(s0 + r)] = f[at(Q, r)] if f[at(OZ, r)] > 0.0 else 0.0
+    return pdf_run
+
+
+def _sample_run(ps):
+    @_jit_run
+    def sample_run(t, nt, active, dmodel, sel, ms, vndf, p, wo, u, wi, out):
+        """Pick lobe k with P_k (u[0]), sample it (u[1:3], or u[0] rescaled and u[1] when u has
+        2 columns); wi (n*3), out (n) = the mixture pdf at wi; 0 marks a failed sample."""
+        n = wo.shape[0] // 3
+        ud = u.shape[0] // n
+        f = _scratch()
+        idx = _lists()
+        cnt = _counts()
+        if ps == 0:   # one material: a local copy (ps is a constant: the other branch is pruned)
+            q = _local_params(p)
+        else:         # a material per row: read where they are
+            q = p
+        b0, b1 = _block_range(t, nt, n)
+        for b in range(b0, b1):
+            s0 = b * B
+            m = min(B, n - s0)
+            load_pass(wo, s0, m, f, OX)
+            state_passes(active, dmodel, ms, True, True, q, ps, s0, B, f)
+            probability_pass(active, sel, q, ps, s0, B, f, ms)
+            _choose(ud, u, s0, m, f)
+            compact(dmodel, B, f, idx, cnt)
+            _each_sampler(vndf, q, ps, s0, f, idx, cnt)
+            ggx_pdf_pass(active, vndf, q, ps, s0, B, f)
+            fill_pass(f, Q, B, 0.0)
+            fill_pass(f, MINE, B, 0.0)
+            _each_pdf(active, dmodel, True, vndf, q, ps, s0, B, f)
+            for r in range(m):
+                j = _U(3) * _U(s0 + r)
+                up = f[at(OZ, r)] > 0.0
+                good = up & (f[at(OK, r)] > 0.0) & (f[at(MINE, r)] > 0.0)
+                out[_U(s0 + r)] = f[at(Q, r)] if good else 0.0
+                wi[j] = f[at(IX, r)] if up else 0.0
+                wi[j + _U(1)] = f[at(IX + 1, r)] if up else 0.0
+                wi[j + _U(2)] = f[at(IX + 2, r)] if up else 1.0
+    return sample_run
+
+
+# --------------------------------------------------------------------------- threads
+
+#: Below this many rows a call runs on the calling thread alone: handing runs to the pool
+#: costs tens of microseconds, more than a small batch (one material's lobes(wo) is the
+#: common case).
+SERIAL_ROWS = 4096
+#: A parallel call splits its blocks into this many runs per thread (the pool's threads take
+#: them as they become free, which evens out a machine whose cores run at different speeds).
+RUNS_PER_THREAD = 2
+
+_pool_lock = threading.Lock()
+_pool = None   # (pool, threads, pid)
+
+
+def _executor(threads):
+    """The surface's thread pool of ``threads`` workers (numba's thread count:
+    ``NUMBA_NUM_THREADS``, ``numba.set_num_threads``); rebuilt when that changes, and in a
+    forked child (which inherits the pool object but not its threads)."""
+    global _pool
+    with _pool_lock:
+        if _pool is None or _pool[1] != threads or _pool[2] != os.getpid():
+            if _pool is not None and _pool[2] == os.getpid():
+                _pool[0].shutdown(wait=False)
+            _pool = (concurrent.futures.ThreadPoolExecutor(threads, thread_name_prefix="openpbr-surface"), threads,
+                     os.getpid())
+        return _pool[0]
+
+
+class _Builds:
+    """A verb's block runners (one material; a material per row) and how a call runs them.
+
+    The runners are compiled with ``nogil``, and a large call runs them on a pool of Python
+    threads: one compiled body serves the serial and the parallel call.  (A numba
+    ``prange`` driver would be a second compilation of the whole body, which numba
+    re-optimises as it inlines it -- a minute of a cold start -- and its OpenMP threads,
+    once idle, took up to milliseconds to wake on the test VM.)"""
+
+    def __init__(self, factory):
+        self.one, self.each = factory(0), factory(N_PARAMS)
+
+    def __call__(self, per_row, n, *args):
+        run = self.each if per_row else self.one
+        threads = numba.get_num_threads()
+        if n < SERIAL_ROWS or threads == 1:
+            run(0, 1, *args)
+            return
+        nt = min((n + B - 1) // B, RUNS_PER_THREAD * threads)
+        pool = _executor(threads)
+        jobs = [pool.submit(run, t, nt, *args) for t in range(nt)]
+        for job in jobs:
+            job.result()
+
+
+LOBES = _Builds(_lobes_run)
+ALBEDO = _Builds(_albedo_run)
+EVAL = _Builds(_eval_run)
+PDF = _Builds(_pdf_run)
+SAMPLE = _Builds(_sample_run)
+BUILDS = {"lobes": LOBES, "albedo": ALBEDO, "eval": EVAL, "pdf": PDF, "sample": SAMPLE}
+
+
+@functools.cache
+def tables():
+    """(C, R): the padded GGX albedo tables (``microfacet.tables.padded_tables``), read by
+    ``pack_drive`` only: it collapses them per material into the P_CURVE_* and P_E* curves
+    in mu that the per-row drivers interpolate."""
+    from ..microfacet.tables import padded_tables
+
+    C, R = padded_tables()
+    if R.shape[2] != N_CURVE or C.shape[1] != N_CCURVE:   # the parameter layout reserves them
+        raise RuntimeError(f"GGX albedo tables have {R.shape[2] - 2} and {C.shape[1] - 2} mu nodes; the "
+                           f"parameter layout expects {N_CURVE - 2} (N_CURVE) and {N_CCURVE - 2} (N_CCURVE)")
+    return C, R
+
+
+def _run(builds, head, params, lead, dirs, outs):
+    """Run a verb's driver over the rows of ``lead``: ``params`` is one material (never copied
+    or tiled) or materials broadcasting to ``lead`` (expanded to a material per row)."""
+    n = math.prod(lead)
+    if n == 0:
+        return
+    if params.ndim == 1 and n == 1:   # one material, one row (lobes(wo) of a material): no batch machinery
+        builds.one(0, 1, *head, params, *(rows(d, lead, k)[0] for d, k in dirs), *(o for o, _ in outs))
+        return
+    if params.ndim == 1:
+        inputs = []
+        for d, k in dirs:
+            b, t = rows(d, lead, k)
+            inputs.append((b, k, t))
+        first = len(head) + 1   # the first direction buffer (3 a row) follows the parameters
+
+        def drive(*args):
+            builds(False, args[first].size // 3, *args)
+
+        launch(drive, head + (params,), inputs, outs, n)
+        return
+    # a material per row (no copy when the materials already have the rows' shape).  The
+    # passes run over whole blocks and read a material for every row of a block: the whole
+    # blocks run on the rows as they are, the last, partial block on a copy padded with its
+    # last material (the padding rows' results are not stored)
+    p = np.ascontiguousarray(np.broadcast_to(params, lead + (N_PARAMS,))).reshape(-1)
+    full = [np.ascontiguousarray(np.broadcast_to(d, lead + (k,))).reshape(-1) for d, k in dirs]
+    whole = n - n % B
+    if whole:
+        builds(True, whole, *head, p[:whole * N_PARAMS], *(d[:whole * k] for d, (_, k) in zip(full, dirs)),
+               *(o[:whole * k] for o, k in outs))
+    if whole < n:
+        tail = np.empty(B * N_PARAMS)
+        tail[:(n - whole) * N_PARAMS] = p[whole * N_PARAMS:]
+        tail[(n - whole) * N_PARAMS:] = np.tile(p[(n - 1) * N_PARAMS:], B - (n - whole))
+        builds(True, n - whole, *head, tail, *(d[whole * k:] for d, (_, k) in zip(full, dirs)),
+               *(o[whole * k:] for o, k in outs))
+
+
+def lobes_rows(flags, params, wo, lead):
+    """(W (..., 8, 3), E (..., 8, 3), P (..., 8)) for float64 arrays broadcasting to ``lead``."""
+    n = math.prod(lead)
+    W = np.empty(n * N_LOBES * 3)
+    E = np.empty(n * N_LOBES * 3)
+    P = np.empty(n * N_LOBES)
+    _run(LOBES, (flags.active, flags.dmodel, flags.sel, flags.ms), params, lead, [(wo, 3)],
+         [(W, N_LOBES * 3), (E, N_LOBES * 3), (P, N_LOBES)])
+    return W.reshape(lead + (N_LOBES, 3)), E.reshape(lead + (N_LOBES, 3)), P.reshape(lead + (N_LOBES,))
+
+
+def albedo_rows(flags, params, wo, lead):
+    out = np.empty(math.prod(lead) * 3)
+    _run(ALBEDO, (flags.active, flags.dmodel, flags.ms), params, lead, [(wo, 3)], [(out, 3)])
+    return out.reshape(lead + (3,))
+
+
+def eval_rows(flags, params, wi, wo, lead, only=-1):
+    out = np.empty(math.prod(lead) * 3)
+    _run(EVAL, (flags.active, only, flags.dmodel, flags.ms), params, lead, [(wi, 3), (wo, 3)], [(out, 3)])
+    return out.reshape(lead + (3,))
+
+
+def pdf_rows(flags, params, wo, wi, lead):
+    out = np.empty(math.prod(lead))
+    _run(PDF, (flags.active, flags.dmodel, flags.sel, flags.ms, flags.vndf), params, lead, [(wo, 3), (wi, 3)],
+         [(out, 1)])
+    return out.reshape(lead)
+
+
+def sample_rows(flags, params, wo, u, lead):
+    n = math.prod(lead)
+    wi = np.empty(n * 3)
+    out = np.empty(n)
+    _run(SAMPLE, (flags.active, flags.dmodel, flags.sel, flags.ms, flags.vndf), params, lead,
+         [(wo, 3), (u, u.shape[-1])], [(wi, 3), (out, 1)])
+    return wi.reshape(lead + (3,)), out.reshape(lead)

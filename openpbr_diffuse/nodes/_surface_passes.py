@@ -1,0 +1,425 @@
+"""Block passes of the surface's drivers: loops over the rows of one block, one quantity or
+one lobe at a time, so that each loop is straight-line code that LLVM vectorises.
+
+A driver (``_surface_drivers``) walks its rows in blocks of ``B``; each block keeps its
+per-row values in a scratch buffer ``f`` of ``NROWS`` rows of B float64 (``at(row, r)``):
+the directions, the layer albedos of mu_o (``state_passes``), the selection probabilities
+(``probability_pass``), then whatever the verb accumulates.  The lobe passes run once per
+active lobe with the lobe id a compile-time constant (the callers write ``if active & bit:
+pass(SLOT, ...)``), so ``lobe_f`` / ``lobe_pdf`` / ``lobe_sample`` fold to that lobe's
+formula and the loop body has no switch; the material's options (multiple scattering, VNDF,
+the selection rule) are selects, the diffuse model a constant of the diffuse lobe's pass.
+A loop with a run-time switch inside, or a libm call (``exp`` of the fuzz albedo), stays
+scalar; measured on the 2-core test VM, the base surface's sample went from ~235 to ~60 ns
+a row single-threaded with this layout (``tools/bench.py``).
+
+Parameters: ``ps`` is the parameter stride, a compile-time constant of each driver build:
+0 for one material (every load of p is then loop-invariant and hoisted), N_PARAMS for a
+material per row (``par``).
+"""
+import numba
+
+from .._jit import kernel, opaque
+from .._launch import _U
+from ..microfacet import kernels as mf
+from ..microfacet.sheen import sheen_albedo_at
+from ..models.qon import qon_albedo
+from ..sampling.simple import U_MAX
+from ._surface_kernels import (COAT, D_EON, DIFFUSE, FUZZ, METAL, N_LOBES, N_SAMPLERS, P_ALPHA_S, P_COAT_W, P_CURVE_C,
+                               P_CURVE_S, P_E1C, P_E1S, P_E5S, P_E6S, P_FUZZ_W, P_K, P_QON_AB, P_SHEEN_FIT,
+                               P_THIN, P_X_C, P_X_S, SPECULAR, SUBSURFACE, SUBSURFACE_T, TRANSMISSION,
+                               diffuse_albedo_terms, layer_albedos,
+                               layer_factor, lobe_albedo, lobe_f, lobe_pdf, lobe_sample, lobe_score, sampler_of)
+
+#: Rows per block: a block's scratch (NROWS x B float64, 25 KB) stays in the L1 cache.
+B = 64
+
+# scratch rows of a block
+(OX, OY, OZ,            # wo
+ IX, IY, IZ,            # wi (given, or sampled)
+ MU,                    # mu_o clamped to [0, 1]
+ E1S, E5S, E6S, ES,     # GGX basis albedos and the dielectric albedo of the base specular
+ E1C, EC,               # E1 and the dielectric albedo of the coat (1, 0 without coat)
+ EF,                    # fuzz albedo (0 without fuzz)
+ EG, EH,                # diffuse albedo terms, E = rho e_g + rho_ms e_h
+ EQ,                    # QON albedo of the thin-walled subsurface reflection (1 otherwise)
+ TU, TB, TF,            # layer factors: under the specular layer, the base, under the fuzz
+ A0, A1, A2,            # RGB accumulators (eval, albedo)
+ GM, GC, GP,            # base specular GGX: f without Fresnel, wo.h; its pdf
+ U0, U1, U2,            # u: the lobe choice's, and the chosen lobe's sampler inputs
+ OK,                    # 1 where the sampler succeeded
+ CH,                    # the chosen lobe slot
+ Q,                     # mixture pdf
+ MINE,                  # the chosen lobe's own pdf at the sample
+ TOX, TOY, TOZ, TU1, TU2, TK,   # one sampler's rows of OX..OZ, U1, U2, CH, gathered (``sample_pass``)
+ TX, TY, TZ, TOK,               # its samples, before they are scattered to IX..IZ, OK
+ PR) = range(44)        # PR .. PR + 7: the selection probabilities P_k
+NROWS = PR + N_LOBES
+
+
+#: Tiny helpers are inlined in numba's IR rather than by LLVM: a ``kernel`` is compiled once per
+#: distinct literal argument (``at`` alone had 43 compilations per driver).
+_inline = numba.njit(inline="always")
+
+
+@_inline
+def at(row, r):
+    """Index of entry r of scratch row ``row``."""
+    return _U(row) * _U(B) + _U(r)
+
+
+@_inline
+def par(ps, s0, r):
+    """Offset of the parameters of row s0 + r: 0 for one material (ps = 0), else a row's own."""
+    return _U(s0 + r) * _U(ps)
+
+
+@_inline
+def active_count(active):
+    """K: the number of active lobe slots."""
+    K = 0
+    for k in range(N_LOBES):
+        K += 1 if active & (1 << k) else 0
+    return K
+
+
+@_inline
+def is_on(active, k):
+    return (active & (1 << k)) != 0
+
+
+# --------------------------------------------------------------------------- state of mu_o
+
+@kernel
+def load_pass(d, s0, m, f, row):
+    """Rows s0 .. s0 + m of the (n*3) direction buffer d into scratch rows row .. row + 2; the
+    rest of the block (m < B: the last block) is padded with the normal, so that every other
+    pass runs over the whole block (a constant trip count: no remainder loop)."""
+    for r in range(m):
+        j = _U(3) * _U(s0 + r)
+        f[at(row, r)] = d[j]
+        f[at(row + 1, r)] = d[j + _U(1)]
+        f[at(row + 2, r)] = d[j + _U(2)]
+    for r in range(m, B):
+        f[at(row, r)] = 0.0
+        f[at(row + 1, r)] = 0.0
+        f[at(row + 2, r)] = 1.0
+
+
+@kernel
+def load_u_pass(ud, u, s0, m, f):
+    """U0 = u[0] and, with 3 columns, U1, U2 = u[1], u[2]; with 2, U2 = u[1] (U1 is then u0
+    rescaled, ``choose_pass``).  Padded with 1/2 beyond row m."""
+    for r in range(m):
+        j = _U(ud) * _U(s0 + r)
+        f[at(U0, r)] = u[j]
+        if ud == 3:
+            f[at(U1, r)] = u[j + _U(1)]
+            f[at(U2, r)] = u[j + _U(2)]
+        else:
+            f[at(U2, r)] = u[j + _U(1)]
+    for r in range(m, B):
+        f[at(U0, r)] = 0.5
+        f[at(U1, r)] = 0.5
+        f[at(U2, r)] = 0.5
+
+
+@_inline
+def fill_pass(f, row, m, v):
+    for r in range(m):
+        f[at(row, r)] = v
+
+
+@kernel
+def state_passes(active, dmodel, ms, albedos, basis, p, ps, s0, m, f):
+    """The per-row values of mu_o shared by every lobe: the layer albedos (E1S, ES, and E5S,
+    E6S when ``basis``; E1C, EC; EF), the layer factors (TU, TB, TF) and, when ``albedos``,
+    the diffuse albedo terms (EG, EH) and EQ.  Layers no material of the call has are filled
+    with their neutral values instead of looked up."""
+    for r in range(m):
+        f[at(MU, r)] = min(max(f[at(OZ, r)], 0.0), 1.0)
+    for r in range(m):
+        o = par(ps, s0, r)
+        E1, E5, E6, E = layer_albedos(p, o, P_E1S, P_E5S, P_E6S, P_CURVE_S, f[at(MU, r)], p[o + P_X_S], ms)
+        f[at(E1S, r)] = E1
+        f[at(ES, r)] = E
+        if basis:
+            f[at(E5S, r)] = E5
+            f[at(E6S, r)] = E6
+    if is_on(active, COAT):
+        for r in range(m):
+            o = par(ps, s0, r)
+            E1, _, _, E = layer_albedos(p, o, P_E1C, P_E1C, P_E1C, P_CURVE_C, f[at(MU, r)], p[o + P_X_C], ms)
+            on = p[o + P_COAT_W] > 0.0
+            f[at(E1C, r)] = E1 if on else 1.0
+            f[at(EC, r)] = E if on else 0.0
+    else:
+        fill_pass(f, E1C, m, 1.0)
+        fill_pass(f, EC, m, 0.0)
+    if is_on(active, FUZZ):
+        for r in range(m):
+            o = par(ps, s0, r)
+            E = sheen_albedo_at(f[at(MU, r)], p[o + P_SHEEN_FIT], p[o + P_SHEEN_FIT + 1], p[o + P_SHEEN_FIT + 2])
+            f[at(EF, r)] = E if p[o + P_FUZZ_W] > 0.0 else 0.0
+    else:
+        fill_pass(f, EF, m, 0.0)
+    for r in range(m):
+        o = par(ps, s0, r)
+        Tf = 1.0 - p[o + P_FUZZ_W] * f[at(EF, r)]
+        Tb = Tf * (1.0 - p[o + P_COAT_W] * f[at(EC, r)])
+        f[at(TF, r)] = Tf
+        f[at(TB, r)] = Tb
+        f[at(TU, r)] = Tb * (1.0 - f[at(ES, r)])
+    if not albedos:
+        return
+    if dmodel == D_EON:
+        diffuse_albedo_pass(D_EON, p, ps, s0, m, f)
+    else:
+        diffuse_albedo_pass(dmodel, p, ps, s0, m, f)
+    if is_on(active, SUBSURFACE) and p[P_THIN] > 0.0:   # thin-walled is one value per surface
+        for r in range(m):
+            o = par(ps, s0, r)
+            f[at(EQ, r)] = qon_albedo(f[at(MU, r)], p[o + P_QON_AB], p[o + P_QON_AB + 1])
+    else:
+        fill_pass(f, EQ, m, 1.0)
+
+
+@kernel
+def diffuse_albedo_pass(dmodel, p, ps, s0, m, f):
+    for r in range(m):
+        eg, eh = diffuse_albedo_terms(dmodel, p, par(ps, s0, r), f[at(MU, r)])
+        f[at(EG, r)] = eg
+        f[at(EH, r)] = eh
+
+
+@kernel
+def albedo_of(k, c, p, o, f, r, ms):
+    """E_k in channel c at row r (``lobe_albedo`` on the state rows).  The diffuse albedo uses
+    EON's form rho e_g + rho_ms e_h for every model: e_h = 0 for QON and Lambert."""
+    return lobe_albedo(k, c, p, o, D_EON, ms, f[at(E1S, r)], f[at(E5S, r)], f[at(E6S, r)], f[at(ES, r)],
+                       f[at(EC, r)], f[at(EF, r)], f[at(EG, r)], f[at(EH, r)], f[at(EQ, r)])
+
+
+@kernel
+def factor_of(k, f, r):
+    """L_k at row r (``layer_factor`` on the state rows)."""
+    return layer_factor(k, f[at(TU, r)], f[at(TB, r)], f[at(TF, r)])
+
+
+@kernel
+def score_pass(k, sel, p, ps, s0, m, f, ms):
+    """PR + k = s_k, the selection score of lobe slot k (``lobe_score``), at every row."""
+    for r in range(m):
+        o = par(ps, s0, r)
+        f[at(PR + k, r)] = lobe_score(k, sel, p, o, ms, factor_of(k, f, r), f[at(E1S, r)], f[at(E5S, r)],
+                                      f[at(E6S, r)], f[at(ES, r)], f[at(EC, r)], f[at(EF, r)], f[at(EG, r)],
+                                      f[at(EH, r)], f[at(EQ, r)])
+
+
+@kernel
+def _score_or_zero(k, active, sel, p, ps, s0, m, f, ms):
+    if is_on(active, k):
+        score_pass(opaque(k), sel, p, ps, s0, m, f, ms)
+    else:
+        fill_pass(f, PR + k, m, 0.0)
+
+
+@kernel
+def probability_pass(active, sel, p, ps, s0, m, f, ms):
+    """PR + k: the selection probability P_k = s_k / sum_j s_j of every lobe slot k (uniform
+    over the active slots when every score is 0 -- a black surface -- or wo is below the
+    horizon; 0 for inactive slots).  One loop per active lobe's score, then one that
+    normalises: each vectorises (one loop doing all of it does not)."""
+    # one pass per slot, the slot a constant (a run-time slot leaves each loop a switch)
+    _score_or_zero(DIFFUSE, active, sel, p, ps, s0, m, f, ms)
+    _score_or_zero(SPECULAR, active, sel, p, ps, s0, m, f, ms)
+    _score_or_zero(METAL, active, sel, p, ps, s0, m, f, ms)
+    _score_or_zero(TRANSMISSION, active, sel, p, ps, s0, m, f, ms)
+    _score_or_zero(SUBSURFACE, active, sel, p, ps, s0, m, f, ms)
+    _score_or_zero(SUBSURFACE_T, active, sel, p, ps, s0, m, f, ms)
+    _score_or_zero(COAT, active, sel, p, ps, s0, m, f, ms)
+    _score_or_zero(FUZZ, active, sel, p, ps, s0, m, f, ms)
+    flat = 1.0 / active_count(active)
+    for r in range(m):
+        S = 0.0
+        for k in range(N_LOBES):
+            S += f[at(PR + k, r)]
+        pos = (S > 0.0) & (f[at(OZ, r)] > 0.0)
+        inv = 1.0 / S
+        for k in range(N_LOBES):
+            P = f[at(PR + k, r)] * inv if pos else flat
+            f[at(PR + k, r)] = P if is_on(active, k) else 0.0
+
+
+# --------------------------------------------------------------------------- lobes
+
+@kernel
+def ggx_pass(active, p, ps, s0, m, f):
+    """GM, GC: the base specular's GGX reflection (without Fresnel) and wo.h, shared by the
+    specular and metal lobes."""
+    if not (is_on(active, SPECULAR) or is_on(active, METAL)):
+        return
+    for r in range(m):
+        o = par(ps, s0, r)
+        g, c = mf.reflection(f[at(IX, r)], f[at(IY, r)], f[at(IZ, r)], f[at(OX, r)], f[at(OY, r)], f[at(OZ, r)],
+                             p[o + P_ALPHA_S])
+        f[at(GM, r)] = g
+        f[at(GC, r)] = c
+
+
+@kernel
+def ggx_pdf_pass(active, vndf, p, ps, s0, m, f):
+    """GP: the base specular's GGX reflection pdf at wi (specular and metal lobes)."""
+    if not (is_on(active, SPECULAR) or is_on(active, METAL)):
+        return
+    for r in range(m):
+        o = par(ps, s0, r)
+        f[at(GP, r)] = mf.reflection_pdf(f[at(IX, r)], f[at(IY, r)], f[at(IZ, r)], f[at(OX, r)], f[at(OY, r)],
+                                         f[at(OZ, r)], p[o + P_ALPHA_S], vndf)
+
+
+@kernel
+def eval_lobe_pass(k, dmodel, weighted, ms, p, ps, s0, m, f):
+    """A0..A2 += w_k f_k, or f_k unweighted (``weighted`` False: one lobe's own BSDF, added
+    to zeros), at every row of the block."""
+    for r in range(m):
+        o = par(ps, s0, r)
+        f0, f1, f2 = lobe_f(opaque(k), p, o, f[at(IX, r)], f[at(IY, r)], f[at(IZ, r)], f[at(OX, r)], f[at(OY, r)],
+                            f[at(OZ, r)], opaque(dmodel), ms, f[at(GM, r)], f[at(GC, r)], f[at(E1S, r)],
+                            f[at(E1C, r)], f[at(EF, r)])
+        L = factor_of(opaque(k), f, r)
+        q = o + P_K + 3 * k
+        f[at(A0, r)] += (L * p[q] if weighted else 1.0) * f0
+        f[at(A1, r)] += (L * p[q + 1] if weighted else 1.0) * f1
+        f[at(A2, r)] += (L * p[q + 2] if weighted else 1.0) * f2
+
+
+@kernel
+def pdf_lobe_pass(k, dmodel, track, vndf, p, ps, s0, m, f):
+    """Q += P_k pdf_k(wi | wo) (a lobe with P_k = 0 adds nothing, whatever its pdf); when
+    ``track``, MINE = pdf_k on the rows that chose lobe k."""
+    for r in range(m):
+        o = par(ps, s0, r)
+        pk = lobe_pdf(k, p, o, f[at(IX, r)], f[at(IY, r)], f[at(IZ, r)], f[at(OX, r)], f[at(OY, r)], f[at(OZ, r)],
+                      dmodel, vndf, f[at(GP, r)])
+        P = f[at(PR + k, r)]
+        f[at(Q, r)] += P * pk if P > 0.0 else 0.0
+        if track:
+            f[at(MINE, r)] = pk if f[at(CH, r)] == k else f[at(MINE, r)]
+
+
+@kernel
+def choose_pass(ud, m, f):
+    """CH: the lobe whose interval of the CDF (slot order) holds u0 (U0); U1: its sampler's
+    first input, u[1] (ud = 3, loaded) or u0 rescaled within the chosen interval,
+    (u0 - C_{k-1})/P_k (ud = 2).  A u0 that rounding leaves above the CDF's end picks the
+    last slot with P_k > 0."""
+    for r in range(m):
+        u0 = f[at(U0, r)]
+        lo = 0.0
+        chosen = -1.0
+        Pc = 0.0
+        last = 0.0
+        Plast = 0.0
+        lolast = 0.0
+        for k in range(N_LOBES):   # a constant bound: unrolled, branch-free
+            Pk = f[at(PR + k, r)]
+            hit = (chosen < 0.0) & (u0 < lo + Pk)
+            pos = Pk > 0.0
+            lolast = lo if pos else lolast
+            last = float(k) if pos else last
+            Plast = Pk if pos else Plast
+            Pc = Pk if hit else Pc
+            lo = lo if (hit | (chosen >= 0.0)) else lo + Pk
+            chosen = float(k) if hit else chosen
+        miss = chosen < 0.0
+        f[at(CH, r)] = last if miss else chosen
+        Pc = Plast if miss else Pc
+        lo = lolast if miss else lo
+        if ud == 2:
+            f[at(U1, r)] = min(max((u0 - lo) / Pc, 0.0), U_MAX)
+
+
+@kernel
+def compact(dmodel, m, f, idx, cnt):
+    """idx[s B : s B + cnt[s]]: the rows of the block whose chosen lobe is drawn by sampler s
+    (``sampler_of``), in order."""
+    for s in range(N_SAMPLERS):
+        cnt[s] = 0
+    for r in range(m):
+        s = sampler_of(int(f[at(CH, r)]), dmodel)
+        idx[_U(s) * _U(B) + _U(cnt[s])] = r
+        cnt[s] += 1
+
+
+@kernel
+def sample_pass(sampler, vndf, p, ps, s0, f, idx, cnt):
+    """IX..IZ, OK of the rows drawn by ``sampler``: their lobes' samples at (U1, U2).  The
+    rows' inputs are gathered into contiguous scratch rows, sampled there (a vectorised
+    loop; with stores to rows listed in ``idx`` it would not be, as LLVM cannot rule out
+    repeats), and the samples scattered back."""
+    c = cnt[sampler]
+    lst = _U(sampler) * _U(B)
+    for t in range(c):
+        r = idx[lst + _U(t)]
+        f[at(TOX, t)] = f[at(OX, r)]
+        f[at(TOY, t)] = f[at(OY, r)]
+        f[at(TOZ, t)] = f[at(OZ, r)]
+        f[at(TU1, t)] = f[at(U1, r)]
+        f[at(TU2, t)] = f[at(U2, r)]
+        f[at(TK, t)] = f[at(CH, r)]
+    for t in range(c):
+        o = par(ps, s0, idx[lst + _U(t)])
+        x, y, z, ok = lobe_sample(sampler, f[at(TK, t)], p, o, f[at(TOX, t)], f[at(TOY, t)], f[at(TOZ, t)],
+                                  f[at(TU1, t)], f[at(TU2, t)], vndf)
+        f[at(TX, t)] = x
+        f[at(TY, t)] = y
+        f[at(TZ, t)] = z
+        f[at(TOK, t)] = 1.0 if ok else 0.0
+    for t in range(c):
+        r = idx[lst + _U(t)]
+        f[at(IX, r)] = f[at(TX, t)]
+        f[at(IY, r)] = f[at(TY, t)]
+        f[at(IZ, r)] = f[at(TZ, t)]
+        f[at(OK, r)] = f[at(TOK, t)]
+
+
+@kernel
+def lobe_outputs_pass(k, on, ms, p, ps, s0, m, f, W, E, P):
+    """Lobe slot k's weight w_k (RGB), albedo E_k (RGB, 0 below the horizon) and probability
+    at every row, into the (n*8*3), (n*8*3), (n*8) outputs; zeros for an inactive slot."""
+    for r in range(m):
+        o = par(ps, s0, r)
+        b = _U(s0 + r) * _U(N_LOBES) + _U(k)
+        up = f[at(OZ, r)] > 0.0
+        L = factor_of(k, f, r)
+        q = o + P_K + 3 * k
+        for c in range(3):
+            W[b * _U(3) + _U(c)] = L * p[q + c] if on else 0.0
+            e = albedo_of(k, c, p, o, f, r, ms)
+            E[b * _U(3) + _U(c)] = e if (on and up) else 0.0
+        P[b] = f[at(PR + k, r)] if on else 0.0
+
+
+@kernel
+def albedo_lobe_pass(k, dmodel, ms, p, ps, s0, m, f):
+    """A0..A2 += w_k E_k of lobe slot k (dmodel: unused, see ``albedo_of``)."""
+    for r in range(m):
+        o = par(ps, s0, r)
+        L = factor_of(k, f, r)
+        q = o + P_K + 3 * k
+        f[at(A0, r)] += L * p[q] * albedo_of(k, opaque(0), p, o, f, r, ms)
+        f[at(A1, r)] += L * p[q + 1] * albedo_of(k, opaque(1), p, o, f, r, ms)
+        f[at(A2, r)] += L * p[q + 2] * albedo_of(k, opaque(2), p, o, f, r, ms)
+
+
+@kernel
+def rgb_out_pass(s0, m, f, out):
+    """out[3 (s0 + r) + c] = A_c, 0 where wo is below the horizon."""
+    for r in range(m):
+        j = _U(3) * _U(s0 + r)
+        up = f[at(OZ, r)] > 0.0
+        out[j] = f[at(A0, r)] if up else 0.0
+        out[j + _U(1)] = f[at(A1, r)] if up else 0.0
+        out[j + _U(2)] = f[at(A2, r)] if up else 0.0
+
