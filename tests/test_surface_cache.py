@@ -66,6 +66,38 @@ def test_the_thread_pool_gives_the_serial_result(rows):
         assert np.array_equal(whole, np.concatenate([p[k] for p in parts]))
 
 
+@pytest.mark.parametrize("per_row", [False, True])
+def test_short_calls_give_the_rows_of_a_whole_block(per_row):
+    """A call shorter than a block runs its passes over its rows rounded up to the vector
+    width (``span``), not the whole block: every verb of 1..9 and 61..63 rows gives the rows
+    of a call over whole blocks (the padding rows never leak into a result)."""
+    rng = np.random.default_rng(11)
+    n = 2 * sd.B
+    wo = rng.normal(size=(n, 3))
+    wo[:, 2] = np.abs(wo[:, 2])
+    wo /= np.linalg.norm(wo, axis=1, keepdims=True)
+    wi = rng.normal(size=(n, 3))
+    wi /= np.linalg.norm(wi, axis=1, keepdims=True)
+    u = rng.random((n, 3))
+    rowwise = dict(base_color=rng.random((n, 3)), base_metalness=rng.random(n), fuzz_weight=rng.random(n) * 0.5,
+                   specular_roughness=rng.random(n))
+    s = OpenPBRSurface(**rowwise, coat_weight=0.5) if per_row else _material()
+
+    def verbs(sl):
+        lobes = s.lobes(wo[sl]) if not per_row else []
+        sub = OpenPBRSurface(**{k: v[sl] for k, v in rowwise.items()}, coat_weight=0.5) if per_row else s
+        return (sub.eval(wi[sl], wo[sl]), sub.pdf(wo[sl], wi[sl]), sub.albedo(wo[sl]), *sub.sample(wo[sl], u[sl]),
+                *(x for lobe in lobes for x in (lobe.weight, lobe.albedo, lobe.probability)))
+
+    whole = verbs(slice(None))
+    for m in (*range(1, 10), 61, 62, 63):
+        for start in (0, 3):
+            part = verbs(slice(start, start + m))
+            for a, b in zip(part, whole):
+                assert np.all(np.isfinite(a))
+                np.testing.assert_allclose(a, b[start:start + m], rtol=1e-13, atol=1e-300)
+
+
 def test_one_thread_gives_the_same_result():
     s = _material()
     rng = np.random.default_rng(5)

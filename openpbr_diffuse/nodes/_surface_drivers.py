@@ -32,7 +32,7 @@ from ._surface_kernels import (COAT, D_EON, D_LAMBERT, D_QON, DIFFUSE, FUZZ, MET
 from ._surface_passes import (A0, A1, A2, load_u_pass, IX, MINE, NROWS, OK, OX, OZ, Q, B, albedo_lobe_pass, at,
                               choose_pass, compact, eval_lobe_pass, fill_pass, ggx_pass, ggx_pdf_pass, is_on,
                               load_pass, lobe_outputs_pass, pdf_lobe_pass, probability_pass, rgb_out_pass,
-                              sample_pass, state_passes)
+                              sample_pass, span, state_passes)
 
 # --------------------------------------------------------------------------- buffers
 # Each run of blocks keeps its scratch, its compaction lists and (one material) a copy of the
@@ -153,13 +153,13 @@ def _each_sampler(vndf, p, ps, s0, f, idx, cnt):
 
 
 @kernel
-def _choose(ud, u, s0, m, f):
+def _choose(ud, u, s0, m, mb, f):
     if ud == 3:
         load_u_pass(3, u, s0, m, f)
-        choose_pass(3, B, f)
+        choose_pass(3, mb, f)
     else:
         load_u_pass(2, u, s0, m, f)
-        choose_pass(2, B, f)
+        choose_pass(2, mb, f)
 
 
 # --------------------------------------------------------------------------- block runs
@@ -191,9 +191,10 @@ def _lobes_run(ps):
         for b in range(b0, b1):
             s0 = b * B
             m = min(B, n - s0)
+            mb = span(m)
             load_pass(wo, s0, m, f, OX)
-            state_passes(active, dmodel, ms, True, True, q, ps, s0, B, f)
-            probability_pass(active, sel, q, ps, s0, B, f, ms)
+            state_passes(active, dmodel, ms, True, True, q, ps, s0, mb, f)
+            probability_pass(active, sel, q, ps, s0, mb, f, ms)
             for k in range(N_LOBES):
                 lobe_outputs_pass(k, is_on(active, k), ms, q, ps, s0, m, f, W, E, P)
     return lobes_run
@@ -213,12 +214,13 @@ def _albedo_run(ps):
         for b in range(b0, b1):
             s0 = b * B
             m = min(B, n - s0)
+            mb = span(m)
             load_pass(wo, s0, m, f, OX)
-            state_passes(active, dmodel, ms, True, True, q, ps, s0, B, f)
-            fill_pass(f, A0, B, 0.0)
-            fill_pass(f, A1, B, 0.0)
-            fill_pass(f, A2, B, 0.0)
-            _each_albedo(active, dmodel, ms, q, ps, s0, B, f)
+            state_passes(active, dmodel, ms, True, True, q, ps, s0, mb, f)
+            fill_pass(f, A0, mb, 0.0)
+            fill_pass(f, A1, mb, 0.0)
+            fill_pass(f, A2, mb, 0.0)
+            _each_albedo(active, dmodel, ms, q, ps, s0, mb, f)
             rgb_out_pass(s0, m, f, out)
     return albedo_run
 
@@ -238,14 +240,15 @@ def _eval_run(ps):
         for b in range(b0, b1):
             s0 = b * B
             m = min(B, n - s0)
+            mb = span(m)
             load_pass(wo, s0, m, f, OX)
             load_pass(wi, s0, m, f, IX)
-            state_passes(active, dmodel, ms, False, False, q, ps, s0, B, f)
-            ggx_pass(lobes, q, ps, s0, B, f)
-            fill_pass(f, A0, B, 0.0)
-            fill_pass(f, A1, B, 0.0)
-            fill_pass(f, A2, B, 0.0)
-            _each_eval(lobes, dmodel, only < 0, ms, q, ps, s0, B, f)
+            state_passes(active, dmodel, ms, False, False, q, ps, s0, mb, f)
+            ggx_pass(lobes, q, ps, s0, mb, f)
+            fill_pass(f, A0, mb, 0.0)
+            fill_pass(f, A1, mb, 0.0)
+            fill_pass(f, A2, mb, 0.0)
+            _each_eval(lobes, dmodel, only < 0, ms, q, ps, s0, mb, f)
             rgb_out_pass(s0, m, f, out)
     return eval_run
 
@@ -264,13 +267,14 @@ def _pdf_run(ps):
         for b in range(b0, b1):
             s0 = b * B
             m = min(B, n - s0)
+            mb = span(m)
             load_pass(wo, s0, m, f, OX)
             load_pass(wi, s0, m, f, IX)
-            state_passes(active, dmodel, ms, True, True, q, ps, s0, B, f)
-            probability_pass(active, sel, q, ps, s0, B, f, ms)
-            ggx_pdf_pass(active, vndf, q, ps, s0, B, f)
-            fill_pass(f, Q, B, 0.0)
-            _each_pdf(active, dmodel, False, vndf, q, ps, s0, B, f)
+            state_passes(active, dmodel, ms, True, True, q, ps, s0, mb, f)
+            probability_pass(active, sel, q, ps, s0, mb, f, ms)
+            ggx_pdf_pass(active, vndf, q, ps, s0, mb, f)
+            fill_pass(f, Q, mb, 0.0)
+            _each_pdf(active, dmodel, False, vndf, q, ps, s0, mb, f)
             for r in range(m):
                 out[_U(s0 + r)] = f[at(Q, r)] if f[at(OZ, r)] > 0.0 else 0.0
     return pdf_run
@@ -294,16 +298,17 @@ def _sample_run(ps):
         for b in range(b0, b1):
             s0 = b * B
             m = min(B, n - s0)
+            mb = span(m)
             load_pass(wo, s0, m, f, OX)
-            state_passes(active, dmodel, ms, True, True, q, ps, s0, B, f)
-            probability_pass(active, sel, q, ps, s0, B, f, ms)
-            _choose(ud, u, s0, m, f)
-            compact(dmodel, B, f, idx, cnt)
+            state_passes(active, dmodel, ms, True, True, q, ps, s0, mb, f)
+            probability_pass(active, sel, q, ps, s0, mb, f, ms)
+            _choose(ud, u, s0, m, mb, f)
+            compact(dmodel, mb, f, idx, cnt)
             _each_sampler(vndf, q, ps, s0, f, idx, cnt)
-            ggx_pdf_pass(active, vndf, q, ps, s0, B, f)
-            fill_pass(f, Q, B, 0.0)
-            fill_pass(f, MINE, B, 0.0)
-            _each_pdf(active, dmodel, True, vndf, q, ps, s0, B, f)
+            ggx_pdf_pass(active, vndf, q, ps, s0, mb, f)
+            fill_pass(f, Q, mb, 0.0)
+            fill_pass(f, MINE, mb, 0.0)
+            _each_pdf(active, dmodel, True, vndf, q, ps, s0, mb, f)
             for r in range(m):
                 j = _U(3) * _U(s0 + r)
                 up = f[at(OZ, r)] > 0.0
@@ -412,9 +417,9 @@ def _run(builds, head, params, lead, dirs, outs):
         launch(drive, head + (params,), inputs, outs, n)
         return
     # a material per row (no copy when the materials already have the rows' shape).  The
-    # passes run over whole blocks and read a material for every row of a block: the whole
-    # blocks run on the rows as they are, the last, partial block on a copy padded with its
-    # last material (the padding rows' results are not stored)
+    # passes of a short block run up to 3 rows past its end (``span``) and read a material for
+    # each: the whole blocks run on the rows as they are, the last, partial block on a copy
+    # padded with its last material (the padding rows' results are not stored)
     p = np.ascontiguousarray(np.broadcast_to(params, lead + (N_PARAMS,))).reshape(-1)
     full = [np.ascontiguousarray(np.broadcast_to(d, lead + (k,))).reshape(-1) for d, k in dirs]
     whole = n - n % B

@@ -69,6 +69,14 @@ def at(row, r):
 
 
 @_inline
+def span(m):
+    """The rows the passes of a block of m rows run over: B for a whole block (a constant trip
+    count), else m rounded up to the vector width (a short call, lobes(wo) of one row, does
+    not pay for a block of B rows; the rows beyond m hold the padding of ``load_pass``)."""
+    return B if m == B else (m + 3) // 4 * 4
+
+
+@_inline
 def par(ps, s0, r):
     """Offset of the parameters of row s0 + r: 0 for one material (ps = 0), else a row's own."""
     return _U(s0 + r) * _U(ps)
@@ -94,7 +102,7 @@ def is_on(active, k):
 def load_pass(d, s0, m, f, row):
     """Rows s0 .. s0 + m of the (n*3) direction buffer d into scratch rows row .. row + 2; the
     rest of the block (m < B: the last block) is padded with the normal, so that every other
-    pass runs over the whole block (a constant trip count: no remainder loop)."""
+    pass can run over ``span(m)`` rows, a multiple of the vector width."""
     for r in range(m):
         j = _U(3) * _U(s0 + r)
         f[at(row, r)] = d[j]
