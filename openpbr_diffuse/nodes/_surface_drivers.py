@@ -10,8 +10,9 @@ the sampled directions with the same passes as ``pdf``: the pdf returned with a 
 ``pdf(wo, wi)`` of the returned wi, computed by the same code.
 
 Each driver is built for a parameter stride (0: one material for every row; N_PARAMS: a
-material per row) as a compile-time constant, in a parallel build (blocks spread over the
-threads) and, for one material, a serial build for small batches (``SERIAL_ROWS``).
+material per row) as a compile-time constant, once, with ``nogil``: a call of fewer than
+``SERIAL_ROWS`` rows runs it on the calling thread, a larger one runs it over runs of blocks
+on a pool of Python threads (``_Builds``).
 No input is checked here: the public class checks its inputs once, at construction and on
 each call's directions.
 """
@@ -177,6 +178,14 @@ def _block_range(t, nt, n):
     return t * nb // nt, (t + 1) * nb // nt
 
 
+@numba.njit(inline="always")
+def _block(b, n):
+    """Block b of n rows: its first row s0, its rows m and the rows its passes run over."""
+    s0 = b * B
+    m = min(B, n - s0)
+    return s0, m, span(m)
+
+
 def _lobes_run(ps):
     @_jit_run
     def lobes_run(t, nt, active, dmodel, sel, ms, p, wo, W, E, P):
@@ -189,9 +198,7 @@ def _lobes_run(ps):
             q = p
         b0, b1 = _block_range(t, nt, n)
         for b in range(b0, b1):
-            s0 = b * B
-            m = min(B, n - s0)
-            mb = span(m)
+            s0, m, mb = _block(b, n)
             load_pass(wo, s0, m, f, OX)
             state_passes(active, dmodel, ms, True, True, q, ps, s0, mb, f)
             probability_pass(active, sel, q, ps, s0, mb, f, ms)
@@ -212,9 +219,7 @@ def _albedo_run(ps):
             q = p
         b0, b1 = _block_range(t, nt, n)
         for b in range(b0, b1):
-            s0 = b * B
-            m = min(B, n - s0)
-            mb = span(m)
+            s0, m, mb = _block(b, n)
             load_pass(wo, s0, m, f, OX)
             state_passes(active, dmodel, ms, True, True, q, ps, s0, mb, f)
             fill_pass(f, A0, mb, 0.0)
@@ -238,9 +243,7 @@ def _eval_run(ps):
             q = p
         b0, b1 = _block_range(t, nt, n)
         for b in range(b0, b1):
-            s0 = b * B
-            m = min(B, n - s0)
-            mb = span(m)
+            s0, m, mb = _block(b, n)
             load_pass(wo, s0, m, f, OX)
             load_pass(wi, s0, m, f, IX)
             state_passes(active, dmodel, ms, False, False, q, ps, s0, mb, f)
@@ -265,9 +268,7 @@ def _pdf_run(ps):
             q = p
         b0, b1 = _block_range(t, nt, n)
         for b in range(b0, b1):
-            s0 = b * B
-            m = min(B, n - s0)
-            mb = span(m)
+            s0, m, mb = _block(b, n)
             load_pass(wo, s0, m, f, OX)
             load_pass(wi, s0, m, f, IX)
             state_passes(active, dmodel, ms, True, True, q, ps, s0, mb, f)
@@ -296,9 +297,7 @@ def _sample_run(ps):
             q = p
         b0, b1 = _block_range(t, nt, n)
         for b in range(b0, b1):
-            s0 = b * B
-            m = min(B, n - s0)
-            mb = span(m)
+            s0, m, mb = _block(b, n)
             load_pass(wo, s0, m, f, OX)
             state_passes(active, dmodel, ms, True, True, q, ps, s0, mb, f)
             probability_pass(active, sel, q, ps, s0, mb, f, ms)

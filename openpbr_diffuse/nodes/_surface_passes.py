@@ -29,7 +29,8 @@ from ._surface_kernels import (COAT, D_EON, DIFFUSE, FUZZ, METAL, N_LOBES, N_SAM
                                P_CURVE_S, P_E1C, P_E1S, P_E5S, P_E6S, P_FUZZ_W, P_K, P_QON_AB, P_SHEEN_FIT,
                                P_THIN, P_X_C, P_X_S, SPECULAR, SUBSURFACE, SUBSURFACE_T, TRANSMISSION,
                                diffuse_albedo_terms, layer_albedos,
-                               layer_factor, lobe_albedo, lobe_f, lobe_pdf, lobe_sample, lobe_score, sampler_of)
+                               layer_factor, lobe_albedo, lobe_f, lobe_pdf, lobe_sample, lobe_score, sampler_of,
+                               uses_base_ggx)
 
 #: Rows per block: a block's scratch (NROWS x B float64, 25 KB) stays in the L1 cache.
 B = 64
@@ -265,7 +266,7 @@ def probability_pass(active, sel, p, ps, s0, m, f, ms):
 def ggx_pass(active, p, ps, s0, m, f):
     """GM, GC: the base specular's GGX reflection (without Fresnel) and wo.h, shared by the
     specular and metal lobes."""
-    if not (is_on(active, SPECULAR) or is_on(active, METAL)):
+    if not uses_base_ggx(active):
         return
     for r in range(m):
         o = par(ps, s0, r)
@@ -278,7 +279,7 @@ def ggx_pass(active, p, ps, s0, m, f):
 @kernel
 def ggx_pdf_pass(active, vndf, p, ps, s0, m, f):
     """GP: the base specular's GGX reflection pdf at wi (specular and metal lobes)."""
-    if not (is_on(active, SPECULAR) or is_on(active, METAL)):
+    if not uses_base_ggx(active):
         return
     for r in range(m):
         o = par(ps, s0, r)
