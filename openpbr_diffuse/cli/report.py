@@ -1,42 +1,211 @@
-"""``openpbr-diffuse report``: the conformance report (HTML + JSON + images).
+"""``openpbr-diffuse report``: does your implementation conform? (HTML + JSON + images).
 
-    openpbr-diffuse report                      # the bundled materials, into report/
-    openpbr-diffuse report scene.usda looks.mtlx --out out/report --quick
+    openpbr-diffuse report --glsl mine.glsl --function f [--albedo-function g]
+    openpbr-diffuse report --cpp mine.cpp --function f --include DIR --define N=V
+    openpbr-diffuse report --vectors filled.csv
+    openpbr-diffuse report --implementation materialx-glsl
+    openpbr-diffuse report                      # the reference's own evidence only
+    openpbr-diffuse report --list-checks        # the stable check ids
+    openpbr-diffuse report --select 'albedo.*' --junit junit.xml
 
-Writes DIR/index.html (opens offline), DIR/report.json and DIR/images/, replacing an
-existing report only when the new one is complete.  Exit status: 0 every check passes,
-1 a check fails, 2 unusable input.
+The implementation under test is graded first and its verdict is the first line of the page
+and of the output; the library's own evidence follows, counted separately.  Writes
+DIR/index.html (opens offline), DIR/report.json and DIR/images/, replacing an existing report
+only when the new one is complete.  Exit status: 0 the implementation conforms (and the
+library's evidence passes), 1 it does not conform (or a check of the evidence fails),
+2 unusable input, 3 the implementation could not run (no GL driver, no compiler, ...).
 """
+from __future__ import annotations
+
+import argparse
 import sys
 
+#: Sections run as the library's evidence when an implementation is graded (``--evidence fast``).
+FAST_EVIDENCE = ("implementations", "approximations")
 
-def add_parser(subparsers):
-    p = subparsers.add_parser("report", help="the conformance report: HTML + JSON + images",
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    """Add the ``report`` sub-command."""
+    p = subparsers.add_parser("report", help="does your implementation conform? HTML + JSON + images",
                               description=__doc__.splitlines()[0].strip("`").replace("``", ""))
     p.add_argument("paths", nargs="*", metavar="PATHS",
                    help="USD / MaterialX files or folders (default: the bundled materials/)")
     p.add_argument("--out", default="report", metavar="DIR", help="output directory (default: report)")
-    p.add_argument("--quick", action="store_true", help="smaller grids and sample counts (a few seconds)")
+    p.add_argument("--quick", action="store_true", help="smaller grids and sample counts")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    g = p.add_argument_group("the implementation under test")
+    g.add_argument("--vectors", metavar="FILE", help="a filled vectors file (CSV / JSON with out_r, out_g, out_b)")
+    added = _grader_arguments(g)
+    if not added:
+        for flag, kw in (("--implementation", {"metavar": "NAME"}), ("--source", {"metavar": "PATH"}),
+                         ("--glsl", {"metavar": "FILE"}), ("--cpp", {"metavar": "FILE"}),
+                         ("--function", {"metavar": "NAME"}), ("--albedo-function", {"metavar": "NAME"}),
+                         ("--sample-function", {"metavar": "NAME"}), ("--pdf-function", {"metavar": "NAME"})):
+            g.add_argument(flag, **kw)
+        g.add_argument("--include", metavar="DIR", action="append", default=[])
+        g.add_argument("--define", metavar="NAME=VALUE", action="append", default=[])
+    g.add_argument("--model", default=None, metavar="MODEL", help="the model it claims (default eon)")
+    c = p.add_argument_group("checks")
+    c.add_argument("--evidence", choices=("all", "fast", "none"), default=None,
+                   help="the library's own evidence to run: all sections, the fast ones "
+                        f"({', '.join(FAST_EVIDENCE)}; default with an implementation) or none")
+    c.add_argument("--select", nargs="+", metavar="ID", default=None,
+                   help="run only these checks / sections (ids or glob patterns, e.g. 'albedo.*' models)")
+    c.add_argument("--list-checks", action="store_true",
+                   help="print the check ids (from a run of the selected sections into a scratch folder) and exit")
+    c.add_argument("--junit", metavar="FILE", help="also write the checks as JUnit XML")
     p.set_defaults(run=run)
     return p
 
 
-def run(args):
+def _grader_arguments(group) -> bool:
+    """The graders' own options (``--glsl``, ``--cpp``, ``--implementation``...), when it offers them."""
+    import importlib
+
+    try:
+        gcli = importlib.import_module("openpbr_diffuse.graders.cli")
+    except ImportError:
+        return False
+    tmp = argparse.ArgumentParser(add_help=False)
+    try:
+        gcli.add_arguments(tmp)
+    except Exception:
+        return False
+    have = {a.dest for a in tmp._actions}
+    for action in tmp._actions:
+        if action.dest in ("help", "quick", "json", "model"):
+            continue
+        kwargs = {"dest": action.dest, "default": action.default, "help": action.help}
+        if action.metavar is not None:
+            kwargs["metavar"] = action.metavar
+        if action.choices is not None:
+            kwargs["choices"] = action.choices
+        if isinstance(action, argparse._AppendAction):
+            kwargs["action"] = "append"
+        elif isinstance(action, argparse._StoreTrueAction):
+            kwargs["action"] = "store_true"
+            kwargs.pop("metavar", None)
+        group.add_argument(*action.option_strings, **kwargs)
+    for flag, dest in (("--sample-function", "sample_function"), ("--pdf-function", "pdf_function")):
+        if dest not in have:
+            group.add_argument(flag, dest=dest, metavar="NAME", default=None,
+                               help="sampler / pdf function (graded when the graders support it)")
+    return True
+
+
+def subject_from_args(args):
+    """The Subject the options name, or None: ``graders.cli.subject_from_args`` when it exists."""
+    import importlib
+
+    gcli = importlib.import_module("openpbr_diffuse.graders.cli")
+    hook = getattr(gcli, "subject_from_args", None)
+    if hook is not None:
+        ns = argparse.Namespace(**{**vars(args), "quick": True, "json": False, "file": None,
+                                   "model": args.model})
+        return hook(ns)
+    # fallback: the graders' generic adapters (BRDF and albedo)
+    modes = [m for m in ("implementation", "glsl", "cpp") if getattr(args, m, None)]
+    if not modes:
+        return None
+    if len(modes) > 1:
+        raise ValueError("report: give one of --implementation, --glsl, --cpp")
+    if args.implementation:
+        from ..graders import load
+
+        return load(args.implementation, getattr(args, "source", None))
+    from ..graders.generic import cpp_subject, glsl_subject
+
+    make = glsl_subject if args.glsl else cpp_subject
+    return make(args.glsl or args.cpp, args.function, args.albedo_function, includes=args.include or (),
+                defines=args.define or (), model=args.model or "eon")
+
+
+def _under_test(args):
+    """(UnderTest or None, Subject or None)."""
+    from ..report.subject import COULD_NOT_RUN, UnderTest, Verdict, grade_subject_under_test, grade_vectors_file
+
+    code = [m for m in ("implementation", "glsl", "cpp") if getattr(args, m, None)]
+    if args.vectors and code:
+        raise ValueError("report: give one of --vectors, --glsl, --cpp, --implementation")
+    if args.vectors:
+        return grade_vectors_file(args.vectors), None
+    if not code:
+        for opt in ("function", "albedo_function", "sample_function", "pdf_function"):
+            if getattr(args, opt, None):
+                raise ValueError(f"report: --{opt.replace('_', '-')} needs --glsl or --cpp")
+        return None, None
+    from ..graders.errors import GraderUnavailable
+
+    label = args.implementation or args.glsl or args.cpp
+    try:
+        subject = subject_from_args(args)
+    except GraderUnavailable as exc:  # no GL driver / compiler / the code does not compile
+        ut = UnderTest(name=str(label), kind="code", error=" ".join(str(exc).split()))
+        ut.verdicts = [Verdict(q, COULD_NOT_RUN, detail=ut.error) for q in ("brdf",)]
+        return ut, None
+    return grade_subject_under_test(subject, quick=True), subject
+
+
+def _sections(args, under):
+    from ..report.sections import SECTIONS
+
+    evidence = args.evidence or ("fast" if under is not None and not args.select else "all")
+    if evidence == "none":
+        return ()
+    return FAST_EVIDENCE if evidence == "fast" else SECTIONS
+
+
+def run(args) -> int:
+    """Run the report per ``args``; the exit status."""
     from ..report.runner import run_report
 
-    result = run_report(args.paths, args.out, quick=args.quick,
-                        progress=not args.no_progress and sys.stderr.isatty())
+    progress = not args.no_progress and sys.stderr.isatty()
+    if args.list_checks:
+        import tempfile
+
+        with tempfile.TemporaryDirectory(prefix="openpbr-diffuse-checks-") as tmp:
+            result = run_report(args.paths, f"{tmp}/r", quick=args.quick, progress=progress,
+                                sections=_sections(args, None), select=args.select)
+            for s in result.document["sections"]:
+                if not s["checks"]:
+                    print(f"{s['key']}.section\t({s['status']}{': ' + s['not_run'] if s['not_run'] else ''})")
+                for c in s["checks"]:
+                    print(f"{c['id']}\t{c['name']}")
+        for q in ("brdf", "albedo", "sampler_pdf", "sampler_chi2"):
+            print(f"implementation.{q}\t(with --glsl / --cpp / --vectors / --implementation)")
+        return 0
+    under, subject = _under_test(args)
+    result = run_report(args.paths, args.out, quick=args.quick, progress=progress,
+                        sections=_sections(args, under), select=args.select, under_test=under, subject=subject)
     doc = result.document
+    if args.junit:
+        from ..report.junit import write_junit
+
+        write_junit(doc, args.junit)
+    ut = doc.get("implementation")
+    if ut:
+        print(ut["headline"])
+        for v in ut["verdicts"]:
+            err = "" if v["max_abs_error"] is None else f"  largest error {v['max_abs_error']:.3g}"
+            print(f"  {v['label']:<8} {v['status']:<17} {v['sentence']}{err}")
+            if v["status"] == "does not conform" and v["where"]:
+                print(f"           at {v['where']}")
+    else:
+        print("No implementation under test: this report shows the reference's own evidence. "
+              "Use --glsl/--cpp/--vectors/--implementation to grade yours.")
+    print("The library's own evidence:")
     for s in doc["sections"]:
-        n_pass = sum(c["passed"] for c in s["checks"])
-        print(f"  {s['key']:<16} {s['status']:<14} {n_pass}/{len(s['checks'])} checks  {s['elapsed_s']:.1f} s")
-    failed = [c for c in doc["checks"] if not c["passed"]]
+        ran = [c for c in s["checks"] if c["status"] != "not run"]
+        n_pass = sum(c["passed"] for c in ran)
+        counts = f"not run: {s['not_run']}" if s["status"] == "not run" else f"{n_pass}/{len(ran)} checks"
+        print(f"  {s['key']:<16} {s['status']:<14} {counts}  {s['elapsed_s']:.1f} s")
+    failed = [c for c in doc["checks"] if c["status"] == "fail"]
     for c in failed[:20]:
-        print(f"  FAIL {c['section']}: {c['name']} (measured {c['measured']}, {c['comparison']} {c['threshold']})")
-    print(f"{'PASS' if result.passed else 'FAIL'}: {doc['n_checks'] - doc['n_failed']}/{doc['n_checks']} checks; "
-          f"report in {result.out_dir / 'index.html'} ({doc['elapsed_s']:.1f} s)")
+        print(f"  FAIL {c['id']}: {c['name']} (measured {c['measured']}, {c['comparison']} {c['threshold']})")
+    ev = doc["evidence"]
+    print(f"{'PASS' if result.passed else 'FAIL'}: {ev['n_checks'] - ev['n_failed']}/{ev['n_checks']} checks "
+          f"of the library's evidence; report in {result.out_dir / 'index.html'} ({doc['elapsed_s']:.1f} s)")
     return result.exit_status
 
 
-__all__ = ["add_parser", "run"]
+__all__ = ["add_parser", "run", "subject_from_args", "FAST_EVIDENCE"]

@@ -34,9 +34,22 @@ class Check:
     unit: str = ""
     detail: str = ""
     section: str = ""
+    #: why the check did not run (no GL driver, no compiler, bpy absent): it then neither
+    #: passes nor fails and is shown as "not run"
+    not_run: str | None = None
+    id: str = ""
+
+    @property
+    def status(self) -> str:
+        """"pass", "fail" or "not run"."""
+        if self.not_run:
+            return "not run"
+        return "pass" if self.passed else "fail"
 
     @property
     def passed(self) -> bool:
+        if self.not_run:
+            return False
         m = self.measured
         if m is None or (isinstance(m, float) and math.isnan(m)):
             return False
@@ -51,7 +64,19 @@ class Check:
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
         d["passed"] = self.passed
+        d["status"] = self.status
         return d
+
+
+def slug(text: str) -> str:
+    """A check name as an id part: lower case, runs of other characters as one ``_``.
+
+    >>> slug("eon: white furnace |E - 1| at rho = 1")
+    'eon_white_furnace_e_1_at_rho_1'
+    """
+    import re
+
+    return re.sub(r"[^a-z0-9]+", "_", text.lower()).strip("_")[:60] or "check"
 
 
 @dataclass
@@ -82,6 +107,8 @@ class SectionResult:
     figures: list[Figure] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
+    #: why the section ran nothing (shown as "not run"), when it did not
+    not_run: str | None = None
 
     def __post_init__(self):
         for c in self.checks:

@@ -38,26 +38,49 @@ caption { text-align: left; font-weight: 600; padding: .2em 0; }
 <p class="meta">openpbr-diffuse {{ doc.version }} &middot; generated {{ doc.generated }} &middot;
 {{ "quick run" if doc.quick else "full run" }} &middot; {{ doc.elapsed_s | num }} s &middot;
 materials: {% for p in doc.paths %}<code>{{ p }}</code>{% if not loop.last %}, {% endif %}{% else %}none{% endfor %}</p>
-<p id="overall" class="{{ 'pass' if doc.passed else 'fail' }}">{{ "ALL CHECKS PASS" if doc.passed else "SOME CHECKS FAIL" }}:
-{{ doc.n_checks - doc.n_failed }} of {{ doc.n_checks }} checks pass.</p>
+{% set ut = doc.implementation %}
+{% if ut %}<section id="under-test" data-status="{{ ut.status }}">
+<p id="headline" class="{{ 'pass' if ut.status == 'conforms' else ('na' if ut.status == 'could not run' else 'fail') }}">{{ ut.headline }}</p>
+<table id="verdicts"><caption>Implementation under test: {{ ut.name }}</caption>
+<tr><th>quantity</th><th>verdict</th><th>diagnosis</th><th>largest error</th><th>where</th><th>rows failing</th></tr>
+{% for v in ut.verdicts %}<tr data-id="{{ v.id }}"><td>{{ v.label }}</td>
+<td class="{{ 'pass' if v.status == 'conforms' else ('na' if v.status == 'could not run' else 'fail') }}">{{ v.status }}</td>
+<td>{{ v.sentence }}</td><td class="num">{{ v.max_abs_error | num }}</td><td>{{ v.where }}</td>
+<td class="num">{{ v.n_failed }} / {{ v.n }}</td></tr>
+{% endfor %}</table>
+{% for n in ut.notes %}<p class="meta">{{ n }}</p>{% endfor %}
+{% for f in ut.figures %}<figure><img src="{{ f.file }}" alt="{{ f.caption }}" loading="eager">
+<figcaption>{{ f.caption }}</figcaption></figure>{% endfor %}
+{% for v in ut.verdicts if v.worst and v.status == 'does not conform' %}<table class="data worst"><caption>{{ v.label }}: worst rows</caption>
+<tr><th>id</th><th>wi</th><th>wo</th><th>mu</th><th>roughness</th><th>rho</th><th>expected</th><th>got</th><th>error / tolerance</th></tr>
+{% for w in v.worst %}<tr><td>{{ w.id }}</td><td>{{ w.wi | vec }}</td><td>{{ w.wo | vec }}</td><td class="num">{{ w.mu | num }}</td>
+<td class="num">{{ w.roughness | num }}</td><td>{{ w.rho | vec }}</td><td>{{ w.expected | vec }}</td><td>{{ w.got | vec }}</td>
+<td class="num">{{ w.normalised_error | num }}</td></tr>{% endfor %}</table>{% endfor %}
+</section>
+<h2 id="evidence">The library's own evidence (counted separately)</h2>
+{% else %}<p id="headline" class="na">No implementation under test: this report shows the reference's own evidence. Use --glsl/--cpp/--vectors/--implementation to grade yours.</p>
+{% endif %}
+<p id="overall" class="{{ 'pass' if doc.passed else 'fail' }}">The reference's evidence: {{ "ALL CHECKS PASS" if doc.passed else "SOME CHECKS FAIL" }}:
+{{ doc.evidence.n_checks - doc.evidence.n_failed }} of {{ doc.evidence.n_checks }} checks pass{% if doc.evidence.n_not_run %}; {{ doc.evidence.n_not_run }} not run{% endif %}.</p>
 <table id="summary"><caption>Sections</caption>
 <tr><th>section</th><th>status</th><th>checks passed</th><th>time (s)</th></tr>
 {% for s in doc.sections %}<tr><td><a href="#section-{{ s.key }}">{{ s.title }}</a></td>
 <td class="{{ status_class(s.status) }}">{{ s.status }}</td>
-<td class="num">{{ s.checks | selectattr('passed') | list | length }} / {{ s.checks | length }}</td>
+<td class="num">{% if s.status == 'not run' %}not run: {{ s.not_run }}{% else %}{{ s.checks | selectattr('passed') | list | length }} / {{ s.checks | rejectattr('status', 'equalto', 'not run') | list | length }}{% endif %}</td>
 <td class="num">{{ s.elapsed_s | num }}</td></tr>
 {% endfor %}</table>
 {% for s in doc.sections %}
 <section id="section-{{ s.key }}" class="report-section" data-key="{{ s.key }}" data-status="{{ s.status }}">
 <h2>{{ s.title }} <span class="badge {{ status_class(s.status) }}">{{ s.status }}</span></h2>
 {% if s.error %}<p class="warn">Section failed: {{ s.error }}</p>{% endif %}
+{% if s.not_run %}<p class="warn not-run">Not run: {{ s.not_run }}</p>{% endif %}
 {% for n in s.notes %}<p>{{ n }}</p>{% endfor %}
 {% for w in s.warnings %}<p class="warn">{{ w }}</p>{% endfor %}
 {% if s.checks %}<table class="checks"><caption>Checks</caption>
-<tr><th>check</th><th>measured</th><th>threshold</th><th>result</th><th>reference</th><th>detail</th></tr>
-{% for c in s.checks %}<tr><td>{{ c.name }}</td><td class="num">{{ c.measured | num }}{% if c.unit %} {{ c.unit }}{% endif %}</td>
+<tr><th>id</th><th>check</th><th>measured</th><th>threshold</th><th>result</th><th>reference</th><th>detail</th></tr>
+{% for c in s.checks %}<tr data-id="{{ c.id }}"><td><code>{{ c.id }}</code></td><td>{{ c.name }}</td><td class="num">{{ c.measured | num }}{% if c.unit %} {{ c.unit }}{% endif %}</td>
 <td class="num">{% if c.comparison == '==' %}{{ c.expected | num }} &plusmn; {{ c.threshold | num }}{% else %}{{ c.comparison }} {{ c.threshold | num }}{% endif %}</td>
-<td class="{{ 'pass' if c.passed else 'fail' }}">{{ "pass" if c.passed else "FAIL" }}</td>
+<td class="{{ status_class(c.status) }}">{{ {'pass': 'pass', 'fail': 'FAIL'}.get(c.status, 'not run: ' ~ (c.not_run or '')) }}</td>
 <td>{{ c.reference }}</td><td>{{ c.detail }}</td></tr>
 {% endfor %}</table>{% endif %}
 {% for t in s.tables %}<table class="data"><caption>{{ t.caption }}</caption>
@@ -88,6 +111,12 @@ def _num(v):
         a = abs(v)
         return f"{v:.4g}" if 1e-3 <= a < 1e5 else f"{v:.3e}"
     return v
+
+
+def _vec(v):
+    if v is None:
+        return "—"
+    return "(" + ", ".join(str(_num(float(x))) for x in v) + ")"
 
 
 def _status_class(status):
@@ -126,6 +155,10 @@ def render_html(doc: dict, image_dir: Path | None = None) -> str:
         doc["sections"] = sections
     env = Environment(autoescape=True, trim_blocks=False, lstrip_blocks=False)
     env.filters["num"] = _num
+    env.filters["vec"] = _vec
+    doc.setdefault("implementation", None)
+    doc.setdefault("evidence", {"n_checks": doc.get("n_checks", 0), "n_failed": doc.get("n_failed", 0),
+                                "n_not_run": 0})
     template = env.from_string(_TEMPLATE)
     return template.render(doc=doc, status_class=_status_class)
 

@@ -6,18 +6,34 @@ as "error" with a failing check), then writes ``index.html``, ``report.json`` an
 images into a temporary directory beside the output directory and moves it into place
 only when everything was written: an existing report is replaced only by a complete one.
 
-``report.json`` schema (``"schema": "openpbr-diffuse-report/1"``)::
+``report.json`` schema (``"schema": "openpbr-diffuse-report/2"``)::
 
     {"schema", "version" (library), "generated" (UTC ISO 8601), "quick" (bool),
-     "paths" [str], "passed" (bool), "n_checks", "n_failed", "elapsed_s",
-     "sections": [{"key", "title", "status": "pass"|"fail"|"error"|"not available",
-                   "elapsed_s", "error" (str|null), "notes" [str], "warnings" [str],
-                   "checks": [CHECK], "tables": [{"caption", "columns", "rows"}],
+     "paths" [str], "select" [str] (the --select patterns, [] = everything),
+     "implementation": null | UNDER_TEST,      # the implementation under test (first screen)
+     "evidence": {"passed", "n_checks", "n_failed", "n_not_run"},   # the library's own checks
+     "passed" (bool: the library's evidence), "n_checks", "n_failed", "elapsed_s",
+     "sections": [{"key", "title", "status": "pass"|"fail"|"error"|"not run"|"findings"|"not available",
+                   "not_run" (str|null: why nothing ran), "elapsed_s", "error" (str|null),
+                   "notes" [str], "warnings" [str], "checks": [CHECK],
+                   "tables": [{"caption", "columns", "rows"}],
                    "figures": [{"file" ("images/<key>_*.png"), "caption"}]}],
      "checks": [CHECK]}       # every check of every section, flattened
-    CHECK = {"section", "name", "measured", "threshold", "comparison" ("<=", ">=", "=="),
-             "expected" (null unless "=="), "unit", "reference" (provenance), "detail",
-             "passed" (bool)}
+    CHECK = {"id" ("section.check_slug", stable), "section", "name", "measured", "threshold",
+             "comparison" ("<=", ">=", "=="), "expected" (null unless "=="), "unit",
+             "reference" (provenance), "detail", "passed" (bool), "status": "pass"|"fail"|"not run",
+             "not_run" (str|null: why)}
+    UNDER_TEST = {"name", "kind" ("vectors"|"code"), "status": "conforms"|"does not conform"|
+                  "could not run", "headline", "error", "version" {str: str}, "notes" [str],
+                  "figures": [{"file", "caption"}],
+                  "verdicts": [{"id" ("implementation.brdf", ...), "quantity", "label", "status",
+                                "diagnosis" (deviation name|null), "sentence", "max_abs_error",
+                                "where" (the inputs of the largest error), "n", "n_failed",
+                                "detail", "worst" [row]}]}
+
+Schema 1 had no "id"/"status"/"not_run" on checks, no "implementation", "evidence", "select"
+and section statuses "pass"|"fail"|"error"|"not available" only (a section with 0 checks was
+"pass"; it is now "not run" or "findings").
 
 Non-finite numbers are written as null (JSON has no NaN).
 """
@@ -33,9 +49,9 @@ import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from .model import Check, Context, SectionResult
+from .model import Check, Context, SectionResult, slug
 
-SCHEMA = "openpbr-diffuse-report/1"
+SCHEMA = "openpbr-diffuse-report/2"
 IMAGE_DIR = "images"
 
 
@@ -56,17 +72,30 @@ class ReportRun:
     sections: list = field(default_factory=list)
     out_dir: Path | None = None
     document: dict = field(default_factory=dict)
+    under_test: object = None
 
     @property
-    def checks(self):
+    def checks(self) -> list:
         return [c for s in self.sections for c in s.result.checks]
 
     @property
-    def passed(self):
-        return all(c.passed for c in self.checks) and not any(s.status == "error" for s in self.sections)
+    def passed(self) -> bool:
+        """The library's own evidence: every check that ran passes and no section crashed."""
+        return (all(c.passed for c in self.checks if c.status != "not run")
+                and not any(s.status == "error" for s in self.sections))
 
     @property
-    def exit_status(self):
+    def exit_status(self) -> int:
+        """0 conforms and the evidence passes, 1 does not conform (or a check fails),
+        3 the implementation could not run (:data:`.subject.EXIT_COULD_NOT_RUN`)."""
+        if self.under_test is not None:
+            from .subject import COULD_NOT_RUN, DOES_NOT_CONFORM, EXIT_COULD_NOT_RUN
+
+            status = self.under_test.status
+            if status == DOES_NOT_CONFORM:
+                return 1
+            if status == COULD_NOT_RUN:
+                return EXIT_COULD_NOT_RUN
         return 0 if self.passed else 1
 
 
@@ -106,8 +135,47 @@ def _section_title(key):
     return key.replace("_", " ").capitalize()
 
 
-def run_section(key, ctx):
-    """Build one section; never raises (errors become an "error" section)."""
+def matches(patterns, text: str) -> bool:
+    """Whether ``text`` (a check id or section key) matches one of the glob ``patterns``."""
+    import fnmatch
+
+    return any(fnmatch.fnmatchcase(text, p) for p in patterns)
+
+
+def section_selected(key: str, patterns) -> bool:
+    """A section runs when a pattern matches its key or the section part of a check id."""
+    if not patterns:
+        return True
+    return any(matches([p], key) or matches([p.split(".", 1)[0]], key) for p in patterns)
+
+
+def assign_ids(res: SectionResult) -> None:
+    """Give every check of ``res`` its stable id ``section.check_slug`` (unique in the section)."""
+    seen: dict = {}
+    for c in res.checks:
+        base = c.id or f"{res.key}.{slug(c.name)}"
+        n = seen.get(base, 0)
+        seen[base] = n + 1
+        c.id = base if n == 0 else f"{base}_{n + 1}"
+
+
+def _status(res: SectionResult) -> str:
+    ran = [c for c in res.checks if c.status != "not run"]
+    if not ran:
+        if res.tables and not res.not_run:
+            return "findings"
+        res.not_run = res.not_run or (
+            "; ".join(sorted({c.not_run for c in res.checks if c.not_run})) or "the section made no checks")
+        return "not run"
+    return "pass" if all(c.passed for c in ran) else "fail"
+
+
+def run_section(key, ctx, select=None):
+    """Build one section; never raises (errors become an "error" section).
+
+    ``select``: glob patterns of check ids; checks matching none are dropped (a pattern
+    matching the section key keeps them all).
+    """
     from . import sections
 
     modname = f"{sections.__name__}.{key}"
@@ -131,13 +199,18 @@ def run_section(key, ctx):
             c.section = key
     except Exception as exc:  # a broken section must not lose the rest of the report
         return _error(SectionResult(key, title), key, f"{type(exc).__name__}: {exc}", t0)
-    status = "pass" if all(c.passed for c in res.checks) else "fail"
-    return SectionRun(res, status, time.perf_counter() - t0)
+    assign_ids(res)
+    if select and not matches(select, key):
+        res.checks = [c for c in res.checks if matches(select, c.id)]
+        if not res.checks:
+            res.not_run = "no check of this section matches --select " + " ".join(select)
+    return SectionRun(res, _status(res), time.perf_counter() - t0)
 
 
 def _error(res, key, message, t0):
     res.checks.append(Check(name="section ran", measured=math.nan, threshold=0.0, comparison="==",
                             expected=0.0, detail=message, reference="the section's build()", section=key))
+    assign_ids(res)
     return SectionRun(res, "error", time.perf_counter() - t0, message)
 
 
@@ -155,24 +228,35 @@ def _clean(x):
     return x
 
 
-def build_document(run: ReportRun, *, paths, quick, elapsed_s):
+def build_document(run: ReportRun, *, paths, quick: bool, elapsed_s: float, select=(), figures=()) -> dict:
+    """``report.json``'s document (see the module docstring for the schema)."""
     from .._version import __version__
 
     sections = []
     for s in run.sections:
         r = s.result
         sections.append({
-            "key": r.key, "title": r.title, "status": s.status, "elapsed_s": round(s.elapsed_s, 3),
+            "key": r.key, "title": r.title, "status": s.status, "not_run": r.not_run,
+            "elapsed_s": round(s.elapsed_s, 3),
             "error": s.error, "notes": list(r.notes), "warnings": list(r.warnings),
             "checks": [c.to_dict() for c in r.checks],
             "tables": [asdict(t) for t in r.tables],
             "figures": [{"file": f"{IMAGE_DIR}/{f.file}", "caption": f.caption} for f in r.figures]})
     checks = [c.to_dict() for c in run.checks]
+    n_failed = sum(c["status"] == "fail" for c in checks)
+    n_not_run = sum(c["status"] == "not run" for c in checks)
+    under = None
+    if run.under_test is not None:
+        under = run.under_test.to_dict()
+        under["figures"] = [{"file": f"{IMAGE_DIR}/{f}", "caption": c} for f, c in figures]
     return _clean({
         "schema": SCHEMA, "version": __version__,
         "generated": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-        "quick": bool(quick), "paths": [str(p) for p in paths], "passed": run.passed,
-        "n_checks": len(checks), "n_failed": sum(not c["passed"] for c in checks),
+        "quick": bool(quick), "paths": [str(p) for p in paths], "select": list(select or ()),
+        "implementation": under,
+        "evidence": {"passed": run.passed, "n_checks": len(checks) - n_not_run, "n_failed": n_failed,
+                     "n_not_run": n_not_run},
+        "passed": run.passed, "n_checks": len(checks), "n_failed": n_failed,
         "elapsed_s": round(elapsed_s, 3), "sections": sections, "checks": checks})
 
 
@@ -184,7 +268,8 @@ def _progress_bar(total, enabled):
                 bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} [{elapsed}] {postfix}")
 
 
-def run_report(paths=None, out="report", *, quick=False, progress=True, sections=None) -> ReportRun:
+def run_report(paths=None, out="report", *, quick: bool = False, progress: bool = True, sections=None,
+               select=None, under_test=None, subject=None) -> ReportRun:
     """Run the report and write ``out/index.html``, ``out/report.json`` and ``out/images/``.
 
     Parameters
@@ -199,6 +284,13 @@ def run_report(paths=None, out="report", *, quick=False, progress=True, sections
         Show a progress bar on stderr.
     sections : sequence of str, optional
         Section keys to run (default all of :data:`.sections.SECTIONS`, in that order).
+    select : sequence of str, optional
+        Glob patterns of check ids / section keys (``--select``): only those sections run and
+        only the matching checks are kept.
+    under_test : UnderTest, optional
+        The implementation under test, already graded (:mod:`.subject`): shown first,
+        counted apart from the library's evidence; ``subject`` (its callables), when given,
+        is drawn in the pictures.
 
     Raises
     ------
@@ -214,6 +306,8 @@ def run_report(paths=None, out="report", *, quick=False, progress=True, sections
     if unknown:
         raise ValueError(f"sections: unknown section(s) {', '.join(unknown)}; "
                          f"expected some of {', '.join(section_pkg.SECTIONS)}")
+    select = [str(p) for p in (select or ())]
+    keys = tuple(k for k in keys if section_selected(k, select))
     out = Path(out).resolve()
     out.parent.mkdir(parents=True, exist_ok=True)
     if out.exists() and not out.is_dir():
@@ -223,18 +317,20 @@ def run_report(paths=None, out="report", *, quick=False, progress=True, sections
     try:
         image_dir = tmp / IMAGE_DIR
         image_dir.mkdir()
-        run = ReportRun()
+        run = ReportRun(under_test=under_test)
+        figures = _subject_figures(under_test, subject, image_dir, quick)
         bar = _progress_bar(len(keys), progress)
         try:
             ctx = Context(image_dir=image_dir, paths=list(paths), quick=quick,
                           progress=lambda message: bar.set_postfix_str(str(message)[:60], refresh=True))
             for key in keys:
                 bar.set_description(key)
-                run.sections.append(run_section(key, ctx))
+                run.sections.append(run_section(key, ctx, select))
                 bar.update(1)
         finally:
             bar.close()
-        doc = build_document(run, paths=paths, quick=quick, elapsed_s=time.perf_counter() - t0)
+        doc = build_document(run, paths=paths, quick=quick, elapsed_s=time.perf_counter() - t0,
+                             select=select, figures=figures)
         run.document = doc
         (tmp / "report.json").write_text(json.dumps(doc, indent=1, allow_nan=False) + "\n")
         (tmp / "index.html").write_text(render_html(doc, image_dir), encoding="utf-8")
@@ -244,6 +340,19 @@ def run_report(paths=None, out="report", *, quick=False, progress=True, sections
         raise
     run.out_dir = out
     return run
+
+
+def _subject_figures(under_test, subject, image_dir, quick):
+    """The pictures of the implementation under test ([] when it cannot be called)."""
+    if under_test is None or subject is None or under_test.error:
+        return []
+    from .subject import figures
+
+    try:
+        return figures(subject, under_test, image_dir, quick=quick)
+    except Exception as exc:  # a picture must not lose the verdicts
+        under_test.notes.append(f"pictures not drawn: {type(exc).__name__}: {' '.join(str(exc).split())}")
+        return []
 
 
 def _replace(tmp, out):
@@ -263,4 +372,4 @@ def _replace(tmp, out):
         shutil.rmtree(old, ignore_errors=True)
 
 
-__all__ = ["run_report", "run_section", "ReportRun", "SectionRun", "SCHEMA", "default_paths"]
+__all__ = ["run_report", "run_section", "matches", "section_selected", "assign_ids", "ReportRun", "SectionRun", "SCHEMA", "default_paths"]

@@ -23,7 +23,7 @@ from pathlib import Path
 
 from ..model import SectionResult, Table
 
-TITLE = "Graded implementations (their own code)"
+TITLE = "Third-party implementations, graded by running their own code (findings)"
 KEY = "graders"
 
 
@@ -100,6 +100,8 @@ def build(ctx) -> SectionResult:
                  "diagnosis"],
         rows=rows))
     ctx.extra.setdefault("graders", run)
+    if not rows:
+        result.not_run = "no implementation could run here: " + ("; ".join(result.warnings) or "none planned")
     if not any(s for n, s in _plan(ctx) if s is not None) and not ctx.quick:
         result.notes.append("Only MaterialX's GLSL ran: point $OPENPBR_DIFFUSE_IMPLEMENTATIONS at a folder holding "
                             "eon-diffuse/, openpbr-viewer/ and adobe-openpbr-bsdf/ checkouts to grade those too.")

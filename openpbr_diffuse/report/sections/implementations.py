@@ -9,7 +9,7 @@ import numpy as np
 
 from ..model import Check, SectionResult, Table
 
-TITLE = "Graded implementations: test vectors and known deviations"
+TITLE = "Grader self-test: test vectors and known deviations"
 
 
 def build(ctx):

@@ -1,0 +1,80 @@
+"""``report --junit FILE``: the report's checks as JUnit XML for CI dashboards.
+
+One ``<testsuite>`` per section (and one, ``implementation``, for the implementation under
+test), one ``<testcase>`` per check, named by its stable id: a failing check carries
+``<failure message=...>`` with what was measured against what; a check that did not run
+(and a section that ran nothing) is ``<skipped message=...>`` with the reason.  An
+implementation that could not run is an ``<error>``.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from xml.etree import ElementTree as ET
+
+
+def _case(suite: ET.Element, classname: str, name: str, elapsed: float = 0.0) -> ET.Element:
+    return ET.SubElement(suite, "testcase", classname=classname, name=name, time=f"{elapsed:.3f}")
+
+
+def junit_xml(doc: dict) -> str:
+    """The JUnit XML text of a report document (``report.json``).
+
+    Examples
+    --------
+    >>> doc = {"sections": [{"key": "s", "title": "S", "status": "pass", "elapsed_s": 0.1, "not_run": None,
+    ...        "checks": [{"id": "s.a", "name": "a", "status": "fail", "measured": 2, "comparison": "<=",
+    ...                    "threshold": 1, "detail": "", "not_run": None}]}], "implementation": None}
+    >>> "<failure" in junit_xml(doc)
+    True
+    """
+    root = ET.Element("testsuites", name="openpbr-diffuse report")
+    ut = doc.get("implementation")
+    if ut:
+        suite = ET.SubElement(root, "testsuite", name="implementation")
+        for v in ut.get("verdicts", []):
+            case = _case(suite, "implementation", v["id"])
+            if v["status"] == "does not conform":
+                ET.SubElement(case, "failure", message=f"does not conform: {v['sentence']}").text = v.get("where", "")
+            elif v["status"] == "could not run":
+                ET.SubElement(case, "error", message=f"could not run: {v.get('detail', '')}")
+        if ut.get("error") or not ut.get("verdicts"):
+            case = _case(suite, "implementation", "implementation.run")
+            ET.SubElement(case, "error", message=f"could not run: {ut.get('error') or 'nothing to grade'}")
+    for s in doc.get("sections", []):
+        suite = ET.SubElement(root, "testsuite", name=s["key"])
+        if not s.get("checks"):
+            case = _case(suite, s["key"], f"{s['key']}.section", s.get("elapsed_s") or 0.0)
+            why = s.get("not_run") or s.get("status", "")
+            if s.get("status") == "error":
+                ET.SubElement(case, "error", message=str(s.get("error")))
+            elif s.get("status") != "pass":
+                ET.SubElement(case, "skipped", message=f"{s.get('status')}: {why}")
+            continue
+        for c in s["checks"]:
+            case = _case(suite, s["key"], c["id"])
+            status = c.get("status") or ("pass" if c.get("passed") else "fail")
+            if status == "fail":
+                ET.SubElement(case, "failure", message=(
+                    f"{c['name']}: measured {c.get('measured')} {c.get('comparison')} {c.get('threshold')}"
+                    + (f" (expected {c['expected']})" if c.get("expected") is not None else ""))).text = c.get("detail", "")
+            elif status == "not run":
+                ET.SubElement(case, "skipped", message=f"not run: {c.get('not_run')}")
+    for suite in root:
+        cases = suite.findall("testcase")
+        suite.set("tests", str(len(cases)))
+        suite.set("failures", str(sum(c.find("failure") is not None for c in cases)))
+        suite.set("errors", str(sum(c.find("error") is not None for c in cases)))
+        suite.set("skipped", str(sum(c.find("skipped") is not None for c in cases)))
+    return ET.tostring(root, encoding="unicode", xml_declaration=True) + "\n"
+
+
+def write_junit(doc: dict, path) -> Path:
+    """Write :func:`junit_xml` of ``doc`` to ``path`` (through a temporary file beside it)."""
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text(junit_xml(doc), encoding="utf-8")
+    tmp.replace(path)
+    return path
+
+
+__all__ = ["junit_xml", "write_junit"]

@@ -1,0 +1,339 @@
+"""The implementation under test: graded first, shown on the report's first screen.
+
+:func:`grade_under_test` grades what the user gave -- a filled vectors file (graded with
+``conformance.grade.grade``) or a :class:`~openpbr_diffuse.graders.subject.Subject` (their
+GLSL / C++ / a registered implementation, graded with ``graders.grading.grade_subject``) --
+and returns an :class:`UnderTest`: one verdict per quantity (BRDF, albedo, sampler pdf,
+sampler chi-square), each "conforms", "does not conform" or "could not run", with the
+diagnosis in one sentence, the largest error and the inputs where it occurs.  When a
+subject can be called, :func:`figures` draws its error maps over (mu_i, mu_o), its in-plane
+lobe slices over the reference's, its albedo curves and its sampler's histogram against
+its pdf (matplotlib, Agg).
+
+These verdicts are never mixed with the library's own evidence (the report's sections).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+CONFORMS, DOES_NOT_CONFORM, COULD_NOT_RUN = "conforms", "does not conform", "could not run"
+#: The sentence when a failure matches no known deviation.
+NO_KNOWN = "no known deviation explains this"
+#: Exit status of ``report`` when the implementation could not be run.
+EXIT_COULD_NOT_RUN = 3
+_QUANTITY_LABEL = {"brdf": "BRDF", "albedo": "albedo", "sampler pdf": "pdf", "sampler chi2": "sampler"}
+
+
+@dataclass
+class Verdict:
+    """One quantity's verdict (``status`` is one of "conforms", "does not conform", "could not run")."""
+
+    quantity: str
+    status: str
+    diagnosis: str | None = None
+    sentence: str = ""
+    max_abs_error: float | None = None
+    where: str = ""
+    n: int = 0
+    n_failed: int = 0
+    detail: str = ""
+    worst: list = field(default_factory=list)
+
+    @property
+    def id(self) -> str:
+        return "implementation." + self.quantity.replace(" ", "_")
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"id": self.id, "quantity": self.quantity, "label": _QUANTITY_LABEL.get(self.quantity, self.quantity),
+                "status": self.status, "diagnosis": self.diagnosis, "sentence": self.sentence,
+                "max_abs_error": self.max_abs_error, "where": self.where, "n": self.n, "n_failed": self.n_failed,
+                "detail": self.detail, "worst": self.worst}
+
+
+@dataclass
+class UnderTest:
+    """The implementation under test and its verdicts."""
+
+    name: str
+    kind: str
+    verdicts: list = field(default_factory=list)
+    version: dict = field(default_factory=dict)
+    error: str | None = None
+    notes: list = field(default_factory=list)
+
+    @property
+    def status(self) -> str:
+        """"could not run" if nothing ran, "does not conform" if any graded quantity fails, else "conforms"."""
+        ran = [v for v in self.verdicts if v.status != COULD_NOT_RUN]
+        if self.error or not ran:
+            return COULD_NOT_RUN
+        return DOES_NOT_CONFORM if any(v.status == DOES_NOT_CONFORM for v in ran) else CONFORMS
+
+    @property
+    def headline(self) -> str:
+        """The first line: the verdict and, when it fails, the first failing quantity's diagnosis."""
+        s = self.status
+        if s == DOES_NOT_CONFORM:
+            v = next(v for v in self.verdicts if v.status == DOES_NOT_CONFORM)
+            return f"{self.name} does not conform: {v.sentence}"
+        if s == COULD_NOT_RUN:
+            why = self.error or "; ".join(v.detail for v in self.verdicts if v.detail) or "nothing to grade"
+            return f"{self.name} could not run: {why}"
+        return f"{self.name} conforms (" + ", ".join(
+            _QUANTITY_LABEL.get(v.quantity, v.quantity) for v in self.verdicts if v.status == CONFORMS) + ")"
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"name": self.name, "kind": self.kind, "status": self.status, "headline": self.headline,
+                "error": self.error, "version": {k: str(v) for k, v in self.version.items()},
+                "notes": list(self.notes), "verdicts": [v.to_dict() for v in self.verdicts]}
+
+
+def _deviation_sentence(name: str | None) -> str:
+    if name is None:
+        return NO_KNOWN
+    try:
+        from ..conformance.deviations import DEVIATIONS
+
+        dev = DEVIATIONS[name]
+        return f"{name}: {dev.description}"
+    except (ImportError, KeyError):
+        return str(name)
+
+
+def _fmt_vec(v) -> str:
+    return "—" if v is None else "(" + ", ".join(f"{x:.4g}" for x in v) + ")"
+
+
+def _where(row: dict | None) -> str:
+    """The inputs of a worst row, in words."""
+    if not row:
+        return ""
+    parts = []
+    if row.get("wi") is not None:
+        wi, wo = row["wi"], row["wo"]
+        ldotv = sum(a * b for a, b in zip(wi, wo))
+        parts.append(f"wi {_fmt_vec(wi)}, wo {_fmt_vec(wo)} (mu_i {wi[2]:.3g}, mu_o {wo[2]:.3g}, L.V {ldotv:.3g})")
+    if row.get("mu") is not None:
+        parts.append(f"mu {row['mu']:.3g}")
+    if row.get("roughness") is not None:
+        parts.append(f"roughness {row['roughness']:.3g}")
+    if row.get("rho") is not None:
+        parts.append(f"rho {_fmt_vec(row['rho'])}")
+    parts.append(f"expected {_fmt_vec(row.get('expected'))}, got {_fmt_vec(row.get('got'))}")
+    return f"row {row.get('id', '?')}: " + ", ".join(parts)
+
+
+def _finite(x) -> float | None:
+    try:
+        x = float(x)
+    except (TypeError, ValueError):
+        return None
+    return x if math.isfinite(x) else (math.inf if x > 0 else None)
+
+
+def verdict_from_grade(quantity: str, g: dict) -> Verdict:
+    """A :class:`Verdict` from ``Grade.to_dict()`` (or a ``QuantityGrade``'s ``grade``)."""
+    worst = list(g.get("worst") or [])
+    passed = bool(g.get("passed"))
+    diag = None if passed else g.get("diagnosis")
+    max_abs = g.get("max_abs_error")
+    max_abs = math.inf if max_abs == "inf" else _finite(max_abs)
+    extra = []
+    for key, label in (("n_nan", "NaN"), ("n_inf", "Inf"), ("n_skipped", "skipped")):
+        if g.get(key):
+            extra.append(f"{g[key]} {label}")
+    detail = f"{g.get('n_failed_rows', 0)} of {g.get('n_rows', 0)} rows outside the tolerance"
+    if extra:
+        detail += " (" + ", ".join(extra) + ")"
+    return Verdict(quantity, CONFORMS if passed else DOES_NOT_CONFORM, diag,
+                   "every value within the tolerance" if passed else _deviation_sentence(diag),
+                   max_abs, _where(worst[0] if worst else None), int(g.get("n_rows", 0) or 0),
+                   int(g.get("n_failed_rows", 0) or 0), detail, worst[:10])
+
+
+def verdict_from_quantity(q) -> Verdict:
+    """A :class:`Verdict` from a ``graders.grading.QuantityGrade``."""
+    if q.grade:
+        return verdict_from_grade(q.quantity, q.grade)
+    passed = bool(q.passed)
+    return Verdict(q.quantity, CONFORMS if passed else DOES_NOT_CONFORM, None if passed else q.diagnosis,
+                   q.detail if passed else (_deviation_sentence(q.diagnosis) if q.diagnosis in _known()
+                                            else (q.diagnosis or NO_KNOWN).replace("_", " ") + f" ({q.detail})"),
+                   _finite(q.max_abs_error), q.detail, int(q.n or 0), 0 if passed else 1, q.detail)
+
+
+def _known() -> set:
+    try:
+        from ..conformance.deviations import DEVIATIONS
+
+        return set(DEVIATIONS)
+    except ImportError:
+        return set()
+
+
+def grade_vectors_file(path) -> UnderTest:
+    """Grade a filled vectors file (CSV / JSON) per kind, as ``check FILE`` does."""
+    from ..conformance.grade import grade
+    from ..conformance.vectors import read_results
+
+    vectors, out = read_results(path)  # ValueError / OSError: unusable input
+    ut = UnderTest(name=str(path), kind="vectors")
+    out = np.asarray(out, float)
+    for kind in ("brdf", "albedo"):
+        sel = vectors.kind == kind
+        if not sel.any():
+            continue
+        g = grade(vectors.subset(sel), out[sel])
+        ut.verdicts.append(verdict_from_grade(kind, g.to_dict()))
+    return ut
+
+
+def grade_subject_under_test(subject, *, quick: bool = True) -> UnderTest:
+    """Grade a :class:`~openpbr_diffuse.graders.subject.Subject`; missing pieces become "could not run"."""
+    from ..graders.errors import GraderUnavailable
+    from ..graders.grading import grade_subject
+
+    ut = UnderTest(name=subject.name, kind="code", version=dict(subject.version), notes=list(subject.notes))
+    try:
+        result = grade_subject(subject, quick=quick, quantities=("brdf", "albedo", "sampler"))
+    except GraderUnavailable as exc:
+        ut.error = " ".join(str(exc).split())
+        return ut
+    ut.verdicts = [verdict_from_quantity(q) for q in result.quantities]
+    if subject.sample is None and subject.pdf is None:
+        ut.notes.append("sampler: not graded (give --sample-function and --pdf-function)")
+    return ut
+
+
+# ---------------------------------------------------------------------------------------------
+# pictures
+
+_MAP_ROUGHNESS = (0.25, 0.5, 1.0)
+_MAP_N = 20
+_SLICE_MU_O = (0.2, 0.5, 0.9)
+
+
+def _grid(n):
+    mu = np.linspace(0.02, 0.98, n)
+    mi, mo = np.meshgrid(mu, mu, indexing="ij")
+    return mu, mi.ravel(), mo.ravel()
+
+
+def _dirs(mu, phi):
+    s = np.sqrt(np.clip(1 - mu * mu, 0, None))
+    return np.stack([s * np.cos(phi), s * np.sin(phi), mu], axis=-1)
+
+
+def figures(subject, ut: UnderTest, image_dir, *, quick: bool = True) -> list:
+    """Write the pictures of the subject's values beside the reference's; [(file, caption)]."""
+    from ..models import directional_albedo, evaluate
+    from ._plot import pyplot
+
+    plt = pyplot()
+    model = getattr(subject, "model", "eon") or "eon"
+    out = []
+    rho = np.array([0.8, 0.8, 0.8])
+    if subject.brdf is not None:
+        n = 14 if quick else _MAP_N
+        mu, mi, mo = _grid(n)
+        fig, axes = plt.subplots(2, len(_MAP_ROUGHNESS), figsize=(3.2 * len(_MAP_ROUGHNESS), 5.6), squeeze=False)
+        for row, (dphi, label) in enumerate(((0.0, "azimuths equal (L.V >= 0)"),
+                                             (math.pi, "azimuths opposite (L.V < 0 where mu_i mu_o < sin sin)"))):
+            for col, r in enumerate(_MAP_ROUGHNESS):
+                wi, wo = _dirs(mi, 0.0), _dirs(mo, dphi)
+                rr = np.full(mi.shape, r)
+                rh = np.broadcast_to(rho, (mi.size, 3))
+                got = np.asarray(subject.brdf(wi, wo, rr, rh), float)[:, 0]
+                ref = evaluate(model, wi, wo, rr, rh)[:, 0]
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    err = np.abs(got - ref) / np.maximum(np.abs(ref), 1e-6)
+                ax = axes[row, col]
+                im = ax.imshow(np.log10(np.maximum(err, 1e-8)).reshape(n, n).T, origin="lower",
+                               extent=(mu[0], mu[-1], mu[0], mu[-1]), vmin=-8, vmax=0, cmap="magma")
+                ax.set_title(f"r = {r:g}, {'dphi = 0' if row == 0 else 'dphi = pi'}", fontsize=8)
+                ax.set_xlabel("mu_i", fontsize=8)
+                ax.set_ylabel("mu_o", fontsize=8)
+                ax.tick_params(labelsize=7)
+        fig.colorbar(im, ax=axes, shrink=0.7, label="log10 relative error")
+        out.append(("subject_error_maps.png", fig,
+                    f"log10 of |theirs - reference| / reference over (mu_i, mu_o), rho = 0.8, at roughness "
+                    f"{', '.join(map(str, _MAP_ROUGHNESS))}; top: equal azimuths (L.V >= 0), bottom: opposite "
+                    "azimuths (L.V < 0 where mu_i mu_o < sin theta_i sin theta_o)"))
+        # in-plane lobe slices
+        th = np.linspace(-89.0, 89.0, 90 if quick else 179)
+        fig, axes = plt.subplots(1, len(_SLICE_MU_O), figsize=(3.4 * len(_SLICE_MU_O), 3.0), squeeze=False)
+        for col, mu_o in enumerate(_SLICE_MU_O):
+            ax = axes[0, col]
+            wo = np.broadcast_to(_dirs(np.array(mu_o), 0.0), (th.size, 3))
+            t = np.radians(th)
+            wi = np.stack([np.sin(t), np.zeros_like(t), np.cos(t)], axis=-1)
+            for r, c in zip((0.5, 1.0), ("C0", "C3")):
+                rr = np.full(th.size, r)
+                rh = np.broadcast_to(rho, (th.size, 3))
+                ref = evaluate(model, wi, wo, rr, rh)[:, 0] * wi[:, 2]
+                got = np.asarray(subject.brdf(wi, wo, rr, rh), float)[:, 0] * wi[:, 2]
+                ax.plot(th, ref, color=c, lw=3, alpha=0.35, label=f"reference r={r:g}")
+                ax.plot(th, got, color=c, lw=1, ls="--", label=f"theirs r={r:g}")
+            ax.set_title(f"in-plane, mu_o = {mu_o:g}", fontsize=8)
+            ax.set_xlabel("theta_i (deg; > 0 on the viewer's side)", fontsize=8)
+            ax.tick_params(labelsize=7)
+        axes[0, 0].set_ylabel("f cos theta_i", fontsize=8)
+        axes[0, 0].legend(fontsize=6)
+        fig.tight_layout()
+        out.append(("subject_lobe_slices.png", fig,
+                    "In-plane slices of f cos theta_i: theirs (dashed) drawn over the reference (wide, pale), rho = 0.8"))
+    if subject.albedo is not None:
+        mu = np.linspace(0.01, 1.0, 60)
+        fig, ax = plt.subplots(figsize=(4.5, 3.2))
+        for r, c in zip((0.25, 0.5, 1.0), ("C0", "C1", "C3")):
+            rr = np.full(mu.size, r)
+            rh = np.broadcast_to(np.array([0.5, 0.5, 0.5]), (mu.size, 3))
+            ax.plot(mu, directional_albedo(model, mu, rr, rh)[:, 0], color=c, lw=3, alpha=0.35,
+                    label=f"reference r={r:g}")
+            ax.plot(mu, np.asarray(subject.albedo(mu, rr, rh), float)[:, 0], color=c, lw=1, ls="--",
+                    label=f"theirs r={r:g}")
+        ax.set_xlabel("mu")
+        ax.set_ylabel("E(mu), rho = 0.5")
+        ax.legend(fontsize=6)
+        fig.tight_layout()
+        out.append(("subject_albedo.png", fig, "Directional albedo: theirs (dashed) against the reference (pale)"))
+    if subject.sample is not None and subject.pdf is not None:
+        rng = np.random.default_rng(5)
+        k = 20_000 if quick else 100_000
+        mu_o, r = 0.3, 1.0
+        wo = np.broadcast_to(_dirs(np.array(mu_o), 0.7), (k, 3))
+        wi, _ = subject.sample(wo, np.full(k, r), rng.random((k, 2)))
+        wi = np.asarray(wi, float)
+        edges = np.linspace(0, 1, 21)
+        hist, _ = np.histogram(wi[:, 2], bins=edges)
+        # expected: integral over phi of their pdf, per cos-theta bin (midpoint rule in mu, 64 phi)
+        mids = 0.5 * (edges[1:] + edges[:-1])
+        phis = np.linspace(0, 2 * np.pi, 64, endpoint=False)
+        M, P = np.meshgrid(mids, phis, indexing="ij")
+        d = _dirs(M.ravel(), P.ravel())
+        p = np.asarray(subject.pdf(np.broadcast_to(wo[0], d.shape), d, np.full(d.shape[0], r)), float)
+        expected = p.reshape(M.shape).mean(axis=1) * 2 * np.pi * np.diff(edges) * k
+        fig, ax = plt.subplots(figsize=(4.5, 3.2))
+        ax.bar(mids, hist, width=np.diff(edges), alpha=0.5, label="their samples")
+        ax.plot(mids, expected, "k.-", label="n x their pdf over each bin")
+        ax.set_xlabel("cos theta_i")
+        ax.set_ylabel("samples per bin")
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        out.append(("subject_sampler_histogram.png", fig,
+                    f"Their sampler's histogram of cos theta_i against their pdf (mu_o = {mu_o}, r = {r}, {k} samples)"))
+    written = []
+    for name, fig, caption in out:
+        fig.savefig(image_dir / name, dpi=80)
+        plt.close(fig)
+        written.append((name, caption))
+    return written
+
+
+__all__ = ["UnderTest", "Verdict", "grade_vectors_file", "grade_subject_under_test", "figures",
+           "verdict_from_grade", "CONFORMS", "DOES_NOT_CONFORM", "COULD_NOT_RUN", "NO_KNOWN",
+           "EXIT_COULD_NOT_RUN"]

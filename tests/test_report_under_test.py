@@ -1,0 +1,186 @@
+"""The report grades the implementation under test first: GLSL written here from the paper's
+equations (EON, Portsmouth-Kutz-Hill 2025, Eq. 10-20), a correct one and one that returns FON
+where EON is claimed; the first screen (in headless Chromium), exit codes, JUnit, --select,
+--list-checks and "not run" sections."""
+import json
+import shutil
+import sys
+import types
+from pathlib import Path
+from xml.etree import ElementTree as ET
+
+import pytest
+
+from openpbr_diffuse.cli.main import main
+from openpbr_diffuse.report import runner
+from openpbr_diffuse.report.model import Check, SectionResult
+
+# EON from the paper's equations (Eq. 10-20): FON single scattering, exact E_F (Eq. 12-13, with
+# 1 - S^3 written without cancellation), <E_F> (Eq. 15), f_ms and rho_ms (Eq. 16-20).
+EON_GLSL = """
+const float PI_ = 3.14159265358979;
+const float C1 = 0.5 - 2.0 / (3.0 * PI_);
+const float C2 = 2.0 / 3.0 - 28.0 / (15.0 * PI_);
+float mine_EF(float mu, float r) {
+    float S = sqrt(max(1.0 - mu * mu, 0.0));
+    float GF = S * (acos(clamp(mu, -1.0, 1.0)) - S * mu)
+             + (2.0 / 3.0) * (S * mu * (1.0 + S + S * S) / (1.0 + S) - S);
+    return (1.0 + r * GF / PI_) / (1.0 + C1 * r);
+}
+vec3 mine_fss(vec3 wi, vec3 wo, float r, vec3 rho) {
+    float s = dot(wi, wo) - wi.z * wo.z;
+    float st = s > 0.0 ? s / max(wi.z, wo.z) : s;
+    return rho / PI_ / (1.0 + C1 * r) * (1.0 + r * st);
+}
+vec3 mine_rho_ms(float r, vec3 rho) {
+    float avg = (1.0 + C2 * r) / (1.0 + C1 * r);
+    return rho * rho * avg / (vec3(1.0) - rho * (1.0 - avg));
+}
+vec3 eon(vec3 wi, vec3 wo, float r, vec3 rho) {
+    if (wi.z <= 0.0 || wo.z <= 0.0) return vec3(0.0);
+    float avg = (1.0 + C2 * r) / (1.0 + C1 * r);
+    float ms = max(1e-7, 1.0 - mine_EF(wo.z, r)) * max(1e-7, 1.0 - mine_EF(wi.z, r)) / max(1e-7, 1.0 - avg);
+    return mine_fss(wi, wo, r, rho) + mine_rho_ms(r, rho) / PI_ * ms;
+}
+vec3 eon_albedo(float mu, float r, vec3 rho) {
+    float E = mine_EF(mu, r);
+    return rho * E + mine_rho_ms(r, rho) * (1.0 - E);
+}
+vec3 fon_not_eon(vec3 wi, vec3 wo, float r, vec3 rho) {
+    if (wi.z <= 0.0 || wo.z <= 0.0) return vec3(0.0);
+    return mine_fss(wi, wo, r, rho);
+}
+"""
+
+FAST = ["--select", "implementations.reference*", "--no-progress"]
+
+
+@pytest.fixture(scope="module")
+def glsl(tmp_path_factory):
+    pytest.importorskip("moderngl")
+    path = tmp_path_factory.mktemp("code") / "mine.glsl"
+    path.write_text(EON_GLSL)
+    return path
+
+
+@pytest.fixture(scope="module")
+def wrong(glsl, tmp_path_factory):
+    out = tmp_path_factory.mktemp("wrong") / "report"
+    status = main(["report", "--glsl", str(glsl), "--function", "fon_not_eon", "--out", str(out),
+                   "--junit", str(out.parent / "junit.xml"), *FAST])
+    return out, status
+
+
+def _could_not_run(out):
+    doc = json.loads((out / "report.json").read_text())
+    return doc["implementation"]["status"] == "could not run"
+
+
+def test_wrong_glsl_does_not_conform_and_is_named(wrong):
+    out, status = wrong
+    if _could_not_run(out):
+        pytest.skip("no OpenGL 4.3 context here")
+    assert status == 1
+    doc = json.loads((out / "report.json").read_text())
+    ut = doc["implementation"]
+    assert ut["status"] == "does not conform"
+    assert ut["headline"].startswith(f"glsl:mine.glsl:fon_not_eon does not conform: no_energy_compensation_fon")
+    brdf = next(v for v in ut["verdicts"] if v["quantity"] == "brdf")
+    assert brdf["max_abs_error"] > 1e-3 and "wi (" in brdf["where"] and brdf["worst"]
+    assert doc["schema"] == "openpbr-diffuse-report/2"
+    assert [s["key"] for s in doc["sections"]] == ["implementations"]   # --select ran only that
+
+
+def test_correct_glsl_conforms(glsl, tmp_path):
+    out = tmp_path / "report"
+    status = main(["report", "--glsl", str(glsl), "--function", "eon", "--albedo-function", "eon_albedo",
+                   "--out", str(out), *FAST])
+    if _could_not_run(out):
+        pytest.skip("no OpenGL 4.3 context here")
+    doc = json.loads((out / "report.json").read_text())
+    assert [v["status"] for v in doc["implementation"]["verdicts"]] == ["conforms", "conforms"], \
+        doc["implementation"]["verdicts"]
+    assert status == 0
+    assert doc["implementation"]["figures"] and all((out / f["file"]).is_file()
+                                                    for f in doc["implementation"]["figures"])
+
+
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+         "--disable-component-update", "--disable-sync", "--no-first-run"]
+
+
+def test_first_screen_in_chromium_says_does_not_conform(wrong):
+    sync_api = pytest.importorskip("playwright.sync_api")
+    if not Path(CHROMIUM).exists():
+        pytest.skip("chromium not installed")
+    out, _ = wrong
+    if _could_not_run(out):
+        pytest.skip("no OpenGL 4.3 context here")
+    with sync_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS)
+        try:
+            page = browser.new_page(viewport={"width": 1280, "height": 800})
+            errors = []
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto((out / "index.html").resolve().as_uri(), wait_until="load")
+            first = page.inner_text("body")[:400]
+            box = page.eval_on_selector("#headline", "e => e.getBoundingClientRect().bottom")
+            text = page.inner_text("#headline")
+        finally:
+            browser.close()
+    assert errors == []
+    assert box < 800   # on the first screen
+    assert "does not conform: no_energy_compensation_fon" in text and text in first
+
+
+def test_junit_has_one_testcase_per_check(wrong):
+    out, _ = wrong
+    doc = json.loads((out / "report.json").read_text())
+    root = ET.parse(out.parent / "junit.xml").getroot()
+    cases = root.findall(".//testcase")
+    names = [c.get("name") for c in cases]
+    ids = [c["id"] for c in doc["checks"]] + [v["id"] for v in doc["implementation"]["verdicts"]]
+    assert sorted(names) == sorted(ids) and len(set(names)) == len(names)
+    if not _could_not_run(out):
+        assert root.find(".//testcase[@name='implementation.brdf']/failure") is not None
+
+
+def test_no_implementation_says_so_and_select_filters(tmp_path, capsys):
+    out = tmp_path / "r"
+    status = main(["report", "--out", str(out), "--select", "implementations.no_energy_compensation_fon*",
+                   "--no-progress"])
+    assert status == 0
+    first = capsys.readouterr().out.splitlines()[0]
+    assert first.startswith("No implementation under test: this report shows the reference's own evidence.")
+    doc = json.loads((out / "report.json").read_text())
+    assert [c["id"] for c in doc["checks"]] == ["implementations.no_energy_compensation_fon_fails_and_is_diagnosed"]
+    assert doc["implementation"] is None and "No implementation under test" in (out / "index.html").read_text()
+
+
+def _fake_section(monkeypatch, key, build):
+    mod = types.ModuleType(f"openpbr_diffuse.report.sections.{key}")
+    mod.TITLE = key
+    mod.build = build
+    monkeypatch.setitem(sys.modules, mod.__name__, mod)
+
+
+def test_a_section_that_ran_nothing_is_not_run(tmp_path, monkeypatch):
+    _fake_section(monkeypatch, "simulation", lambda ctx: SectionResult("simulation", "s"))
+    _fake_section(monkeypatch, "colorshift", lambda ctx: SectionResult(
+        "colorshift", "c", checks=[Check("renders", 0.0, 1.0, reference="x", not_run="bpy absent")]))
+    run = runner.run_report(None, tmp_path / "r", quick=True, progress=False,
+                            sections=["simulation", "colorshift"])
+    doc = run.document
+    assert [s["status"] for s in doc["sections"]] == ["not run", "not run"]
+    assert doc["sections"][1]["not_run"] == "bpy absent" and doc["checks"][0]["status"] == "not run"
+    html = (tmp_path / "r" / "index.html").read_text()
+    assert "Not run: bpy absent" in html and "0 / 0" not in html
+    assert run.exit_status == 0
+
+
+def test_list_checks_prints_ids(capsys):
+    assert main(["report", "--list-checks", "--select", "implementations", "--no-progress"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert "implementations.reference_rounded_to_float32_conforms\treference rounded to float32 conforms" in lines
+    assert any(line.startswith("implementation.brdf") for line in lines)
