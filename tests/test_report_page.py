@@ -14,9 +14,9 @@ from openpbr_diffuse.report import runner
 from openpbr_diffuse.report.model import Check, SectionResult, Table
 from openpbr_diffuse.report.sections import SECTIONS
 
-CHECK_KEYS = {"section", "name", "measured", "threshold", "comparison", "expected", "unit", "reference",
+CHECK_KEYS = {"id", "status", "not_run", "section", "name", "measured", "threshold", "comparison", "expected", "unit", "reference",
               "detail", "passed"}
-SECTION_KEYS = {"key", "title", "status", "elapsed_s", "error", "notes", "warnings", "checks", "tables", "figures"}
+SECTION_KEYS = {"key", "title", "status", "not_run", "elapsed_s", "error", "notes", "warnings", "checks", "tables", "figures"}
 
 
 class _Page(HTMLParser):
@@ -59,7 +59,8 @@ def test_quick_report_passes_and_shows_every_section(quick_report):
     assert list(page.sections) == list(SECTIONS)           # every section, in order
     mine = ("models", "albedo", "sampling", "implementations", "timings")
     assert all(page.sections[k] == "pass" for k in mine)
-    assert all(page.sections[k] in ("pass", "not available") for k in SECTIONS)
+    assert all(page.sections[k] in ("pass", "not available", "findings", "not run") for k in SECTIONS)
+    assert page.sections["graders"] in ("findings", "not run")   # third-party verdicts are not checks
     assert page.scripts == 0
     assert page.images and all((out / src).is_file() for src in page.images)
     assert {Path(s).name.split("_")[0] for s in page.images} >= set(mine) - {"implementations"}
@@ -77,7 +78,12 @@ def test_report_json_schema(quick_report):
         for f in s["figures"]:
             assert (out / f["file"]).is_file()
     for c in doc["checks"]:
-        assert set(c) == CHECK_KEYS and c["passed"] is True and c["reference"]
+        assert set(c) == CHECK_KEYS and c["passed"] is True and c["reference"] and c["status"] == "pass"
+    ids = [c["id"] for c in doc["checks"]]
+    assert len(set(ids)) == len(ids) and all(i.startswith(c["section"] + ".") for i, c in zip(ids, doc["checks"]))
+    titles = [s["title"] for s in doc["sections"]]
+    assert len(set(titles)) == len(titles)                   # section names unique
+    assert doc["implementation"] is None
     names = {c["name"] for c in doc["checks"]}
     assert "eon: white furnace |E - 1| at rho = 1" in names
     assert any(n.startswith("chi-square") for n in names)

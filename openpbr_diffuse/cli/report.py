@@ -137,6 +137,11 @@ def _under_test(args):
     from ..graders.errors import GraderUnavailable
 
     label = args.implementation or args.glsl or args.cpp
+    from pathlib import Path
+
+    for opt in ("glsl", "cpp"):
+        if getattr(args, opt, None) and not Path(getattr(args, opt)).is_file():
+            raise FileNotFoundError(f"report: --{opt} {getattr(args, opt)}: no such file")
     try:
         subject = subject_from_args(args)
     except GraderUnavailable as exc:  # no GL driver / compiler / the code does not compile
@@ -187,9 +192,9 @@ def run(args) -> int:
         print(ut["headline"])
         for v in ut["verdicts"]:
             err = "" if v["max_abs_error"] is None else f"  largest error {v['max_abs_error']:.3g}"
-            print(f"  {v['label']:<8} {v['status']:<17} {v['sentence']}{err}")
+            print(f"  {v['label']:<8} {v['status']:<17} {v['sentence'] or v['detail']}{err}")
             if v["status"] == "does not conform" and v["where"]:
-                print(f"           at {v['where']}")
+                print(f"           worst row (error / tolerance): {v['where']}")
     else:
         print("No implementation under test: this report shows the reference's own evidence. "
               "Use --glsl/--cpp/--vectors/--implementation to grade yours.")
