@@ -84,7 +84,7 @@ def test_wrong_glsl_does_not_conform_and_is_named(wrong):
     doc = json.loads((out / "report.json").read_text())
     ut = doc["implementation"]
     assert ut["status"] == "does not conform"
-    assert ut["headline"].startswith(f"glsl:mine.glsl:fon_not_eon does not conform: no_energy_compensation_fon")
+    assert ut["headline"].startswith("glsl:mine.glsl:fon_not_eon does not conform: no_energy_compensation_fon")
     brdf = next(v for v in ut["verdicts"] if v["quantity"] == "brdf")
     assert brdf["max_abs_error"] > 1e-3 and "wi (" in brdf["where"] and brdf["worst"]
     assert doc["schema"] == "openpbr-diffuse-report/2"

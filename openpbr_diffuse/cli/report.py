@@ -69,7 +69,7 @@ def _grader_arguments(group) -> bool:
     tmp = argparse.ArgumentParser(add_help=False)
     try:
         gcli.add_arguments(tmp)
-    except Exception:
+    except (argparse.ArgumentError, TypeError, ValueError):
         return False
     have = {a.dest for a in tmp._actions}
     for action in tmp._actions:
@@ -116,13 +116,23 @@ def subject_from_args(args):
     from ..graders.generic import cpp_subject, glsl_subject
 
     make = glsl_subject if args.glsl else cpp_subject
-    return make(args.glsl or args.cpp, args.function, args.albedo_function, includes=args.include or (),
-                defines=args.define or (), model=args.model or "eon")
+    subject = make(args.glsl or args.cpp, args.function, args.albedo_function, includes=args.include or (),
+                   defines=args.define or (), model=args.model or "eon")
+    if getattr(args, "sample_function", None) or getattr(args, "pdf_function", None):
+        subject.notes.append("sampler: not graded: this installation's graders do not run "
+                             "--sample-function / --pdf-function")
+    return subject
 
 
 def _under_test(args):
     """(UnderTest or None, Subject or None)."""
-    from ..report.subject import COULD_NOT_RUN, UnderTest, Verdict, grade_subject_under_test, grade_vectors_file
+    from ..report.subject import (
+        COULD_NOT_RUN,
+        UnderTest,
+        Verdict,
+        grade_subject_under_test,
+        grade_vectors_file,
+    )
 
     code = [m for m in ("implementation", "glsl", "cpp") if getattr(args, m, None)]
     if args.vectors and code:
@@ -213,4 +223,4 @@ def run(args) -> int:
     return result.exit_status
 
 
-__all__ = ["add_parser", "run", "subject_from_args", "FAST_EVIDENCE"]
+__all__ = ["FAST_EVIDENCE", "add_parser", "run", "subject_from_args"]

@@ -350,7 +350,7 @@ def _subject_figures(under_test, subject, image_dir, quick):
 
     try:
         return figures(subject, under_test, image_dir, quick=quick)
-    except Exception as exc:  # a picture must not lose the verdicts
+    except Exception as exc:  # noqa: BLE001 -- a picture must not lose the verdicts
         under_test.notes.append(f"pictures not drawn: {type(exc).__name__}: {' '.join(str(exc).split())}")
         return []
 

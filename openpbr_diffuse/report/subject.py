@@ -204,7 +204,9 @@ def grade_subject_under_test(subject, *, quick: bool = True) -> UnderTest:
         ut.error = " ".join(str(exc).split())
         return ut
     ut.verdicts = [verdict_from_quantity(q) for q in result.quantities]
-    if subject.sample is None and subject.pdf is None:
+    if any(n.startswith("sampler: not graded") for n in ut.notes):
+        ut.verdicts.append(Verdict("sampler chi2", COULD_NOT_RUN, detail="the graders here do not run samplers"))
+    elif subject.sample is None and subject.pdf is None:
         ut.notes.append("sampler: not graded (give --sample-function and --pdf-function)")
     return ut
 
@@ -260,9 +262,9 @@ def figures(subject, ut: UnderTest, image_dir, *, quick: bool = True) -> list:
                 ax.tick_params(labelsize=7)
         fig.colorbar(im, ax=axes, shrink=0.7, label="log10 relative error")
         out.append(("subject_error_maps.png", fig,
-                    f"log10 of |theirs - reference| / reference over (mu_i, mu_o), rho = 0.8, at roughness "
+                    (f"log10 of |theirs - reference| / reference over (mu_i, mu_o), rho = 0.8, at roughness "
                     f"{', '.join(map(str, _MAP_ROUGHNESS))}; top: equal azimuths (L.V >= 0), bottom: opposite "
-                    "azimuths (L.V < 0 where mu_i mu_o < sin theta_i sin theta_o)"))
+                    "azimuths (L.V < 0 where mu_i mu_o < sin theta_i sin theta_o)")))
         # in-plane lobe slices
         th = np.linspace(-89.0, 89.0, 90 if quick else 179)
         fig, axes = plt.subplots(1, len(_SLICE_MU_O), figsize=(3.4 * len(_SLICE_MU_O), 3.0), squeeze=False)
@@ -334,6 +336,16 @@ def figures(subject, ut: UnderTest, image_dir, *, quick: bool = True) -> list:
     return written
 
 
-__all__ = ["UnderTest", "Verdict", "grade_vectors_file", "grade_subject_under_test", "figures",
-           "verdict_from_grade", "CONFORMS", "DOES_NOT_CONFORM", "COULD_NOT_RUN", "NO_KNOWN",
-           "EXIT_COULD_NOT_RUN"]
+__all__ = [
+    "CONFORMS",
+    "COULD_NOT_RUN",
+    "DOES_NOT_CONFORM",
+    "EXIT_COULD_NOT_RUN",
+    "NO_KNOWN",
+    "UnderTest",
+    "Verdict",
+    "figures",
+    "grade_subject_under_test",
+    "grade_vectors_file",
+    "verdict_from_grade",
+]
