@@ -184,3 +184,55 @@ def test_list_checks_prints_ids(capsys):
     lines = capsys.readouterr().out.splitlines()
     assert "implementations.reference_rounded_to_float32_conforms\treference rounded to float32 conforms" in lines
     assert any(line.startswith("implementation.brdf") for line in lines)
+
+
+def test_vectors_file_is_graded_first(tmp_path):
+    """A filled vectors file whose EON values are white-tinted (evaluated at rho = 1, times rho)."""
+    from openpbr_diffuse.conformance.deviations import DEVIATIONS
+    from openpbr_diffuse.conformance.vectors import default_vectors, write_vectors
+
+    v = default_vectors()
+    v = v.subset(v.model == "eon")
+    path = write_vectors(v, tmp_path / "filled.csv", out=DEVIATIONS["white_tint"](v))
+    out = tmp_path / "r"
+    assert main(["report", "--vectors", str(path), "--out", str(out), *FAST]) == 1
+    ut = json.loads((out / "report.json").read_text())["implementation"]
+    assert ut["kind"] == "vectors" and ut["status"] == "does not conform"
+    assert {v["quantity"]: v["diagnosis"] for v in ut["verdicts"]}["brdf"] == "white_tint"
+
+
+def test_code_that_does_not_compile_could_not_run(tmp_path, capsys):
+    pytest.importorskip("moderngl")
+    bad = tmp_path / "bad.glsl"
+    bad.write_text("vec3 f(vec3 wi, vec3 wo, float r, vec3 rho) { return rho * undefined_thing; }\n")
+    out = tmp_path / "r"
+    status = main(["report", "--glsl", str(bad), "--function", "f", "--out", str(out), *FAST])
+    assert status == 3
+    first = capsys.readouterr().out.splitlines()[0]
+    assert " could not run: " in first and "undefined_thing" in first
+    assert main(["report", "--glsl", str(tmp_path / "missing.glsl"), "--function", "f",
+                 "--out", str(tmp_path / "r2"), *FAST]) == 2
+    assert not (tmp_path / "r2").exists()
+
+
+def test_cpp_fon_for_eon_does_not_conform(tmp_path):
+    if shutil.which("g++") is None:
+        pytest.skip("g++ not installed")
+    src = tmp_path / "mine.cpp"
+    src.write_text("""
+#include <cmath>
+#include <glm/glm.hpp>
+glm::vec3 fon(glm::vec3 wi, glm::vec3 wo, float r, glm::vec3 rho) {
+    if (wi.z <= 0.f || wo.z <= 0.f) return glm::vec3(0.f);
+    const float pi = 3.14159265358979f, c1 = 0.5f - 2.f / (3.f * pi);
+    float s = glm::dot(wi, wo) - wi.z * wo.z;
+    float st = s > 0.f ? s / std::max(wi.z, wo.z) : s;
+    return rho / pi / (1.f + c1 * r) * (1.f + r * st);
+}
+""")
+    out = tmp_path / "r"
+    assert main(["report", "--cpp", str(src), "--function", "fon", "--out", str(out), *FAST]) == 1
+    ut = json.loads((out / "report.json").read_text())["implementation"]
+    assert ut["headline"].endswith("does not conform: no_energy_compensation_fon: "
+                                   + ut["verdicts"][0]["sentence"].split(": ", 1)[1])
+    assert ut["verdicts"][0]["diagnosis"] == "no_energy_compensation_fon"
