@@ -236,3 +236,8 @@ glm::vec3 fon(glm::vec3 wi, glm::vec3 wo, float r, glm::vec3 rho) {
     assert ut["headline"].endswith("does not conform: no_energy_compensation_fon: "
                                    + ut["verdicts"][0]["sentence"].split(": ", 1)[1])
     assert ut["verdicts"][0]["diagnosis"] == "no_energy_compensation_fon"
+
+
+def test_select_matching_nothing_is_unusable_input(tmp_path, capsys):
+    assert main(["report", "--select", "no_such_section*", "--out", str(tmp_path / "r"), "--no-progress"]) == 2
+    assert "no_such_section" in capsys.readouterr().err and not (tmp_path / "r").exists()

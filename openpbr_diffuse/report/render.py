@@ -60,8 +60,9 @@ materials: {% for p in doc.paths %}<code>{{ p }}</code>{% if not loop.last %}, {
 <h2 id="evidence">The library's own evidence (counted separately)</h2>
 {% else %}<p id="headline" class="na">No implementation under test: this report shows the reference's own evidence. Use --glsl/--cpp/--vectors/--implementation to grade yours.</p>
 {% endif %}
-<p id="overall" class="{{ 'pass' if doc.passed else 'fail' }}">The reference's evidence: {{ "ALL CHECKS PASS" if doc.passed else "SOME CHECKS FAIL" }}:
-{{ doc.evidence.n_checks - doc.evidence.n_failed }} of {{ doc.evidence.n_checks }} checks pass{% if doc.evidence.n_not_run %}; {{ doc.evidence.n_not_run }} not run{% endif %}.</p>
+{% if doc.evidence.n_checks == 0 %}<p id="overall" class="na">The reference's evidence: not run (no check ran{% if doc.select %}; --select {{ doc.select | join(' ') }}{% endif %}).</p>
+{% else %}<p id="overall" class="{{ 'pass' if doc.passed else 'fail' }}">The reference's evidence: {{ "ALL CHECKS PASS" if doc.passed else "SOME CHECKS FAIL" }}:
+{{ doc.evidence.n_checks - doc.evidence.n_failed }} of {{ doc.evidence.n_checks }} checks pass{% if doc.evidence.n_not_run %}; {{ doc.evidence.n_not_run }} not run{% endif %}.</p>{% endif %}
 <table id="summary"><caption>Sections</caption>
 <tr><th>section</th><th>status</th><th>checks passed</th><th>time (s)</th></tr>
 {% for s in doc.sections %}<tr><td><a href="#section-{{ s.key }}">{{ s.title }}</a></td>
