@@ -42,7 +42,7 @@ materials: {% for p in doc.paths %}<code>{{ p }}</code>{% if not loop.last %}, {
 {% if ut %}<section id="under-test" data-status="{{ ut.status }}">
 <p id="headline" class="{{ 'pass' if ut.status == 'conforms' else ('na' if ut.status == 'could not run' else 'fail') }}">{{ ut.headline }}</p>
 <table id="verdicts"><caption>Implementation under test: {{ ut.name }}</caption>
-<tr><th>quantity</th><th>verdict</th><th>diagnosis</th><th>largest error</th><th>where</th><th>rows failing</th></tr>
+<tr><th>quantity</th><th>verdict</th><th>diagnosis</th><th>largest abs error</th><th>worst row (largest error / tolerance)</th><th>rows failing</th></tr>
 {% for v in ut.verdicts %}<tr data-id="{{ v.id }}"><td>{{ v.label }}</td>
 <td class="{{ 'pass' if v.status == 'conforms' else ('na' if v.status == 'could not run' else 'fail') }}">{{ v.status }}</td>
 <td>{{ v.sentence }}</td><td class="num">{{ v.max_abs_error | num }}</td><td>{{ v.where }}</td>
