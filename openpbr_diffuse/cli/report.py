@@ -80,6 +80,10 @@ def _grader_arguments(group) -> bool:
             kwargs["metavar"] = action.metavar
         if action.choices is not None:
             kwargs["choices"] = action.choices
+        if action.type is not None:
+            kwargs["type"] = action.type
+        if action.nargs is not None and not isinstance(action, argparse._StoreTrueAction):
+            kwargs["nargs"] = action.nargs
         if isinstance(action, argparse._AppendAction):
             kwargs["action"] = "append"
         elif isinstance(action, argparse._StoreTrueAction):

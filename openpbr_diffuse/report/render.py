@@ -51,6 +51,8 @@ materials: {% for p in doc.paths %}<code>{{ p }}</code>{% if not loop.last %}, {
 {% for n in ut.notes %}<p class="meta">{{ n }}</p>{% endfor %}
 {% for f in ut.figures %}<figure><img src="{{ f.file }}" alt="{{ f.caption }}" loading="eager">
 <figcaption>{{ f.caption }}</figcaption></figure>{% endfor %}
+{% for v in ut.verdicts if v.regions %}<table class="data regions"><caption>{{ v.label }}: by region</caption>
+<tr><th>region</th><th>errors</th></tr>{% for r in v.regions %}<tr><td>{{ r[0] }}</td><td>{{ r[1] }}</td></tr>{% endfor %}</table>{% endfor %}
 {% for v in ut.verdicts if v.worst and v.status == 'does not conform' %}<table class="data worst"><caption>{{ v.label }}: worst rows</caption>
 <tr><th>id</th><th>wi</th><th>wo</th><th>mu</th><th>roughness</th><th>rho</th><th>expected</th><th>got</th><th>error / tolerance</th></tr>
 {% for w in v.worst %}<tr><td>{{ w.id }}</td><td>{{ w.wi | vec }}</td><td>{{ w.wo | vec }}</td><td class="num">{{ w.mu | num }}</td>

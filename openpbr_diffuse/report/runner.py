@@ -268,7 +268,7 @@ def _progress_bar(total, enabled):
                 bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} [{elapsed}] {postfix}")
 
 
-def run_report(paths=None, out="report", *, quick: bool = False, progress: bool = True, sections=None,
+def run_report(paths: list | None = None, out: str | Path = "report", *, quick: bool = False, progress: bool = True, sections=None,
                select=None, under_test=None, subject=None) -> ReportRun:
     """Run the report and write ``out/index.html``, ``out/report.json`` and ``out/images/``.
 

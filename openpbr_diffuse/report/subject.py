@@ -42,6 +42,7 @@ class Verdict:
     n_failed: int = 0
     detail: str = ""
     worst: list = field(default_factory=list)
+    regions: Any = None
 
     @property
     def id(self) -> str:
@@ -51,7 +52,7 @@ class Verdict:
         return {"id": self.id, "quantity": self.quantity, "label": _QUANTITY_LABEL.get(self.quantity, self.quantity),
                 "status": self.status, "diagnosis": self.diagnosis, "sentence": self.sentence,
                 "max_abs_error": self.max_abs_error, "where": self.where, "n": self.n, "n_failed": self.n_failed,
-                "detail": self.detail, "worst": self.worst}
+                "detail": self.detail, "worst": self.worst, "regions": _regions_rows(self.regions)}
 
 
 @dataclass
@@ -90,6 +91,22 @@ class UnderTest:
         return {"name": self.name, "kind": self.kind, "status": self.status, "headline": self.headline,
                 "error": self.error, "version": {k: str(v) for k, v in self.version.items()},
                 "notes": list(self.notes), "verdicts": [v.to_dict() for v in self.verdicts]}
+
+
+def _regions_rows(regions) -> list | None:
+    """The grade's breakdown by region (grazing, L.V < 0, roughness bins, dark rho) as
+    [[region, text]] rows for the page, whatever mapping / list form the grader gives."""
+    if not regions:
+        return None
+    items = regions.items() if isinstance(regions, dict) else (
+        (r.get("region", r.get("name", "?")), r) if isinstance(r, dict) else (str(r), "") for r in regions)
+    rows = []
+    for name, val in items:
+        if isinstance(val, dict):
+            val = ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
+                            for k, v in val.items() if k not in ("region", "name"))
+        rows.append([str(name), str(val)])
+    return rows
 
 
 def _deviation_sentence(name: str | None) -> str:
@@ -152,7 +169,7 @@ def verdict_from_grade(quantity: str, g: dict) -> Verdict:
     return Verdict(quantity, CONFORMS if passed else DOES_NOT_CONFORM, diag,
                    "every value within the tolerance" if passed else _deviation_sentence(diag),
                    max_abs, _where(worst[0] if worst else None), int(g.get("n_rows", 0) or 0),
-                   int(g.get("n_failed_rows", 0) or 0), detail, worst[:10])
+                   int(g.get("n_failed_rows", 0) or 0), detail, worst[:10], g.get("regions"))
 
 
 def verdict_from_quantity(q) -> Verdict:
