@@ -153,7 +153,22 @@ def _finite(x) -> float | None:
 
 
 def verdict_from_grade(quantity: str, g: dict) -> Verdict:
-    """A :class:`Verdict` from ``Grade.to_dict()`` (or a ``QuantityGrade``'s ``grade``)."""
+    """A :class:`Verdict` from ``Grade.to_dict()`` (or a ``QuantityGrade``'s ``grade``).
+
+    Examples
+    --------
+    >>> from openpbr_diffuse.conformance.vectors import default_vectors
+    >>> from openpbr_diffuse.conformance.deviations import DEVIATIONS
+    >>> from openpbr_diffuse.conformance.grade import grade
+    >>> v = default_vectors()
+    >>> v = v.subset((v.model == "eon") & (v.kind == "brdf"))
+    >>> verdict = verdict_from_grade("brdf", grade(v, DEVIATIONS["white_tint"](v)).to_dict())
+    >>> verdict.status, verdict.diagnosis, verdict.id
+    ('does not conform', 'white_tint', 'implementation.brdf')
+    >>> ut = UnderTest("mine", "vectors", [verdict])
+    >>> ut.headline.startswith("mine does not conform: white_tint")
+    True
+    """
     worst = list(g.get("worst") or [])
     passed = bool(g.get("passed"))
     diag = None if passed else g.get("diagnosis")
