@@ -5,7 +5,10 @@ Conventions: local shading frame with the normal +z; ``wi`` (to the light) and `
 the viewer) point away from the surface; BRDF values exclude the cosine factor; arrays
 broadcast over leading axes with the colour channel axis last.
 """
-from ._version import __version__
+from . import _signals
+
+_signals.install_for_start_up()  # the command line only: Ctrl-C while importing exits cleanly
+from ._version import __version__  # noqa: E402
 from .albedo.tables import reference_albedo, reference_average_albedo
 from .models import COLOR_MODES, MODELS, average_albedo, directional_albedo, evaluate
 from .nodes import OpenPBRSurface, OrenNayarDiffuseBSDF

@@ -141,9 +141,14 @@ def test_failed_run_leaves_the_old_report_intact(tmp_path, monkeypatch):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["rep"]  # temporary directory removed
     monkeypatch.undo()
     # a complete run replaces it
-    (out / "stale.txt").write_text("old")
     assert runner.run_report(None, out, quick=True, progress=False, sections=["implementations"]).passed
-    assert not (out / "stale.txt").exists() and (out / "index.html").is_file()
+    assert (out / "index.html").is_file()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rep"]
+    # a file the user put into the report folder: the folder is no longer the tool's to replace
+    (out / "notes.txt").write_text("mine")
+    with pytest.raises(ValueError, match="did not write"):
+        runner.run_report(None, out, quick=True, progress=False, sections=["implementations"])
+    assert (out / "notes.txt").read_text() == "mine" and (out / "index.html").is_file()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["rep"]
 
 

@@ -11,7 +11,11 @@ Conventions (tested in ``tests/test_cli_conventions.py``):
 - a closed output pipe (``... | head -2``) ends the command quietly with exit status 141
   (128 + SIGPIPE: what a C tool killed by SIGPIPE reports, so ``set -o pipefail`` still
   sees that the output was cut short);
-- Ctrl-C prints ``openpbr-diffuse: interrupted`` and exits 130 (128 + SIGINT), no traceback.
+- Ctrl-C prints ``openpbr-diffuse: interrupted`` and exits 130 (128 + SIGINT), no traceback;
+  SIGTERM and SIGHUP likewise (``terminated by SIGTERM``, exit 143 / 129). The handlers are
+  installed before anything else is imported, so a signal during start-up is honoured too;
+- an unknown option or sub-command names the closest known one (``did you mean --roughness?``)
+  and the sub-command's usage, on the same one line.
 """
 import argparse
 import importlib
@@ -19,6 +23,7 @@ import os
 import re
 import sys
 
+from .. import _signals
 from .._version import __version__
 
 #: sub-command name -> module in this package (added as the commands are built).
@@ -57,7 +62,31 @@ class _Parser(argparse.ArgumentParser):
         self._negative_number_matcher = _NEGATIVE_NUMBER
 
     def error(self, message):  # argparse's multi-line usage dump -> one line, exit 2
-        raise UsageError(message, prog=self.prog)
+        raise UsageError(_with_suggestion(self, message), prog=self.prog)
+
+
+def _known_options(parser):
+    return [o for a in parser._actions for o in a.option_strings if o.startswith("--")]
+
+
+def _with_suggestion(parser, message):
+    """``message`` plus 'did you mean X?' for an unknown option / choice, and the usage line."""
+    import difflib
+
+    hint = ""
+    m = re.search(r"unrecognized arguments: (\S+)", message)
+    if m:
+        word = m.group(1).split("=")[0]
+        close = difflib.get_close_matches(word, _known_options(parser), n=1, cutoff=0.6)
+        hint = f" (did you mean {close[0]}?)" if close else ""
+    m = m or re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
+    if m and not hint and m.lastindex == 2:
+        choices = re.findall(r"'?([\w.-]+)'?", m.group(2))
+        close = difflib.get_close_matches(m.group(1), choices, n=1, cutoff=0.5)
+        hint = f" (did you mean {close[0]}?)" if close else ""
+    usage = " ".join(parser.format_usage().split())
+    usage = usage.replace(f"usage: {parser.prog}", "usage:", 1)  # the program is named once, up front
+    return f"{message}{hint}; {usage}"
 
 
 def build_parser():
@@ -66,6 +95,7 @@ def build_parser():
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
+    parser.commands = sub.choices  # name -> sub-command parser (its usage for option typos)
     for name, module in COMMANDS.items():
         importlib.import_module(f"{__package__}.{module}").add_parser(sub)
     return parser
@@ -90,9 +120,12 @@ def _silence_stdout():
 
 def main(argv=None):
     prog = PROG
+    _signals.install()
     try:
         parser = build_parser()
-        args = parser.parse_args(argv)
+        args, extra = parser.parse_known_args(argv)
+        if extra:  # an unknown option: the sub-command's usage and a suggestion from its options
+            parser.commands[args.command].error(f"unrecognized arguments: {' '.join(extra)}")
         prog = f"{PROG} {args.command}"
         code = int(args.run(args) or 0)
         sys.stdout.flush()  # a closed pipe shows here, inside the handler, not at exit
@@ -103,6 +136,9 @@ def main(argv=None):
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
         return EXIT_SIGINT
+    except _signals.Terminated as exc:
+        print(f"{PROG}: {exc}", file=sys.stderr)
+        return 128 + exc.signum
     except UsageError as exc:
         print(f"{exc.prog or prog}: error: {_message(exc)}", file=sys.stderr)
         return EXIT_USAGE

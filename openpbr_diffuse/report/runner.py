@@ -43,12 +43,11 @@ import datetime
 import importlib
 import json
 import math
-import shutil
-import tempfile
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+from . import output
 from .model import Check, Context, SectionResult, slug
 
 SCHEMA = "openpbr-diffuse-report/2"
@@ -311,11 +310,8 @@ def run_report(paths: list | None = None, out: str | Path = "report", *, quick: 
     if select and not keys and not (under_test is not None and matches(select, "implementation.x")):
         raise ValueError(f"--select: no section or check id matches {' '.join(select)} "
                          f"(sections: {', '.join(section_pkg.SECTIONS)}; see --list-checks)")
-    out = Path(out).resolve()
-    out.parent.mkdir(parents=True, exist_ok=True)
-    if out.exists() and not out.is_dir():
-        raise NotADirectoryError(f"report: --out {out} exists and is not a directory")
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
+    out = output.check_target(out)  # before any work: never replace what this tool did not write
+    tmp = output.make_temp(out)
     t0 = time.perf_counter()
     try:
         image_dir = tmp / IMAGE_DIR
@@ -337,9 +333,9 @@ def run_report(paths: list | None = None, out: str | Path = "report", *, quick: 
         run.document = doc
         (tmp / "report.json").write_text(json.dumps(doc, indent=1, allow_nan=False) + "\n")
         (tmp / "index.html").write_text(render_html(doc, image_dir), encoding="utf-8")
-        _replace(tmp, out)
+        output.publish(tmp, out)
     except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
+        output.discard(tmp)
         raise
     run.out_dir = out
     return run
@@ -356,23 +352,6 @@ def _subject_figures(under_test, subject, image_dir, quick):
     except Exception as exc:  # noqa: BLE001 -- a picture must not lose the verdicts
         under_test.notes.append(f"pictures not drawn: {type(exc).__name__}: {' '.join(str(exc).split())}")
         return []
-
-
-def _replace(tmp, out):
-    """Move the complete report ``tmp`` to ``out``, keeping the old one until it is in place."""
-    old = None
-    if out.exists():
-        old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
-        old.rmdir()
-        out.rename(old)
-    try:
-        tmp.rename(out)
-    except BaseException:
-        if old is not None:
-            old.rename(out)
-        raise
-    if old is not None:
-        shutil.rmtree(old, ignore_errors=True)
 
 
 __all__ = ["run_report", "run_section", "matches", "section_selected", "assign_ids", "ReportRun", "SectionRun", "SCHEMA", "default_paths"]
