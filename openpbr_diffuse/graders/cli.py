@@ -16,7 +16,10 @@ def add_arguments(parser):
     """Add the grader options to the ``check`` sub-command's parser."""
     from . import IMPLEMENTATIONS
 
-    g = parser.add_argument_group("grade an implementation by running its own code")
+    g = parser.add_argument_group(
+        "grade an implementation by running its own code",
+        "--glsl and --cpp compile and run the given code with your user's rights (C++ under a time "
+        "and memory limit, in a process group that is killed on timeout or Ctrl-C)")
     g.add_argument("--implementation", choices=sorted(IMPLEMENTATIONS), metavar="NAME",
                    help="one of: " + ", ".join(IMPLEMENTATIONS))
     g.add_argument("--source", metavar="PATH", help="the implementation's checkout (its code is not in a package)")
@@ -29,6 +32,8 @@ def add_arguments(parser):
     g.add_argument("--include", metavar="DIR", action="append", default=[], help="include path (repeatable)")
     g.add_argument("--define", metavar="NAME=VALUE", action="append", default=[],
                    help="preprocessor define (repeatable)")
+    g.add_argument("--timeout", type=float, default=None, metavar="SECONDS",
+                   help="wall-time limit of each compile and run of the C++ code (default 60)")
     g.add_argument("--quick", action="store_true", help="fewer sampler samples (40k instead of 200k per case)")
 
 
@@ -49,30 +54,44 @@ def _print_text(result):
         print(f"  note: {note}")
 
 
-def run(args):
-    """Grade per the options, or return None when none of them is given (``check FILE`` mode)."""
+def subject_from_args(args):
+    """The :class:`~.subject.Subject` the options name, or None when no implementation option is given.
+
+    Used by ``check`` and by ``report``; raises ``ValueError`` for contradictory options and
+    :class:`~.errors.GraderUnavailable` when a piece (GL driver, compiler, source) is missing.
+    """
     from . import load
     from .generic import cpp_subject, glsl_subject
-    from .grading import grade_subject
 
+    cmd = "check" if getattr(args, "file", None) is not None or not hasattr(args, "out") else "report"
     modes = [m for m in ("implementation", "glsl", "cpp") if getattr(args, m, None)]
     if not modes:
         for opt in ("source", "function", "albedo_function"):
             if getattr(args, opt, None):
-                raise ValueError(f"check: --{opt.replace('_', '-')} needs --implementation, --glsl or --cpp")
+                raise ValueError(f"{cmd}: --{opt.replace('_', '-')} needs --implementation, --glsl or --cpp")
         return None
     if len(modes) > 1 or getattr(args, "file", None):
-        raise ValueError("check: give one of FILE, --implementation, --glsl, --cpp")
+        raise ValueError(f"{cmd}: give one of FILE, --implementation, --glsl, --cpp")
     if args.implementation:
         if args.function or args.albedo_function:
-            raise ValueError("check: --function is for --glsl / --cpp, not --implementation")
-        subject = load(args.implementation, args.source)
-    else:
-        if args.source:
-            raise ValueError("check: --source is for --implementation")
-        make = glsl_subject if args.glsl else cpp_subject
-        subject = make(args.glsl or args.cpp, args.function, args.albedo_function, includes=args.include,
-                       defines=args.define, model=args.model or "eon")
+            raise ValueError(f"{cmd}: --function is for --glsl / --cpp, not --implementation")
+        return load(args.implementation, args.source)
+    if args.source:
+        raise ValueError(f"{cmd}: --source is for --implementation")
+    if args.glsl:
+        return glsl_subject(args.glsl, args.function, args.albedo_function, includes=args.include or (),
+                            defines=args.define or (), model=args.model or "eon")
+    return cpp_subject(args.cpp, args.function, args.albedo_function, includes=args.include or (),
+                       defines=args.define or (), model=args.model or "eon", timeout=getattr(args, "timeout", None))
+
+
+def run(args):
+    """Grade per the options, or return None when none of them is given (``check FILE`` mode)."""
+    from .grading import grade_subject
+
+    subject = subject_from_args(args)
+    if subject is None:
+        return None
     result = grade_subject(subject, quick=args.quick)  # GraderUnavailable (an OSError): exit 2
     if args.json:
         print(json.dumps(result.to_dict()))

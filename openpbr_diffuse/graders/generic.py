@@ -21,6 +21,7 @@ from pathlib import Path
 
 from . import cpp, glsl
 from ._arrays import rows
+from ._limits import check_define, check_identifier
 from .errors import GraderUnavailable
 from .subject import Subject
 
@@ -33,17 +34,18 @@ def _check_file(path, what):
 
 
 def _defines(defines):
-    out = {}
-    for d in defines or ():
-        name, _, value = str(d).partition("=")
-        if not name.isidentifier():
-            raise ValueError(f"--define: {d!r} is not NAME or NAME=VALUE")
-        out[name] = value or "1"
-    return out
+    return dict(check_define(d) for d in defines or ())
+
+
+def _names(function, albedo_function):
+    for name, option in ((function, "--function"), (albedo_function, "--albedo-function")):
+        if name:
+            check_identifier(name, option)
 
 
 def glsl_subject(path, function=None, albedo_function=None, *, includes=(), defines=(), model="eon") -> Subject:
     """A GLSL file's BRDF function ``function`` and/or albedo function ``albedo_function``."""
+    _names(function, albedo_function)
     path = _check_file(path, "GLSL")
     if not function and not albedo_function:
         raise ValueError("--function or --albedo-function is required with --glsl")
@@ -74,8 +76,14 @@ def glsl_subject(path, function=None, albedo_function=None, *, includes=(), defi
                    brdf=brdf, albedo=albedo)
 
 
-def cpp_subject(path, function=None, albedo_function=None, *, includes=(), defines=(), model="eon") -> Subject:
-    """A C++ file's BRDF function ``function`` and/or albedo function ``albedo_function``."""
+def cpp_subject(path, function=None, albedo_function=None, *, includes=(), defines=(), model="eon",
+                timeout=None) -> Subject:
+    """A C++ file's BRDF function ``function`` and/or albedo function ``albedo_function``.
+
+    The file is compiled and run with the user's rights, under ``timeout`` seconds per compile
+    and per run (default :data:`._limits.DEFAULT_TIMEOUT`) and a memory limit.
+    """
+    _names(function, albedo_function)
     path = _check_file(path, "C++")
     if not function and not albedo_function:
         raise ValueError("--function or --albedo-function is required with --cpp")
@@ -92,7 +100,7 @@ def cpp_subject(path, function=None, albedo_function=None, *, includes=(), defin
     prelude = f'#include <glm/glm.hpp>\n#include "{path.resolve()}"\n'
     h = cpp.Harness(prelude=prelude, entries=entries,
                     include_dirs=[str(path.parent.resolve()), *map(str, includes)],
-                    defines=_defines(defines), sources=[path], label=str(path))
+                    defines=_defines(defines), sources=[path], label=str(path), timeout=timeout)
     h.binary()
     brdf = albedo = None
     if function:
