@@ -395,7 +395,7 @@ def smooth_lambert_terms(ior: float, tau=0.0, n: int = 400) -> tuple[np.ndarray,
 
     Without absorption r_in = 1 - (1 - r_e)/ior^2 with r_e the hemispherical Fresnel
     reflectance from outside (Lekner & Dorf 1988), and e_out = 1 - r_in.  Integrated
-    piecewise (split at the critical angle) by Gauss-Legendre.
+    piecewise (split at the critical angle, square-root edge substituted) by Gauss-Legendre.
 
     Example
     -------
@@ -408,7 +408,8 @@ def smooth_lambert_terms(ior: float, tau=0.0, n: int = 400) -> tuple[np.ndarray,
     mc = math.sqrt(max(0.0, 1.0 - 1.0 / ior ** 2))  # cosine of the critical angle inside
     # [0, mc]: total internal reflection; [mc, 1]: partial
     mu1, w1 = mc * x, mc * w
-    mu2, w2 = mc + (1.0 - mc) * x, (1.0 - mc) * w
+    # mu = mc + (1 - mc) t^2: F_int has a square-root edge at the critical angle
+    mu2, w2 = mc + (1.0 - mc) * x * x, 2.0 * (1.0 - mc) * x * w
     mu = np.concatenate([mu1, mu2]); ww = np.concatenate([w1, w2])
     F = _fresnel(mu, 1.0 / ior)
     with np.errstate(divide="ignore", over="ignore"):
