@@ -21,7 +21,7 @@ Example
 -------
 >>> s = LayeredSurface("smooth", 1.5, base="lambert")
 >>> e = simulate_layered_albedo(s, [1.0], rho=0.8, paths=20000, seed=1)
->>> abs(e.total[0, 0] - smooth_lambert_albedo(1.5, 0.8, 1.0)) < 4 * e.total_stderr[0, 0]
+>>> bool(abs(e.total[0, 0] - smooth_lambert_albedo(1.5, 0.8, 1.0)) < 4 * e.total_stderr[0, 0])
 True
 """
 from __future__ import annotations
@@ -308,7 +308,7 @@ def simulate_layered_albedo(surface: LayeredSurface, mu, rho=1.0, paths: int = 1
     Example
     -------
     >>> e = simulate_layered_albedo(LayeredSurface("smooth", 1.0), [0.5], rho=0.7, paths=1000)
-    >>> float(e.total[0, 0]), float(e.specular[0, 0])
+    >>> round(float(e.total[0, 0]), 12), float(e.specular[0, 0])
     (0.7, 0.0)
     """
     return _albedo("albedo", surface, _mu(mu), rho, paths, seed, workers, client, scheduler)
@@ -412,8 +412,8 @@ def smooth_lambert_terms(ior: float, tau=0.0, n: int = 400) -> tuple[np.ndarray,
     mu2, w2 = mc + (1.0 - mc) * x * x, 2.0 * (1.0 - mc) * x * w
     mu = np.concatenate([mu1, mu2]); ww = np.concatenate([w1, w2])
     F = _fresnel(mu, 1.0 / ior)
-    with np.errstate(divide="ignore", over="ignore"):
-        T = np.exp(-tau[:, None] / mu[None])
+    with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
+        T = np.where(mu[None] > 0.0, np.exp(-tau[:, None] / mu[None]), 0.0)
     e_out = (2 * mu * T * (1 - F) * ww).sum(axis=1)
     r_in = (2 * mu * T * T * F * ww).sum(axis=1)
     return e_out, r_in
