@@ -5,8 +5,9 @@ of albedo rho under a dielectric interface of index n (GGX roughness r = sqrt(al
 smooth) over a slab of normal optical depth tau (coat_color = exp(-tau)):
 
 - ``openpbr``: OpenPBR's albedo scaling of the dielectric base, as ``OpenPBRSurface``
-  computes it: rho (1 - E_spec(mu)), E_spec the single-scattering albedo of the GGX
-  dielectric lobe (``microfacet.tables.dielectric_albedo``); no absorption term (the
+  computes it: rho (1 - E_spec(mu)), E_spec the albedo of the GGX dielectric lobe
+  (``microfacet.tables.dielectric_albedo``, times the surface's default multiple-scattering
+  factor); no absorption term (the
   dielectric base has none);
 - ``openpbr_coat``: the coat over a base without specular (specular_weight = 0), coat
   darkening 1: rho (1 - E_coat(mu)) coat_color (1 - K)/(1 - rho K), K = 1 - (1 -
@@ -30,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..microfacet.tables import dielectric_albedo
+from ..microfacet.tables import dielectric_albedo, ggx_albedo
 from . import gotanda2012_layered as g
 from . import weidlich_wilkie as ww
 
@@ -39,8 +40,9 @@ DATA = Path(__file__).resolve().parent.parent / "data"
 TABLE = DATA / "layered_grading.csv"
 
 
-def spec_albedo(mu, n: float, roughness: float) -> np.ndarray:
-    """E_spec(mu) of OpenPBR's GGX dielectric lobe (index n, perceptual roughness).
+def spec_albedo(mu, n: float, roughness: float, multiscatter: bool = True) -> np.ndarray:
+    """E_spec(mu) of OpenPBR's GGX dielectric lobe (index n, perceptual roughness), with
+    ``OpenPBRSurface``'s default multiple-scattering factor 1 + F0 (1 - E1)/E1 (Turquin 2019).
 
     Example
     -------
@@ -48,7 +50,12 @@ def spec_albedo(mu, n: float, roughness: float) -> np.ndarray:
     0.0397
     """
     x = math.sqrt(float(g.f0(n)))
-    return np.asarray(dielectric_albedo(np.asarray(mu, dtype=float), roughness, x), dtype=float)
+    mu = np.asarray(mu, dtype=float)
+    e = np.asarray(dielectric_albedo(mu, roughness, x), dtype=float)
+    if multiscatter:
+        e1 = np.asarray(ggx_albedo(mu, roughness), dtype=float)
+        e = e * (1.0 + x * x * (1.0 - e1) / e1)
+    return e
 
 
 def spec_average(n: float, roughness: float, nq: int = 64) -> float:
