@@ -1,11 +1,14 @@
 """``openpbr-diffuse simulate --layered``: numbers equal the library's, bad input is one line, exit 2."""
 import json
 
-import numpy as np
 import pytest
 
 from openpbr_diffuse.cli.main import main
-from openpbr_diffuse.simulation.layered import LayeredSurface, simulate_layered_albedo, smooth_lambert_albedo
+from openpbr_diffuse.simulation.layered import (
+    LayeredSurface,
+    simulate_layered_albedo,
+    smooth_lambert_albedo,
+)
 
 
 def test_json_matches_the_library(capsys):

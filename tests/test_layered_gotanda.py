@@ -1,4 +1,5 @@
 """Gotanda 2012 Eq. 1-9: the printed statements checked by quadrature and limits."""
+# ruff: noqa: B023  (quadrature integrands use the loop value at once)
 import math
 
 import numpy as np

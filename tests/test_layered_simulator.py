@@ -11,10 +11,15 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from openpbr_diffuse.simulation.layered import (LayeredSurface, simulate_layered_albedo,
-                                                simulate_layered_average_albedo, simulate_layered_brdf,
-                                                smooth_lambert_albedo, smooth_lambert_brdf,
-                                                smooth_lambert_terms)
+from openpbr_diffuse.simulation.layered import (
+    LayeredSurface,
+    simulate_layered_albedo,
+    simulate_layered_average_albedo,
+    simulate_layered_brdf,
+    smooth_lambert_albedo,
+    smooth_lambert_brdf,
+    smooth_lambert_terms,
+)
 
 
 def fresnel_sp(mu, n):
@@ -40,7 +45,7 @@ def r_internal(n):
 
 def exact_albedo(n, rho, mu, tau=0.0):
     """Directional albedo of smooth dielectric / absorbing slab / Lambert, by quadrature."""
-    T = lambda m: math.exp(-tau / m) if m > 0 else 0.0  # noqa: E731
+    T = lambda m: math.exp(-tau / m) if m > 0 else 0.0
     e_out = integrate.quad(lambda m: 2 * m * T(m) * (1 - fresnel_sp(m, 1 / n)), 0, 1, limit=200)[0]
     r_in = integrate.quad(lambda m: 2 * m * T(m) ** 2 * fresnel_sp(m, 1 / n), 0, 1, limit=200,
                           points=[math.sqrt(1 - 1 / n ** 2)])[0]
@@ -188,15 +193,15 @@ def test_dask_bit_identical():
 
 
 @pytest.mark.parametrize("kwargs,exc", [
-    (dict(interface="rough", ior=1.5), ValueError), (dict(interface="smooth", ior=0.5), ValueError),
-    (dict(interface="smooth", ior=float("nan")), ValueError), (dict(interface="smooth", ior="1.5"), TypeError),
-    (dict(interface="ggx", ior=1.5, interface_alpha=2.0), ValueError),
-    (dict(interface="smooth", ior=1.5, base="vgroove"), ValueError),
-    (dict(interface="smooth", ior=1.5, coat_color=0.5, absorption=1.0, thickness=1.0), ValueError),
+    ({"interface": "rough", "ior": 1.5}, ValueError), ({"interface": "smooth", "ior": 0.5}, ValueError),
+    ({"interface": "smooth", "ior": float("nan")}, ValueError), ({"interface": "smooth", "ior": "1.5"}, TypeError),
+    ({"interface": "ggx", "ior": 1.5, "interface_alpha": 2.0}, ValueError),
+    ({"interface": "smooth", "ior": 1.5, "base": "vgroove"}, ValueError),
+    ({"interface": "smooth", "ior": 1.5, "coat_color": 0.5, "absorption": 1.0, "thickness": 1.0}, ValueError),
 ])
 def test_bad_surface(kwargs, exc):
     with pytest.raises(exc):
-        LayeredSurface(**kwargs).tau
+        _ = LayeredSurface(**kwargs).tau
 
 
 def test_bad_queries():
@@ -211,7 +216,7 @@ def test_bad_queries():
     with pytest.raises(ValueError, match="smooth"):
         simulate_layered_brdf(LayeredSurface("ggx", 1.5, 0.2), [0, 0, 1.0], [0, 0, 1.0], paths=10)
     with pytest.raises(ValueError, match="coat_color"):
-        LayeredSurface("smooth", 1.5, coat_color=-0.1).tau
+        _ = LayeredSurface("smooth", 1.5, coat_color=-0.1).tau
 
 
 @pytest.mark.parametrize("alpha", [0.1, 0.5])

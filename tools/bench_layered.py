@@ -18,8 +18,11 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from openpbr_diffuse.simulation.layered import (CHUNK_PATHS, LayeredSurface,  # noqa: E402
-                                                simulate_layered_albedo)
+from openpbr_diffuse.simulation.layered import (
+    CHUNK_PATHS,
+    LayeredSurface,
+    simulate_layered_albedo,
+)
 
 CONFIGS = {
     "smooth n 1.5, Lambert rho 0.8, mu 0.5": (LayeredSurface("smooth", 1.5), 0.8),
@@ -41,7 +44,7 @@ def _cpu() -> str:
 def to_target(surface: LayeredSurface, rho: float, target: float, workers: int) -> dict:
     simulate_layered_albedo(surface, [0.5], rho=rho, paths=CHUNK_PATHS, seed=99, workers=1)   # compile
     pilot = simulate_layered_albedo(surface, [0.5], rho=rho, paths=4 * CHUNK_PATHS, seed=98, workers=workers)
-    n = int(math.ceil(4 * CHUNK_PATHS * (pilot.total_stderr[0, 0] / target) ** 2 * 1.05))
+    n = math.ceil(4 * CHUNK_PATHS * (pilot.total_stderr[0, 0] / target) ** 2 * 1.05)
     t0, c0 = time.perf_counter(), time.process_time()
     e = simulate_layered_albedo(surface, [0.5], rho=rho, paths=n, seed=1, workers=workers)
     return {"paths": n, "wall": time.perf_counter() - t0, "cpu": time.process_time() - c0,

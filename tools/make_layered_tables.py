@@ -23,11 +23,14 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from openpbr_diffuse._version import __version__  # noqa: E402
-from openpbr_diffuse.approximations import gotanda2012_layered as g  # noqa: E402
-from openpbr_diffuse.approximations import layering_grading as lg  # noqa: E402
-from openpbr_diffuse.simulation.layered import (LayeredSurface, simulate_layered_albedo,  # noqa: E402
-                                                smooth_lambert_albedo)
+from openpbr_diffuse._version import __version__
+from openpbr_diffuse.approximations import gotanda2012_layered as g
+from openpbr_diffuse.approximations import layering_grading as lg
+from openpbr_diffuse.simulation.layered import (
+    LayeredSurface,
+    simulate_layered_albedo,
+    smooth_lambert_albedo,
+)
 
 N = (1.3, 1.5, 1.7, 2.0)
 ALPHA = (0.0, 0.04, 0.25, 0.64)
@@ -112,7 +115,7 @@ def figure(rows_names, rows, path: Path) -> None:
         ax.axhline(0, color="k", lw=0.8)
         ax.set_xlabel("mu (cosine of view)")
         ax.set_ylabel("diffuse albedo error vs physics (%)")
-        ax.set_title(f"n = 1.5, rho = 0.8, {'smooth' if a == 0 else 'GGX alpha = %g' % a}, no absorption")
+        ax.set_title(f"n = 1.5, rho = 0.8, {'smooth' if a == 0 else f'GGX alpha = {a:g}'}, no absorption")
     axes[0].legend(fontsize=8)
     tmp = path.with_suffix(".tmp.png")
     fig.savefig(tmp, dpi=90)
@@ -130,13 +133,13 @@ def main(argv: list[str] | None = None) -> int:
     se_max = max(r[names.index("physics_se")] for r in rows)
     _write(lg.TABLE, [
         "title: diffuse albedo of a Lambertian base under a dielectric layer: physics and layering rules",
-        "quantity: E_d(mu), the diffuse part of the directional albedo (light that reached the base), per rule of "
+        ("quantity: E_d(mu), the diffuse part of the directional albedo (light that reached the base), per rule of "
         "openpbr_diffuse.approximations.layering_grading; physics_specular: the first-interface reflection; "
-        "openpbr_E_spec: OpenPBR's E_spec(mu) of the same interface",
-        "method: smooth interface (interface_alpha 0): exact closed form with all internal reflections "
+        "openpbr_E_spec: OpenPBR's E_spec(mu) of the same interface"),
+        ("method: smooth interface (interface_alpha 0): exact closed form with all internal reflections "
         "(simulation.layered.smooth_lambert_albedo); GGX interface: position-free random walk "
         f"(simulation.layered, Heitz 2016 dielectric microsurface walk), {args.paths} paths per (surface, mu), "
-        f"all rho share paths, seed {args.seed}; slab optical depth tau = absorption x thickness (coat_color = exp(-tau))",
+        f"all rho share paths, seed {args.seed}; slab optical depth tau = absorption x thickness (coat_color = exp(-tau))"),
         f"resolution: interface_alpha {ALPHA}; n {N}; tau {TAU}; mu {MU}; rho {RHO}",
         f"error: physics_se per entry (max {se_max:.1e}); 0 for the closed form",
         f"library: openpbr-diffuse {__version__}",
@@ -144,8 +147,8 @@ def main(argv: list[str] | None = None) -> int:
     ], names, rows)
     gn, grows = gotanda_absorption()
     _write(lg.DATA / "layered_gotanda_absorption.csv", [
-        "title: Gotanda 2012 absorption: Eq. 3 (linear, non-refracted) against Eq. 2 (Beer-Lambert, refracted), "
-        "Eq. 9 (IBL) against the cosine-weighted integral of Eq. 2 over the light",
+        ("title: Gotanda 2012 absorption: Eq. 3 (linear, non-refracted) against Eq. 2 (Beer-Lambert, refracted), "
+        "Eq. 9 (IBL) against the cosine-weighted integral of Eq. 2 over the light"),
         "quantity: transmittance I/I0 with alpha' = alpha d = tau",
         "method: closed forms; eq2_cosine_weighted by 400-point Gauss-Legendre over mu_l",
         "resolution: n (1.33, 1.5); tau (0.01, 0.05, 0.1, 0.2); mu_l, mu_e " + str(MU),

@@ -42,7 +42,11 @@ def _usage(message: str):
 
 def run(args: argparse.Namespace) -> int:
     """Run ``simulate --layered``; prints the table (or JSON) and returns 0."""
-    from ..simulation.layered import LayeredSurface, simulate_layered_albedo, simulate_layered_average_albedo
+    from ..simulation.layered import (
+        LayeredSurface,
+        simulate_layered_albedo,
+        simulate_layered_average_albedo,
+    )
 
     if args.ior is None:
         raise _usage("--layered needs --ior")
@@ -65,13 +69,13 @@ def run(args: argparse.Namespace) -> int:
         raise _usage("--roughness is the EON base roughness: needs --base eon")
     kw = {}
     if args.absorption is not None:
-        kw = dict(absorption=np.array(args.absorption), thickness=args.thickness)
+        kw = {"absorption": np.array(args.absorption), "thickness": args.thickness}
     elif args.coat_color is not None:
-        kw = dict(coat_color=np.array(args.coat_color))
+        kw = {"coat_color": np.array(args.coat_color)}
     surface = LayeredSurface(args.interface, args.ior, args.interface_roughness, base=args.base,
                              roughness=roughness, **kw)
     rho = np.array(args.rho, dtype=np.float64)
-    run_kw = dict(rho=rho, paths=args.paths, seed=args.seed, workers=args.workers, scheduler=args.scheduler)
+    run_kw = {"rho": rho, "paths": args.paths, "seed": args.seed, "workers": args.workers, "scheduler": args.scheduler}
     try:
         if args.average:
             est = simulate_layered_average_albedo(surface, **run_kw)

@@ -34,8 +34,8 @@ import numpy as np
 from ..microfacet.fresnel import dielectric
 from ..microfacet.kernels import ggx_visible_normal
 from ..models.eon import eon_terms, rho_ms
-from ..sampling.ltc import ltc_frame, to_frame
-from ..sampling.mis import eon_pdf, eon_sample, pow_tenth
+from ..sampling.ltc import ltc_frame
+from ..sampling.mis import eon_sample, pow_tenth
 from ._common import INV_PI, cosine_hemisphere, inline, jit
 from .smith import GGX, sample_height
 

@@ -22,7 +22,11 @@ HEADLINE_N, HEADLINE_RHO = 1.5, 0.8
 
 
 def _live(quick: bool, rows: list[dict]) -> list[Check]:
-    from ...simulation.layered import LayeredSurface, simulate_layered_albedo, smooth_lambert_albedo
+    from ...simulation.layered import (
+        LayeredSurface,
+        simulate_layered_albedo,
+        smooth_lambert_albedo,
+    )
 
     paths = 20_000 if quick else 100_000
     checks = []
