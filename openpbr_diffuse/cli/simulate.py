@@ -67,7 +67,7 @@ def run(args):
     if not args.average and not args.mu:
         raise _usage("--mu is required (or --average)")
     rho = np.array(args.rho, dtype=np.float64)
-    kw = {"rho": rho, "paths": args.paths, "seed": args.seed, "workers": args.workers, "scheduler": args.scheduler}
+    kw = dict(rho=rho, paths=args.paths, seed=args.seed, workers=args.workers, scheduler=args.scheduler)
     try:
         if args.average:
             est = simulate_average_albedo(args.geometry, args.roughness, **kw)
