@@ -232,3 +232,15 @@ def test_rough_specular_part_against_single_scattering_table(alpha):
     assert np.all(gain > -3 * e.specular_stderr[:, 0]), gain
     missed = 1.0 - np.asarray(ggx_albedo(mus, math.sqrt(alpha)), dtype=float).reshape(-1)
     assert np.all(gain < missed + 3 * e.specular_stderr[:, 0]), (gain, missed)
+
+
+def test_standard_errors_are_honest_rough_eon_absorbing():
+    """Spread of 20 seeds against the reported error for the random-choice walk (GGX
+    interface, EON base, absorbing slab), per part."""
+    s = LayeredSurface("ggx", 1.6, 0.3, coat_color=0.7, base="eon", roughness=0.6)
+    runs = [simulate_layered_albedo(s, [0.4], rho=0.9, paths=6_000, seed=seed) for seed in range(20)]
+    for part in ("specular", "diffuse", "total"):
+        means = np.array([getattr(e, part)[0, 0] for e in runs])
+        errs = np.array([getattr(e, part + "_stderr")[0, 0] for e in runs])
+        ratio = means.var(ddof=1) / np.mean(errs ** 2)
+        assert 0.35 < ratio < 2.0, (part, ratio)
