@@ -244,3 +244,23 @@ def test_standard_errors_are_honest_rough_eon_absorbing():
         errs = np.array([getattr(e, part + "_stderr")[0, 0] for e in runs])
         ratio = means.var(ddof=1) / np.mean(errs ** 2)
         assert 0.35 < ratio < 2.0, (part, ratio)
+
+
+def test_microsurface_base_index_matched_is_the_microsurface_simulator():
+    """n = 1: the layer over a Smith GGX Lambertian microsurface is that microsurface, as the
+    microsurface simulator (a separate kernel) computes it."""
+    from openpbr_diffuse.simulation import simulate_albedo
+
+    mus = np.array([0.9, 0.3])
+    e = simulate_layered_albedo(LayeredSurface("smooth", 1.0, base="smith-ggx", roughness=0.8), mus,
+                                rho=[0.5, 1.0], paths=60_000, seed=1)
+    ref = simulate_albedo("smith-ggx", 0.8, mus, rho=[0.5, 1.0], paths=60_000, seed=2)
+    z = np.abs(e.total[:, 0] - ref.albedo[:, 0]) / np.hypot(e.total_stderr[:, 0], ref.stderr[:, 0])
+    assert np.all(z < 3.5), z
+    np.testing.assert_allclose(e.total[:, 1], 1.0, atol=1e-12)    # rho = 1: every path leaves
+    # under a smooth n = 1.5 interface the microsurface base is darker than the Lambertian
+    # base of the same facet albedo (its albedo is below rho) but conserves energy at rho = 1
+    w = simulate_layered_albedo(LayeredSurface("smooth", 1.5, base="smith-ggx", roughness=0.8), [0.5],
+                                rho=[0.5, 1.0], paths=40_000, seed=1)
+    assert abs(w.total[0, 1] - 1.0) < 3 * w.total_stderr[0, 1] + 1e-12
+    assert w.total[0, 0] < float(smooth_lambert_albedo(1.5, 0.5, 0.5))

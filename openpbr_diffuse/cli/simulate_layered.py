@@ -15,7 +15,7 @@ import json
 
 import numpy as np
 
-BASES = ("lambert", "eon", "vcavity")
+BASES = ("lambert", "eon", "smith-ggx", "vcavity")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -31,7 +31,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--thickness", type=float, metavar="D", help="slab thickness, with --absorption")
     g.add_argument("--coat-color", type=float, nargs="+", metavar="C",
                    help="transmittance of one pass at normal incidence (OpenPBR coat_color), per channel")
-    g.add_argument("--base", choices=BASES, default="lambert", help="diffuse base (default lambert)")
+    g.add_argument("--base", choices=BASES, default="lambert",
+                   help="diffuse base (default lambert; smith-ggx: simulated Smith GGX Lambertian microsurface, "
+                        "--roughness its alpha)")
 
 
 def _usage(message: str):
@@ -53,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
     if args.geometry is not None:
         raise _usage("--layered takes --base, not --geometry")
     if args.base == "vcavity":
-        raise _usage("--base vcavity is not available for --layered (use lambert or eon)")
+        raise _usage("--base vcavity is not available for --layered (use lambert, eon or smith-ggx)")
     if (args.absorption is None) != (args.thickness is None):
         raise _usage("--absorption and --thickness go together")
     if args.coat_color is not None and args.absorption is not None:
@@ -92,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
             else f"tau = ({', '.join(f'{t:g}' for t in surface.tau)})")
     print(f"# {args.interface} interface, ior {surface.ior:g}"
           + (f", alpha {surface.interface_alpha:g}" if args.interface == "ggx" else "")
-          + f", {slab}, base {args.base}" + (f" r = {roughness:g}" if args.base == "eon" else "")
+          + f", {slab}, base {args.base}" + (f" roughness {roughness:g}" if args.base != "lambert" else "")
           + f", rho = ({', '.join(f'{r:g}' for r in est.rho)}), {args.paths} paths per row, seed {args.seed};"
           " values +- one standard error")
     cols = ["mu"]

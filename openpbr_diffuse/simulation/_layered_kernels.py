@@ -19,8 +19,9 @@ crossing is weighted by its transmittance.
   dielectric Smith microsurface (both sides, uniform heights, GGX visible normals,
   reflection or refraction chosen with probability F): energy-conserving, all
   inter-reflections between microfacets included;
-- base: Lambert (cosine sampling, weight rho) or EON (the library's EON sampler and its
-  pdf, weight f mu / pdf per channel, ``sampling.mis``);
+- base: Lambert (cosine sampling, weight rho), EON (the library's EON sampler and its
+  pdf, weight f mu / pdf per channel, ``sampling.mis``), or the Smith GGX microsurface of
+  Lambertian microfacets (Heitz et al. 2016's walk, as ``smith``; weight rho^k);
 - BRDF by next-event estimation (smooth interface only): at every base event the
   radiance towards the refracted direction of wo is carried up through the slab and out,
   f += W f_base T(mu_t) (1 - F(mu_o)) / eta^2 (radiance is divided by eta^2 when it
@@ -37,10 +38,12 @@ from ..models.eon import eon_terms, rho_ms
 from ..sampling.ltc import ltc_frame
 from ..sampling.mis import eon_sample, pow_tenth
 from ._common import INV_PI, cosine_hemisphere, inline, jit
-from .smith import GGX, sample_height
+from ._common import cosine_about
+from .smith import GGX, sample_height, sample_visible_normal
 
 LAMBERT = 0
 EON = 1
+SMITH = 2
 #: Russian roulette starts below this largest channel weight
 RR_WEIGHT = 0.05
 #: a rough-interface walk longer than this many microfacet events is cut (counted)
@@ -93,6 +96,24 @@ def rough_interface(dx, dy, dz, outside, alpha, eta):
         n = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
         dx, dy, dz = dx * n, dy * n, dz * n
     return dx, dy, dz, outside, MAX_INTERFACE_EVENTS, True
+
+
+@inline
+def smith_base(dx, dy, dz, alpha, max_bounces):
+    """Walk the Smith GGX microsurface of Lambertian microfacets (Heitz et al. 2016, as
+    ``smith.walk``) from the direction of travel d; returns (wx, wy, wz, k, escaped): the
+    leaving direction and the number of facet bounces (the path carries rho^k)."""
+    h = math.inf
+    k = 0
+    while True:
+        h = sample_height(dz, h, alpha, GGX)
+        if h == math.inf:
+            return dx, dy, dz, k, True
+        k += 1
+        if k > max_bounces:
+            return dx, dy, dz, k, False
+        mx, my, mz = sample_visible_normal(-dx, -dy, -dz, alpha, GGX)
+        dx, dy, dz = cosine_about(mx, my, mz)
 
 
 @inline
@@ -191,6 +212,13 @@ def run_chunk_layered(alpha, eta, tau, base, r, rho, wi, random_wi, wo, n_paths,
                 ux, uy, uz = cosine_hemisphere()
                 for c in range(C):
                     w[c] *= rho[c]
+            elif base == SMITH:
+                ux, uy, uz, kb, esc = smith_base(dx, dy, dz, r, max_bounces)
+                if not esc or uz <= 0.0:
+                    stats[2] += 0 if esc else 1
+                    break
+                for c in range(C):
+                    w[c] *= rho[c] ** kb
             else:
                 Xx, Xy = ltc_frame(vx, vy)
                 ux, uy, uz, p = eon_sample(Xx, Xy, min(max(vz, 0.0), 1.0), r, r10,

@@ -37,7 +37,7 @@ from .. import _arrays as ar
 from .api import _client
 
 INTERFACES = ("smooth", "ggx")
-BASES = ("lambert", "eon")
+BASES = ("lambert", "eon", "smith-ggx")
 #: paths per chunk (the unit of work and of reproducibility)
 CHUNK_PATHS = 1 << 15
 #: a path that reached the base more often than this is cut (counted in ``truncated``)
@@ -75,9 +75,10 @@ class LayeredSurface:
     coat_color : array_like, optional
         OpenPBR's coat_color, the transmittance of one pass at normal incidence, in [0, 1]
         (tau = -ln coat_color); exclusive with absorption/thickness.
-    base : {"lambert", "eon"}
+    base : {"lambert", "eon", "smith-ggx"}
     roughness : float
-        EON roughness r of the base in [0, 1] (0 for Lambert).
+        EON roughness r of the base in [0, 1] (0 for Lambert); for "smith-ggx" (a Smith GGX
+        microsurface of Lambertian microfacets, simulated) its GGX alpha in [0, 2].
 
     Example
     -------
@@ -102,7 +103,8 @@ class LayeredSurface:
         object.__setattr__(self, "ior", _number("ior", self.ior, 1.0, 4.0))
         a = _number("interface_alpha", self.interface_alpha, 0.0, 1.0)
         object.__setattr__(self, "interface_alpha", a if self.interface == "ggx" else 0.0)
-        object.__setattr__(self, "roughness", _number("roughness", self.roughness, 0.0, 1.0))
+        object.__setattr__(self, "roughness", _number("roughness", self.roughness, 0.0,
+                                                      2.0 if self.base == "smith-ggx" else 1.0))
         object.__setattr__(self, "thickness", _number("thickness", self.thickness, 0.0, 1e6))
         absorbing = np.any(np.asarray(self.absorption, dtype=float) != 0.0) or self.thickness != 0.0
         if self.coat_color is not None and absorbing:
@@ -163,10 +165,10 @@ def _chunk_seed(seed: int, kind: str, surface: LayeredSurface, key, chunk: int) 
 
 def _run_task(task):
     """One chunk (module-level so that Dask workers can import it)."""
-    from ._layered_kernels import EON, LAMBERT, run_chunk_layered
+    from ._layered_kernels import EON, LAMBERT, SMITH, run_chunk_layered
 
     alpha, eta, tau, base, r, rho, wi, random_wi, wo, n, seed = task
-    b = LAMBERT if base == "lambert" else EON
+    b = {"lambert": LAMBERT, "eon": EON, "smith-ggx": SMITH}[base]
     return run_chunk_layered(alpha, eta, tau, b, r, rho, wi, random_wi, wo, n, seed, MAX_BOUNCES)
 
 
@@ -355,6 +357,8 @@ def simulate_layered_brdf(surface: LayeredSurface, wi, wo, rho=1.0, paths: int =
     """
     if surface.interface != "smooth":
         raise ValueError("simulate_layered_brdf needs interface='smooth' (NEE through a rough interface is not implemented)")
+    if surface.base == "smith-ggx":
+        raise ValueError("simulate_layered_brdf needs base 'lambert' or 'eon' (the microsurface base has no closed-form BRDF)")
     paths = _check_count("paths", paths, 2)
     seed = _check_count("seed", seed, 0)
     wi, wo = _dirs("wi", wi), _dirs("wo", wo)
