@@ -37,8 +37,7 @@ from ..microfacet.kernels import ggx_visible_normal
 from ..models.eon import eon_terms, rho_ms
 from ..sampling.ltc import ltc_frame
 from ..sampling.mis import eon_sample, pow_tenth
-from ._common import INV_PI, cosine_hemisphere, inline, jit
-from ._common import cosine_about
+from ._common import INV_PI, cosine_about, cosine_hemisphere, inline, jit
 from .smith import GGX, sample_height, sample_visible_normal
 
 LAMBERT = 0
