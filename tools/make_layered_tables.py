@@ -3,6 +3,7 @@
 - layered_grading.csv: the diffuse part of the directional albedo of a Lambertian base
   under a dielectric layer, physics (exact closed form for a smooth interface, simulation
   for GGX) and every rule of ``approximations.layering_grading``;
+- layered_grading_eon.csv: the same for an EON base (OpenPBR's rules);
 - layered_gotanda_absorption.csv: Gotanda 2012 Eq. 3 against Eq. 2, and Eq. 9 against the
   cosine-weighted integral of Eq. 2;
 - layered_grading.png: relative error of each rule against the physics.
@@ -80,6 +81,24 @@ def grading(paths: int, seed: int, workers: int | None) -> tuple[list[str], list
     return names, rows
 
 
+def eon_grading(paths: int, seed: int, workers: int | None) -> tuple[list[str], list[list]]:
+    names = ["interface_alpha", "n", "r", "mu", "rho", "physics", "physics_se", "openpbr", "openpbr_coat"]
+    rows = []
+    mu = np.array(MU)
+    rho = np.array(RHO)
+    for a in (0.0, 0.25):
+        for r in (0.5, 1.0):
+            s = LayeredSurface("smooth" if a == 0 else "ggx", 1.5, a, base="eon", roughness=r)
+            e = simulate_layered_albedo(s, mu, rho=rho, paths=paths, seed=seed, workers=workers)
+            vals = [np.broadcast_to(lg.eon_base_albedo(rule, mu[:, None], 1.5, rho[None, :], r, math.sqrt(a)),
+                                    e.diffuse.shape) for rule in ("openpbr", "openpbr_coat")]
+            for i, m in enumerate(mu):
+                for c, p in enumerate(rho):
+                    rows.append([a, 1.5, r, float(m), float(p), float(e.diffuse[i, c]), float(e.diffuse_stderr[i, c]),
+                                 float(vals[0][i, c]), float(vals[1][i, c])])
+    return names, rows
+
+
 def gotanda_absorption() -> tuple[list[str], list[list]]:
     names = ["n", "tau", "mu_l", "mu_e", "eq2", "eq3", "eq3_minus_eq2", "eq9_ibl", "eq2_cosine_weighted", "eq9_minus_exact"]
     x, w = np.polynomial.legendre.leggauss(400)
@@ -145,6 +164,18 @@ def main(argv: list[str] | None = None) -> int:
         f"library: openpbr-diffuse {__version__}",
         "regenerate: python tools/make_layered_tables.py",
     ], names, rows)
+    en, erows = eon_grading(args.paths, args.seed, args.workers)
+    _write(lg.DATA / "layered_grading_eon.csv", [
+        "title: diffuse albedo of an EON base under a dielectric layer (n 1.5): simulation and OpenPBR's rules",
+        ("quantity: E_d(mu), the diffuse part of the directional albedo; openpbr: (1 - E_spec) E_EON; openpbr_coat: "
+        "(1 - E_coat)(1 - K)/(1 - rho K) E_EON (approximations.layering_grading.eon_base_albedo)"),
+        (f"method: position-free random walk (simulation.layered), EON base sampled with the library's EON sampler, "
+        f"{args.paths} paths per (surface, mu), seed {args.seed}"),
+        f"resolution: interface_alpha (0, 0.25); r (0.5, 1); mu {MU}; rho {RHO}",
+        f"error: physics_se per entry (max {max(r[6] for r in erows):.1e})",
+        f"library: openpbr-diffuse {__version__}",
+        "regenerate: python tools/make_layered_tables.py",
+    ], en, erows)
     gn, grows = gotanda_absorption()
     _write(lg.DATA / "layered_gotanda_absorption.csv", [
         ("title: Gotanda 2012 absorption: Eq. 3 (linear, non-refracted) against Eq. 2 (Beer-Lambert, refracted), "

@@ -99,6 +99,29 @@ def diffuse_albedo(rule: str, mu, n: float, rho, roughness: float = 0.0, tau: fl
     raise ValueError(f"rule must be one of {', '.join(RULES)}, got {rule!r}")
 
 
+def eon_base_albedo(rule: str, mu, n: float, rho, r: float, roughness: float = 0.0) -> np.ndarray:
+    """E_d(mu) of an EON base (roughness r, albedo rho) under the layer by OpenPBR's rules:
+    ``openpbr`` (1 - E_spec(mu)) E_EON(mu) or ``openpbr_coat`` (1 - E_coat(mu)) (1 - K)/(1 -
+    rho K) E_EON(mu) (no absorption); E_EON from the library's reference tables.
+
+    Example
+    -------
+    >>> round(float(eon_base_albedo("openpbr", 1.0, 1.0, 0.8, 0.5)), 4) == round(float(
+    ...     __import__("openpbr_diffuse").albedo.reference_albedo("eon", 1.0, 0.5, [0.8])[0]), 4)
+    True
+    """
+    from ..albedo import reference_albedo
+
+    mu, rho = np.broadcast_arrays(np.asarray(mu, dtype=float), np.asarray(rho, dtype=float))
+    e = np.asarray(reference_albedo("eon", mu, r, rho[..., None]), dtype=float)[..., 0]
+    if rule == "openpbr":
+        return (1 - spec_albedo(mu, n, roughness)) * e
+    if rule == "openpbr_coat":
+        K = 1 - (1 - g.f0(n)) / n ** 2
+        return (1 - spec_albedo(mu, n, roughness)) * (1 - K) / (1 - rho * K) * e
+    raise ValueError(f"rule must be 'openpbr' or 'openpbr_coat', got {rule!r}")
+
+
 def load_table(path: Path | str = TABLE) -> tuple[dict, list[dict]]:
     """(provenance header, rows as dicts of floats/str) of the shipped grading table.
 

@@ -92,8 +92,24 @@ def build(ctx) -> SectionResult:
     res.tables.append(Table(caption=f"Smooth interface, n {HEADLINE_N:g}, rho {HEADLINE_RHO:g}, no absorption: "
                                     "physics and each rule's error in %", columns=["mu", "physics E_d", *lg.RULES],
                             rows=hrows))
-    # Gotanda's absorption: Eq. 3 vs Eq. 2, Eq. 9 vs the integral of Eq. 2
+    # EON base: OpenPBR's rules against the simulation
     from ..._csv import read_headed_csv
+
+    _, en, erows = read_headed_csv(lg.DATA / "layered_grading_eon.csv")
+    ec = {k: i for i, k in enumerate(en)}
+    etab = []
+    for a in (0.0, 0.25):
+        for r in (0.5, 1.0):
+            sel_e = [x for x in erows if float(x[ec["interface_alpha"]]) == a and float(x[ec["r"]]) == r]
+            cells = ["smooth" if a == 0 else f"GGX alpha {a:g}", r]
+            for rule in ("openpbr", "openpbr_coat"):
+                err = np.array([float(x[ec[rule]]) / float(x[ec["physics"]]) - 1 for x in sel_e])
+                cells.append(f"{100 * np.mean(np.abs(err)):.1f} / {100 * np.max(np.abs(err)):.0f}")
+            etab.append(cells)
+    res.tables.append(Table(caption="EON base (n 1.5, no absorption): relative error of E_d, mean / max in %, over "
+                                    "rho 0.2-1 and mu 0.1-1 (data/layered_grading_eon.csv)",
+                            columns=["interface", "EON r", "openpbr", "openpbr_coat"], rows=etab))
+    # Gotanda's absorption: Eq. 3 vs Eq. 2, Eq. 9 vs the integral of Eq. 2
 
     _, names, grow = read_headed_csv(lg.DATA / "layered_gotanda_absorption.csv")
     col = {k: i for i, k in enumerate(names)}
