@@ -13,16 +13,17 @@ import math
 import numpy as np
 
 from ..simulation.api import GEOMETRIES, simulate_albedo, simulate_average_albedo
+from . import simulate_layered
 
 
 def add_parser(subparsers):
     p = subparsers.add_parser(
         "simulate", help="Monte Carlo albedo of a V-cavity / Smith Lambertian microsurface",
         description=__doc__.splitlines()[0].strip("`").replace("``", ""))
-    p.add_argument("--geometry", required=True, choices=list(GEOMETRIES),
+    p.add_argument("--geometry", choices=list(GEOMETRIES),
                    help="vcavity (Oren-Nayar V-grooves) or a Smith microsurface (Heitz et al. 2016)")
-    p.add_argument("--roughness", type=float, required=True, metavar="S",
-                   help="sigma in radians [0, pi/2] for vcavity; alpha [0, 2] for smith-*")
+    p.add_argument("--roughness", type=float, metavar="S",
+                   help="sigma in radians [0, pi/2] for vcavity; alpha [0, 2] for smith-*; EON r with --layered")
     p.add_argument("--mu", type=float, nargs="+", metavar="MU", help="cosine(s) of the incident angle in (0, 1]")
     p.add_argument("--average", action="store_true", help="average albedo <E> instead of E(mu)")
     p.add_argument("--rho", type=float, nargs="+", metavar="RHO", default=[1.0],
@@ -32,6 +33,7 @@ def add_parser(subparsers):
     p.add_argument("--workers", type=int, default=None, metavar="W", help="local threads (default: all cores)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="run the chunks on this Dask distributed scheduler")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+    simulate_layered.add_arguments(p)
     p.set_defaults(run=run)
     return p
 
@@ -56,6 +58,10 @@ def _usage(message):
 
 
 def run(args):
+    if args.layered:
+        return simulate_layered.run(args)
+    if args.geometry is None or args.roughness is None:
+        raise _usage("--geometry and --roughness are required (or --layered)")
     if args.average and args.mu:
         raise _usage("--average takes no --mu")
     if not args.average and not args.mu:

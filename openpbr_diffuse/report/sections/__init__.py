@@ -9,7 +9,8 @@
 - graders: real implementations graded by running their own code (issue 12)
 - approximations: the seeds' real-time approximations (Gotanda, table compensation, SH)
 - simulation: the microsurface ground truth
+- layered: the diffuse lobe under a dielectric layer against the layered-surface simulation
 - timings: the paper's Table 1 on this machine
 """
 SECTIONS = ("models", "albedo", "sampling", "colorshift", "materials", "implementations", "graders",
-            "approximations", "simulation", "timings")
+            "approximations", "simulation", "layered", "timings")
