@@ -33,6 +33,9 @@ def add_parser(subparsers):
     p.add_argument("--workers", type=int, default=None, metavar="W", help="local threads (default: all cores)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="run the chunks on this Dask distributed scheduler")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument("--yes", action="store_true",
+                   help=f"run even above the work budget ({BUDGET_PATHS:.0e} paths in total, about 5-10 "
+                        f"minutes on 2 cores)")
     simulate_layered.add_arguments(p)
     p.set_defaults(run=run)
     return p
@@ -57,7 +60,20 @@ def _usage(message):
     return UsageError(f"simulate: {message}")
 
 
+#: Paths of one command (paths x rows) run without --yes: ~5-10 min on 2 cores (~3.5 M bounce
+#: events/s per core, 1-2 bounces per path), so that a mistyped --paths 1e12 (days) is refused.
+BUDGET_PATHS = 10**9
+
+
+def _check_budget(args, rows):
+    total = args.paths * max(1, rows)
+    if total > BUDGET_PATHS and not args.yes:
+        raise _usage(f"{total:.3g} paths is above the work budget of {BUDGET_PATHS:.0e} paths "
+                     f"(about 5-10 minutes on 2 cores): lower --paths or add --yes")
+
+
 def run(args):
+    _check_budget(args, 1 if args.average or not args.mu else len(args.mu))
     if args.layered:
         return simulate_layered.run(args)
     if args.geometry is None or args.roughness is None:

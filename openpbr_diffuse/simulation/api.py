@@ -29,6 +29,8 @@ GEOMETRIES = {
     "smith-beckmann": ("alpha", 0.0, 2.0),
     "smith-ggx": ("alpha", 0.0, 2.0),
 }
+#: seconds to wait for a Dask scheduler to answer (``scheduler=``)
+SCHEDULER_TIMEOUT = 10.0
 #: paths per chunk (the unit of work and of reproducibility)
 CHUNK_PATHS = 1 << 15
 #: a path still inside the surface after this many bounces is cut (counted in ``truncated``)
@@ -93,7 +95,14 @@ def _client(client, scheduler):
                           "pip install 'dask[distributed]' (or openpbr-diffuse[dask])") from exc
     if client is not None:
         return client, False
-    return Client(scheduler), True
+    try:
+        return Client(scheduler, timeout=SCHEDULER_TIMEOUT), True
+    except (OSError, TimeoutError, MemoryError, ValueError) as exc:
+        # a silent service times out; one that answers with something else than Dask's protocol
+        # can make the client decode a garbage frame length (MemoryError): both are "not a scheduler"
+        raise ConnectionError(f"scheduler {scheduler}: no Dask scheduler answered within "
+                              f"{SCHEDULER_TIMEOUT:g} s ({type(exc).__name__}: "
+                              f"{' '.join(str(exc).split())[:160]})") from None
 
 
 def _execute(tasks, workers, client, scheduler):
