@@ -261,10 +261,17 @@ def _parse_number(text, column, row_label, allow_nonfinite=False):
     if isinstance(text, bool):
         raise ValueError(f"{row_label}: column {column} must be a number, got {text!r}")
     if isinstance(text, (int, float)):
-        return float(text)
-    text = str(text).strip()
+        try:
+            return float(text)
+        except OverflowError:
+            raise ValueError(f"{row_label}: column {column} is too large for a float") from None
+    if not isinstance(text, str):
+        raise ValueError(f"{row_label}: column {column} must be a number, got a {type(text).__name__}")
+    text = text.strip()
     if text == "":
         return math.nan
+    if "_" in text:  # Python's float() reads "1_000"; a number column does not
+        raise ValueError(f"{row_label}: column {column} is not a number: {text[:40]!r}")
     try:
         v = float(text)
     except ValueError:
@@ -283,6 +290,8 @@ def _read_records(path):
             doc = json.loads(text)
         except json.JSONDecodeError as exc:
             raise ValueError(f"{path}: not valid JSON ({exc.msg} at line {exc.lineno})") from None
+        except RecursionError:
+            raise ValueError(f"{path}: not usable JSON (nested too deeply)") from None
         rows = doc.get("rows") if isinstance(doc, dict) else doc
         if not isinstance(rows, list) or not all(isinstance(r, dict) for r in rows):
             raise ValueError(f"{path}: expected a JSON object with a 'rows' list of objects")
@@ -295,32 +304,70 @@ def _read_records(path):
         header = [h.strip() for h in next(reader)]
     except StopIteration:
         raise ValueError(f"{path}: empty file (no header row)") from None
+    except csv.Error as exc:
+        raise ValueError(f"{path}: header row is not valid CSV ({exc})") from None
+    dup = sorted({h for h in header if header.count(h) > 1})
+    if dup:
+        raise ValueError(f"{path}: duplicated column(s) {', '.join(dup)} in the header row")
     rows = []
-    for lineno, cells in enumerate(reader, start=2):
+    lineno = 1
+    while True:
+        try:
+            cells = next(reader)
+        except StopIteration:
+            break
+        except csv.Error as exc:
+            raise ValueError(f"{path}: data row {lineno} is not valid CSV ({exc})") from None
+        lineno += 1
         if len(cells) != len(header):
             raise ValueError(f"{path}: data row {lineno - 1} has {len(cells)} cells, the header has {len(header)}")
         rows.append(dict(zip(header, cells)))
     return header, rows
 
 
-def read_results(path, vectors: VectorSet | None = None):
+def _record_out(rec, label):
+    """The three result values of one record: from ``out_r, out_g, out_b`` or an ``out`` list;
+    None when the row is left blank (every result empty)."""
+    raw = rec.get("out")
+    if raw is not None and not (isinstance(raw, str) and not raw.strip()):
+        if not isinstance(raw, list) or len(raw) != 3:
+            raise ValueError(f"{label}: column out must be a list of 3 numbers, got {str(raw)[:40]!r}")
+        vals = raw
+        cols = ("out[0]", "out[1]", "out[2]")
+    else:
+        vals = [rec.get(c) for c in OUT_COLUMNS]
+        cols = OUT_COLUMNS
+    blank = [v is None or (isinstance(v, str) and not v.strip()) for v in vals]
+    if all(blank):
+        return None
+    if any(blank):
+        col = cols[blank.index(True)]
+        raise ValueError(f"{label}: column {col} is blank while the row's other results are given")
+    # "nan"/"inf" results are read (and fail the grade): a NaN is the implementation's bug
+    return [_parse_number(v, c, label, allow_nonfinite=True) for v, c in zip(vals, cols)]
+
+
+def read_results(path, vectors: VectorSet | None = None, *, with_skipped: bool = False):
     """Read a submitted results file; return ``(vectors_subset, out)`` matched by id.
 
     ``vectors`` defaults to :func:`default_vectors`.  Every row must carry the columns
-    :data:`COLUMNS` and :data:`OUT_COLUMNS`; its id must name a vector and its inputs must
-    equal that vector's (to :data:`INPUT_MATCH_TOL`, so float32-printed inputs pass);
-    every ``out_*`` must be a number ("nan" and "inf" are read as such: they fail the grade,
-    they do not make the file unusable).  Rows are returned in the file's order.
+    :data:`COLUMNS`; its id must name a vector and its inputs must equal that vector's (to
+    :data:`INPUT_MATCH_TOL`, so float32-printed inputs pass).  The results are the columns
+    :data:`OUT_COLUMNS` or, in JSON, either those keys or an ``"out": [r, g, b]`` list in
+    each row (the file's ``"columns"`` list need not name them).  A row whose results are
+    all blank is skipped (any subset of the rows may be filled); "nan" and "inf" are read as
+    such: they fail the grade, they do not make the file unusable.  Rows are returned in the
+    file's order; ``with_skipped=True`` returns ``(vectors_subset, out, n_skipped)``.
 
     Raises
     ------
     ValueError
-        Missing columns, non-numeric values, unknown or duplicated ids, or inputs that do not
-        match the vectors (the message names the row and the column).
+        Missing columns, non-numeric values, unknown or duplicated ids, inputs that do not
+        match the vectors, or no row with results (the message names the row and the column).
     """
     vectors = default_vectors() if vectors is None else vectors
     names, records = _read_records(path)
-    missing = [c for c in COLUMNS + OUT_COLUMNS if c not in names]
+    missing = [c for c in COLUMNS if c not in names and not (records and c in records[0])]
     if missing:
         raise ValueError(f"{path}: missing column(s) {', '.join(missing)} "
                          f"(expected {', '.join(COLUMNS + OUT_COLUMNS)})")
@@ -328,9 +375,10 @@ def read_results(path, vectors: VectorSet | None = None):
         raise ValueError(f"{path}: no data rows")
     index = {str(v): i for i, v in enumerate(vectors.id)}
     ref_cols = vectors.columns()
-    take = np.empty(len(records), dtype=np.int64)
-    out = np.empty((len(records), 3))
+    take = []
+    out = []
     seen = set()
+    skipped = 0
     for n, rec in enumerate(records):
         rid = str(rec.get("id", "")).strip()
         label = f"{path}: row {n + 1} (id {rid[:40]!r})"
@@ -351,14 +399,16 @@ def read_results(path, vectors: VectorSet | None = None):
                     not math.isnan(want) and abs(got - want) > INPUT_MATCH_TOL * (1.0 + abs(want))):
                 raise ValueError(f"{label}: column {col} is {got!r}, the vector has "
                                  f"{'blank' if math.isnan(want) else repr(want)}: rows do not match the vectors")
-        for k, col in enumerate(OUT_COLUMNS):
-            raw = rec.get(col)
-            if raw is None or (isinstance(raw, str) and not raw.strip()):
-                raise ValueError(f"{label}: column {col} is blank; every submitted row needs a result")
-            # "nan"/"inf" results are read (and fail the grade): a NaN is the implementation's bug
-            out[n, k] = _parse_number(raw, col, label, allow_nonfinite=True)
-        take[n] = i
-    return vectors.subset(take), out
+        vals = _record_out(rec, label)
+        if vals is None:
+            skipped += 1
+            continue
+        out.append(vals)
+        take.append(i)
+    if not take:
+        raise ValueError(f"{path}: no row has results (fill out_r, out_g, out_b of the rows to grade)")
+    result = vectors.subset(np.array(take, dtype=np.int64)), np.array(out, dtype=np.float64).reshape(-1, 3)
+    return (*result, skipped) if with_skipped else result
 
 
 __all__ = ["VERSION", "COLUMNS", "OUT_COLUMNS", "VECTOR_MODELS", "ALBEDO_MODELS", "VectorSet", "default_vectors",
