@@ -206,22 +206,22 @@ def test_vectors_cli_writes_csv_columns_in_order(tmp_path):
     path = tmp_path / "v.csv"
     assert main(["vectors", "--out", str(path)]) == 0
     header = [ln for ln in path.read_text().splitlines() if not ln.startswith("#")][0]
-    assert header.split(",") == list(COLUMNS)
+    assert header.split(",") == list(COLUMNS + OUT_COLUMNS)
     assert main(["vectors", "--out", str(tmp_path / "v.json")]) == 0
     doc = json.loads((tmp_path / "v.json").read_text())
-    assert doc["columns"] == list(COLUMNS) and len(doc["rows"]) == len(V) and doc["version"] == V.version
-    # an implementer appends out columns to the CSV written by `vectors`
+    assert doc["columns"] == list(COLUMNS + OUT_COLUMNS) and len(doc["rows"]) == len(V) and doc["version"] == V.version
+    assert main(["vectors", "--out", str(path)]) == 2  # never overwritten without --force
+    # an implementer fills the empty out columns of the CSV written by `vectors`
     lines = path.read_text().splitlines()
     ref = reference(V)
     k = 0
     new = []
     for ln in lines:
-        if ln.startswith("#"):
+        if ln.startswith("#") or ln.startswith("id,"):
             new.append(ln)
-        elif ln.startswith("id,"):
-            new.append(ln + "," + ",".join(OUT_COLUMNS))
         else:
-            new.append(ln + "," + ",".join(f"{x:.9g}" for x in ref[k]))
+            assert ln.endswith(",,,")
+            new.append(ln[:-3] + "," + ",".join(f"{x:.9g}" for x in ref[k]))
             k += 1
     path.write_text("\n".join(new) + "\n")
     assert main(["check", str(path)]) == 0

@@ -31,6 +31,7 @@ COMMANDS = {
     "eval": "eval",
     "render": "render",
     "simulate": "simulate",
+    "template": "template",
 }
 
 PROG = "openpbr-diffuse"

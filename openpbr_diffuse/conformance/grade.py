@@ -331,7 +331,7 @@ def grade(vectors, out, *, model=None, tolerance=None, n_skipped: int = 0) -> Gr
         tolerance={"relative": rel, "absolute": ab, "rule": "|out - ref| <= absolute + relative |ref|"},
         tolerance_reason=TOLERANCE_REASON if tolerance is None else "tolerance given by the caller",
         worst=worst, n_rows=len(vectors), n_failed_rows=int((row_e > 1.0).sum()),
-        max_rel_error=float(np.max(np.where(np.abs(ref) > 0, rel_err, np.where(diff > 0, math.inf, 0.0)))),
+        max_rel_error=float(np.max(np.where(np.abs(ref) > 0, rel_err, np.where(diff > 0, math.inf, 0.0)))) if finite else math.inf,
         max_normalised_error=float(row_e.max()), models=sorted(set(map(str, vectors.model))),
         version=vectors.version, regions=_regions(vectors, row_e), n_nan=int(np.isnan(out).sum()),
         n_inf=int(np.isinf(out).sum()), n_skipped=int(n_skipped))

@@ -211,16 +211,21 @@ def _header_lines(vectors):
     return [f"{FORMAT_NAME}, version {vectors.version}",
             "kind brdf: f(wi, wo) without the cosine factor; kind albedo: directional albedo E(mu)",
             "directions in the local frame (normal +z), both pointing away from the surface; blank = not applicable",
-            "roughness: r in [0, 1] for fon/eon/eon_approx, sigma in radians for qon; append out_r,out_g,out_b"]
+            "roughness: r in [0, 1] for fon/eon/eon_approx, sigma in radians for qon; fill out_r,out_g,out_b "
+            "(rows left blank are skipped)"]
 
 
-def write_vectors(vectors: VectorSet, path, *, out=None) -> Path:
+def write_vectors(vectors: VectorSet, path: str | Path, *, out: np.ndarray | None = None,
+                  blank_out: bool = False) -> Path:
     """Write ``vectors`` to ``path`` (CSV, or JSON if the name ends in ``.json``).
 
-    ``out`` (n, 3), if given, is appended as ``out_r, out_g, out_b`` (a results file).
+    ``out`` (n, 3), if given, is appended as ``out_r, out_g, out_b`` (a results file);
+    ``blank_out=True`` appends those columns empty (the file an implementer fills in).
     """
     path = Path(path)
     cols = vectors.columns()
+    if blank_out and out is None:
+        out = np.full((len(vectors), 3), np.nan)
     names = list(COLUMNS) + (list(OUT_COLUMNS) if out is not None else [])
     if out is not None:
         out = np.asarray(out, dtype=np.float64).reshape(len(vectors), 3)
@@ -233,7 +238,9 @@ def write_vectors(vectors: VectorSet, path, *, out=None) -> Path:
             if isinstance(v, (str, np.str_)):
                 return str(v)
             if not math.isfinite(float(v)):
-                return None if name not in OUT_COLUMNS else str(float(v))  # a result NaN stays "nan"
+                if name not in OUT_COLUMNS or blank_out:
+                    return None
+                return str(float(v))  # a result NaN stays "nan"
             return float(v)
 
         doc = {"format": FORMAT_NAME, "version": vectors.version, "notes": _header_lines(vectors)[1:],
@@ -248,7 +255,8 @@ def write_vectors(vectors: VectorSet, path, *, out=None) -> Path:
     text_cols = [cols[name] for name in names]
     n_in = len(COLUMNS)
     for i in range(n):
-        w.writerow([_cell(c[i]) for c in text_cols[:n_in]] + [repr(float(c[i])) for c in text_cols[n_in:]])
+        w.writerow([_cell(c[i]) for c in text_cols[:n_in]]
+                   + [("" if blank_out else repr(float(c[i]))) for c in text_cols[n_in:]])
     path.write_text(buf.getvalue())
     return path
 
