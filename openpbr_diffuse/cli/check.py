@@ -85,12 +85,11 @@ def run(args: argparse.Namespace) -> int:
     status = graders_cli.run(args)
     if status is not None:
         return status
-    from ..conformance.grade import grade
-    from ..conformance.vectors import read_results
+    from ..conformance.grade import grade_chunks
+    from ..conformance.vectors import iter_results
     if args.file is None:  # ValueError, not main.UsageError: the same exit 2 under `python -m`
         raise ValueError("check: FILE is required (the vectors file with out_r, out_g, out_b filled in)")
-    vectors, out, skipped = read_results(args.file, with_skipped=True)
-    g = grade(vectors, out, model=args.model, n_skipped=skipped)
+    g = grade_chunks(iter_results(args.file), model=args.model)  # streamed: memory bounded by a chunk
     if args.json:
         d = g.to_dict()
         d["file"] = str(args.file)

@@ -314,38 +314,163 @@ def grade(vectors, out, *, model=None, tolerance=None, n_skipped: int = 0) -> Gr
         vectors, out = vectors.subset(keep), out[keep]
     if len(vectors) == 0:
         raise ValueError("vectors: nothing to grade (0 rows)")
-    ref = reference(vectors)
-    e = _normalised(out, ref, rel, ab)
-    with np.errstate(invalid="ignore", over="ignore"):
-        diff = np.abs(out - ref)
-        rel_err = diff / np.maximum(np.abs(ref), 1e-300)
-    finite = np.isfinite(out).all()
-    row_e = e.max(axis=1)
-    passed = bool(finite and row_e.max() <= 1.0)
-    order = np.argsort(-row_e, kind="stable")[:N_WORST]
-    worst = [_row(vectors, int(i), ref, out, e) for i in order if row_e[i] > 0]
-    g = Grade(
-        passed=passed,
-        max_abs_error=float(np.max(diff)) if finite else math.inf,
-        rms_error=float(np.sqrt(np.mean(diff ** 2))) if finite else math.inf,
-        tolerance={"relative": rel, "absolute": ab, "rule": "|out - ref| <= absolute + relative |ref|"},
-        tolerance_reason=TOLERANCE_REASON if tolerance is None else "tolerance given by the caller",
-        worst=worst, n_rows=len(vectors), n_failed_rows=int((row_e > 1.0).sum()),
-        max_rel_error=float(np.max(np.where(np.abs(ref) > 0, rel_err, np.where(diff > 0, math.inf, 0.0)))) if finite else math.inf,
-        max_normalised_error=float(row_e.max()), models=sorted(set(map(str, vectors.model))),
-        version=vectors.version, regions=_regions(vectors, row_e), n_nan=int(np.isnan(out).sum()),
-        n_inf=int(np.isinf(out).sum()), n_skipped=int(n_skipped))
-    if not passed:
+    acc = _Accumulator(rel, ab)
+    acc.add(vectors, out)
+    return acc.result(tolerance, n_skipped)
+
+
+#: The diagnosis fits at most this many rows (a seeded sample chosen by row position when a
+#: streamed file has more; every row otherwise).
+DIAGNOSIS_ROWS = 50_000
+
+
+def _row_keys(start, n):
+    """A pseudo-random key per global row position (splitmix64): the diagnosis sample is the
+    rows with the smallest keys, the same whatever the chunking."""
+    x = (np.arange(start, start + n, dtype=np.uint64) + np.uint64(0x9E3779B97F4A7C15))
+    with np.errstate(over="ignore"):
+        x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return x ^ (x >> np.uint64(31))
+
+
+def _concat(parts):
+    from .vectors import VectorSet
+
+    return VectorSet(*(np.concatenate([getattr(v, f) for v in parts]) for f in
+                       ("id", "kind", "model", "wi", "wo", "mu", "roughness", "rho")), version=parts[0].version)
+
+
+class _Accumulator:
+    """Grade chunk by chunk: totals, regions, worst rows and a bounded sample for the diagnosis."""
+
+    def __init__(self, rel, ab):
+        self.rel, self.ab = rel, ab
+        self.n = self.n_failed = self.n_nan = self.n_inf = self.n_values = 0
+        self.max_abs = self.max_rel = self.max_norm = 0.0
+        self.sum_sq = 0.0
+        self.finite = True
+        self.models, self.version = set(), ""
+        self.regions = {}
+        self.worst = []  # (-row_e, position, row dict)
+        self.sample = None  # (keys, positions, vectors, out)
+
+    def add(self, vectors, out):
+        from .deviations import reference
+
+        if len(vectors) == 0:
+            return
+        rel, ab = self.rel, self.ab
+        ref = reference(vectors)
+        e = _normalised(out, ref, rel, ab)
+        with np.errstate(invalid="ignore", over="ignore"):
+            diff = np.abs(out - ref)
+            rel_err = diff / np.maximum(np.abs(ref), 1e-300)
+        finite = bool(np.isfinite(out).all())
+        row_e = e.max(axis=1)
+        start = self.n
+        self.n += len(vectors)
+        self.version = vectors.version
+        self.models |= set(map(str, np.unique(vectors.model)))
+        self.n_failed += int((row_e > 1.0).sum())
+        self.n_nan += int(np.isnan(out).sum())
+        self.n_inf += int(np.isinf(out).sum())
+        self.finite &= finite
+        self.max_norm = max(self.max_norm, float(row_e.max()))
+        if self.finite:
+            self.max_abs = max(self.max_abs, float(np.max(diff)))
+            self.sum_sq += float(np.sum(diff ** 2))
+            self.n_values += diff.size
+            self.max_rel = max(self.max_rel, float(np.max(np.where(np.abs(ref) > 0, rel_err,
+                                                                   np.where(diff > 0, math.inf, 0.0)))))
+        for r in _regions(vectors, row_e):
+            t = self.regions.setdefault(r["region"], {"region": r["region"], "n": 0, "n_failed": 0,
+                                                       "max_normalised_error": 0.0})
+            t["n"] += r["n"]
+            t["n_failed"] += r["n_failed"]
+            t["max_normalised_error"] = max(t["max_normalised_error"], r["max_normalised_error"])
+        order = np.argsort(-row_e, kind="stable")[:N_WORST]
+        self.worst += [(-float(row_e[i]), start + int(i), _row(vectors, int(i), ref, out, e))
+                       for i in order if row_e[i] > 0]
+        self.worst = sorted(self.worst, key=lambda t: (t[0], t[1]))[:N_WORST]
+        keys = _row_keys(start, len(vectors))
+        pos = np.arange(start, start + len(vectors))
+        if self.sample is not None:
+            k0, p0, v0, o0 = self.sample
+            keys, pos = np.concatenate([k0, keys]), np.concatenate([p0, pos])
+            vectors, out = _concat([v0, vectors]), np.concatenate([o0, out])
+        if len(keys) > DIAGNOSIS_ROWS:
+            keep = np.sort(np.argsort(keys, kind="stable")[:DIAGNOSIS_ROWS])
+            keys, pos, vectors, out = keys[keep], pos[keep], vectors.subset(keep), out[keep]
+        self.sample = (keys, pos, vectors, out)
+
+    def result(self, tolerance, n_skipped):
+        from .deviations import reference
+
+        if self.n == 0:
+            raise ValueError("vectors: nothing to grade (0 rows)")
+        rel, ab = self.rel, self.ab
+        passed = bool(self.finite and self.max_norm <= 1.0)
+        g = Grade(
+            passed=passed,
+            max_abs_error=self.max_abs if self.finite else math.inf,
+            rms_error=math.sqrt(self.sum_sq / self.n_values) if self.finite else math.inf,
+            tolerance={"relative": rel, "absolute": ab, "rule": "|out - ref| <= absolute + relative |ref|"},
+            tolerance_reason=TOLERANCE_REASON if tolerance is None else "tolerance given by the caller",
+            worst=[t[2] for t in self.worst], n_rows=self.n, n_failed_rows=self.n_failed,
+            max_rel_error=self.max_rel if self.finite else math.inf,
+            max_normalised_error=self.max_norm, models=sorted(self.models), version=self.version,
+            regions=list(self.regions.values()), n_nan=self.n_nan, n_inf=self.n_inf, n_skipped=int(n_skipped))
+        if passed:
+            g.diagnosis_detail = "conforms: every value within the tolerance"
+            return g
+        _, _, vectors, out = self.sample
+        ref = reference(vectors)
+        e = _normalised(out, ref, rel, ab)
         (g.diagnosis, g.diagnosis_detail, g.candidates, g.candidate_details,
          g.candidate_match_fractions) = _diagnose(vectors, out, ref, e, rel, ab)
+        if len(vectors) < self.n:
+            g.diagnosis_detail += f" (fitted on a sample of {len(vectors)} of the {self.n} rows)"
         if g.diagnosis is None:
             where = where_it_fails(g.regions)
             nonfinite = ", ".join(f"{n} {w} values" for n, w in ((g.n_nan, "NaN"), (g.n_inf, "Inf")) if n)
             g.diagnosis_detail = ". ".join(x for x in (NOT_EXPLAINED, where, nonfinite) if x)
-    else:
-        g.diagnosis_detail = "conforms: every value within the tolerance"
-    return g
+        return g
 
 
-__all__ = ["grade", "Grade", "REL_TOL", "ABS_TOL", "TOLERANCE_REASON", "NOT_EXPLAINED", "region_masks",
+def grade_chunks(chunks, *, model: str | None = None, tolerance=None) -> Grade:
+    """Grade ``(vectors, out[, n_skipped])`` chunks (e.g. :func:`.vectors.iter_results`) as one
+    file: the same :class:`Grade` as :func:`grade` on the rows put together (the diagnosis is
+    fitted on a sample of :data:`DIAGNOSIS_ROWS` rows when there are more); memory is bounded
+    by the chunk size.
+
+    Examples
+    --------
+    >>> from openpbr_diffuse.conformance.vectors import default_vectors
+    >>> from openpbr_diffuse.conformance.deviations import reference
+    >>> v = default_vectors()
+    >>> parts = [(v.subset(slice(k, k + 500)), reference(v.subset(slice(k, k + 500)))) for k in range(0, len(v), 500)]
+    >>> grade_chunks(parts).passed
+    True
+    """
+    rel, ab = _tolerance(tolerance)
+    acc = _Accumulator(rel, ab)
+    skipped = 0
+    seen_model = False
+    for chunk in chunks:
+        vectors, out = chunk[0], np.asarray(chunk[1], dtype=np.float64)
+        skipped += int(chunk[2]) if len(chunk) > 2 else 0
+        if out.shape != (len(vectors), 3):
+            raise ValueError(f"out must have shape ({len(vectors)}, 3) (one RGB value per vector), got {out.shape}")
+        if model is not None:
+            keep = vectors.model == model
+            seen_model |= bool(keep.any())
+            vectors, out = vectors.subset(keep), out[keep]
+        acc.add(vectors, out)
+    if model is not None and not seen_model:
+        raise ValueError(f"model: no rows of model {model!r}")
+    return acc.result(tolerance, skipped)
+
+
+__all__ = ["grade", "grade_chunks", "Grade", "DIAGNOSIS_ROWS", "REL_TOL", "ABS_TOL", "TOLERANCE_REASON", "NOT_EXPLAINED", "region_masks",
            "where_it_fails"]
