@@ -184,6 +184,14 @@ def region_masks(vectors) -> dict[str, np.ndarray]:
     return masks
 
 
+def _region_names():
+    names = ["all", "grazing (mu < 0.1)", "L.V < 0", "below the horizon"]
+    for lo, hi in ROUGHNESS_BINS:
+        names.append(f"roughness = {lo:g}" if lo == hi else f"roughness > {lo:g}" if math.isinf(hi)
+                     else f"roughness in ({lo:g}, {hi:g}]")
+    return names + ["dark (rho < 0.1)"]
+
+
 def _regions(vectors, row_e):
     out = []
     for name, m in region_masks(vectors).items():
@@ -420,7 +428,7 @@ class _Accumulator:
             worst=[t[2] for t in self.worst], n_rows=self.n, n_failed_rows=self.n_failed,
             max_rel_error=self.max_rel if self.finite else math.inf,
             max_normalised_error=self.max_norm, models=sorted(self.models), version=self.version,
-            regions=list(self.regions.values()), n_nan=self.n_nan, n_inf=self.n_inf, n_skipped=int(n_skipped))
+            regions=sorted(self.regions.values(), key=lambda r: _region_names().index(r["region"])), n_nan=self.n_nan, n_inf=self.n_inf, n_skipped=int(n_skipped))
         if passed:
             g.diagnosis_detail = "conforms: every value within the tolerance"
             return g
