@@ -5,14 +5,13 @@ formulas typed from the EON paper in plain NumPy) is diagnosed by name through t
 import json
 import math
 
+import _hand_impl as hand
 import numpy as np
 import pytest
 
 from openpbr_diffuse.cli.main import main
 from openpbr_diffuse.conformance.grade import NOT_EXPLAINED, grade
 from openpbr_diffuse.conformance.vectors import default_vectors, write_vectors
-
-import _hand_impl as hand
 
 V = default_vectors()
 
@@ -105,3 +104,16 @@ def test_regions_and_nonfinite_counts():
     assert {"nan", "inf", "fail"} <= statuses
     w = g.worst[0]
     assert {"wi", "wo", "mu_i", "mu_o", "ldotv", "roughness", "rho", "model", "expected", "got"} <= set(w)
+
+
+def test_check_text_names_nan_and_shows_inputs(tmp_path, capsys):
+    out = hand.answer(V, np.float64)
+    out[5, 1] = math.nan
+    out[40, 0] = math.inf
+    path = tmp_path / "r.csv"
+    write_vectors(V, path, out=out)
+    assert main(["check", str(path)]) == 1
+    text = capsys.readouterr().out
+    assert "NaN output" in text and "Inf output" in text and "infx" not in text
+    assert "1 NaN values, 1 Inf values" in text
+    assert "mu_i" in text and "L.V" in text and "by region" in text and "grazing (mu < 0.1)" in text

@@ -7,16 +7,20 @@ NumPy, independent of the library and of ``conformance.deviations``).
 import json
 import math
 
+import _hand_impl as hand
 import numpy as np
 import pytest
 
 from openpbr_diffuse.cli.main import main
 from openpbr_diffuse.conformance.deviations import DEVIATIONS, reference
 from openpbr_diffuse.conformance.grade import grade
-from openpbr_diffuse.conformance.vectors import (COLUMNS, OUT_COLUMNS, default_vectors, read_results,
-                                                 write_vectors)
-
-import _hand_impl as hand  # noqa: E402  (tests/ is on sys.path under pytest rootdir conftest)
+from openpbr_diffuse.conformance.vectors import (
+    COLUMNS,
+    OUT_COLUMNS,
+    default_vectors,
+    read_results,
+    write_vectors,
+)
 
 V = default_vectors()
 

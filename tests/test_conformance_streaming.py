@@ -7,15 +7,19 @@ import os
 import subprocess
 import sys
 
+import _hand_impl as hand
 import numpy as np
 import pytest
 
 from openpbr_diffuse.cli.main import main
 from openpbr_diffuse.conformance.grade import grade, grade_chunks
-from openpbr_diffuse.conformance.vectors import COLUMNS, OUT_COLUMNS, default_vectors, iter_results, read_results, \
-    write_vectors
-
-import _hand_impl as hand
+from openpbr_diffuse.conformance.vectors import (
+    COLUMNS,
+    default_vectors,
+    iter_results,
+    read_results,
+    write_vectors,
+)
 
 V = default_vectors()
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

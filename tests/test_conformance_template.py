@@ -9,7 +9,12 @@ import pytest
 
 from openpbr_diffuse.cli.main import main
 from openpbr_diffuse.conformance.deviations import reference
-from openpbr_diffuse.conformance.vectors import COLUMNS, OUT_COLUMNS, default_vectors, read_results
+from openpbr_diffuse.conformance.vectors import (
+    COLUMNS,
+    OUT_COLUMNS,
+    default_vectors,
+    read_results,
+)
 
 V = default_vectors()
 

@@ -43,8 +43,8 @@ Examples
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
@@ -97,7 +97,7 @@ def _predict(vectors, *, model_map=None, roughness_map=None, color_mode="referen
     return out
 
 
-def reference(vectors):
+def reference(vectors) -> np.ndarray:
     """The conforming result of every row (float64): ``evaluate`` / ``directional_albedo``."""
     return _predict(vectors)
 

@@ -281,7 +281,8 @@ def _diagnose(vectors, out, ref, e_ref, rel, ab):
     return None, NOT_EXPLAINED, candidates, details, fractions
 
 
-def grade(vectors, out, *, model=None, tolerance=None, n_skipped: int = 0) -> Grade:
+def grade(vectors, out: np.ndarray, *, model: str | None = None, tolerance: float | tuple | None = None,
+          n_skipped: int = 0) -> Grade:
     """Grade submitted values ``out`` (n, 3) for the rows of ``vectors``.
 
     Parameters
@@ -306,7 +307,6 @@ def grade(vectors, out, *, model=None, tolerance=None, n_skipped: int = 0) -> Gr
         ``diagnosis_detail`` then starts with :data:`NOT_EXPLAINED`); ``regions`` is the
         breakdown by region, ``n_nan`` / ``n_inf`` count non-finite values.
     """
-    from .deviations import reference
 
     rel, ab = _tolerance(tolerance)
     try:
@@ -446,7 +446,7 @@ class _Accumulator:
         return g
 
 
-def grade_chunks(chunks, *, model: str | None = None, tolerance=None) -> Grade:
+def grade_chunks(chunks, *, model: str | None = None, tolerance: float | tuple | None = None) -> Grade:
     """Grade ``(vectors, out[, n_skipped])`` chunks (e.g. :func:`.vectors.iter_results`) as one
     file: the same :class:`Grade` as :func:`grade` on the rows put together (the diagnosis is
     fitted on a sample of :data:`DIAGNOSIS_ROWS` rows when there are more); memory is bounded

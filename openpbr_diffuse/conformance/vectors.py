@@ -33,6 +33,7 @@ import io
 import json
 import math
 import re
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -449,7 +450,7 @@ def _own_row(rec, label):
 
 
 def iter_results(path: str | Path, vectors: VectorSet | None = None, *,
-                 chunk_rows: int = CHUNK_ROWS):
+                 chunk_rows: int = CHUNK_ROWS) -> Iterator[tuple[VectorSet, np.ndarray, int]]:
     """Read a submitted results file in chunks: yield ``(vectors_chunk, out, n_skipped)``.
 
     The rules are those of :func:`read_results`; a CSV file is read line by line, so memory
@@ -567,7 +568,8 @@ def _chunk(vectors, take, own, out):
     return VectorSet(ids.astype(str), kind.astype(str), model.astype(str), wi, wo, mu, rough, rho, vectors.version)
 
 
-def read_results(path: str | Path, vectors: VectorSet | None = None, *, with_skipped: bool = False):
+def read_results(path: str | Path, vectors: VectorSet | None = None, *,
+                 with_skipped: bool = False) -> tuple:
     """Read a submitted results file; return ``(vectors_subset, out)`` matched by id.
 
     ``vectors`` defaults to :func:`default_vectors`.  Every row must carry the columns
