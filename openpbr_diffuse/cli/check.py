@@ -68,7 +68,9 @@ def _print_text(g, path) -> None:
         print(f"  diagnosis: {g.diagnosis_detail}")
     print("  by region (rows failed / rows, max error in tolerances):")
     for r in g.regions:
-        print(f"    {r['region']:<28} {r['n_failed']:>6} / {r['n']:<6} max {_num(r['max_normalised_error'])}")
+        m = r["max_normalised_error"]
+        worst = "NaN/Inf output" if isinstance(m, float) and math.isinf(m) else _num(m)
+        print(f"    {r['region']:<28} {r['n_failed']:>6} / {r['n']:<6} max {worst}")
     if g.worst:
         print("  worst rows:")
         for w in g.worst:
