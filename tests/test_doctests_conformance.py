@@ -6,7 +6,7 @@ import pytest
 
 MODULES = ["openpbr_diffuse.conformance.vectors", "openpbr_diffuse.conformance.deviations",
            "openpbr_diffuse.sampling.quality", "openpbr_diffuse.report.render",
-           "openpbr_diffuse.conformance.grade"]
+           "openpbr_diffuse.conformance.grade", "openpbr_diffuse.conformance.templates"]
 
 
 @pytest.mark.parametrize("name", MODULES)

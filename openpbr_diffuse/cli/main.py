@@ -36,6 +36,7 @@ COMMANDS = {
     "eval": "eval",
     "render": "render",
     "simulate": "simulate",
+    "template": "template",
 }
 
 PROG = "openpbr-diffuse"

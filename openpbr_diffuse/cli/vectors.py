@@ -2,25 +2,34 @@
 
     openpbr-diffuse vectors --out vectors.csv      # CSV (JSON when the name ends in .json)
 
-Append ``out_r, out_g, out_b`` to every row (the BRDF value without the cosine factor, or
-the directional albedo) and grade the file with ``openpbr-diffuse check FILE``.
+Fill ``out_r, out_g, out_b`` of the rows to grade (the BRDF value without the cosine factor,
+or the directional albedo; rows left blank are skipped) and grade the file with
+``openpbr-diffuse check FILE``.  An existing file is not replaced without ``--force``.
 """
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
 from ..conformance.vectors import COLUMNS, OUT_COLUMNS, default_vectors, write_vectors
 
 
-def add_parser(subparsers):
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p = subparsers.add_parser("vectors", help="write the conformance test vectors (CSV or JSON)",
                               description=__doc__.splitlines()[0].strip("`").replace("``", ""))
     p.add_argument("--out", required=True, metavar="FILE", help="output file (.csv, or .json)")
+    p.add_argument("--force", action="store_true", help="replace FILE if it exists")
     p.set_defaults(run=run)
     return p
 
 
-def run(args):
+def run(args: argparse.Namespace) -> int:
+    if Path(args.out).exists() and not args.force:
+        raise ValueError(f"{args.out} exists: not overwritten (use --force to replace it)")
     v = default_vectors()
-    path = write_vectors(v, args.out)
+    path = write_vectors(v, args.out, blank_out=True)
     print(f"wrote {len(v)} vectors (version {v.version}) to {path}; columns {', '.join(COLUMNS)}; "
-          f"append {', '.join(OUT_COLUMNS)} and run: openpbr-diffuse check {path}")
+          f"fill {', '.join(OUT_COLUMNS)} (blank rows are skipped) and run: openpbr-diffuse check {path}")
     return 0
 
 

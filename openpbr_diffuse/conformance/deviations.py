@@ -43,8 +43,8 @@ Examples
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
@@ -58,7 +58,8 @@ def _roughness_of(vectors):
     return np.where(np.isnan(vectors.roughness), 0.0, vectors.roughness)
 
 
-def _predict(vectors, *, model_map=None, roughness_map=None, color_mode="reference", wi=None):
+def _predict(vectors, *, model_map=None, roughness_map=None, color_mode="reference", wi=None, wo=None,
+             rho=None, mu=None):
     """Evaluate the library for every row: (n, 3).
 
     ``model_map``: {vector model: model used}; ``roughness_map(model_used, roughness)`` ->
@@ -70,6 +71,9 @@ def _predict(vectors, *, model_map=None, roughness_map=None, color_mode="referen
     n = len(vectors)
     out = np.zeros((n, 3))
     wi = vectors.wi if wi is None else wi
+    wo = vectors.wo if wo is None else wo
+    rho = vectors.rho if rho is None else rho
+    mu = vectors.mu if mu is None else mu
     rough = _roughness_of(vectors)
     for name in np.unique(vectors.model):
         used = (model_map or {}).get(str(name), str(name))
@@ -86,14 +90,14 @@ def _predict(vectors, *, model_map=None, roughness_map=None, color_mode="referen
         alb = sel & (vectors.kind == "albedo")
         kb, ka = vectors.kind[sel] == "brdf", vectors.kind[sel] == "albedo"
         if brdf.any():
-            out[brdf] = evaluate(used, wi[brdf], vectors.wo[brdf], r[kb], vectors.rho[brdf], color_mode=color_mode)
+            out[brdf] = evaluate(used, wi[brdf], wo[brdf], r[kb], rho[brdf], color_mode=color_mode)
         if alb.any():
-            out[alb] = directional_albedo(used, vectors.mu[alb], r[ka], vectors.rho[alb], color_mode=color_mode)
+            out[alb] = directional_albedo(used, mu[alb], r[ka], rho[alb], color_mode=color_mode)
         out[np.flatnonzero(sel)[outside]] = np.nan  # beyond the model's domain: no prediction
     return out
 
 
-def reference(vectors):
+def reference(vectors) -> np.ndarray:
     """The conforming result of every row (float64): ``evaluate`` / ``directional_albedo``."""
     return _predict(vectors)
 
@@ -198,6 +202,208 @@ def _sqrt(info, x):
     return _HALF_PI * np.sqrt(x / _HALF_PI)
 
 
+def _ms_scaled_brdf(scale):
+    """f_ms scaled in the BRDF rows only (the albedo computed by a separate, right formula)."""
+    def predict(vectors):
+        out = _ms_scaled(vectors, lambda rho: scale)
+        alb = vectors.kind == "albedo"
+        out[alb] = reference(vectors.subset(alb))
+        return out
+
+    return predict
+
+
+def _ms_times_pi(vectors):
+    return _ms_scaled(vectors, lambda rho: math.pi)
+
+
+def _divided_by_cos(vectors):
+    """The BRDF divided by cos(theta_i) (a cosine "divided out" twice)."""
+    out = reference(vectors)
+    brdf = vectors.kind == "brdf"
+    with np.errstate(divide="ignore", invalid="ignore"):
+        mu_i = vectors.wi[brdf, 2]
+        out[brdf] = np.where((mu_i > 0)[:, None], out[brdf] / np.where(mu_i > 0, mu_i, 1.0)[:, None], 0.0)
+    return out
+
+
+def _degrees(info, x):
+    """A value in radians (or r) converted as if it were degrees."""
+    return x * (math.pi / 180.0)
+
+
+def _radians_to_degrees(info, x):
+    return x * (180.0 / math.pi)
+
+
+def srgb_encode(x: np.ndarray) -> np.ndarray:
+    """The sRGB transfer function (IEC 61966-2-1): linear -> encoded.
+
+    >>> round(float(srgb_encode(np.array(0.5))), 5)
+    0.73536
+    """
+    x = np.asarray(x, dtype=np.float64)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(np.maximum(x, 0.0), 1.0 / 2.4) - 0.055)
+
+
+def srgb_decode(x: np.ndarray) -> np.ndarray:
+    """The inverse sRGB transfer function (IEC 61966-2-1): encoded -> linear.
+
+    >>> round(float(srgb_decode(np.array(0.5))), 5)
+    0.21404
+    """
+    x = np.asarray(x, dtype=np.float64)
+    return np.where(x <= 0.04045, x / 12.92, np.power((np.maximum(x, 0.0) + 0.055) / 1.055, 2.4))
+
+
+def _rho_mapped(fn):
+    def predict(vectors):
+        return _predict(vectors, rho=fn(vectors.rho))
+
+    return predict
+
+
+def _lambert_for_eon(vectors):
+    return _predict(vectors, model_map={m: "lambert" for m in _EON_MODELS})
+
+
+def _predict_qon_scaled(vectors):
+    out = reference(vectors)
+    eon = np.isin(vectors.model, _EON_MODELS)
+    if eon.any():
+        sub = vectors.subset(eon)
+        sub = type(sub)(sub.id, sub.kind, np.full(len(sub), "qon"), sub.wi, sub.wo, sub.mu,
+                        np.minimum(_roughness_of(sub) * _HALF_PI, _HALF_PI), sub.rho, sub.version)
+        out[eon] = _predict(sub)
+    return out
+
+
+def _eq14(listing_albedo):
+    """EON rows computed with the Eq. 14 fit of E_F.  The albedo rows: Listing 1's
+    E_EON(exact = false) = rho E_F~ + rho_ms (1 - E_F~) (``listing_albedo``), or the
+    exact albedo of the approximate lobe."""
+    def predict(vectors):
+        from ..models.eon import rho_ms
+        from ..models.fon import E_F_approx, E_F_avg
+
+        out = _predict(vectors, model_map={"eon": "eon_approx"})
+        alb = (vectors.kind == "albedo") & (vectors.model == "eon")
+        if listing_albedo and alb.any():
+            r = _roughness_of(vectors)[alb]
+            ef = np.vectorize(E_F_approx, otypes=[float])(vectors.mu[alb], r)[:, None]
+            avg = np.vectorize(E_F_avg, otypes=[float])(r)[:, None]
+            rho = vectors.rho[alb]
+            out[alb] = rho * ef + np.vectorize(rho_ms, otypes=[float])(rho, avg) * (1.0 - ef)
+        return out
+
+    return predict
+
+
+def _mu_floor_predict(vectors, floor):
+    """mu_i, mu_o (and the albedo's mu) raised to ``floor`` while L.V is kept: the
+    directions are rebuilt with z = max(mu, floor) and the azimuth that gives the
+    implementation's s = L.V - mu_i' mu_o'."""
+    wi, wo = vectors.wi.copy(), vectors.wo.copy()
+    brdf = vectors.kind == "brdf"
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ldotv = np.einsum("ij,ij->i", vectors.wi, vectors.wo)
+        up = brdf & (vectors.wi[:, 2] > 0) & (vectors.wo[:, 2] > 0) & (
+            (vectors.wi[:, 2] < floor) | (vectors.wo[:, 2] < floor))
+        mi = np.maximum(vectors.wi[:, 2], floor)
+        mo = np.maximum(vectors.wo[:, 2], floor)
+        si, so = np.sqrt(np.maximum(0.0, 1.0 - mi * mi)), np.sqrt(np.maximum(0.0, 1.0 - mo * mo))
+        s_new = ldotv - mi * mo
+        cos_dphi = s_new / np.where(si * so > 0, si * so, 1.0)
+        # no direction pair has these mu and this L.V: no prediction for that row
+        infeasible = up & ((np.abs(cos_dphi) > 1.0 + 1e-12) | (si * so == 0))
+        dphi = np.arccos(np.clip(cos_dphi, -1.0, 1.0))
+    new_wo = np.stack([so, np.zeros_like(so), mo], axis=-1)
+    new_wi = np.stack([si * np.cos(dphi), si * np.sin(dphi), mi], axis=-1)
+    wi[up], wo[up] = new_wi[up], new_wo[up]
+    mu = np.where(vectors.kind == "albedo", np.maximum(vectors.mu, floor), vectors.mu)
+    out = _predict(vectors, wi=wi, wo=wo, mu=mu)
+    out[infeasible] = np.nan
+    return out
+
+
+class Fitted:
+    """A deviation variant with one fitted parameter: ``fit(vectors, out, ref, weight)``
+    returns (parameter, prediction); ``label(parameter)`` describes it; calling it with
+    ``vectors`` alone predicts at ``default``."""
+
+    def __init__(self, fit: Callable, predict: Callable, label: Callable, default: float):
+        self.fit, self.predict, self.label, self.default = fit, predict, label, default
+
+    def __call__(self, vectors):
+        return self.predict(vectors, self.default)
+
+
+_NAMED_FACTORS = ((math.pi, "1/pi forgotten"), (1.0 / math.pi, "an extra 1/pi"), (2.0, "x 2"),
+                  (0.5, "x 1/2"), (2.0 * math.pi, "1/(2 pi) forgotten"), (1.0 / (2.0 * math.pi), "an extra 1/(2 pi)"),
+                  (4.0 * math.pi, "1/(4 pi) forgotten"))
+
+
+def factor_name(k: float) -> str:
+    """The sentence for a fitted constant factor.
+
+    >>> factor_name(3.14159)
+    'every value x 3.1416 (1/pi forgotten)'
+    """
+    for value, why in _NAMED_FACTORS:
+        if abs(k - value) <= 2e-4 * value:
+            return f"every value x {k:.5g} ({why})"
+    return f"every value x {k:.5g}"
+
+
+def _scale_predict(kinds):
+    def predict(vectors, k):
+        out = reference(vectors)
+        sel = np.isin(vectors.kind, kinds)
+        out[sel] *= k
+        return out
+
+    return predict
+
+
+def _scale_fit(kinds):
+    predict = _scale_predict(kinds)
+
+    def fit(vectors, out, ref, weight):
+        sel = np.isin(vectors.kind, kinds)[:, None] & np.isfinite(out) & np.isfinite(ref)
+        w2 = np.where(sel, weight, 0.0) ** 2
+        den = float(np.sum(w2 * ref * ref))
+        k = float(np.sum(w2 * np.where(sel, out, 0.0) * ref) / den) if den > 0 else 1.0
+        if not math.isfinite(k):
+            k = 1.0
+        return k, predict(vectors, k)
+
+    return fit, predict
+
+
+def _floor_fit(vectors, out, ref, weight):
+    """The floor that matches the most values (a grid in log mu, then the best cell refined)."""
+    mus = np.concatenate([vectors.wi[:, 2], vectors.wo[:, 2], vectors.mu])
+    mus = mus[np.isfinite(mus) & (mus > 0) & (mus < 0.5)]
+    if mus.size == 0:
+        return 0.0, ref.copy()
+
+    def score(m):  # a robust residual, continuous in m (capped per value at 1e3 tolerances)
+        e = np.abs(out - _mu_floor_predict(vectors, m)) * weight
+        return float(np.sum(np.minimum(np.where(np.isfinite(e), e, 1e3), 1e3) ** 2))
+
+    grid = np.geomspace(1e-4, 0.3, 60)
+    k = int(np.argmin([score(m) for m in grid]))
+    lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
+    for _ in range(40):  # golden-section inside the best cells
+        a, b = lo + 0.382 * (hi - lo), lo + 0.618 * (hi - lo)
+        if score(a) <= score(b):
+            hi = b
+        else:
+            lo = a
+    m = 0.5 * (lo + hi)
+    return float(m), _mu_floor_predict(vectors, m)
+
+
 @dataclass(frozen=True)
 class Deviation:
     """A known deviation: ``variants`` is a tuple of (label, predictor); calling the
@@ -208,13 +414,14 @@ class Deviation:
     source: str
     variants: tuple[tuple[str, Callable], ...]
 
-    def __call__(self, vectors):
+    def __call__(self, vectors) -> np.ndarray:
         return self.variants[0][1](vectors)
 
 
 _TABLE = (
     ("no_energy_compensation_qon", "QON (sigma = the given r) instead of EON: no energy compensation",
-     "MaterialX OSL backend (ignores energy_compensation)", (("qon with sigma = r", _no_ec("qon")),)),
+     "MaterialX OSL backend (ignores energy_compensation)",
+     (("qon with sigma = r", _no_ec("qon")), ("qon with sigma = r pi/2", _predict_qon_scaled))),
     ("no_energy_compensation_fon", "FON instead of EON: the single-scattering lobe without f_ms",
      "EON without its Eq. 16-19 compensation term", (("fon", _no_ec("fon")),)),
     ("rho_ms_extra_inv_pi", "rho_ms with an extra 1/pi in f_ms (white furnace fails)",
@@ -236,9 +443,33 @@ _TABLE = (
      (("r' = r^2 (sigma normalised to [0, 1])", _rough(_squared)),
       ("sigma' = sigma^2 (radians)", _rough(_squared_radians)),
       ("r' = sqrt(r)", _rough(_sqrt)))),
+    ("no_energy_compensation_lambert", "Lambert instead of EON: rho/pi, no roughness",
+     "EON rows answered by a Lambertian lobe", (("lambert", _lambert_for_eon),)),
+    ("eq14_fit_for_exact", "the Eq. 14 fit of E_F where the exact E_F (Eq. 12-13) is claimed",
+     "Listing 1 with exact = false: grade such code as eon_approx (fill the eon_approx rows, "
+     "check --model eon_approx)",
+     (("E_F~ in f_ms, Listing 1 albedo", _eq14(True)), ("E_F~ in f_ms, the lobe's albedo", _eq14(False)))),
+    ("constant_factor", "every value multiplied by a constant factor", "a 1/pi forgotten or added, a factor 2",
+     (("{}", Fitted(_scale_fit(("brdf", "albedo"))[0], _scale_predict(("brdf", "albedo")), factor_name,
+                    math.pi)),
+      ("{} (BRDF rows only)", Fitted(_scale_fit(("brdf",))[0], _scale_predict(("brdf",)),
+                                     lambda k: factor_name(k).replace("every value", "every BRDF value"),
+                                     math.pi)))),
+    ("ms_missing_inv_pi", "f_ms without its 1/pi (multiple scattering x pi)", "Eq. 17 with the 1/pi dropped",
+     (("f_ms x pi", _ms_times_pi), ("f_ms x pi, albedo right", _ms_scaled_brdf(math.pi)))),
+    ("divided_by_cos_theta_i", "the BRDF divided by cos(theta_i) (the cosine divided out)",
+     "a cosine removed that was never in f", (("f / mu_i", _divided_by_cos),)),
+    ("roughness_degrees", "roughness converted between degrees and radians",
+     "a radians value read as degrees (or the reverse)",
+     (("x' = x pi/180", _rough(_degrees)), ("x' = x 180/pi", _rough(_radians_to_degrees)))),
+    ("rho_srgb_encoded", "rho used sRGB-encoded instead of linear",
+     "a colour texture or swatch read without (or with a second) sRGB decode",
+     (("rho' = srgb_encode(rho)", _rho_mapped(srgb_encode)), ("rho' = srgb_decode(rho)", _rho_mapped(srgb_decode)))),
+    ("mu_floor", "mu_i, mu_o clamped at a floor", "max(mu, floor) against grazing division",
+     (("mu' = max(mu, {:.4g})", Fitted(_floor_fit, _mu_floor_predict, lambda m: f"mu' = max(mu, {m:.4g})", 0.01)),)),
 )
 
 #: name -> Deviation (predictor of such an implementation's output).
 DEVIATIONS = {name: Deviation(name, desc, src, variants) for name, desc, src, variants in _TABLE}
 
-__all__ = ["DEVIATIONS", "Deviation", "reference", "LDOTV_EPS"]
+__all__ = ["DEVIATIONS", "Deviation", "Fitted", "reference", "LDOTV_EPS", "srgb_encode", "srgb_decode", "factor_name"]

@@ -48,6 +48,8 @@ TOLERANCE_REASON = (
 #: A deviation is diagnosed when it matches (within the tolerance) at least this fraction
 #: of the values that fail against the reference, and of all graded values.
 EXPLAIN_FRACTION = 0.9
+#: The diagnosis when no known deviation explains a failure (exactly this sentence).
+NOT_EXPLAINED = "no known deviation explains this"
 #: How many of the worst rows are listed.
 N_WORST = 10
 
@@ -86,6 +88,11 @@ class Grade:
     max_normalised_error: float = 0.0
     models: list = field(default_factory=list)
     version: str = ""
+    regions: list = field(default_factory=list)
+    n_nan: int = 0
+    n_inf: int = 0
+    n_skipped: int = 0
+    candidate_match_fractions: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         return json_safe({
@@ -95,7 +102,9 @@ class Grade:
             "rms_error": self.rms_error, "max_normalised_error": self.max_normalised_error,
             "tolerance": self.tolerance, "tolerance_reason": self.tolerance_reason,
             "worst": self.worst, "diagnosis": self.diagnosis, "diagnosis_detail": self.diagnosis_detail,
-            "candidates": self.candidates, "candidate_details": self.candidate_details})
+            "candidates": self.candidates, "candidate_details": self.candidate_details,
+            "regions": self.regions, "n_nan": self.n_nan, "n_inf": self.n_inf, "n_skipped": self.n_skipped,
+            "candidate_match_fractions": self.candidate_match_fractions})
 
 
 def _tolerance(tolerance):
@@ -125,57 +134,155 @@ def _row(vectors, i, ref, out, e):
     def num(x):
         return None if math.isnan(float(x)) else float(x)
 
+    brdf = str(vectors.kind[i]) == "brdf"
+    got = out[i]
+    if np.isnan(got).any():
+        status = "nan"
+    elif np.isinf(got).any():
+        status = "inf"
+    else:
+        status = "fail" if e[i].max() > 1.0 else "ok"
     return {"id": str(vectors.id[i]), "kind": str(vectors.kind[i]), "model": str(vectors.model[i]),
             "wi": vec(vectors.wi[i]), "wo": vec(vectors.wo[i]), "mu": num(vectors.mu[i]),
+            "mu_i": float(vectors.wi[i, 2]) if brdf else None,
+            "mu_o": float(vectors.wo[i, 2]) if brdf else num(vectors.mu[i]),
+            "ldotv": float(vectors.wi[i] @ vectors.wo[i]) if brdf else None,
             "roughness": num(vectors.roughness[i]), "rho": vec(vectors.rho[i]),
-            "expected": [float(x) for x in ref[i]], "got": [float(x) for x in out[i]],
-            "abs_error": float(np.max(np.abs(out[i] - ref[i]))) if np.isfinite(out[i]).all() else math.inf,
+            "expected": [float(x) for x in ref[i]], "got": [float(x) for x in got], "status": status,
+            "abs_error": float(np.max(np.abs(got - ref[i]))) if np.isfinite(got).all() else math.inf,
             "normalised_error": float(e[i].max())}
 
 
+#: Roughness bins of the region breakdown (the value as given: r, or sigma in radians).
+ROUGHNESS_BINS = ((0.0, 0.0), (0.0, 0.25), (0.25, 0.5), (0.5, 1.0), (1.0, math.inf))
+
+
+def region_masks(vectors) -> dict[str, np.ndarray]:
+    """{region name: (n,) bool mask} of the breakdown by region.
+
+    >>> from openpbr_diffuse.conformance.vectors import default_vectors
+    >>> sorted(region_masks(default_vectors()))[:2]
+    ['L.V < 0', 'all']
+    """
+    brdf = vectors.kind == "brdf"
+    with np.errstate(invalid="ignore"):
+        mu_min = np.where(brdf, np.minimum(vectors.wi[:, 2], vectors.wo[:, 2]), vectors.mu)
+        ldotv = np.einsum("ij,ij->i", vectors.wi, vectors.wo)
+        masks = {"all": np.ones(len(vectors), bool),
+                 "grazing (mu < 0.1)": (mu_min > 0) & (mu_min < 0.1),
+                 "L.V < 0": brdf & (ldotv < 0) & (vectors.wi[:, 2] > 0) & (vectors.wo[:, 2] > 0),
+                 "below the horizon": brdf & ((vectors.wi[:, 2] <= 0) | (vectors.wo[:, 2] <= 0))}
+        r = vectors.roughness
+        for lo, hi in ROUGHNESS_BINS:
+            if lo == hi:
+                masks[f"roughness = {lo:g}"] = r == lo
+            elif math.isinf(hi):
+                masks[f"roughness > {lo:g}"] = r > lo
+            else:
+                masks[f"roughness in ({lo:g}, {hi:g}]"] = (r > lo) & (r <= hi)
+        masks["dark (rho < 0.1)"] = (vectors.rho < 0.1).any(axis=1)
+    return masks
+
+
+def _region_names():
+    names = ["all", "grazing (mu < 0.1)", "L.V < 0", "below the horizon"]
+    for lo, hi in ROUGHNESS_BINS:
+        names.append(f"roughness = {lo:g}" if lo == hi else f"roughness > {lo:g}" if math.isinf(hi)
+                     else f"roughness in ({lo:g}, {hi:g}]")
+    return names + ["dark (rho < 0.1)"]
+
+
+def _regions(vectors, row_e):
+    out = []
+    for name, m in region_masks(vectors).items():
+        n = int(m.sum())
+        if n == 0:
+            continue
+        out.append({"region": name, "n": n, "n_failed": int((row_e[m] > 1.0).sum()),
+                    "max_normalised_error": float(row_e[m].max())})
+    return out
+
+
+def where_it_fails(regions: list[dict]) -> str:
+    """One sentence: the regions with failures, worst first ("" when nothing fails)."""
+    bad = sorted((r for r in regions if r["n_failed"] and r["region"] != "all"),
+                 key=lambda r: -r["n_failed"] / r["n"])
+    parts = [f"{r['region']}: {r['n_failed']}/{r['n']} rows" for r in bad]
+    return "fails in " + "; ".join(parts) if parts else ""
+
+
+def _swapped(vectors):
+    """The rows with wi and wo exchanged (an implementation that swapped its arguments)."""
+    return type(vectors)(vectors.id, vectors.kind, vectors.model, vectors.wo, vectors.wi, vectors.mu,
+                         vectors.roughness, vectors.rho, vectors.version)
+
+
+def _variants(vectors, out, ref, rel, ab):
+    """Yield (name, label, prediction) of every deviation variant (fitted ones fitted to
+    ``out``; fixed, non-reciprocal ones also with wi and wo swapped)."""
+    from .deviations import DEVIATIONS, Fitted
+
+    weight = 1.0 / (ab + rel * np.abs(ref))
+    swapped = None
+    for name, dev in DEVIATIONS.items():
+        for label, predictor in dev.variants:
+            if isinstance(predictor, Fitted):
+                param, pred = predictor.fit(vectors, out, ref, weight)
+                yield name, predictor.label(param), pred
+                continue
+            pred = predictor(vectors)
+            yield name, label, pred
+            if not (vectors.kind == "brdf").any():
+                continue
+            swapped = _swapped(vectors) if swapped is None else swapped
+            pred_s = predictor(swapped)
+            both = np.isfinite(pred) & np.isfinite(pred_s)
+            if (_normalised(pred_s, pred, rel, ab)[both] > 1.0).any():
+                yield f"{name}+wi_wo_swapped", f"{label}, with wi and wo swapped", pred_s
+
+
 def _diagnose(vectors, out, ref, e_ref, rel, ab):
-    """Fit every deviation variant; (name, detail, {name: residual}, {name: details})."""
+    """Fit every deviation variant: (name or None, detail, {name: residual}, {name: details},
+    {name: fraction of the failing values it matches})."""
     from .deviations import DEVIATIONS
 
     failing = e_ref > 1.0
     n_fail = int(failing.sum())
-    candidates, details = {}, {}
+    candidates, details, fractions = {}, {}, {}
     best = None
-    for name, dev in DEVIATIONS.items():
-        best_v = None
-        for label, predictor in dev.variants:
-            pred = predictor(vectors)
-            known = np.isfinite(pred)  # NaN: the deviation makes no prediction there
-            if known.mean() < 0.5 or not (_normalised(pred, ref, rel, ab)[known] > 1.0).any():
-                continue  # indistinguishable from the reference on these rows
-            e = _normalised(out, pred, rel, ab)
-            fk = failing & known
-            explained = float((e[fk] <= 1.0).mean()) if fk.any() else 0.0
-            overall = float((e[known] <= 1.0).mean())
-            residual = float(np.sqrt(np.mean(np.minimum(e[known], 1e6) ** 2)))
-            key = (explained, overall, -residual)
-            if best_v is None or key > best_v[0]:
-                best_v = (key, label, explained, overall, residual)
-        if best_v is None:
-            details[name] = {"distinguishable": False}
-            continue
-        key, label, explained, overall, residual = best_v
-        candidates[name] = residual
-        details[name] = {"distinguishable": True, "variant": label, "explained_fraction": explained,
-                         "matching_fraction": overall, "residual": residual}
+    for name, label, pred in _variants(vectors, out, ref, rel, ab):
+        known = np.isfinite(pred)  # NaN: the deviation makes no prediction there
+        if known.mean() < 0.5 or not (_normalised(pred, ref, rel, ab)[known] > 1.0).any():
+            details.setdefault(name, {"distinguishable": False})
+            continue  # indistinguishable from the reference on these rows
+        e = _normalised(out, pred, rel, ab)
+        fk = failing & known
+        explained = float((e[fk] <= 1.0).mean()) if fk.any() else 0.0
+        overall = float((e[known] <= 1.0).mean())
+        residual = float(np.sqrt(np.mean(np.minimum(e[known], 1e6) ** 2)))
+        key = (explained, overall, -residual)
+        prev = details.get(name)
+        if prev is None or not prev.get("distinguishable") or key > prev["_key"]:
+            details[name] = {"distinguishable": True, "variant": label, "explained_fraction": explained,
+                             "matching_fraction": overall, "residual": residual, "_key": key}
+            candidates[name] = residual
+            fractions[name] = explained
         if best is None or key > best[0]:
             best = (key, name, label, explained, overall)
-    if best is None:
-        return None, "no known deviation is distinguishable from the reference on these rows", candidates, details
-    _, name, label, explained, overall = best
-    text = (f"{name} ({label}): matches {explained:.0%} of the {n_fail} failing values and "
-            f"{overall:.0%} of all values within the tolerance")
-    if explained >= EXPLAIN_FRACTION and overall >= EXPLAIN_FRACTION:
-        return name, f"{DEVIATIONS[name].description} [{DEVIATIONS[name].source}]: {text}", candidates, details
-    return None, f"no known deviation explains the failure; closest: {text}", candidates, details
+    for d in details.values():
+        d.pop("_key", None)
+    if best is not None:
+        _, name, label, explained, overall = best
+        if explained >= EXPLAIN_FRACTION and overall >= EXPLAIN_FRACTION:
+            dev = DEVIATIONS[name.split("+")[0]]
+            text = (f"{dev.description} [{dev.source}]: {label}; matches {explained:.0%} of the {n_fail} "
+                    f"failing values and {overall:.0%} of all values within the tolerance")
+            return name, text, candidates, details, fractions
+    return None, NOT_EXPLAINED, candidates, details, fractions
 
 
-def grade(vectors, out, *, model=None, tolerance=None) -> Grade:
+def grade(vectors, out: np.ndarray, *, model: str | None = None, tolerance: float | tuple | None = None,
+          n_skipped: int = 0) -> Grade:
     """Grade submitted values ``out`` (n, 3) for the rows of ``vectors``.
 
     Parameters
@@ -189,14 +296,17 @@ def grade(vectors, out, *, model=None, tolerance=None) -> Grade:
     tolerance : None, float or (float, float)
         None: the stated default (``REL_TOL``, ``ABS_TOL``); a float: relative tolerance
         (absolute stays ``ABS_TOL``); a pair: (relative, absolute).
+    n_skipped : int
+        Rows of the file left blank (not graded; reported as ``n_skipped``).
 
     Returns
     -------
     Grade
         ``passed`` when every value is within the tolerance; ``diagnosis`` names the known
-        deviation that explains a failure (None when it conforms or nothing fits).
+        deviation that explains a failure (None when it conforms or nothing explains it:
+        ``diagnosis_detail`` then starts with :data:`NOT_EXPLAINED`); ``regions`` is the
+        breakdown by region, ``n_nan`` / ``n_inf`` count non-finite values.
     """
-    from .deviations import reference
 
     rel, ab = _tolerance(tolerance)
     try:
@@ -212,31 +322,163 @@ def grade(vectors, out, *, model=None, tolerance=None) -> Grade:
         vectors, out = vectors.subset(keep), out[keep]
     if len(vectors) == 0:
         raise ValueError("vectors: nothing to grade (0 rows)")
-    ref = reference(vectors)
-    e = _normalised(out, ref, rel, ab)
-    with np.errstate(invalid="ignore", over="ignore"):
-        diff = np.abs(out - ref)
-        rel_err = diff / np.maximum(np.abs(ref), 1e-300)
-    finite = np.isfinite(out).all()
-    row_e = e.max(axis=1)
-    passed = bool(finite and row_e.max() <= 1.0)
-    order = np.argsort(-row_e, kind="stable")[:N_WORST]
-    worst = [_row(vectors, int(i), ref, out, e) for i in order if row_e[i] > 0]
-    g = Grade(
-        passed=passed,
-        max_abs_error=float(np.max(diff)) if finite else math.inf,
-        rms_error=float(np.sqrt(np.mean(diff ** 2))) if finite else math.inf,
-        tolerance={"relative": rel, "absolute": ab, "rule": "|out - ref| <= absolute + relative |ref|"},
-        tolerance_reason=TOLERANCE_REASON if tolerance is None else "tolerance given by the caller",
-        worst=worst, n_rows=len(vectors), n_failed_rows=int((row_e > 1.0).sum()),
-        max_rel_error=float(np.max(np.where(np.abs(ref) > 0, rel_err, np.where(diff > 0, math.inf, 0.0)))),
-        max_normalised_error=float(row_e.max()), models=sorted(set(map(str, vectors.model))),
-        version=vectors.version)
-    if not passed:
-        g.diagnosis, g.diagnosis_detail, g.candidates, g.candidate_details = _diagnose(vectors, out, ref, e, rel, ab)
-    else:
-        g.diagnosis_detail = "conforms: every value within the tolerance"
-    return g
+    acc = _Accumulator(rel, ab)
+    acc.add(vectors, out)
+    return acc.result(tolerance, n_skipped)
 
 
-__all__ = ["grade", "Grade", "REL_TOL", "ABS_TOL", "TOLERANCE_REASON"]
+#: The diagnosis fits at most this many rows (a seeded sample chosen by row position when a
+#: streamed file has more; every row otherwise).
+DIAGNOSIS_ROWS = 50_000
+
+
+def _row_keys(start, n):
+    """A pseudo-random key per global row position (splitmix64): the diagnosis sample is the
+    rows with the smallest keys, the same whatever the chunking."""
+    x = (np.arange(start, start + n, dtype=np.uint64) + np.uint64(0x9E3779B97F4A7C15))
+    with np.errstate(over="ignore"):
+        x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return x ^ (x >> np.uint64(31))
+
+
+def _concat(parts):
+    from .vectors import VectorSet
+
+    return VectorSet(*(np.concatenate([getattr(v, f) for v in parts]) for f in
+                       ("id", "kind", "model", "wi", "wo", "mu", "roughness", "rho")), version=parts[0].version)
+
+
+class _Accumulator:
+    """Grade chunk by chunk: totals, regions, worst rows and a bounded sample for the diagnosis."""
+
+    def __init__(self, rel, ab):
+        self.rel, self.ab = rel, ab
+        self.n = self.n_failed = self.n_nan = self.n_inf = self.n_values = 0
+        self.max_abs = self.max_rel = self.max_norm = 0.0
+        self.sum_sq = 0.0
+        self.finite = True
+        self.models, self.version = set(), ""
+        self.regions = {}
+        self.worst = []  # (-row_e, position, row dict)
+        self.sample = None  # (keys, positions, vectors, out)
+
+    def add(self, vectors, out):
+        from .deviations import reference
+
+        if len(vectors) == 0:
+            return
+        rel, ab = self.rel, self.ab
+        ref = reference(vectors)
+        e = _normalised(out, ref, rel, ab)
+        with np.errstate(invalid="ignore", over="ignore"):
+            diff = np.abs(out - ref)
+            rel_err = diff / np.maximum(np.abs(ref), 1e-300)
+        finite = bool(np.isfinite(out).all())
+        row_e = e.max(axis=1)
+        start = self.n
+        self.n += len(vectors)
+        self.version = vectors.version
+        self.models |= set(map(str, np.unique(vectors.model)))
+        self.n_failed += int((row_e > 1.0).sum())
+        self.n_nan += int(np.isnan(out).sum())
+        self.n_inf += int(np.isinf(out).sum())
+        self.finite &= finite
+        self.max_norm = max(self.max_norm, float(row_e.max()))
+        if self.finite:
+            self.max_abs = max(self.max_abs, float(np.max(diff)))
+            self.sum_sq += float(np.sum(diff ** 2))
+            self.n_values += diff.size
+            self.max_rel = max(self.max_rel, float(np.max(np.where(np.abs(ref) > 0, rel_err,
+                                                                   np.where(diff > 0, math.inf, 0.0)))))
+        for r in _regions(vectors, row_e):
+            t = self.regions.setdefault(r["region"], {"region": r["region"], "n": 0, "n_failed": 0,
+                                                       "max_normalised_error": 0.0})
+            t["n"] += r["n"]
+            t["n_failed"] += r["n_failed"]
+            t["max_normalised_error"] = max(t["max_normalised_error"], r["max_normalised_error"])
+        order = np.argsort(-row_e, kind="stable")[:N_WORST]
+        self.worst += [(-float(row_e[i]), start + int(i), _row(vectors, int(i), ref, out, e))
+                       for i in order if row_e[i] > 0]
+        self.worst = sorted(self.worst, key=lambda t: (t[0], t[1]))[:N_WORST]
+        keys = _row_keys(start, len(vectors))
+        pos = np.arange(start, start + len(vectors))
+        if self.sample is not None:
+            k0, p0, v0, o0 = self.sample
+            keys, pos = np.concatenate([k0, keys]), np.concatenate([p0, pos])
+            vectors, out = _concat([v0, vectors]), np.concatenate([o0, out])
+        if len(keys) > DIAGNOSIS_ROWS:
+            keep = np.sort(np.argsort(keys, kind="stable")[:DIAGNOSIS_ROWS])
+            keys, pos, vectors, out = keys[keep], pos[keep], vectors.subset(keep), out[keep]
+        self.sample = (keys, pos, vectors, out)
+
+    def result(self, tolerance, n_skipped):
+        from .deviations import reference
+
+        if self.n == 0:
+            raise ValueError("vectors: nothing to grade (0 rows)")
+        rel, ab = self.rel, self.ab
+        passed = bool(self.finite and self.max_norm <= 1.0)
+        g = Grade(
+            passed=passed,
+            max_abs_error=self.max_abs if self.finite else math.inf,
+            rms_error=math.sqrt(self.sum_sq / self.n_values) if self.finite else math.inf,
+            tolerance={"relative": rel, "absolute": ab, "rule": "|out - ref| <= absolute + relative |ref|"},
+            tolerance_reason=TOLERANCE_REASON if tolerance is None else "tolerance given by the caller",
+            worst=[t[2] for t in self.worst], n_rows=self.n, n_failed_rows=self.n_failed,
+            max_rel_error=self.max_rel if self.finite else math.inf,
+            max_normalised_error=self.max_norm, models=sorted(self.models), version=self.version,
+            regions=sorted(self.regions.values(), key=lambda r: _region_names().index(r["region"])), n_nan=self.n_nan, n_inf=self.n_inf, n_skipped=int(n_skipped))
+        if passed:
+            g.diagnosis_detail = "conforms: every value within the tolerance"
+            return g
+        _, _, vectors, out = self.sample
+        ref = reference(vectors)
+        e = _normalised(out, ref, rel, ab)
+        (g.diagnosis, g.diagnosis_detail, g.candidates, g.candidate_details,
+         g.candidate_match_fractions) = _diagnose(vectors, out, ref, e, rel, ab)
+        if len(vectors) < self.n:
+            g.diagnosis_detail += f" (fitted on a sample of {len(vectors)} of the {self.n} rows)"
+        if g.diagnosis is None:
+            where = where_it_fails(g.regions)
+            nonfinite = ", ".join(f"{n} {w} values" for n, w in ((g.n_nan, "NaN"), (g.n_inf, "Inf")) if n)
+            g.diagnosis_detail = ". ".join(x for x in (NOT_EXPLAINED, where, nonfinite) if x)
+        return g
+
+
+def grade_chunks(chunks, *, model: str | None = None, tolerance: float | tuple | None = None) -> Grade:
+    """Grade ``(vectors, out[, n_skipped])`` chunks (e.g. :func:`.vectors.iter_results`) as one
+    file: the same :class:`Grade` as :func:`grade` on the rows put together (the diagnosis is
+    fitted on a sample of :data:`DIAGNOSIS_ROWS` rows when there are more); memory is bounded
+    by the chunk size.
+
+    Examples
+    --------
+    >>> from openpbr_diffuse.conformance.vectors import default_vectors
+    >>> from openpbr_diffuse.conformance.deviations import reference
+    >>> v = default_vectors()
+    >>> parts = [(v.subset(slice(k, k + 500)), reference(v.subset(slice(k, k + 500)))) for k in range(0, len(v), 500)]
+    >>> grade_chunks(parts).passed
+    True
+    """
+    rel, ab = _tolerance(tolerance)
+    acc = _Accumulator(rel, ab)
+    skipped = 0
+    seen_model = False
+    for chunk in chunks:
+        vectors, out = chunk[0], np.asarray(chunk[1], dtype=np.float64)
+        skipped += int(chunk[2]) if len(chunk) > 2 else 0
+        if out.shape != (len(vectors), 3):
+            raise ValueError(f"out must have shape ({len(vectors)}, 3) (one RGB value per vector), got {out.shape}")
+        if model is not None:
+            keep = vectors.model == model
+            seen_model |= bool(keep.any())
+            vectors, out = vectors.subset(keep), out[keep]
+        acc.add(vectors, out)
+    if model is not None and not seen_model:
+        raise ValueError(f"model: no rows of model {model!r}")
+    return acc.result(tolerance, skipped)
+
+
+__all__ = ["grade", "grade_chunks", "Grade", "DIAGNOSIS_ROWS", "REL_TOL", "ABS_TOL", "TOLERANCE_REASON", "NOT_EXPLAINED", "region_masks",
+           "where_it_fails"]

@@ -32,6 +32,8 @@ import csv
 import io
 import json
 import math
+import re
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -211,16 +213,21 @@ def _header_lines(vectors):
     return [f"{FORMAT_NAME}, version {vectors.version}",
             "kind brdf: f(wi, wo) without the cosine factor; kind albedo: directional albedo E(mu)",
             "directions in the local frame (normal +z), both pointing away from the surface; blank = not applicable",
-            "roughness: r in [0, 1] for fon/eon/eon_approx, sigma in radians for qon; append out_r,out_g,out_b"]
+            "roughness: r in [0, 1] for fon/eon/eon_approx, sigma in radians for qon; fill out_r,out_g,out_b "
+            "(rows left blank are skipped)"]
 
 
-def write_vectors(vectors: VectorSet, path, *, out=None) -> Path:
+def write_vectors(vectors: VectorSet, path: str | Path, *, out: np.ndarray | None = None,
+                  blank_out: bool = False) -> Path:
     """Write ``vectors`` to ``path`` (CSV, or JSON if the name ends in ``.json``).
 
-    ``out`` (n, 3), if given, is appended as ``out_r, out_g, out_b`` (a results file).
+    ``out`` (n, 3), if given, is appended as ``out_r, out_g, out_b`` (a results file);
+    ``blank_out=True`` appends those columns empty (the file an implementer fills in).
     """
     path = Path(path)
     cols = vectors.columns()
+    if blank_out and out is None:
+        out = np.full((len(vectors), 3), np.nan)
     names = list(COLUMNS) + (list(OUT_COLUMNS) if out is not None else [])
     if out is not None:
         out = np.asarray(out, dtype=np.float64).reshape(len(vectors), 3)
@@ -233,7 +240,9 @@ def write_vectors(vectors: VectorSet, path, *, out=None) -> Path:
             if isinstance(v, (str, np.str_)):
                 return str(v)
             if not math.isfinite(float(v)):
-                return None if name not in OUT_COLUMNS else str(float(v))  # a result NaN stays "nan"
+                if name not in OUT_COLUMNS or blank_out:
+                    return None
+                return str(float(v))  # a result NaN stays "nan"
             return float(v)
 
         doc = {"format": FORMAT_NAME, "version": vectors.version, "notes": _header_lines(vectors)[1:],
@@ -248,7 +257,8 @@ def write_vectors(vectors: VectorSet, path, *, out=None) -> Path:
     text_cols = [cols[name] for name in names]
     n_in = len(COLUMNS)
     for i in range(n):
-        w.writerow([_cell(c[i]) for c in text_cols[:n_in]] + [repr(float(c[i])) for c in text_cols[n_in:]])
+        w.writerow([_cell(c[i]) for c in text_cols[:n_in]]
+                   + [("" if blank_out else repr(float(c[i]))) for c in text_cols[n_in:]])
     path.write_text(buf.getvalue())
     return path
 
@@ -261,10 +271,17 @@ def _parse_number(text, column, row_label, allow_nonfinite=False):
     if isinstance(text, bool):
         raise ValueError(f"{row_label}: column {column} must be a number, got {text!r}")
     if isinstance(text, (int, float)):
-        return float(text)
-    text = str(text).strip()
+        try:
+            return float(text)
+        except OverflowError:
+            raise ValueError(f"{row_label}: column {column} is too large for a float") from None
+    if not isinstance(text, str):
+        raise ValueError(f"{row_label}: column {column} must be a number, got a {type(text).__name__}")
+    text = text.strip()
     if text == "":
         return math.nan
+    if "_" in text:  # Python's float() reads "1_000"; a number column does not
+        raise ValueError(f"{row_label}: column {column} is not a number: {text[:40]!r}")
     try:
         v = float(text)
     except ValueError:
@@ -283,6 +300,8 @@ def _read_records(path):
             doc = json.loads(text)
         except json.JSONDecodeError as exc:
             raise ValueError(f"{path}: not valid JSON ({exc.msg} at line {exc.lineno})") from None
+        except RecursionError:
+            raise ValueError(f"{path}: not usable JSON (nested too deeply)") from None
         rows = doc.get("rows") if isinstance(doc, dict) else doc
         if not isinstance(rows, list) or not all(isinstance(r, dict) for r in rows):
             raise ValueError(f"{path}: expected a JSON object with a 'rows' list of objects")
@@ -295,71 +314,292 @@ def _read_records(path):
         header = [h.strip() for h in next(reader)]
     except StopIteration:
         raise ValueError(f"{path}: empty file (no header row)") from None
+    except csv.Error as exc:
+        raise ValueError(f"{path}: header row is not valid CSV ({exc})") from None
+    dup = sorted({h for h in header if header.count(h) > 1})
+    if dup:
+        raise ValueError(f"{path}: duplicated column(s) {', '.join(dup)} in the header row")
     rows = []
-    for lineno, cells in enumerate(reader, start=2):
+    lineno = 1
+    while True:
+        try:
+            cells = next(reader)
+        except StopIteration:
+            break
+        except csv.Error as exc:
+            raise ValueError(f"{path}: data row {lineno} is not valid CSV ({exc})") from None
+        lineno += 1
         if len(cells) != len(header):
             raise ValueError(f"{path}: data row {lineno - 1} has {len(cells)} cells, the header has {len(header)}")
         rows.append(dict(zip(header, cells)))
     return header, rows
 
 
-def read_results(path, vectors: VectorSet | None = None):
+def _record_out(rec, label):
+    """The three result values of one record: from ``out_r, out_g, out_b`` or an ``out`` list;
+    None when the row is left blank (every result empty)."""
+    raw = rec.get("out")
+    if raw is not None and not (isinstance(raw, str) and not raw.strip()):
+        if not isinstance(raw, list) or len(raw) != 3:
+            raise ValueError(f"{label}: column out must be a list of 3 numbers, got {str(raw)[:40]!r}")
+        vals = raw
+        cols = ("out[0]", "out[1]", "out[2]")
+    else:
+        vals = [rec.get(c) for c in OUT_COLUMNS]
+        cols = OUT_COLUMNS
+    blank = [v is None or (isinstance(v, str) and not v.strip()) for v in vals]
+    if all(blank):
+        return None
+    if any(blank):
+        col = cols[blank.index(True)]
+        raise ValueError(f"{label}: column {col} is blank while the row's other results are given")
+    # "nan"/"inf" results are read (and fail the grade): a NaN is the implementation's bug
+    return [_parse_number(v, c, label, allow_nonfinite=True) for v, c in zip(vals, cols)]
+
+
+#: Rows read and graded at a time by :func:`iter_results` (memory is bounded by this).
+CHUNK_ROWS = 50_000
+#: JSON results files are parsed whole: above this size, use CSV (which is streamed).
+MAX_JSON_BYTES = 256 * 1024 * 1024
+#: Ids of this form name rows of the vector set; any other id is the submitter's own query,
+#: graded from the inputs written in its row.
+_SET_ID = re.compile(r"^(" + "|".join(VECTOR_MODELS) + r")-(brdf|albedo)-\d+$")
+
+
+def _csv_rows(path):
+    """(header, iterator of (data row number, cells)) of a CSV file, read line by line."""
+    fh = open(path, encoding="utf-8-sig", newline="")
+
+    def lines():
+        with fh:
+            for ln in fh:
+                st = ln.strip()
+                if st and not st.startswith("#"):
+                    yield ln
+
+    reader = csv.reader(lines())
+    try:
+        header = [h.strip() for h in next(reader)]
+    except StopIteration:
+        raise ValueError(f"{path}: empty file (no header row)") from None
+    except csv.Error as exc:
+        raise ValueError(f"{path}: header row is not valid CSV ({exc})") from None
+    dup = sorted({h for h in header if header.count(h) > 1})
+    if dup:
+        raise ValueError(f"{path}: duplicated column(s) {', '.join(dup)} in the header row")
+
+    def rows():
+        n = 0
+        while True:
+            try:
+                cells = next(reader)
+            except StopIteration:
+                return
+            except csv.Error as exc:
+                raise ValueError(f"{path}: data row {n + 1} is not valid CSV ({exc})") from None
+            n += 1
+            if len(cells) != len(header):
+                raise ValueError(f"{path}: data row {n} has {len(cells)} cells, the header has {len(header)}")
+            yield dict(zip(header, cells))
+
+    return header, rows()
+
+
+def _json_rows(path):
+    path = Path(path)
+    if path.stat().st_size > MAX_JSON_BYTES:
+        raise ValueError(f"{path}: JSON results files are read whole and this one is larger than "
+                         f"{MAX_JSON_BYTES >> 20} MB: write the results as CSV (read in chunks)")
+    names, records = _read_records(path)
+    return names, iter(records)
+
+
+def _label(path, n, rid):
+    return f"{path}: row {n} (id {rid[:40]!r})"
+
+
+def _own_row(rec, label):
+    """The inputs of a row that is the submitter's own query, checked."""
+    from ..models.registry import model_info
+
+    kind, model = str(rec.get("kind", "")).strip(), str(rec.get("model", "")).strip()
+    if kind not in ("brdf", "albedo"):
+        raise ValueError(f"{label}: column kind must be brdf or albedo, got {kind[:40]!r}")
+    if model not in VECTOR_MODELS or (kind == "albedo" and model not in ALBEDO_MODELS):
+        allowed = VECTOR_MODELS if kind == "brdf" else ALBEDO_MODELS
+        raise ValueError(f"{label}: column model must be one of {', '.join(allowed)} for kind {kind}, "
+                         f"got {model[:40]!r}")
+    vals = {c: _parse_number(rec.get(c), c, label) for c in _NUMERIC}
+    need = ["rho_r", "rho_g", "rho_b"] + ([] if model == "lambert" else ["roughness"])
+    need += [f"w{d}_{a}" for d in "io" for a in "xyz"] if kind == "brdf" else ["mu"]
+    for c in need:
+        if math.isnan(vals[c]):
+            raise ValueError(f"{label}: column {c} is blank; a {model} {kind} row needs it")
+    if kind == "brdf":
+        for d in "io":
+            norm = math.sqrt(sum(vals[f"w{d}_{a}"] ** 2 for a in "xyz"))
+            if abs(norm - 1.0) > 1e-4:
+                raise ValueError(f"{label}: columns w{d}_x, w{d}_y, w{d}_z are not a unit vector (length {norm:.6g})")
+    elif not 0.0 < vals["mu"] <= 1.0:
+        raise ValueError(f"{label}: column mu must be in (0, 1], got {vals['mu']!r}")
+    if model != "lambert":
+        hi = model_info(model).roughness_max
+        if not 0.0 <= vals["roughness"] <= hi:
+            raise ValueError(f"{label}: column roughness must be in [0, {hi:g}] for {model}, got {vals['roughness']!r}")
+    return kind, model, vals
+
+
+def iter_results(path: str | Path, vectors: VectorSet | None = None, *,
+                 chunk_rows: int = CHUNK_ROWS) -> Iterator[tuple[VectorSet, np.ndarray, int]]:
+    """Read a submitted results file in chunks: yield ``(vectors_chunk, out, n_skipped)``.
+
+    The rules are those of :func:`read_results`; a CSV file is read line by line, so memory
+    does not grow with the file's length.  A row whose id has the form of the set's ids
+    (``eon-brdf-0042``) must be that vector; a row with any other id is the submitter's own
+    query, graded from its own inputs (checked: unit directions, mu in (0, 1], roughness in
+    the model's range).
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> d = tempfile.mkdtemp()
+    >>> p = os.path.join(d, "mine.csv")
+    >>> _ = open(p, "w").write(
+    ...     "id,kind,model,wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,mu,roughness,rho_r,rho_g,rho_b,out_r,out_g,out_b\\n"
+    ...     "my-1,albedo,lambert,,,,,,,0.5,,0.5,0.5,0.5,0.5,0.5,0.5\\n"
+    ...     "my-2,albedo,lambert,,,,,,,0.7,,0.5,0.5,0.5,,,\\n")
+    >>> [(len(v), out.tolist(), n) for v, out, n in iter_results(p)]
+    [(1, [[0.5, 0.5, 0.5]], 1)]
+    """
+    if isinstance(chunk_rows, bool) or not isinstance(chunk_rows, int) or chunk_rows < 1:
+        raise ValueError(f"chunk_rows must be a positive integer, got {chunk_rows!r}")
+    vectors = default_vectors() if vectors is None else vectors
+    path = Path(path)
+    if not path.is_file():
+        if path.exists():
+            raise ValueError(f"{path}: not a regular file")
+        raise FileNotFoundError(2, "No such file or directory", str(path))
+    if path.suffix.lower() == ".json":
+        names, records = _json_rows(path)
+    else:
+        names, records = _csv_rows(path)
+    names = list(names)
+    index = {str(v): i for i, v in enumerate(vectors.id)}
+    ref_cols = vectors.columns()
+    seen = np.zeros(len(vectors), bool)
+    first = True
+    n = 0
+    any_results = False
+    while True:
+        take, out, own = [], [], []
+        skipped = 0
+        for rec in records:
+            if first:
+                missing = [c for c in COLUMNS if c not in names and c not in rec]
+                if missing:
+                    raise ValueError(f"{path}: missing column(s) {', '.join(missing)} "
+                                     f"(expected {', '.join(COLUMNS + OUT_COLUMNS)})")
+                first = False
+            n += 1
+            rid = str(rec.get("id", "")).strip()
+            label = _label(path, n, rid)
+            i = index.get(rid)
+            if i is None:
+                if _SET_ID.match(rid) or not rid:
+                    raise ValueError(f"{label}: no such vector in set version {vectors.version}")
+                kind, model, vals = _own_row(rec, label)
+                row = (rid, kind, model, vals)
+            else:
+                if seen[i]:
+                    raise ValueError(f"{label}: duplicated id")
+                seen[i] = True
+                for col in ("kind", "model"):
+                    if str(rec.get(col, "")).strip() != str(ref_cols[col][i]):
+                        raise ValueError(f"{label}: column {col} is {str(rec.get(col))[:40]!r}, "
+                                         f"the vector has {ref_cols[col][i]!r}")
+                for col in _NUMERIC:
+                    got = _parse_number(rec.get(col), col, label)
+                    want = float(ref_cols[col][i])
+                    if math.isnan(want) != math.isnan(got) or (
+                            not math.isnan(want) and abs(got - want) > INPUT_MATCH_TOL * (1.0 + abs(want))):
+                        raise ValueError(f"{label}: column {col} is {got!r}, the vector has "
+                                         f"{'blank' if math.isnan(want) else repr(want)}: "
+                                         f"rows do not match the vectors")
+                row = i
+            vals_out = _record_out(rec, label)
+            if vals_out is None:
+                skipped += 1
+            else:
+                out.append(vals_out)
+                (take if isinstance(row, int) else own).append((len(out) - 1, row))
+            if len(out) + skipped >= chunk_rows:
+                break
+        if first:
+            raise ValueError(f"{path}: no data rows")
+        any_results = any_results or bool(out)
+        if out or skipped:
+            yield _chunk(vectors, take, own, out), np.array(out, dtype=np.float64).reshape(-1, 3), skipped
+        if len(out) + skipped < chunk_rows:  # the file is read to its end
+            if not any_results:
+                raise ValueError(f"{path}: no row has results (fill out_r, out_g, out_b of the rows to grade)")
+            return
+
+
+def _chunk(vectors, take, own, out):
+    """The VectorSet of a chunk's graded rows, in the file's order."""
+    m = len(out)
+    ids = np.empty(m, dtype=object)
+    kind = np.empty(m, dtype=object)
+    model = np.empty(m, dtype=object)
+    wi, wo = np.full((m, 3), np.nan), np.full((m, 3), np.nan)
+    mu, rough, rho = np.full(m, np.nan), np.full(m, np.nan), np.full((m, 3), np.nan)
+    if take:
+        pos = np.array([p for p, _ in take], dtype=np.int64)
+        src = np.array([i for _, i in take], dtype=np.int64)
+        ids[pos], kind[pos], model[pos] = vectors.id[src], vectors.kind[src], vectors.model[src]
+        wi[pos], wo[pos], mu[pos] = vectors.wi[src], vectors.wo[src], vectors.mu[src]
+        rough[pos], rho[pos] = vectors.roughness[src], vectors.rho[src]
+    for p, (rid, k, mdl, v) in own:
+        ids[p], kind[p], model[p] = rid, k, mdl
+        wi[p] = (v["wi_x"], v["wi_y"], v["wi_z"])
+        wo[p] = (v["wo_x"], v["wo_y"], v["wo_z"])
+        mu[p], rough[p] = v["mu"], v["roughness"]
+        rho[p] = (v["rho_r"], v["rho_g"], v["rho_b"])
+    return VectorSet(ids.astype(str), kind.astype(str), model.astype(str), wi, wo, mu, rough, rho, vectors.version)
+
+
+def read_results(path: str | Path, vectors: VectorSet | None = None, *,
+                 with_skipped: bool = False) -> tuple:
     """Read a submitted results file; return ``(vectors_subset, out)`` matched by id.
 
     ``vectors`` defaults to :func:`default_vectors`.  Every row must carry the columns
-    :data:`COLUMNS` and :data:`OUT_COLUMNS`; its id must name a vector and its inputs must
-    equal that vector's (to :data:`INPUT_MATCH_TOL`, so float32-printed inputs pass);
-    every ``out_*`` must be a number ("nan" and "inf" are read as such: they fail the grade,
-    they do not make the file unusable).  Rows are returned in the file's order.
+    :data:`COLUMNS`; its id must name a vector and its inputs must equal that vector's (to
+    :data:`INPUT_MATCH_TOL`, so float32-printed inputs pass), or be an id of the
+    submitter's own (see :func:`iter_results`).  The results are the columns
+    :data:`OUT_COLUMNS` or, in JSON, either those keys or an ``"out": [r, g, b]`` list in
+    each row (the file's ``"columns"`` list need not name them).  A row whose results are
+    all blank is skipped (any subset of the rows may be filled); "nan" and "inf" are read as
+    such: they fail the grade, they do not make the file unusable.  Rows are returned in the
+    file's order; ``with_skipped=True`` returns ``(vectors_subset, out, n_skipped)``.  The
+    whole file is held in memory: :func:`iter_results` reads it in chunks.
 
     Raises
     ------
     ValueError
-        Missing columns, non-numeric values, unknown or duplicated ids, or inputs that do not
-        match the vectors (the message names the row and the column).
+        Missing or duplicated columns, malformed CSV or JSON, non-numeric values (also
+        ``1_000``), unknown or duplicated ids, inputs that do not match the vectors, or no
+        row with results (the message names the row and the column).
     """
-    vectors = default_vectors() if vectors is None else vectors
-    names, records = _read_records(path)
-    missing = [c for c in COLUMNS + OUT_COLUMNS if c not in names]
-    if missing:
-        raise ValueError(f"{path}: missing column(s) {', '.join(missing)} "
-                         f"(expected {', '.join(COLUMNS + OUT_COLUMNS)})")
-    if not records:
-        raise ValueError(f"{path}: no data rows")
-    index = {str(v): i for i, v in enumerate(vectors.id)}
-    ref_cols = vectors.columns()
-    take = np.empty(len(records), dtype=np.int64)
-    out = np.empty((len(records), 3))
-    seen = set()
-    for n, rec in enumerate(records):
-        rid = str(rec.get("id", "")).strip()
-        label = f"{path}: row {n + 1} (id {rid[:40]!r})"
-        if rid not in index:
-            raise ValueError(f"{label}: no such vector in set version {vectors.version}")
-        if rid in seen:
-            raise ValueError(f"{label}: duplicated id")
-        seen.add(rid)
-        i = index[rid]
-        for col in ("kind", "model"):
-            if str(rec.get(col, "")).strip() != str(ref_cols[col][i]):
-                raise ValueError(f"{label}: column {col} is {str(rec.get(col))[:40]!r}, "
-                                 f"the vector has {ref_cols[col][i]!r}")
-        for col in _NUMERIC:
-            got = _parse_number(rec.get(col), col, label)
-            want = float(ref_cols[col][i])
-            if math.isnan(want) != math.isnan(got) or (
-                    not math.isnan(want) and abs(got - want) > INPUT_MATCH_TOL * (1.0 + abs(want))):
-                raise ValueError(f"{label}: column {col} is {got!r}, the vector has "
-                                 f"{'blank' if math.isnan(want) else repr(want)}: rows do not match the vectors")
-        for k, col in enumerate(OUT_COLUMNS):
-            raw = rec.get(col)
-            if raw is None or (isinstance(raw, str) and not raw.strip()):
-                raise ValueError(f"{label}: column {col} is blank; every submitted row needs a result")
-            # "nan"/"inf" results are read (and fail the grade): a NaN is the implementation's bug
-            out[n, k] = _parse_number(raw, col, label, allow_nonfinite=True)
-        take[n] = i
-    return vectors.subset(take), out
+    chunks = list(iter_results(path, vectors, chunk_rows=CHUNK_ROWS))
+    vs = [c[0] for c in chunks if len(c[0])]
+    if not vs:
+        raise ValueError(f"{path}: no row has results (fill out_r, out_g, out_b of the rows to grade)")
+    cat = VectorSet(*(np.concatenate([getattr(v, f) for v in vs]) for f in
+                      ("id", "kind", "model", "wi", "wo", "mu", "roughness", "rho")), version=vs[0].version)
+    out = np.concatenate([c[1] for c in chunks])
+    skipped = sum(c[2] for c in chunks)
+    return (cat, out, skipped) if with_skipped else (cat, out)
 
 
 __all__ = ["VERSION", "COLUMNS", "OUT_COLUMNS", "VECTOR_MODELS", "ALBEDO_MODELS", "VectorSet", "default_vectors",
-           "write_vectors", "read_results"]
+           "write_vectors", "read_results", "iter_results", "CHUNK_ROWS"]

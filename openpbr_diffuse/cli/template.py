@@ -1,0 +1,43 @@
+"""``openpbr-diffuse template``: write a starting file for another implementation.
+
+    openpbr-diffuse template glsl [--out FILE] [--force]   # the documented GLSL signatures
+    openpbr-diffuse template cpp  [--out FILE] [--force]   # the same in C++ with GLM
+    openpbr-diffuse template csv  [--out FILE] [--force]   # the vectors with empty out_* columns
+
+The code templates hold a clearly marked Lambertian placeholder (they compile and run as
+they are).  An existing file is never overwritten without ``--force``.
+"""
+from __future__ import annotations
+
+import argparse
+
+_DEFAULT = {"glsl": "diffuse.glsl", "cpp": "diffuse.cpp", "csv": "vectors.csv"}
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    p = subparsers.add_parser("template", help="write a starting GLSL, C++ or CSV file to grade with check",
+                              description=__doc__.splitlines()[0].strip("`").replace("``", ""))
+    p.add_argument("kind", choices=sorted(_DEFAULT), help="glsl, cpp or csv")
+    p.add_argument("--out", metavar="FILE", help="output file (default diffuse.glsl / diffuse.cpp / vectors.csv)")
+    p.add_argument("--force", action="store_true", help="replace FILE if it exists")
+    p.set_defaults(run=run)
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..conformance.templates import write_template
+
+    path = args.out or _DEFAULT[args.kind]
+    try:
+        path = write_template(args.kind, path, force=args.force)
+    except FileExistsError as exc:
+        raise ValueError(str(exc)) from None
+    if args.kind == "csv":
+        print(f"wrote {path}: fill out_r, out_g, out_b of the rows you grade, then: openpbr-diffuse check {path}")
+    else:
+        print(f"wrote {path} (a Lambertian placeholder): replace the bodies, then: "
+              f"openpbr-diffuse check --{args.kind} {path} --function f --albedo-function albedo")
+    return 0
+
+
+__all__ = ["add_parser", "run"]
