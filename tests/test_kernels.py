@@ -15,6 +15,7 @@ from openpbr_diffuse._jit import acos
 
 
 # --- arccos ---------------------------------------------------------------------------------
+@pytest.mark.cpu_portable
 def test_acos_matches_libm_to_two_ulp():
     x = np.concatenate([np.linspace(-1.0, 1.0, 200_001), [0.5, -0.5, np.nextafter(0.5, 1.0), 1e-300, -0.0],
                         1.0 - np.logspace(-16, -1, 200), -1.0 + np.logspace(-16, -1, 200)])
@@ -24,6 +25,7 @@ def test_acos_matches_libm_to_two_ulp():
     assert np.max(np.abs(got - ref) / np.spacing(ref)) <= 2.0
 
 
+@pytest.mark.cpu_portable
 def test_acos_endpoints_and_outside():
     assert acos(1.0) == 0.0
     assert acos(-1.0) == math.pi
@@ -40,6 +42,7 @@ def _rowwise(model, wi, wo, r, rho):
     return od.evaluate(model, full[0], full[1], np.ascontiguousarray(np.broadcast_to(r, lead)), full[2])
 
 
+@pytest.mark.cpu_portable
 @pytest.mark.parametrize("model", ["eon", "qon_fujii", "full_on"])
 def test_layouts_give_the_rowwise_result(model, rng):
     n = 300
@@ -61,6 +64,7 @@ def test_layouts_give_the_rowwise_result(model, rng):
         np.testing.assert_allclose(od.evaluate(model, *args), _rowwise(model, *args), rtol=1e-14, atol=0)
 
 
+@pytest.mark.cpu_portable
 def test_tiled_inputs_across_chunks(rng):
     """More rows than one driver call takes: scalar roughness and a single rho are tiled per chunk."""
     n = 2 * _launch.CHUNK + 123
@@ -77,6 +81,7 @@ def test_tiled_inputs_across_chunks(rng):
                                                         np.tile(rho, (n, 1))), rtol=1e-14, atol=0)
 
 
+@pytest.mark.cpu_portable
 @pytest.mark.parametrize("C", [1, 2, 3, 5])
 def test_each_channel_count_matches_single_channels(C, rng):
     """The C = 3 and C = 1 drivers are unrolled, others loop: all give the per-channel result."""
@@ -115,6 +120,7 @@ def test_below_horizon_is_zero_in_a_vectorised_batch(rng):
 
 
 # --- float32 --------------------------------------------------------------------------------
+@pytest.mark.cpu_portable
 def test_float32_is_the_float64_result_rounded(model, rng):
     """Arithmetic is float64 for float32 inputs too: only the inputs' and output's rounding differ."""
     n = 4000
