@@ -22,7 +22,7 @@ import numba
 import numpy as np
 import pytest
 
-from openpbr_diffuse import OpenPBRSurface
+from openpbr_diffuse import OpenPBRSurface, _launch
 from openpbr_diffuse.nodes import _surface_drivers as sd
 
 
@@ -132,11 +132,11 @@ def test_the_pool_is_rebuilt_in_a_forked_child(monkeypatch):
     wo = np.random.default_rng(3).normal(size=(2 * sd.SERIAL_ROWS, 3))
     wo /= np.linalg.norm(wo, axis=1, keepdims=True)
     expected = s.albedo(wo)
-    parent = sd._pool
+    parent = _launch._pool
     child_pid = os.getpid() + 1
-    monkeypatch.setattr(sd.os, "getpid", lambda: child_pid)
+    monkeypatch.setattr(_launch.os, "getpid", lambda: child_pid)
     got = s.albedo(wo)
-    assert sd._pool[2] == child_pid and sd._pool[0] is not parent[0]
+    assert _launch._pool[2] == child_pid and _launch._pool[0] is not parent[0]
     assert np.array_equal(got, expected)
 
 
@@ -146,7 +146,7 @@ def test_a_second_process_loads_the_drivers_from_the_cache(tmp_path):
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
     script = textwrap.dedent("""
         import numpy as np
-        from openpbr_diffuse import OpenPBRSurface
+        from openpbr_diffuse import OpenPBRSurface, _launch
         from openpbr_diffuse.nodes import _surface_drivers as sd
         s = OpenPBRSurface(base_color=(0.8, 0.5, 0.3), base_metalness=0.3)
         wo = np.tile([0.0, 0.6, 0.8], (10000, 1))
