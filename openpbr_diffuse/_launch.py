@@ -28,9 +28,12 @@ from ._jit import FASTMATH
 #: horizon can be computed and then discarded without a branch.
 compiled = numba.njit(nogil=True, cache=True, fastmath=FASTMATH, error_model="numpy")
 
-#: Below this many rows a call runs on the calling thread alone: handing runs to the pool
-#: costs tens of microseconds, more than a small batch.
+#: Below this many rows a surface call runs on the calling thread alone: handing runs to the
+#: pool costs tens of microseconds, more than a small batch (the surface's rows cost 30-80 ns).
 SERIAL_ROWS = 4096
+#: The same for ``launch``'s drivers, whose rows cost a few ns: below this many rows the
+#: pool's hand-off costs more than the second thread saves.
+SPLIT_ROWS = 1 << 15
 
 _PREFIX = "openpbr-diffuse"
 _pool_lock = threading.Lock()
@@ -62,7 +65,7 @@ def _call(drive, head, args, widths, n, split=True):
     thread, run on the pool.  Returns the sum of what the runs return (None counts as 0)."""
     count = threads()
     # a run already on the pool runs its rows itself (waiting on the pool from the pool deadlocks)
-    if not split or n < SERIAL_ROWS or count == 1 or threading.current_thread().name.startswith(_PREFIX):
+    if not split or n < SPLIT_ROWS or count == 1 or threading.current_thread().name.startswith(_PREFIX):
         return drive(*head, *args) or 0
     cuts = [n * t // count for t in range(count + 1)]
     pool = executor(count)
