@@ -1,4 +1,4 @@
-"""Benchmark of the public batch calls against the scalar C yardstick (issue 6).
+"""Benchmark of the public batch calls against the scalar C yardstick.
 
 Times ``evaluate`` for every model, ``directional_albedo`` for every model and
 ``sample`` + ``evaluate("eon_approx")`` in the sampled direction for every strategy, in
@@ -17,12 +17,13 @@ Usage::
     python tools/bench.py                 # n = 10^6, table on stdout
     python tools/bench.py --quick         # n = 10^5, fewer repetitions
     python tools/bench.py --json bench.json
+    python tools/bench.py --cold          # compile budget per command, empty numba cache
 
 From Python: ``run_bench(n=..., reps=...)`` returns ``{"rows": [...], "env": {...},
 "startup": {...}, "c": {...}}``; ``format_table(result)`` renders it.
 
 Columns: ns per call (per row of the batch), ratio to the C time of the same work (eval
-approx, eval exact, MIS sample + approx eval), the issue's target, and the peak extra
+approx, eval exact, MIS sample + approx eval), the target, and the peak extra
 memory of the call (tracemalloc peak, which sees NumPy's allocations, minus the returned
 arrays) in multiples of the returned arrays' size.
 """
@@ -297,7 +298,7 @@ print(time.perf_counter() - t0)
 """
 
 
-# --------------------------------------------------------------------------- the surface (issue 9)
+# --------------------------------------------------------------------------- the surface
 
 #: Issue 9 targets: time per row relative to OrenNayarDiffuseBSDF's of the same verb.
 TARGET_SURFACE_BASE = 5.0      # diffuse + specular + metal
@@ -444,7 +445,7 @@ def run_bench(n=1_000_000, reps=15, c_reps=20, dtypes=(np.float32, np.float64), 
 
 
 def summary(result):
-    """The issue's targets, one entry each: what was measured, the bound, met or not."""
+    """The targets, one entry each: what was measured, the bound, met or not."""
     out = []
     for r in result["rows"]:
         if r.get("ok") is not None and r["kind"].startswith("surface."):
@@ -619,7 +620,7 @@ def main(argv=None):
     p.add_argument("--no-c", action="store_true", help="skip the C yardstick")
     p.add_argument("--no-startup", action="store_true", help="skip the fresh-process start-up timings")
     p.add_argument("--dtype", choices=("float32", "float64", "both"), default="both")
-    p.add_argument("--surface-only", action="store_true", help="only the OpenPBRSurface rows (issue 9)")
+    p.add_argument("--surface-only", action="store_true", help="only the OpenPBRSurface rows")
     p.add_argument("--cold", nargs="*", metavar="COMMAND",
                    help="compile budgets: each CLI command in a fresh process with an empty numba cache, CPU s "
                         "(optionally only the named commands, e.g. 'albedo' 'report --quick')")
