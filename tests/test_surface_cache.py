@@ -22,7 +22,7 @@ import numba
 import numpy as np
 import pytest
 
-from openpbr_diffuse import OpenPBRSurface
+from openpbr_diffuse import OpenPBRSurface, _launch
 from openpbr_diffuse.nodes import _surface_drivers as sd
 
 
@@ -47,10 +47,15 @@ def _material():
                           subsurface_weight=0.3, transmission_weight=0.2, geometry_thin_walled=True)
 
 
+@pytest.mark.cpu_portable
 @pytest.mark.parametrize("rows", [sd.SERIAL_ROWS + 1, 3 * sd.SERIAL_ROWS + 17])
 def test_the_thread_pool_gives_the_serial_result(rows):
     """Every verb over more than SERIAL_ROWS rows (split into runs over the pool) equals the
-    same rows in small calls (the calling thread alone), including the last, partial block."""
+    same rows in small calls (the calling thread alone), including the last, partial block.
+
+    Bit for bit on every CPU by construction: the small calls start at multiples of the block
+    size B, so each of their blocks holds the rows of one block of the large call, and both
+    run the same compiled runner over it (a row is in the same vector lane in both)."""
     rng = np.random.default_rng(rows)
     s = _material()
     wo = rng.normal(size=(rows, 3))
@@ -58,10 +63,12 @@ def test_the_thread_pool_gives_the_serial_result(rows):
     wi = rng.normal(size=(rows, 3))
     wi /= np.linalg.norm(wi, axis=1, keepdims=True)
     u = rng.random((rows, 3))
-    small = range(0, rows, 1000)
+    step = 16 * sd.B
+    assert step < sd.SERIAL_ROWS
+    small = range(0, rows, step)
     big = (s.eval(wi, wo), s.pdf(wo, wi), s.albedo(wo), *s.sample(wo, u))
-    parts = [(s.eval(wi[a:a + 1000], wo[a:a + 1000]), s.pdf(wo[a:a + 1000], wi[a:a + 1000]),
-              s.albedo(wo[a:a + 1000]), *s.sample(wo[a:a + 1000], u[a:a + 1000])) for a in small]
+    parts = [(s.eval(wi[a:a + step], wo[a:a + step]), s.pdf(wo[a:a + step], wi[a:a + step]),
+              s.albedo(wo[a:a + step]), *s.sample(wo[a:a + step], u[a:a + step])) for a in small]
     for k, whole in enumerate(big):
         assert np.array_equal(whole, np.concatenate([p[k] for p in parts]))
 
@@ -98,7 +105,10 @@ def test_short_calls_give_the_rows_of_a_whole_block(per_row):
                 np.testing.assert_allclose(a, b[start:start + m], rtol=1e-13, atol=1e-300)
 
 
+@pytest.mark.cpu_portable
 def test_one_thread_gives_the_same_result():
+    """Bit for bit by construction: the blocks do not depend on the thread count, and each is
+    run by the same compiled runner."""
     s = _material()
     rng = np.random.default_rng(5)
     wo = rng.normal(size=(20000, 3))
@@ -122,11 +132,11 @@ def test_the_pool_is_rebuilt_in_a_forked_child(monkeypatch):
     wo = np.random.default_rng(3).normal(size=(2 * sd.SERIAL_ROWS, 3))
     wo /= np.linalg.norm(wo, axis=1, keepdims=True)
     expected = s.albedo(wo)
-    parent = sd._pool
+    parent = _launch._pool
     child_pid = os.getpid() + 1
-    monkeypatch.setattr(sd.os, "getpid", lambda: child_pid)
+    monkeypatch.setattr(_launch.os, "getpid", lambda: child_pid)
     got = s.albedo(wo)
-    assert sd._pool[2] == child_pid and sd._pool[0] is not parent[0]
+    assert _launch._pool[2] == child_pid and _launch._pool[0] is not parent[0]
     assert np.array_equal(got, expected)
 
 
@@ -136,7 +146,7 @@ def test_a_second_process_loads_the_drivers_from_the_cache(tmp_path):
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
     script = textwrap.dedent("""
         import numpy as np
-        from openpbr_diffuse import OpenPBRSurface
+        from openpbr_diffuse import OpenPBRSurface, _launch
         from openpbr_diffuse.nodes import _surface_drivers as sd
         s = OpenPBRSurface(base_color=(0.8, 0.5, 0.3), base_metalness=0.3)
         wo = np.tile([0.0, 0.6, 0.8], (10000, 1))

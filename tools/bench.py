@@ -1,4 +1,4 @@
-"""Benchmark of the public batch calls against the scalar C yardstick (issue 6).
+"""Benchmark of the public batch calls against the scalar C yardstick.
 
 Times ``evaluate`` for every model, ``directional_albedo`` for every model and
 ``sample`` + ``evaluate("eon_approx")`` in the sampled direction for every strategy, in
@@ -17,12 +17,13 @@ Usage::
     python tools/bench.py                 # n = 10^6, table on stdout
     python tools/bench.py --quick         # n = 10^5, fewer repetitions
     python tools/bench.py --json bench.json
+    python tools/bench.py --cold          # compile budget per command, empty numba cache
 
 From Python: ``run_bench(n=..., reps=...)`` returns ``{"rows": [...], "env": {...},
 "startup": {...}, "c": {...}}``; ``format_table(result)`` renders it.
 
 Columns: ns per call (per row of the batch), ratio to the C time of the same work (eval
-approx, eval exact, MIS sample + approx eval), the issue's target, and the peak extra
+approx, eval exact, MIS sample + approx eval), the target, and the peak extra
 memory of the call (tracemalloc peak, which sees NumPy's allocations, minus the returned
 arrays) in multiples of the returned arrays' size.
 """
@@ -297,7 +298,7 @@ print(time.perf_counter() - t0)
 """
 
 
-# --------------------------------------------------------------------------- the surface (issue 9)
+# --------------------------------------------------------------------------- the surface
 
 #: Issue 9 targets: time per row relative to OrenNayarDiffuseBSDF's of the same verb.
 TARGET_SURFACE_BASE = 5.0      # diffuse + specular + metal
@@ -444,7 +445,7 @@ def run_bench(n=1_000_000, reps=15, c_reps=20, dtypes=(np.float32, np.float64), 
 
 
 def summary(result):
-    """The issue's targets, one entry each: what was measured, the bound, met or not."""
+    """The targets, one entry each: what was measured, the bound, met or not."""
     out = []
     for r in result["rows"]:
         if r.get("ok") is not None and r["kind"].startswith("surface."):
@@ -531,6 +532,85 @@ def format_table(result):
     return "\n".join(lines)
 
 
+#: The compile budget per command: CPU seconds (user + sys of the command's process and its
+#: children) with an empty numba cache, on the 2-core development machine kind.
+COLD_BUDGETS = (
+    ("albedo", ("albedo", "eon", "--roughness", "0.5", "--mu", "0.5"), 3.0),
+    ("check FILE", ("check", "{vectors}"), 8.0),
+    ("eval MATERIAL", ("eval", "{root}/materials/clay_rough.mtlx"), 10.0),
+    ("report --quick", ("report", "--quick", "--no-progress", "--out", "{tmp}/report-quick"), 25.0),
+    ("report", ("report", "--no-progress", "--out", "{tmp}/report"), 40.0),
+)
+
+_VECTORS_WITH_RESULTS = """
+import sys
+from openpbr_diffuse.conformance.deviations import reference
+from openpbr_diffuse.conformance.vectors import default_vectors, write_vectors
+v = default_vectors()
+write_vectors(v, sys.argv[1], out=reference(v))
+"""
+
+
+def _child_cpu(cmd, env, cwd):
+    """(CPU seconds, wall seconds, exit status) of ``cmd`` run to its end in a child process:
+    the growth of ``getrusage(RUSAGE_CHILDREN)`` (user + sys of every waited-for descendant)."""
+    import resource
+    import subprocess
+
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t = time.perf_counter()
+    done = subprocess.run(cmd, env=env, cwd=cwd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, check=False)
+    wall = time.perf_counter() - t
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return cpu, wall, done.returncode, done.stderr[-400:]
+
+
+def cold_budgets(names=None) -> list:
+    """Each command of ``COLD_BUDGETS`` (or those named) in a fresh process with an empty numba
+    cache (``NUMBA_CACHE_DIR`` a new temporary folder): its CPU seconds against its budget.
+
+    Returns one dict per command: ``command``, ``cpu_s``, ``wall_s``, ``budget_s``, ``ok``,
+    ``exit``.  CPU seconds rather than wall time: robust to the other jobs of a loaded machine
+    (they slow a run's wall clock, not its own CPU time)."""
+    import os
+    import subprocess
+    import sys
+    import tempfile
+
+    root = Path(__file__).resolve().parents[1]
+    out = []
+    with tempfile.TemporaryDirectory(prefix="openpbr-cold-") as tmp:
+        env = dict(os.environ, PYTHONPATH=str(root) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+        vectors = Path(tmp) / "vectors.csv"
+        # the graded file is made beforehand, with a cache of its own (not counted)
+        subprocess.run([sys.executable, "-c", _VECTORS_WITH_RESULTS, str(vectors)], check=True, cwd=tmp,
+                       env=dict(env, NUMBA_CACHE_DIR=tempfile.mkdtemp(dir=tmp)))
+        for label, args, budget in COLD_BUDGETS:
+            if names and label not in names:
+                continue
+            cache = tempfile.mkdtemp(prefix="numba-", dir=tmp)
+            cmd = [sys.executable, "-m", "openpbr_diffuse",
+                   *(a.format(vectors=vectors, root=root, tmp=tmp) for a in args)]
+            cpu, wall, code, err = _child_cpu(cmd, dict(env, NUMBA_CACHE_DIR=cache), tmp)
+            # check FILE exits 0 (conforms); every other command 0 too
+            out.append({"command": label, "cpu_s": cpu, "wall_s": wall, "budget_s": budget,
+                        "ok": code == 0 and cpu <= budget, "exit": code, "stderr": err if code else ""})
+    return out
+
+
+def format_cold(rows: list) -> str:
+    """The compile-budget table of ``cold_budgets``."""
+    lines = [f"{'command':<16} {'CPU s':>7} {'wall s':>7} {'budget':>7}  result",
+             "-" * 52]
+    for r in rows:
+        verdict = "ok" if r["ok"] else (f"FAILED (exit {r['exit']}: {r['stderr'].strip()})" if r["exit"] else "MISSED")
+        lines.append(f"{r['command']:<16} {r['cpu_s']:7.1f} {r['wall_s']:7.1f} {r['budget_s']:7.0f}  {verdict}")
+    met = sum(r["ok"] for r in rows)
+    lines.append(f"budgets: {met} of {len(rows)} met (empty numba cache per command, CPU s = user + sys)")
+    return "\n".join(lines)
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--n", type=int, default=None, help="batch size (default 10^6; 10^5 with --quick)")
@@ -540,8 +620,17 @@ def main(argv=None):
     p.add_argument("--no-c", action="store_true", help="skip the C yardstick")
     p.add_argument("--no-startup", action="store_true", help="skip the fresh-process start-up timings")
     p.add_argument("--dtype", choices=("float32", "float64", "both"), default="both")
-    p.add_argument("--surface-only", action="store_true", help="only the OpenPBRSurface rows (issue 9)")
+    p.add_argument("--surface-only", action="store_true", help="only the OpenPBRSurface rows")
+    p.add_argument("--cold", nargs="*", metavar="COMMAND",
+                   help="compile budgets: each CLI command in a fresh process with an empty numba cache, CPU s "
+                        "(optionally only the named commands, e.g. 'albedo' 'report --quick')")
     a = p.parse_args(argv)
+    if a.cold is not None:
+        rows = cold_budgets(a.cold or None)
+        print(format_cold(rows))
+        if a.json:
+            Path(a.json).write_text(json.dumps({"cold": rows, "env": environment()}, indent=1, default=float) + "\n")
+        return 0 if all(r["ok"] for r in rows) else 1
     n = a.n or (100_000 if a.quick else 1_000_000)
     reps = a.reps or (7 if a.quick else 15)
     if a.surface_only:

@@ -1,4 +1,4 @@
-"""Batch drivers: one parallel loop per verb, specialised per model and channel count.
+"""Batch drivers: one serial ``nogil`` loop per verb, specialised per model and channel count.
 
 Every formula is the scalar function of its model module, inlined here (``lobe_terms``,
 ``albedo_terms``).  A driver is compiled for one model id and one channel count C (1, 3,
@@ -7,7 +7,8 @@ straight-line code over flat C-contiguous buffers with constant row strides, whi
 vectorises (4-8 rows per instruction).  With a run-time model id, run-time C or
 run-time strides it does not, and the loop runs 4-10x slower.
 
-Rows are independent, so the loops are ``prange``; arithmetic is float64 for both input
+Rows are independent: ``_launch.launch`` runs a large call's loop over runs of rows on the
+package's thread pool (no ``prange``: one compiled body per driver); arithmetic is float64 for both input
 dtypes (loads are widened, stores rounded: float32 results are the float64 ones rounded).
 
 The value checks of ``_arrays`` (unit directions, parameter ranges, finiteness) run inside
@@ -23,11 +24,12 @@ first use (``functools.cache``) and compiled lazily per dtype; numba caches them
 import functools
 
 import numpy as np
-from numba import prange
+from numba import errors, types
+from numba.extending import overload
 
 from .._arrays import is_unit, is_within
-from .._launch import _F, _U, compiled, launch, rows
 from .._jit import kernel
+from .._launch import _F, _U, compiled, launch, rows
 from .eon import eon_albedo_terms, eon_average_terms, eon_terms, rho_ms
 from .fon import fon_albedo, fon_terms
 from .fujii import fujii_albedo_terms, fujii_terms
@@ -43,11 +45,26 @@ LAMBERT, QON, QON_FOOTNOTE, QON_VO, QON_FUJII, FON, FULL_ON, GOTANDA, EON, EON_A
                          "fon", "full_on", "gotanda", "eon", "eon_approx"))
 
 
-@kernel
+def _model_id(model):
+    """The model id of a driver's call site: a compile-time constant (the driver closes over it)."""
+    if not isinstance(model, types.IntegerLiteral):
+        raise errors.TypingError("the model id of a batch driver must be a compile-time constant")
+    return model.literal_value
+
+
 def lobe_terms(model, ix, iy, iz, ox, oy, oz, r):
     """(g, h, <E_F>) of f = rho g + m(rho) h at one pair of directions (both above the horizon).
 
-    s = wi.wo - mu_i mu_o = sin(theta_i) sin(theta_o) cos(phi) lies in [-1, 1] for unit
+    Compiled form only (``_lobe_terms``): the model id selects one model's formula while the
+    driver is typed, so a driver compiles its own model's kernels and no other's (numba types
+    every branch of a run-time ``if model == ...``, and so compiled all ten models' kernels
+    into each driver)."""
+    raise NotImplementedError("compiled only: called from the batch drivers")
+
+
+@overload(lobe_terms, inline="always")
+def _lobe_terms(model, ix, iy, iz, ox, oy, oz, r):
+    """s = wi.wo - mu_i mu_o = sin(theta_i) sin(theta_o) cos(phi) lies in [-1, 1] for unit
     vectors, and is clamped to it here, the one place every model gets s from.  Directions
     are accepted within |w| = 1 +- UNIT_TOL (``_arrays``), and for such not-quite-unit
     vectors s reaches -(1 + 2 UNIT_TOL) at grazing opposite azimuth, where FON's
@@ -57,52 +74,88 @@ def lobe_terms(model, ix, iy, iz, ox, oy, oz, r):
     changed by rounding everywhere); it only moves rows whose |w| differs from 1.
     Full Oren-Nayar keeps its published negative values (``full_on``).
     """
-    s = min(max(ix * ox + iy * oy, -1.0), 1.0)
-    if model == EON or model == EON_APPROX:
-        return eon_terms(iz, oz, s, r, model == EON_APPROX)
-    if model == FON:
-        return fon_terms(iz, oz, s, r), 0.0, 0.0
-    if model == QON or model == QON_FOOTNOTE:
-        A, B = qon_AB(r, 0.33 if model == QON else 0.57)
-        return qon_terms(iz, oz, s, A, B), 0.0, 0.0
-    if model == QON_VO:
-        return van_ouwerkerk_terms(ix, iy, iz, ox, oy, oz, r), 0.0, 0.0
-    if model == QON_FUJII:
-        g, h = fujii_terms(iz, oz, s, r)
-        return g, h, 0.0
-    if model == FULL_ON:
-        g, h = full_on_terms(iz, oz, s, r)
-        return g, h, 0.0
-    if model == GOTANDA:
-        return gotanda_terms(iz, oz, s, r), 0.0, 0.0
-    return lambert_terms(), 0.0, 0.0
+    m = _model_id(model)
+    if m == EON or m == EON_APPROX:
+        approx = m == EON_APPROX
+
+        def impl(model, ix, iy, iz, ox, oy, oz, r):
+            return eon_terms(iz, oz, min(max(ix * ox + iy * oy, -1.0), 1.0), r, approx)
+    elif m == FON:
+        def impl(model, ix, iy, iz, ox, oy, oz, r):
+            return fon_terms(iz, oz, min(max(ix * ox + iy * oy, -1.0), 1.0), r), 0.0, 0.0
+    elif m == QON or m == QON_FOOTNOTE:
+        a_const = 0.33 if m == QON else 0.57
+
+        def impl(model, ix, iy, iz, ox, oy, oz, r):
+            A, B = qon_AB(r, a_const)
+            return qon_terms(iz, oz, min(max(ix * ox + iy * oy, -1.0), 1.0), A, B), 0.0, 0.0
+    elif m == QON_VO:
+        def impl(model, ix, iy, iz, ox, oy, oz, r):
+            return van_ouwerkerk_terms(ix, iy, iz, ox, oy, oz, r), 0.0, 0.0
+    elif m == QON_FUJII:
+        def impl(model, ix, iy, iz, ox, oy, oz, r):
+            g, h = fujii_terms(iz, oz, min(max(ix * ox + iy * oy, -1.0), 1.0), r)
+            return g, h, 0.0
+    elif m == FULL_ON:
+        def impl(model, ix, iy, iz, ox, oy, oz, r):
+            g, h = full_on_terms(iz, oz, min(max(ix * ox + iy * oy, -1.0), 1.0), r)
+            return g, h, 0.0
+    elif m == GOTANDA:
+        def impl(model, ix, iy, iz, ox, oy, oz, r):
+            return gotanda_terms(iz, oz, min(max(ix * ox + iy * oy, -1.0), 1.0), r), 0.0, 0.0
+    else:
+        def impl(model, ix, iy, iz, ox, oy, oz, r):
+            return lambert_terms(), 0.0, 0.0
+    return impl
 
 
-@kernel
 def albedo_terms(model, mu, r, average):
-    """(e_g, e_h, <E_F>) of E = rho e_g + m(rho) e_h; the average <E> when ``average``.
+    """(e_g, e_h, <E_F>) of E = rho e_g + m(rho) e_h; the average <E> when ``average`` (0 or 1).
 
-    Each model module holds its own closed form: QON family Eq. 8-9 (``qon``), FON
+    Compiled form only (``_albedo_terms``, one model's formula per driver, as ``lobe_terms``)."""
+    raise NotImplementedError("compiled only: called from the batch drivers")
+
+
+@overload(albedo_terms, inline="always")
+def _albedo_terms(model, mu, r, average):
+    """Each model module holds its own closed form: QON family Eq. 8-9 (``qon``), FON
     Eq. 12-15 and the lobes of FON's shape (``fon``, ``gotanda``, ``fujii``), EON Eq. 20
     (``eon``).  ("full_on" has none: its albedo comes from the reference tables.)
     """
-    if model == EON or model == EON_APPROX:
-        if average:
-            return eon_average_terms(r, model == EON_APPROX)
-        return eon_albedo_terms(mu, r, model == EON_APPROX)
-    if model == QON or model == QON_FOOTNOTE or model == QON_VO:
-        A, B = qon_AB(r, 0.57 if model == QON_FOOTNOTE else 0.33)
-        if average:
-            return qon_average_albedo(A, B), 0.0, 0.0
-        return qon_albedo(mu, A, B), 0.0, 0.0
-    if model == FON:
-        return fon_albedo(mu, r, average), 0.0, 0.0
-    if model == GOTANDA:
-        return gotanda_albedo(mu, r, average), 0.0, 0.0
-    if model == QON_FUJII:
-        g, h = fujii_albedo_terms(mu, r, average)
-        return g, h, 0.0
-    return lambert_albedo(), 0.0, 0.0
+    m = _model_id(model)
+    avg_on = bool(_model_id(average))   # 0/1, a compile-time constant as the model id
+    if m == EON or m == EON_APPROX:
+        approx = m == EON_APPROX
+        if avg_on:
+            def impl(model, mu, r, average):
+                return eon_average_terms(r, approx)
+        else:
+            def impl(model, mu, r, average):
+                return eon_albedo_terms(mu, r, approx)
+    elif m == QON or m == QON_FOOTNOTE or m == QON_VO:
+        a_const = 0.57 if m == QON_FOOTNOTE else 0.33
+        if avg_on:
+            def impl(model, mu, r, average):
+                A, B = qon_AB(r, a_const)
+                return qon_average_albedo(A, B), 0.0, 0.0
+        else:
+            def impl(model, mu, r, average):
+                A, B = qon_AB(r, a_const)
+                return qon_albedo(mu, A, B), 0.0, 0.0
+    elif m == FON:
+        def impl(model, mu, r, average):
+            return fon_albedo(mu, r, avg_on), 0.0, 0.0
+    elif m == GOTANDA:
+        def impl(model, mu, r, average):
+            return gotanda_albedo(mu, r, avg_on), 0.0, 0.0
+    elif m == QON_FUJII:
+        def impl(model, mu, r, average):
+            g, h = fujii_albedo_terms(mu, r, avg_on)
+            return g, h, 0.0
+    else:
+        def impl(model, mu, r, average):
+            return lambert_albedo(), 0.0, 0.0
+    return impl
 
 
 @kernel
@@ -171,7 +224,7 @@ def write_row(nc, kind, tint, up, rho, out, i, n, g, h, avg, ok):
 
 @functools.cache
 def eval_driver(model, C):
-    """Parallel ``evaluate`` loop for one model id and channel count (see ``_channels``).
+    """The ``evaluate`` loop for one model id and channel count (see ``_channels``).
 
     ``drive(tint, rlo, rhi, wi, wo, r, rho, out) -> bad``: wi, wo flat (N*3,), r (N,),
     rho (N*C,), out (N*C,); ``bad`` counts the rows whose inputs fail the ``_arrays``
@@ -185,7 +238,7 @@ def eval_driver(model, C):
     def drive(tint, rlo, rhi, wi, wo, r, rho, out):
         n = r.shape[0]
         bad = 0
-        for i in prange(n):
+        for i in range(n):
             j = _U(i) * _U(3)
             # float64 from here on; the range checks compare exactly as in the input dtype
             # (rlo, rhi arrive rounded to it, and widening is exact)
@@ -204,7 +257,7 @@ def eval_driver(model, C):
 
 @functools.cache
 def albedo_driver(model, C, average):
-    """Parallel ``directional_albedo`` (or ``average_albedo``) loop.
+    """The ``directional_albedo`` (or ``average_albedo``) loop.
 
     ``drive(tint, rlo, rhi, mu, r, rho, out) -> bad`` with the input checks fused as in
     ``eval_driver`` (mu in [0, 1]).  E(mu) at mu = 0 is the limit mu -> 0; with
@@ -212,19 +265,20 @@ def albedo_driver(model, C, average):
     """
     kind = _MIX[model]
     nc = 0 if average else _channels(C)  # <E> is not a batch hot path: one variant per model
+    which = 1 if average else 0          # an int: numba types a captured int as a literal
 
     @compiled
     def drive(tint, rlo, rhi, mu, r, rho, out):
         n = r.shape[0]
         bad = 0
-        for i in prange(n):
+        for i in range(n):
             ri = _F(r[i])
             ok = is_within(ri, _F(rlo), _F(rhi), False, False)
             m_i = 0.0
             if not average:
                 m_i = _F(mu[i])
                 ok = ok & is_within(m_i, 0.0, 1.0, False, False)
-            eg, eh, avg = albedo_terms(model, m_i, ri, average)
+            eg, eh, avg = albedo_terms(model, m_i, ri, which)
             ok = write_row(nc, kind, tint, True, rho, out, i, n, eg, eh, avg, ok)
             bad += 0 if ok else 1
         return bad

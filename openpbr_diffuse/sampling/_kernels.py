@@ -1,4 +1,4 @@
-"""Batch drivers: one parallel loop per verb (``sample``, ``pdf``), specialised per strategy.
+"""Batch drivers: one serial ``nogil`` loop per verb (``sample``, ``pdf``), specialised per strategy.
 
 The formulas are the scalar functions of ``simple``, ``ltc`` and ``mis``, inlined here.
 As for the lobe models (``models/_kernels.py``; ``compiled``, ``rows`` and ``launch`` come
@@ -10,11 +10,18 @@ float64 for both dtypes (float32 results are the float64 ones rounded).
 import functools
 
 import numpy as np
-from numba import prange
 
 from .._jit import kernel
 from .._launch import _F, _U, compiled, launch, rows
-from .ltc import clip_fraction, from_frame, ltc_coeffs, ltc_frame, ltc_pdf_local, ltc_sample_local, to_frame
+from .ltc import (
+    clip_fraction,
+    from_frame,
+    ltc_coeffs,
+    ltc_frame,
+    ltc_pdf_local,
+    ltc_sample_local,
+    to_frame,
+)
 from .mis import eon_pdf, eon_sample, pow_tenth
 from .registry import CLTC, COSINE, EON, LTC, LTC_NONNEG, UNIFORM
 from .simple import INV_2PI, cosine_pdf, cosine_sample_local, uniform_sample
@@ -64,7 +71,7 @@ def sample_driver(strategy):
 
     @compiled
     def drive(z_min, wo, r, u, wi, pdf):
-        for i in prange(r.shape[0]):
+        for i in range(r.shape[0]):
             j = _U(i) * _U(3)
             k = _U(i) * _U(2)
             ox = _F(wo[j])
@@ -106,7 +113,7 @@ def pdf_driver(strategy):
 
     @compiled
     def drive(wo, wi, r, out):
-        for i in prange(r.shape[0]):
+        for i in range(r.shape[0]):
             j = _U(i) * _U(3)
             out[i] = strategy_pdf(strategy, _F(wo[j]), _F(wo[j + _U(1)]), _F(wo[j + _U(2)]),
                                   _F(wi[j]), _F(wi[j + _U(1)]), _F(wi[j + _U(2)]), _F(r[i]))
