@@ -11,6 +11,7 @@ weight and selection probability, the directional albedo at theta_o and the BRDF
 to wo (180: forward, in the plane of incidence).
 """
 import json
+import sys
 
 import numpy as np
 
@@ -31,6 +32,14 @@ def add_parser(subparsers):
     p.add_argument("--json", action="store_true", help="one JSON document (schema in the README)")
     p.set_defaults(run=run)
     return p
+
+
+def _safe(text: str) -> str:
+    """Text from a user's file with control characters escaped repr-style (``\\x1b``)."""
+    text = str(text)
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 def _fmt(v):
@@ -63,6 +72,9 @@ def run(args):
         raise ValueError("eval: --theta-i, --theta-o and --phi must have the same number of values (or one)") from None
     materials = load(args)
     results = [(m, evaluate(m, ti, to, ph)) for m in materials]
+    # 0: every material read (unsupported shaders listed as such); 1: some could not be
+    # evaluated (each named with its reason); 2 (raised before): the file itself is unusable
+    status = 1 if any(m.error for m in materials) else 0
     if args.json:
         doc = {
             "file": args.file, "working_space": WORKING_SPACE, "time": args.time,
@@ -72,13 +84,17 @@ def run(args):
             "materials": [dict(m.to_dict(), evaluation=r) for m, r in results],
         }
         print(json.dumps(doc, allow_nan=False))
-        return 0
+        return status
     for m, r in results:
-        print(f"# {m.path}  [{m.shader_id or 'no shader'}]  from {m.file}")
+        if m.error:
+            print(f"# {_safe(m.path)}  [not evaluated]  from {_safe(m.file)}")
+            print(f"  error: {_safe(m.error)}")
+            continue
+        print(f"# {_safe(m.path)}  [{_safe(m.shader_id) or 'no shader'}]  from {_safe(m.file)}")
         if not m.supported:
-            print("  not supported: " + "; ".join(m.unsupported))
+            print("  not supported: " + _safe("; ".join(m.unsupported)))
             for w in m.warnings:
-                print(f"  warning: {w}")
+                print(f"  warning: {_safe(w)}")
             continue
         print(f"  node: {m.node_class}" + (f" (diffuse {m.diffuse_model})" if m.diffuse_model else "")
               + f"; colours in {WORKING_SPACE}")
@@ -117,12 +133,16 @@ def run(args):
         for k in range(n):
             print(f"    theta_i {r['theta_i'][k]:g} theta_o {r['theta_o'][k]:g} phi {r['phi'][k]:g}: {_rgb(r['brdf'][k])}")
         for u in m.unsupported:
-            print(f"  unsupported: {u}")
+            print(f"  unsupported: {_safe(u)}")
         for a in m.approximations:
             print(f"  approximation: {a}")
         for w in m.warnings:
-            print(f"  warning: {w}")
-    return 0
+            print(f"  warning: {_safe(w)}")
+    bad = [m for m in materials if m.error]
+    if bad:
+        print(f"{len(bad)} of {len(materials)} material(s) could not be evaluated: "
+              + ", ".join(_safe(m.path) for m in bad), file=sys.stderr)
+    return status
 
 
 __all__ = ["add_parser", "run"]

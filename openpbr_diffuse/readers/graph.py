@@ -22,7 +22,7 @@ import numpy as np
 
 from . import colorspace, mxlib, ops, textures
 from .material import Parameter
-from ..nodes.materialx_defs import parse_value
+from .mxlib import mx_value
 
 #: Node output types the evaluator can produce (closures are not values).
 VALUE_TYPES = ("float", "integer", "boolean", "string", "filename", "color3", "color4",
@@ -81,13 +81,12 @@ class Resolver:
             raise ValueError(f"{self.file}: connection cycle: {' -> '.join(loop)}")
         return trail + (key,)
 
-    def _authored(self, port, library):
+    def _authored(self, port, library: bool) -> Parameter:
         t = port.getType()
         text = port.getValueString()
-        try:
-            raw = parse_value(t, text)
-        except ValueError as exc:
-            raise ValueError(f"{self.file}: {port.getNamePath()}: bad {t} value {text!r} ({exc})") from None
+        raw = mx_value(port, t)
+        if raw is None and text.strip():
+            raise ValueError(f"{self.file}: {port.getNamePath()}: bad {t} value {text!r} (MaterialX cannot parse it)")
         if t == "filename":
             resolved = port.getResolvedValueString() or raw
             if resolved and not os.path.isabs(resolved):
@@ -152,7 +151,10 @@ class Resolver:
                        f"MaterialX library: not evaluated, default used", True)
             return None
         ndname = nd.getName()
-        outs = mxlib.outputs(ndname)
+        if cat == "texcoord" and node.getType() == "vector2":
+            return Parameter(self.uv.copy(), f"texcoord {node.getNamePath()} = uv ({self.uv[0]:g}, {self.uv[1]:g})",
+                             "uv")
+        outs = mxlib.outputs(ndname, nd)
         out_type = outs.get(outname) if outname else None
         if out_type is None:
             out_type = node.getType() if node.getType() != "multioutput" else next(iter(outs.values()))
@@ -160,11 +162,11 @@ class Resolver:
         if out_type not in VALUE_TYPES:
             self._note(f"node {node.getNamePath()} ({ndname}) outputs a {out_type}: not a value", True)
             return None
-        if cat not in ops.OPS and cat != "image" and mxlib.implementation_graph(ndname) is None:
+        if cat not in ops.OPS and cat != "image" and mxlib.implementation_graph(ndname, nd) is None:
             self._note(f"node {node.getNamePath()} ({ndname}) is not evaluated by the reader; default used", True)
             return None
         resolved = {}
-        for name, (t, default, geomprop) in mxlib.inputs(ndname).items():
+        for name, (t, default, geomprop) in mxlib.inputs(ndname, nd).items():
             inp = node.getInput(name)
             p = self.port(inp, trail, iface, library) if inp is not None else None
             if p is None:
@@ -185,7 +187,7 @@ class Resolver:
             except (TypeError, ValueError, IndexError) as exc:
                 raise ValueError(f"{self.file}: node {node.getNamePath()} ({ndname}): {exc}") from None
             return Parameter(value, _describe(f"{cat} {node.getNamePath()}", resolved), _combined(resolved))
-        graph = mxlib.implementation_graph(ndname)
+        graph = mxlib.implementation_graph(ndname, nd)
         out = graph.getOutput(outname) or graph.getOutputs()[0]
         p = self.port(out, trail, resolved, True)
         if p is None:

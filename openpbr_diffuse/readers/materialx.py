@@ -11,7 +11,7 @@ import os
 from . import mxlib
 from .graph import Resolver, to_python
 from .mapping import build_material
-from .material import Parameter
+from .material import Parameter, failed_material
 
 # ----------------------------------------------------------------------- documents
 def read_document(path):
@@ -80,8 +80,12 @@ def load(path, *, uv=(0.5, 0.5), material=None, path_prefix=None, variants=None)
         full = f"{path_prefix.rstrip('/')}/{name}" if path_prefix else npath
         if material is not None and material not in (name, npath, full):
             continue
-        out.append(build_material(_MxShader(shader, file, doc_space), name=name, path=full, file=file, uv=uv,
-                                  variants=variants))
+        try:
+            m = build_material(_MxShader(shader, file, doc_space), name=name, path=full, file=file, uv=uv,
+                               variants=variants)
+        except Exception as exc:  # one bad value fails its own material, never the document
+            m = failed_material(exc, name=name, path=full, file=file, uv=uv, variants=variants)
+        out.append(m)
     return out
 
 

@@ -34,7 +34,7 @@ import numpy as np
 
 from . import colorspace, mxlib, ops, textures
 from .mapping import build_material
-from .material import Parameter
+from .material import Material, Parameter, failed_material
 from .graph import Resolver, convert_color, to_python
 
 _MX_TYPES = {
@@ -309,12 +309,17 @@ class _UsdResolver:
             t = defs[name][0]
             tn = str(inp.GetTypeName())
             got = _MX_TYPES.get(tn, tn)
-            if got != t and not (t == "string" and got == "filename"):
+            # float3 / float4 colours: how Blender and the glTF converters write them
+            as_colour = t in ("color3", "color4") and got == "vector" + t[-1]
+            if got != t and not as_colour and not (t == "string" and got == "filename"):
                 raise ValueError(f"{self.file}: {inp.GetAttr().GetPath()}: type {tn}, but "
                                  f"input {name} of {sid} is {t}")
             p = self.port(inp, t, trail)
             if p is not None:
                 out[name] = p
+            elif defs[name][2] in ("UV0", "UV1"):
+                # connected to something not evaluated (e.g. a texcoord node): the uv point
+                out[name] = Parameter(self.uv.copy(), f"uv ({self.uv[0]:g}, {self.uv[1]:g})", "uv")
         # geometry inputs (normals, ...) that nothing supplies are left out
         return {n: out[n] for n in defs if n in out}
 
@@ -336,6 +341,8 @@ class _UsdResolver:
             self._note(f"{path} ({sid or 'no info:id'}) is not evaluated by the reader; default used", True)
             return None
         cat = nd.getNodeString()
+        if cat == "texcoord" and nd.getType() == "vector2":
+            return Parameter(self.uv.copy(), f"{path} (texcoord) = uv ({self.uv[0]:g}, {self.uv[1]:g})", "uv")
         outs = mxlib.outputs(sid)
         out_type = outs.get(output) or next(iter(outs.values()))
         if cat not in ops.OPS and cat != "image" and mxlib.implementation_graph(sid) is None:
@@ -572,6 +579,15 @@ def _entries(stage, file, time, uv, variants, diagnostics):
     return entries
 
 
+def _build(entry: "_Entry", file: str, uv: tuple, variants: dict | None, time: object) -> Material:
+    """Build one material; an error fails that material only (``Material.error``)."""
+    try:
+        return entry.build()
+    except Exception as exc:  # one bad value fails its own material, never the stage
+        return failed_material(exc, name=entry.name, path=entry.path, file=file, uv=uv, variants=variants,
+                               time=time)
+
+
 def _mtlx_names(path):
     from .materialx import read_document
 
@@ -650,7 +666,7 @@ def _load(path, *, time, variants, uv, material, purpose):
                     raise ValueError(f"{file}: prim {prim.GetPath()} has no bound material (purpose "
                                      f"{purpose or 'all'})")
                 chosen.append(e)
-    mats = [e.build() for e in chosen]
+    mats = [_build(e, file, uv, variants, time) for e in chosen]
     useful = [d for d in diagnostics if "Cannot determine file format" not in d and ".mtlx" not in d]
     for m in mats:
         m.warnings += [f"USD: {d.strip()[:300]}" for d in useful]
