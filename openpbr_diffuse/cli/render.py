@@ -36,6 +36,8 @@ def run(args):
     if len(materials) != 1:
         names = ", ".join(m.path for m in materials[:8])
         raise ValueError(f"render: {len(materials)} materials in {args.file} ({names}); choose one with --material")
+    if materials[0].error:
+        raise ValueError(f"render: {materials[0].path} cannot be evaluated: {materials[0].error}")
     img = render_image(materials[0], args.size)
     write_image(img, args.out)
     print(args.out)
