@@ -16,7 +16,9 @@ The same evaluator runs MaterialX's own translation graph for Standard Surface
 (``ND_standard_surface_to_open_pbr_surface``, see ``mapping``) and the library graphs of
 ``ND_`` nodes met in USD stages.
 """
+import contextlib
 import os
+import sys
 
 import numpy as np
 
@@ -28,6 +30,24 @@ from .mxlib import mx_value
 VALUE_TYPES = ("float", "integer", "boolean", "string", "filename", "color3", "color4",
                "vector2", "vector3", "vector4")
 _COLORS = ("color3", "color4")
+
+
+#: Longest chain of connected nodes evaluated (deeper graphs fail their material with a
+#: one-line error instead of exhausting the interpreter's stack).
+MAX_CHAIN = 2000
+
+
+@contextlib.contextmanager
+def deep_stack(frames: int = 8 * MAX_CHAIN + 2000):
+    """Raise the interpreter's recursion limit to at least ``frames`` while evaluating graphs
+    (the evaluator recurses along connections; since Python 3.11 such frames do not use
+    the C stack)."""
+    old = sys.getrecursionlimit()
+    sys.setrecursionlimit(max(old, frames))
+    try:
+        yield
+    finally:
+        sys.setrecursionlimit(old)
 
 
 def to_python(v):
@@ -61,6 +81,9 @@ class Resolver:
         self.uv = np.asarray(uv, dtype=np.float64)
         self.default_space = default_space
         self.sink = sink
+        # node outputs already evaluated, per (node, output, interface context, library):
+        # a graph that reads one node many times evaluates it once
+        self._memo = {}
 
     # ----------------------------------------------------------------- helpers
     def _note(self, text, unsupported=False):
@@ -76,6 +99,9 @@ class Resolver:
             raise ValueError(f"{self.file}: {elem.getNamePath()}: {exc}") from None
 
     def _cycle(self, key, trail):
+        if len(trail) > 2 * MAX_CHAIN:
+            raise ValueError(f"{self.file}: the shading graph is deeper than {MAX_CHAIN} connected nodes "
+                             f"(at {key}); not evaluated")
         if key in trail:
             loop = list(trail[trail.index(key):]) + [key]
             raise ValueError(f"{self.file}: connection cycle: {' -> '.join(loop)}")
@@ -143,6 +169,15 @@ class Resolver:
     # ----------------------------------------------------------------- nodes
     def node_value(self, node, outname, trail=(), iface=None, library=False):
         """The value of output ``outname`` of ``node`` (None if the node is not evaluated)."""
+        key = (node.getNamePath(), outname, id(iface), library)
+        hit = self._memo.get(key)
+        if hit is not None:
+            return hit[0]
+        p = self._node_value(node, outname, trail, iface, library)
+        self._memo[key] = (p, iface)  # iface kept alive so that its id is not reused
+        return p
+
+    def _node_value(self, node, outname, trail, iface, library):
         trail = self._cycle("node:" + node.getNamePath(), trail)
         nd = node.getNodeDef()
         cat = node.getCategory()
@@ -252,10 +287,20 @@ def _combined(resolved):
     return "texture" if any(p.kind == "texture" for p in resolved.values()) else "connection"
 
 
-def _describe(head, resolved):
-    set_ = [f"{n}: {p.provenance}" for n, p in resolved.items() if p.kind not in ("default",)]
+#: Longest provenance kept per input of a node: a graph that reads a node many times would
+#: otherwise build provenance strings exponentially long.
+PROVENANCE_LIMIT = 400
+
+
+def _short(text: str, limit: int = PROVENANCE_LIMIT) -> str:
+    """``text`` cut to ``limit`` characters (the cut said)."""
+    return text if len(text) <= limit else text[:limit] + f"... ({len(text) - limit} more characters)"
+
+
+def _describe(head: str, resolved: dict) -> str:
+    set_ = [f"{n}: {_short(p.provenance)}" for n, p in resolved.items() if p.kind not in ("default",)]
     return f"{head}({'; '.join(set_)})" if set_ else head
 
 
 
-__all__ = ["Resolver", "to_python", "convert_color", "VALUE_TYPES"]
+__all__ = ["MAX_CHAIN", "deep_stack", "Resolver", "to_python", "convert_color", "VALUE_TYPES"]

@@ -9,7 +9,7 @@ The file is only read.
 import os
 
 from . import mxlib
-from .graph import Resolver, to_python
+from .graph import Resolver, deep_stack, to_python
 from .mapping import build_material
 from .material import Parameter, failed_material
 
@@ -81,8 +81,9 @@ def load(path, *, uv=(0.5, 0.5), material=None, path_prefix=None, variants=None)
         if material is not None and material not in (name, npath, full):
             continue
         try:
-            m = build_material(_MxShader(shader, file, doc_space), name=name, path=full, file=file, uv=uv,
-                               variants=variants)
+            with deep_stack():
+                m = build_material(_MxShader(shader, file, doc_space), name=name, path=full, file=file, uv=uv,
+                                   variants=variants)
         except Exception as exc:  # one bad value fails its own material, never the document
             m = failed_material(exc, name=name, path=full, file=file, uv=uv, variants=variants)
         out.append(m)

@@ -35,7 +35,7 @@ import numpy as np
 from . import colorspace, mxlib, ops, textures
 from .mapping import build_material
 from .material import Material, Parameter, failed_material
-from .graph import Resolver, convert_color, to_python
+from .graph import MAX_CHAIN, Resolver, _short, convert_color, deep_stack, to_python
 
 _MX_TYPES = {
     "color3f": "color3", "color3d": "color3", "color3h": "color3", "color4f": "color4", "color4d": "color4",
@@ -171,6 +171,7 @@ class _UsdResolver:
         self.default_space = default_space
         self.sink = sink
         self._mx = None
+        self._memo = {}  # (shader path, output, type) -> Parameter: each shader output evaluated once
 
     @property
     def mx(self):
@@ -211,6 +212,9 @@ class _UsdResolver:
             raise ValueError(f"{self.file}: {attr.GetPath()}: {exc}") from None
 
     def _cycle(self, key, trail):
+        if len(trail) > 2 * MAX_CHAIN:
+            raise ValueError(f"{self.file}: the shading network is deeper than {MAX_CHAIN} connected shaders "
+                             f"(at {key}); not evaluated")
         if key in trail:
             loop = list(trail[trail.index(key):]) + [key]
             raise ValueError(f"{self.file}: connection cycle: {' -> '.join(str(k) for k in loop)}")
@@ -324,7 +328,16 @@ class _UsdResolver:
         return {n: out[n] for n in defs if n in out}
 
     # ----------------------------------------------------------------- shader nodes
-    def shader_value(self, shader, output, mx_type, trail):
+    def shader_value(self, shader, output: str, mx_type: str, trail: tuple) -> "Parameter | None":
+        """The value of ``output`` of a shader prim (memoised per shader, output and type)."""
+        key = (shader.GetPath(), output, mx_type)
+        if key in self._memo:
+            return self._memo[key]
+        p = self._shader_value(shader, output, mx_type, trail)
+        self._memo[key] = p
+        return p
+
+    def _shader_value(self, shader, output, mx_type, trail):
         sid = shader.GetShaderId() or ""
         path = str(shader.GetPath())
         trail = self._cycle(shader.GetPath(), trail)
@@ -359,7 +372,7 @@ class _UsdResolver:
                 value = ops.apply(cat, {n: p.value for n, p in resolved.items()}, out_type)
             except (TypeError, ValueError, IndexError) as exc:
                 raise ValueError(f"{self.file}: {path} ({sid}): {exc}") from None
-            set_ = [f"{n}: {p.provenance}" for n, p in resolved.items() if p.kind != "default"]
+            set_ = [f"{n}: {_short(p.provenance)}" for n, p in resolved.items() if p.kind != "default"]
             kind = "texture" if any(p.kind == "texture" for p in resolved.values()) else "connection"
             return Parameter(value, f"{cat} {path}({'; '.join(set_)})", kind)
         graph = mxlib.implementation_graph(sid)
@@ -582,7 +595,8 @@ def _entries(stage, file, time, uv, variants, diagnostics):
 def _build(entry: "_Entry", file: str, uv: tuple, variants: dict | None, time: object) -> Material:
     """Build one material; an error fails that material only (``Material.error``)."""
     try:
-        return entry.build()
+        with deep_stack():
+            return entry.build()
     except Exception as exc:  # one bad value fails its own material, never the stage
         return failed_material(exc, name=entry.name, path=entry.path, file=file, uv=uv, variants=variants,
                                time=time)
