@@ -238,3 +238,57 @@ def test_usd_unknown_colour_space_fails_only_its_material(tmp_path):
     mats = _by_name(load_materials(_write(tmp_path, "cs.usda", text)))
     assert "gamma22" in mats["M"].error and not mats["M"].supported
     assert mats["Other"].error == "" and mats["Other"].supported
+
+
+# --------------------------------------------------------------- shaders inside nodegraphs
+GRAPH_SHADERS = """
+<?xml version="1.0"?>
+<materialx version="1.39">
+  <nodegraph name="G">
+    <oren_nayar_diffuse_bsdf name="d1" type="BSDF">
+      <input name="color" type="color3" value="0.6, 0.5, 0.4" />
+      <input name="roughness" type="float" value="0.25" />
+      <input name="energy_compensation" type="boolean" value="true" />
+    </oren_nayar_diffuse_bsdf>
+    <surface name="s1" type="surfaceshader"><input name="bsdf" type="BSDF" nodename="d1" /></surface>
+    <output name="out1" type="surfaceshader" nodename="s1" />
+    <oren_nayar_diffuse_bsdf name="d2" type="BSDF">
+      <input name="roughness" type="float" value="0.75" />
+    </oren_nayar_diffuse_bsdf>
+    <surface name="s2" type="surfaceshader"><input name="bsdf" type="BSDF" nodename="d2" /></surface>
+    <output name="out2" type="surfaceshader" nodename="s2" />
+  </nodegraph>
+  <open_pbr_surface name="S" type="surfaceshader" />
+  <surfacematerial name="M" type="material"><input name="surfaceshader" type="surfaceshader" nodename="S" /></surfacematerial>
+</materialx>
+"""
+
+
+def test_surface_shaders_inside_nodegraphs_are_listed(tmp_path):
+    import MaterialX as mx
+    from MaterialX import PyMaterialXGenShader as gen
+
+    def renderable(f):
+        doc = mx.createDocument()
+        mx.readFromXmlFile(doc, str(f))
+        return {e.getNamePath() for e in gen.findRenderableElements(doc)}
+
+    # what MaterialX's findRenderableElements finds, eval lists: with a material node, the
+    # material; without one, the nodegraph's surface-shader outputs
+    with_material = _write(tmp_path, "m.mtlx", GRAPH_SHADERS)
+    assert set(_by_name(load_materials(with_material))) == renderable(with_material) == {"M"}
+    f = _write(tmp_path, "g.mtlx", GRAPH_SHADERS.replace(
+        '<surfacematerial name="M" type="material"><input name="surfaceshader" type="surfaceshader" '
+        'nodename="S" /></surfacematerial>', ""))
+    mats = _by_name(load_materials(f))
+    assert renderable(f) >= {"G/out1", "G/out2"}
+    assert {"G/out1", "G/out2"} <= set(mats) and set(mats) <= renderable(f) | {"S"}
+    a, b = mats["G/out1"], mats["G/out2"]
+    assert a.error == "" and a.node_class == "OrenNayarDiffuseBSDF" and a.diffuse_model == "eon"
+    assert a.parameters["roughness"].value == 0.25 and a.node_inputs["roughness"].value == 0.25
+    # d2 takes the nodedef defaults of MaterialX's library (read there, not here)
+    lib = mx.createDocument()
+    mx.loadLibraries(mx.getDefaultDataLibraryFolders(), mx.getDefaultDataSearchPath(), lib)
+    nd = lib.getNodeDef("ND_oren_nayar_diffuse_bsdf")
+    assert b.parameters["color"].value == pytest.approx(tuple(nd.getInput("color").getValue()))
+    assert b.parameters["energy_compensation"].value == nd.getInput("energy_compensation").getValue()
