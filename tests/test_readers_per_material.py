@@ -292,3 +292,46 @@ def test_surface_shaders_inside_nodegraphs_are_listed(tmp_path):
     nd = lib.getNodeDef("ND_oren_nayar_diffuse_bsdf")
     assert b.parameters["color"].value == pytest.approx(tuple(nd.getInput("color").getValue()))
     assert b.parameters["energy_compensation"].value == nd.getInput("energy_compensation").getValue()
+
+
+# --------------------------------------------------------------- sourceColorSpace "auto"
+UVTEX = """
+#usda 1.0
+def Material "M"
+{{
+    token outputs:surface.connect = </M/S.outputs:surface>
+    def Shader "S"
+    {{
+        uniform token info:id = "UsdPreviewSurface"
+        float inputs:roughness.connect = </M/T.outputs:r>
+        token outputs:surface
+    }}
+    def Shader "T"
+    {{
+        uniform token info:id = "UsdUVTexture"
+        asset inputs:file = @{tex}@
+        token inputs:sourceColorSpace = "{cs}"
+        float outputs:r
+    }}
+}}
+"""
+
+
+@pytest.mark.parametrize("channels, cs, decoded", [(1, "auto", False), (2, "auto", False), (3, "auto", True),
+                                                   (4, "auto", True), (1, "sRGB", True), (3, "raw", False)])
+def test_auto_source_colour_space_decodes_only_colour_textures(tmp_path, channels, cs, decoded):
+    import OpenImageIO as oiio
+
+    tex = str(tmp_path / f"t{channels}.png")
+    pix = np.full((4, 4, channels), 216, dtype=np.uint8)
+    out = oiio.ImageOutput.create(tex)
+    out.open(tex, oiio.ImageSpec(4, 4, channels, "uint8"))
+    out.write_image(pix)
+    out.close()
+    (m,) = load_materials(_write(tmp_path, "t.usda", UVTEX.format(tex=tex, cs=cs)))
+    assert m.error == "", m.error
+    c = 216 / 255
+    srgb = ((c + 0.055) / 1.055) ** 2.4  # IEC 61966-2-1 decoding
+    want = srgb if decoded else c
+    # (the decoding runs through OpenColorIO, whose CPU path approximates the power to ~2e-5)
+    assert m.parameters["roughness"].value == pytest.approx(want, abs=5e-5)

@@ -429,7 +429,9 @@ class _UsdResolver:
                 rgba = np.array([texel[0], texel[1], texel[2], 1.0])
             else:
                 rgba = texel[:4].copy()
-            srgb = source_cs == "sRGB" or (source_cs == "auto" and bits == 8)
+            # "auto": sRGB for 8-bit textures of 3 or 4 channels only (UsdPreviewSurface
+            # specification; OpenUSD's Hio does the same); 1- and 2-channel ones are data
+            srgb = source_cs == "sRGB" or (source_cs == "auto" and bits == 8 and nch in (3, 4))
             if srgb:
                 rgba[:3] = _srgb_decode(rgba[:3])
             rgba = rgba * scale + bias
