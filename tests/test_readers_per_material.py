@@ -335,3 +335,16 @@ def test_auto_source_colour_space_decodes_only_colour_textures(tmp_path, channel
     want = srgb if decoded else c
     # (the decoding runs through OpenColorIO, whose CPU path approximates the power to ~2e-5)
     assert m.parameters["roughness"].value == pytest.approx(want, abs=5e-5)
+
+
+# --------------------------------------------------------------- clamp warnings and round-off
+def test_no_clamp_warning_for_colour_space_round_off(tmp_path):
+    white = _openpbr(tmp_path, "w.mtlx", '<input name="base_color" type="color3" value="1, 1, 1" />')
+    (m,) = load_materials(white)
+    authored = np.asarray(m.parameters["base_color"].value)
+    assert np.all(np.abs(authored - 1.0) < 1e-6)  # lin_rec709 white in ACEScg, up to round-off
+    assert not [w for w in m.warnings if "base_color" in w]
+    assert all(0.0 <= x <= 1.0 for x in m.node_inputs["base_color"].value)
+    over = _openpbr(tmp_path, "o.mtlx", '<input name="base_color" type="color3" value="1.001, 1, 1" />')
+    (m,) = load_materials(over)
+    assert [w for w in m.warnings if "base_color" in w and "clamped" in w]  # a real overshoot still warns
