@@ -10,6 +10,7 @@ weight and selection probability, the directional albedo at theta_o and the BRDF
 (no cosine) at the given directions.  Angles in degrees; phi is the azimuth of wi relative
 to wo (180: forward, in the plane of incidence).
 """
+import argparse
 import json
 import sys
 
@@ -62,7 +63,7 @@ def _node_defaults(node_class):
     return {n: v for n, (t, v, g) in mxlib.inputs(nd).items()} if nd else {}
 
 
-def run(args):
+def run(args: "argparse.Namespace") -> int:
     from ..readers import WORKING_SPACE
     from ..readers.evaluate import evaluate
 

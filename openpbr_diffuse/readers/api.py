@@ -62,7 +62,8 @@ def _check_variants(variants):
     return dict(items)
 
 
-def load_materials(path, *, time=None, variants=None, uv=(0.5, 0.5), material=None, purpose="full"):
+def load_materials(path: "str | os.PathLike", *, time: float | None = None, variants: "dict | list | None" = None,
+                   uv: tuple = (0.5, 0.5), material: str | None = None, purpose: str = "full") -> list:
     """Read the materials of a USD stage or MaterialX document.
 
     Parameters

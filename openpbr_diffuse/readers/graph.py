@@ -98,7 +98,7 @@ class Resolver:
         except ValueError as exc:
             raise ValueError(f"{self.file}: {elem.getNamePath()}: {exc}") from None
 
-    def _cycle(self, key, trail):
+    def _cycle(self, key: str, trail: tuple) -> tuple:
         if len(trail) > 2 * MAX_CHAIN:
             raise ValueError(f"{self.file}: the shading graph is deeper than {MAX_CHAIN} connected nodes "
                              f"(at {key}); not evaluated")
@@ -167,7 +167,8 @@ class Resolver:
         return None
 
     # ----------------------------------------------------------------- nodes
-    def node_value(self, node, outname, trail=(), iface=None, library=False):
+    def node_value(self, node, outname: str, trail: tuple = (), iface: dict | None = None,
+                   library: bool = False) -> Parameter | None:
         """The value of output ``outname`` of ``node`` (None if the node is not evaluated)."""
         key = (node.getNamePath(), outname, id(iface), library)
         hit = self._memo.get(key)
@@ -177,7 +178,7 @@ class Resolver:
         self._memo[key] = (p, iface)  # iface kept alive so that its id is not reused
         return p
 
-    def _node_value(self, node, outname, trail, iface, library):
+    def _node_value(self, node, outname: str, trail: tuple, iface: dict | None, library: bool) -> Parameter | None:
         trail = self._cycle("node:" + node.getNamePath(), trail)
         nd = node.getNodeDef()
         cat = node.getCategory()

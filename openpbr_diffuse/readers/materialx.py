@@ -75,7 +75,8 @@ def graph_shaders(doc, known: set) -> list:
     return out
 
 
-def load(path, *, uv=(0.5, 0.5), material=None, path_prefix=None, variants=None):
+def load(path: "str | os.PathLike", *, uv: tuple = (0.5, 0.5), material: str | None = None,
+         path_prefix: str | None = None, variants: dict | None = None) -> list:
     """Materials of a MaterialX document.
 
     Parameters

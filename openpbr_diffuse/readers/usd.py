@@ -211,7 +211,7 @@ class _UsdResolver:
         except ValueError as exc:
             raise ValueError(f"{self.file}: {attr.GetPath()}: {exc}") from None
 
-    def _cycle(self, key, trail):
+    def _cycle(self, key: object, trail: tuple) -> tuple:
         if len(trail) > 2 * MAX_CHAIN:
             raise ValueError(f"{self.file}: the shading network is deeper than {MAX_CHAIN} connected shaders "
                              f"(at {key}); not evaluated")
@@ -293,7 +293,7 @@ class _UsdResolver:
             v = np.asarray(v, dtype=np.float64)
         return Parameter(v, prov, "time" if note else "authored")
 
-    def inputs(self, shader, sid, trail, authored=None):
+    def inputs(self, shader, sid: str, trail: tuple, authored: dict | None = None) -> dict:
         """Resolved {name: Parameter} of every nodedef input of a shader (defaults filled).
 
         ``authored``: {name: UsdShade.Input} of the shader's authored inputs (from
@@ -337,7 +337,7 @@ class _UsdResolver:
         self._memo[key] = p
         return p
 
-    def _shader_value(self, shader, output, mx_type, trail):
+    def _shader_value(self, shader, output: str, mx_type: str, trail: tuple) -> "Parameter | None":
         sid = shader.GetShaderId() or ""
         path = str(shader.GetPath())
         trail = self._cycle(shader.GetPath(), trail)
@@ -654,7 +654,8 @@ def load(path, *, time=None, variants=None, uv=(0.5, 0.5), material=None, purpos
             gc.enable()
 
 
-def _load(path, *, time, variants, uv, material, purpose):
+def _load(path, *, time: float | None, variants: dict, uv: tuple, material: str | None,
+          purpose: str) -> list[Material]:
     from pxr import Sdf, UsdShade
 
     file = os.fspath(path)

@@ -16,7 +16,7 @@ import re
 
 import numpy as np
 
-from ..model import Check, Figure, SectionResult, Table
+from ..model import Check, Context, Figure, SectionResult, Table
 
 TITLE = "Materials"
 KEY = "materials"
@@ -83,7 +83,7 @@ def _render(m, path, size):
     write_image(render_image(m, size, supersample=1), str(path))
 
 
-def _material_rows(mats):
+def _material_rows(mats: list) -> list:
     from ...readers.evaluate import evaluate
 
     rows = []
@@ -107,7 +107,7 @@ def _material_rows(mats):
     return rows
 
 
-def build(ctx):
+def build(ctx: Context) -> SectionResult:
     from ...readers import BUNDLED_MATERIALS, find_material_files, load_materials
     from ...readers.evaluate import directions
 
