@@ -112,3 +112,55 @@ def test_render_exr_and_png(tmp_path, capsys):
     # PNG = sRGB transfer of the same pixel (converted ACEScg -> lin Rec.709 with Gf.ColorSpace)
     want_png = np.round(_srgb_encode(_acescg_to_lin709(centre)) * 255)
     assert np.all(np.abs(P[size // 2, size + size // 2, :3].astype(float) - want_png) <= 1.0)
+
+
+MIXED = """<?xml version="1.0"?>
+<materialx version="1.39">
+  <open_pbr_surface name="Sa" type="surfaceshader">
+    <input name="base_color" type="color3" value="0.5, 0.5, 0.5" colorspace="{space}" />
+  </open_pbr_surface>
+  <surfacematerial name="A" type="material"><input name="surfaceshader" type="surfaceshader" nodename="Sa" /></surfacematerial>
+  <gltf_pbr name="G" type="surfaceshader" />
+  <surfacematerial name="Gltf" type="material"><input name="surfaceshader" type="surfaceshader" nodename="G" /></surfacematerial>
+</materialx>"""
+
+
+@pytest.mark.parametrize("space, rc_want", [("lin_rec709", 0), ("gamma22", 1)])
+def test_eval_exit_codes_per_material(tmp_path, capfd, space, rc_want):
+    """0: every material read (an unsupported shader is listed as unsupported); 1: some
+    material could not be evaluated, named with its reason; the others still evaluated."""
+    f = tmp_path / "m.mtlx"
+    f.write_text(MIXED.format(space=space))
+    assert main(["eval", str(f)]) == rc_want
+    out, err = capfd.readouterr()
+    assert "Traceback" not in err and "# Gltf  [ND_gltf_pbr_surfaceshader]" in out and "not supported" in out
+    if rc_want:
+        assert "# A  [not evaluated]" in out and "gamma22" in out and "could not be evaluated: A" in err
+    else:
+        assert "# A  [ND_open_pbr_surface_surfaceshader]" in out and err == ""
+    assert main(["eval", str(f), "--json"]) == rc_want
+    mats = {m["name"]: m for m in json.loads(capfd.readouterr().out)["materials"]}
+    assert mats["Gltf"]["error"] is None and mats["Gltf"]["supported"] is False
+    assert (mats["A"]["error"] is not None) == bool(rc_want)
+    assert (mats["A"]["evaluation"]["brdf"] is None) == bool(rc_want)
+
+
+def test_eval_unusable_file_exit_2(tmp_path, capfd):
+    f = tmp_path / "m.mtlx"
+    f.write_text("<materialx version='1.39'><oops")
+    assert main(["eval", str(f)]) == 2
+    assert "not a readable MaterialX document" in capfd.readouterr().err
+
+
+def test_eval_escapes_control_characters_in_names(tmp_path, capfd):
+    """A material name holding a terminal escape is printed repr-style, never raw."""
+    f = tmp_path / "esc.mtlx"
+    f.write_text(MIXED.format(space="lin_rec709").replace('name="A"', 'name="A&#27;[31mred"'))
+    import MaterialX as mx
+
+    doc = mx.createDocument()
+    mx.readFromXmlFile(doc, str(f))
+    assert doc.getMaterialNodes()[0].getName() == "A\x1b[31mred"  # MaterialX itself keeps the byte
+    assert main(["eval", str(f)]) == 0
+    out = capfd.readouterr().out
+    assert "\x1b" not in out and "# A\\x1b[31mred  [" in out

@@ -82,8 +82,6 @@ def _files(tmp_path):
     (["notes.txt"], "unknown file type"),
     (["bad.mtlx"], "not a readable MaterialX document"),
     (["bad.usda"], "not a readable USD stage"),
-    (["cycle.mtlx"], "connection cycle"),
-    (["wrong.usda"], "base_diffuse_roughness"),
     (["range.mtlx", "--material", "Nope"], "no material or prim 'Nope'"),
     (["wrong.usda", "--variant", "finish=matte"], "variant set 'finish'"),
     (["range.mtlx", "--variant", "a=b"], "variants apply to USD"),
@@ -97,6 +95,20 @@ def test_eval_bad_input_one_line_exit_2(tmp_path, monkeypatch, capfd, args, need
     rc, out, err = _run(capfd, "eval", *args)
     assert rc == 2
     assert needle in _one_error_line(err)
+
+
+@pytest.mark.parametrize("name, needle", [("cycle.mtlx", "connection cycle"),
+                                           ("wrong.usda", "base_diffuse_roughness")])
+def test_eval_material_that_cannot_be_evaluated_exit_1(tmp_path, monkeypatch, capfd, name, needle):
+    """The material is listed with its path and reason; exit 1; no traceback."""
+    monkeypatch.chdir(_files(tmp_path))
+    rc, out, err = _run(capfd, "eval", name)
+    assert rc == 1 and "Traceback" not in err
+    assert "# M  [not evaluated]" in out or "# /M  [not evaluated]" in out, out
+    assert needle in out and "could not be evaluated: " in err
+    rc, out, err = _run(capfd, "eval", name, "--json")
+    (m,) = json.loads(out)["materials"]
+    assert rc == 1 and needle in m["error"] and m["supported"] is False
 
 
 def test_malformed_usd_diagnostics_do_not_leak(tmp_path, monkeypatch, capfd):

@@ -32,7 +32,32 @@ def test_materials_section_on_given_files(tmp_path):
     assert "materials_albedo.png" in files and sum(f.endswith("_render.png") for f in files) == 3
     for f in files:
         assert (images / f).is_file() and f.startswith("materials_")
-    assert res.checks and all(c.passed for c in res.checks)
+    # the unreadable file is a failed check, never a pass; the materials' own checks pass
+    read = next(c for c in res.checks if c.name == "every given material file is read")
+    assert not read.passed and read.measured == 1 and "broken.mtlx" in read.detail
+    assert all(c.passed for c in res.checks if c is not read)
     # per-material parameter tables carry the provenance
     clay = next(t for t in res.tables if t.caption.startswith("clay_rough"))
     assert any(r[0] == "base_diffuse_roughness" and "authored" in r[3] for r in clay.rows)
+
+
+def test_materials_section_fails_on_a_material_that_cannot_be_evaluated(tmp_path):
+    src = tmp_path / "in"
+    src.mkdir()
+    (src / "two.mtlx").write_text("""<?xml version="1.0"?>
+<materialx version="1.39">
+  <open_pbr_surface name="Sa" type="surfaceshader">
+    <input name="base_color" type="color3" value="0.5, 0.5, 0.5" colorspace="gamma22" />
+  </open_pbr_surface>
+  <surfacematerial name="Bad" type="material"><input name="surfaceshader" type="surfaceshader" nodename="Sa" /></surfacematerial>
+  <open_pbr_surface name="Sb" type="surfaceshader" />
+  <surfacematerial name="Good" type="material"><input name="surfaceshader" type="surfaceshader" nodename="Sb" /></surfacematerial>
+</materialx>""")
+    images = tmp_path / "img"
+    images.mkdir()
+    res = materials.build(Context(image_dir=images, paths=[src], quick=True))
+    ev = next(c for c in res.checks if c.name == "every material found is evaluated")
+    assert not ev.passed and ev.measured == 1 and "Bad" in ev.detail and "gamma22" in ev.detail
+    rows = {r[1]: r for r in res.tables[0].rows}
+    assert set(rows) == {"Bad", "Good"} and "gamma22" in rows["Bad"][9]
+    assert sum(f.file.endswith("_render.png") for f in res.figures) == 1

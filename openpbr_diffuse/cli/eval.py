@@ -10,7 +10,9 @@ weight and selection probability, the directional albedo at theta_o and the BRDF
 (no cosine) at the given directions.  Angles in degrees; phi is the azimuth of wi relative
 to wo (180: forward, in the plane of incidence).
 """
+import argparse
 import json
+import sys
 
 import numpy as np
 
@@ -33,6 +35,14 @@ def add_parser(subparsers):
     return p
 
 
+def _safe(text: str) -> str:
+    """Text from a user's file with control characters escaped repr-style (``\\x1b``)."""
+    text = str(text)
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+
+
 def _fmt(v):
     if isinstance(v, (tuple, list)):
         return "(" + ", ".join(_fmt(x) for x in v) + ")"
@@ -53,7 +63,7 @@ def _node_defaults(node_class):
     return {n: v for n, (t, v, g) in mxlib.inputs(nd).items()} if nd else {}
 
 
-def run(args):
+def run(args: "argparse.Namespace") -> int:
     from ..readers import WORKING_SPACE
     from ..readers.evaluate import evaluate
 
@@ -63,6 +73,9 @@ def run(args):
         raise ValueError("eval: --theta-i, --theta-o and --phi must have the same number of values (or one)") from None
     materials = load(args)
     results = [(m, evaluate(m, ti, to, ph)) for m in materials]
+    # 0: every material read (unsupported shaders listed as such); 1: some could not be
+    # evaluated (each named with its reason); 2 (raised before): the file itself is unusable
+    status = 1 if any(m.error for m in materials) else 0
     if args.json:
         doc = {
             "file": args.file, "working_space": WORKING_SPACE, "time": args.time,
@@ -72,13 +85,17 @@ def run(args):
             "materials": [dict(m.to_dict(), evaluation=r) for m, r in results],
         }
         print(json.dumps(doc, allow_nan=False))
-        return 0
+        return status
     for m, r in results:
-        print(f"# {m.path}  [{m.shader_id or 'no shader'}]  from {m.file}")
+        if m.error:
+            print(f"# {_safe(m.path)}  [not evaluated]  from {_safe(m.file)}")
+            print(f"  error: {_safe(m.error)}")
+            continue
+        print(f"# {_safe(m.path)}  [{_safe(m.shader_id) or 'no shader'}]  from {_safe(m.file)}")
         if not m.supported:
-            print("  not supported: " + "; ".join(m.unsupported))
+            print("  not supported: " + _safe("; ".join(m.unsupported)))
             for w in m.warnings:
-                print(f"  warning: {w}")
+                print(f"  warning: {_safe(w)}")
             continue
         print(f"  node: {m.node_class}" + (f" (diffuse {m.diffuse_model})" if m.diffuse_model else "")
               + f"; colours in {WORKING_SPACE}")
@@ -117,12 +134,16 @@ def run(args):
         for k in range(n):
             print(f"    theta_i {r['theta_i'][k]:g} theta_o {r['theta_o'][k]:g} phi {r['phi'][k]:g}: {_rgb(r['brdf'][k])}")
         for u in m.unsupported:
-            print(f"  unsupported: {u}")
+            print(f"  unsupported: {_safe(u)}")
         for a in m.approximations:
             print(f"  approximation: {a}")
         for w in m.warnings:
-            print(f"  warning: {w}")
-    return 0
+            print(f"  warning: {_safe(w)}")
+    bad = [m for m in materials if m.error]
+    if bad:
+        print(f"{len(bad)} of {len(materials)} material(s) could not be evaluated: "
+              + ", ".join(_safe(m.path) for m in bad), file=sys.stderr)
+    return status
 
 
 __all__ = ["add_parser", "run"]

@@ -7,6 +7,7 @@ Left: the sphere under a directional light; right: under a uniform white environ
 furnace: each pixel is the directional albedo at its view angle).  EXR: linear ACEScg, float;
 PNG: sRGB, 8 bit (see :mod:`openpbr_diffuse.readers.preview`).
 """
+import argparse
 import os
 
 from ..readers.preview import render_image, write_image
@@ -28,7 +29,7 @@ def _check_out(path):
         raise ValueError(f"--out must end in .exr or .png (also .jpg, .tif), got {path!r}")
 
 
-def run(args):
+def run(args: "argparse.Namespace") -> int:
     _check_out(args.out)
     if not 8 <= args.size <= 4096:
         raise ValueError(f"size must be an integer in [8, 4096], got {args.size!r}")
@@ -36,6 +37,8 @@ def run(args):
     if len(materials) != 1:
         names = ", ".join(m.path for m in materials[:8])
         raise ValueError(f"render: {len(materials)} materials in {args.file} ({names}); choose one with --material")
+    if materials[0].error:
+        raise ValueError(f"render: {materials[0].path} cannot be evaluated: {materials[0].error}")
     img = render_image(materials[0], args.size)
     write_image(img, args.out)
     print(args.out)

@@ -1,5 +1,6 @@
 """``load_materials`` and ``BUNDLED_MATERIALS``: the readers' public entry points."""
 import os
+import stat
 from pathlib import Path
 
 USD_SUFFIXES = (".usda", ".usdc", ".usd", ".usdz")
@@ -61,7 +62,8 @@ def _check_variants(variants):
     return dict(items)
 
 
-def load_materials(path, *, time=None, variants=None, uv=(0.5, 0.5), material=None, purpose="full"):
+def load_materials(path: "str | os.PathLike", *, time: float | None = None, variants: "dict | list | None" = None,
+                   uv: tuple = (0.5, 0.5), material: str | None = None, purpose: str = "full") -> list:
     """Read the materials of a USD stage or MaterialX document.
 
     Parameters
@@ -115,6 +117,12 @@ def load_materials(path, *, time=None, variants=None, uv=(0.5, 0.5), material=No
         raise FileNotFoundError(f"{path}: no such file")
     if os.path.isdir(path):
         raise IsADirectoryError(f"{path}: is a directory, expected a .usd* or .mtlx file")
+    mode = os.stat(path).st_mode
+    if not stat.S_ISREG(mode):
+        # a FIFO or device would block or never end: refused by its type, before any open
+        kind = "a FIFO" if stat.S_ISFIFO(mode) else ("a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode)
+                                                     else "a socket" if stat.S_ISSOCK(mode) else "not a regular file")
+        raise ValueError(f"{path}: is {kind}, expected a regular .usd* or .mtlx file")
     if suffix in MTLX_SUFFIXES:
         if variants:
             raise ValueError(f"{path}: variants apply to USD stages, not MaterialX documents")

@@ -16,18 +16,38 @@ The same evaluator runs MaterialX's own translation graph for Standard Surface
 (``ND_standard_surface_to_open_pbr_surface``, see ``mapping``) and the library graphs of
 ``ND_`` nodes met in USD stages.
 """
+import contextlib
 import os
+import sys
 
 import numpy as np
 
 from . import colorspace, mxlib, ops, textures
 from .material import Parameter
-from ..nodes.materialx_defs import parse_value
+from .mxlib import mx_value
 
 #: Node output types the evaluator can produce (closures are not values).
 VALUE_TYPES = ("float", "integer", "boolean", "string", "filename", "color3", "color4",
                "vector2", "vector3", "vector4")
 _COLORS = ("color3", "color4")
+
+
+#: Longest chain of connected nodes evaluated (deeper graphs fail their material with a
+#: one-line error instead of exhausting the interpreter's stack).
+MAX_CHAIN = 2000
+
+
+@contextlib.contextmanager
+def deep_stack(frames: int = 8 * MAX_CHAIN + 2000):
+    """Raise the interpreter's recursion limit to at least ``frames`` while evaluating graphs
+    (the evaluator recurses along connections; since Python 3.11 such frames do not use
+    the C stack)."""
+    old = sys.getrecursionlimit()
+    sys.setrecursionlimit(max(old, frames))
+    try:
+        yield
+    finally:
+        sys.setrecursionlimit(old)
 
 
 def to_python(v):
@@ -61,6 +81,9 @@ class Resolver:
         self.uv = np.asarray(uv, dtype=np.float64)
         self.default_space = default_space
         self.sink = sink
+        # node outputs already evaluated, per (node, output, interface context, library):
+        # a graph that reads one node many times evaluates it once
+        self._memo = {}
 
     # ----------------------------------------------------------------- helpers
     def _note(self, text, unsupported=False):
@@ -75,19 +98,21 @@ class Resolver:
         except ValueError as exc:
             raise ValueError(f"{self.file}: {elem.getNamePath()}: {exc}") from None
 
-    def _cycle(self, key, trail):
+    def _cycle(self, key: str, trail: tuple) -> tuple:
+        if len(trail) > 2 * MAX_CHAIN:
+            raise ValueError(f"{self.file}: the shading graph is deeper than {MAX_CHAIN} connected nodes "
+                             f"(at {key}); not evaluated")
         if key in trail:
             loop = list(trail[trail.index(key):]) + [key]
             raise ValueError(f"{self.file}: connection cycle: {' -> '.join(loop)}")
         return trail + (key,)
 
-    def _authored(self, port, library):
+    def _authored(self, port, library: bool) -> Parameter:
         t = port.getType()
         text = port.getValueString()
-        try:
-            raw = parse_value(t, text)
-        except ValueError as exc:
-            raise ValueError(f"{self.file}: {port.getNamePath()}: bad {t} value {text!r} ({exc})") from None
+        raw = mx_value(port, t)
+        if raw is None and text.strip():
+            raise ValueError(f"{self.file}: {port.getNamePath()}: bad {t} value {text!r} (MaterialX cannot parse it)")
         if t == "filename":
             resolved = port.getResolvedValueString() or raw
             if resolved and not os.path.isabs(resolved):
@@ -142,8 +167,18 @@ class Resolver:
         return None
 
     # ----------------------------------------------------------------- nodes
-    def node_value(self, node, outname, trail=(), iface=None, library=False):
+    def node_value(self, node, outname: str, trail: tuple = (), iface: dict | None = None,
+                   library: bool = False) -> Parameter | None:
         """The value of output ``outname`` of ``node`` (None if the node is not evaluated)."""
+        key = (node.getNamePath(), outname, id(iface), library)
+        hit = self._memo.get(key)
+        if hit is not None:
+            return hit[0]
+        p = self._node_value(node, outname, trail, iface, library)
+        self._memo[key] = (p, iface)  # iface kept alive so that its id is not reused
+        return p
+
+    def _node_value(self, node, outname: str, trail: tuple, iface: dict | None, library: bool) -> Parameter | None:
         trail = self._cycle("node:" + node.getNamePath(), trail)
         nd = node.getNodeDef()
         cat = node.getCategory()
@@ -152,7 +187,10 @@ class Resolver:
                        f"MaterialX library: not evaluated, default used", True)
             return None
         ndname = nd.getName()
-        outs = mxlib.outputs(ndname)
+        if cat == "texcoord" and node.getType() == "vector2":
+            return Parameter(self.uv.copy(), f"texcoord {node.getNamePath()} = uv ({self.uv[0]:g}, {self.uv[1]:g})",
+                             "uv")
+        outs = mxlib.outputs(ndname, nd)
         out_type = outs.get(outname) if outname else None
         if out_type is None:
             out_type = node.getType() if node.getType() != "multioutput" else next(iter(outs.values()))
@@ -160,11 +198,11 @@ class Resolver:
         if out_type not in VALUE_TYPES:
             self._note(f"node {node.getNamePath()} ({ndname}) outputs a {out_type}: not a value", True)
             return None
-        if cat not in ops.OPS and cat != "image" and mxlib.implementation_graph(ndname) is None:
+        if cat not in ops.OPS and cat != "image" and mxlib.implementation_graph(ndname, nd) is None:
             self._note(f"node {node.getNamePath()} ({ndname}) is not evaluated by the reader; default used", True)
             return None
         resolved = {}
-        for name, (t, default, geomprop) in mxlib.inputs(ndname).items():
+        for name, (t, default, geomprop) in mxlib.inputs(ndname, nd).items():
             inp = node.getInput(name)
             p = self.port(inp, trail, iface, library) if inp is not None else None
             if p is None:
@@ -185,7 +223,7 @@ class Resolver:
             except (TypeError, ValueError, IndexError) as exc:
                 raise ValueError(f"{self.file}: node {node.getNamePath()} ({ndname}): {exc}") from None
             return Parameter(value, _describe(f"{cat} {node.getNamePath()}", resolved), _combined(resolved))
-        graph = mxlib.implementation_graph(ndname)
+        graph = mxlib.implementation_graph(ndname, nd)
         out = graph.getOutput(outname) or graph.getOutputs()[0]
         p = self.port(out, trail, resolved, True)
         if p is None:
@@ -250,10 +288,20 @@ def _combined(resolved):
     return "texture" if any(p.kind == "texture" for p in resolved.values()) else "connection"
 
 
-def _describe(head, resolved):
-    set_ = [f"{n}: {p.provenance}" for n, p in resolved.items() if p.kind not in ("default",)]
+#: Longest provenance kept per input of a node: a graph that reads a node many times would
+#: otherwise build provenance strings exponentially long.
+PROVENANCE_LIMIT = 400
+
+
+def _short(text: str, limit: int = PROVENANCE_LIMIT) -> str:
+    """``text`` cut to ``limit`` characters (the cut said)."""
+    return text if len(text) <= limit else text[:limit] + f"... ({len(text) - limit} more characters)"
+
+
+def _describe(head: str, resolved: dict) -> str:
+    set_ = [f"{n}: {_short(p.provenance)}" for n, p in resolved.items() if p.kind not in ("default",)]
     return f"{head}({'; '.join(set_)})" if set_ else head
 
 
 
-__all__ = ["Resolver", "to_python", "convert_color", "VALUE_TYPES"]
+__all__ = ["MAX_CHAIN", "deep_stack", "Resolver", "to_python", "convert_color", "VALUE_TYPES"]

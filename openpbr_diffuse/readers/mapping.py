@@ -254,8 +254,14 @@ def _inside(v, lo, hi):
                and x not in (math.inf, -math.inf) for x, a, b in zip(vals, los, his))
 
 
-def clamp_inputs(m):
-    """Clamp node inputs to the node's range, with a warning per clamped input."""
+#: Relative distance outside a range that is taken for round-off (of a colour-space
+#: conversion) and clamped silently, relative to the value's largest component.
+ROUND_OFF = 1e-6
+
+
+def clamp_inputs(m: Material) -> None:
+    """Clamp node inputs to the node's range, with a warning per clamped input (none for a
+    value within ``ROUND_OFF`` relative of the range: colour-space round-off)."""
     ranges = _ranges(m.node_class, m.diffuse_model)
     for name, p in list(m.node_inputs.items()):
         if p.kind == "default" or name not in ranges or isinstance(p.value, (bool, str)) or p.value is None:
@@ -272,6 +278,11 @@ def clamp_inputs(m):
         if np.array_equal(c, v):
             continue
         value = tuple(float(x) for x in c) if isinstance(p.value, tuple) else float(c)
+        scale = float(np.max(np.abs(v)))
+        if np.all(np.abs(c - v) <= ROUND_OFF * scale):
+            # colour-space round-off (white in ACEScg is 1.0000000186): clamped without a warning
+            m.node_inputs[name] = Parameter(value, p.provenance + " (round-off clamped)", p.kind, p.value)
+            continue
         rng = f"[{_fmt(lo) if lo is not None else '-inf'}, {_fmt(hi) if hi is not None else 'inf'}]"
         m.warnings.append(f"{name} = {_fmt(p.value)} is outside {rng}, the range of the "
                           f"{m.node_class} node: clamped to {_fmt(value)}")

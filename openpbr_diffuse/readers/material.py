@@ -79,6 +79,10 @@ class Material:
         What the mapping onto the library node approximates.
     shader_path : str
         Path of the surface shader prim / node.
+    error : str
+        Why the material could not be evaluated ("" when it was read; then ``supported``
+        says whether its shader maps onto a library node).  One bad value fails its own
+        material, never the file's others.
     """
 
     name: str
@@ -97,6 +101,7 @@ class Material:
     variants: dict = field(default_factory=dict)
     time: object = None
     uv: tuple = (0.5, 0.5)
+    error: str = ""
 
     def node_kwargs(self):
         """Keyword arguments of the library node (plain values)."""
@@ -131,7 +136,31 @@ class Material:
             "unsupported": list(self.unsupported), "approximations": list(self.approximations),
             "warnings": list(self.warnings),
             "time": self.time, "variants": dict(self.variants), "uv": list(self.uv),
+            "error": self.error or None,
         }
+
+
+def failed_material(exc: BaseException, *, name: str, path: str, file: str, uv: tuple = (0.5, 0.5),
+                    variants: dict | None = None, time: object = None) -> Material:
+    """A Material that could not be evaluated: ``error`` says why (one line), nothing else set.
+
+    Examples
+    --------
+    >>> m = failed_material(ValueError("x.mtlx: /M/S.base_color: unknown colour space 'gamma22'"),
+    ...                     name="M", path="/M", file="x.mtlx")
+    >>> (m.supported, m.error)
+    (False, "x.mtlx: /M/S.base_color: unknown colour space 'gamma22'")
+    """
+    if isinstance(exc, RecursionError):
+        text = "the shading graph is nested too deeply to evaluate"
+    else:
+        text = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+        if not isinstance(exc, (ValueError, TypeError, LookupError, OSError)) or not text:
+            text = f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+    if file and not text.startswith(str(file)):
+        text = f"{file}: {text}"
+    return Material(name=name, path=path, file=str(file), shader_id="", supported=False,
+                    uv=tuple(float(x) for x in uv), variants=dict(variants or {}), time=time, error=text)
 
 
 def surface_options(diffuse_model):
@@ -156,4 +185,4 @@ def diffuse_model_available():
     return "diffuse_model" in OpenPBRSurface.signature().parameters
 
 
-__all__ = ["Parameter", "Material", "surface_options", "diffuse_model_available"]
+__all__ = ["Parameter", "Material", "failed_material", "surface_options", "diffuse_model_available"]

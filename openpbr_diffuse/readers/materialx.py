@@ -9,9 +9,9 @@ The file is only read.
 import os
 
 from . import mxlib
-from .graph import Resolver, to_python
+from .graph import Resolver, deep_stack, to_python
 from .mapping import build_material
-from .material import Parameter
+from .material import Parameter, failed_material
 
 # ----------------------------------------------------------------------- documents
 def read_document(path):
@@ -45,7 +45,38 @@ def shader_of(node):
     return inp.getConnectedNode() if inp is not None else None
 
 
-def load(path, *, uv=(0.5, 0.5), material=None, path_prefix=None, variants=None):
+def id_of(node) -> str:
+    """A node's identity within its document (its name path)."""
+    return node.getNamePath()
+
+
+def graph_shaders(doc, known: set) -> list:
+    """[(name, path, shader node)] of the surface shaders that are outputs of nodegraphs
+    (e.g. a ``surface`` over an ``oren_nayar_diffuse_bsdf``), as MaterialX's own
+    ``findRenderableElements`` finds them; shaders in ``known`` (reached through a material
+    node) are left out.  Named by the output's path ("graph/out1")."""
+    import MaterialX as mx
+
+    try:
+        from MaterialX import PyMaterialXGenShader as gen
+
+        elements = gen.findRenderableElements(doc)
+    except Exception:  # an old MaterialX without the helper: the nodegraph outputs themselves
+        elements = [o for g in doc.getNodeGraphs() if not g.hasNodeDefString() for o in g.getOutputs()]
+    out = []
+    for e in elements:
+        if not e.isA(mx.Output) or e.getType() != "surfaceshader":
+            continue
+        node = e.getConnectedNode()
+        if node is None or id_of(node) in known:
+            continue
+        known.add(id_of(node))
+        out.append((e.getNamePath(), e.getNamePath(), node))
+    return out
+
+
+def load(path: "str | os.PathLike", *, uv: tuple = (0.5, 0.5), material: str | None = None,
+         path_prefix: str | None = None, variants: dict | None = None) -> list:
     """Materials of a MaterialX document.
 
     Parameters
@@ -75,13 +106,19 @@ def load(path, *, uv=(0.5, 0.5), material=None, path_prefix=None, variants=None)
                     used.add(i.getNodeName())
         pairs = [(n.getName(), n.getNamePath(), n) for n in doc.getNodes()
                  if n.getCategory() in SHADER_CATEGORIES and n.getName() not in used]
+    pairs += graph_shaders(doc, {id_of(sh) for _, _, sh in pairs if sh is not None})
     out = []
     for name, npath, shader in pairs:
         full = f"{path_prefix.rstrip('/')}/{name}" if path_prefix else npath
         if material is not None and material not in (name, npath, full):
             continue
-        out.append(build_material(_MxShader(shader, file, doc_space), name=name, path=full, file=file, uv=uv,
-                                  variants=variants))
+        try:
+            with deep_stack():
+                m = build_material(_MxShader(shader, file, doc_space), name=name, path=full, file=file, uv=uv,
+                                   variants=variants)
+        except Exception as exc:  # one bad value fails its own material, never the document
+            m = failed_material(exc, name=name, path=full, file=file, uv=uv, variants=variants)
+        out.append(m)
     return out
 
 

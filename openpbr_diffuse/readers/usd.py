@@ -34,8 +34,8 @@ import numpy as np
 
 from . import colorspace, mxlib, ops, textures
 from .mapping import build_material
-from .material import Parameter
-from .graph import Resolver, convert_color, to_python
+from .material import Material, Parameter, failed_material
+from .graph import MAX_CHAIN, Resolver, _short, convert_color, deep_stack, to_python
 
 _MX_TYPES = {
     "color3f": "color3", "color3d": "color3", "color3h": "color3", "color4f": "color4", "color4d": "color4",
@@ -171,6 +171,7 @@ class _UsdResolver:
         self.default_space = default_space
         self.sink = sink
         self._mx = None
+        self._memo = {}  # (shader path, output, type) -> Parameter: each shader output evaluated once
 
     @property
     def mx(self):
@@ -210,7 +211,10 @@ class _UsdResolver:
         except ValueError as exc:
             raise ValueError(f"{self.file}: {attr.GetPath()}: {exc}") from None
 
-    def _cycle(self, key, trail):
+    def _cycle(self, key: object, trail: tuple) -> tuple:
+        if len(trail) > 2 * MAX_CHAIN:
+            raise ValueError(f"{self.file}: the shading network is deeper than {MAX_CHAIN} connected shaders "
+                             f"(at {key}); not evaluated")
         if key in trail:
             loop = list(trail[trail.index(key):]) + [key]
             raise ValueError(f"{self.file}: connection cycle: {' -> '.join(str(k) for k in loop)}")
@@ -289,7 +293,7 @@ class _UsdResolver:
             v = np.asarray(v, dtype=np.float64)
         return Parameter(v, prov, "time" if note else "authored")
 
-    def inputs(self, shader, sid, trail, authored=None):
+    def inputs(self, shader, sid: str, trail: tuple, authored: dict | None = None) -> dict:
         """Resolved {name: Parameter} of every nodedef input of a shader (defaults filled).
 
         ``authored``: {name: UsdShade.Input} of the shader's authored inputs (from
@@ -309,17 +313,31 @@ class _UsdResolver:
             t = defs[name][0]
             tn = str(inp.GetTypeName())
             got = _MX_TYPES.get(tn, tn)
-            if got != t and not (t == "string" and got == "filename"):
+            # float3 / float4 colours: how Blender and the glTF converters write them
+            as_colour = t in ("color3", "color4") and got == "vector" + t[-1]
+            if got != t and not as_colour and not (t == "string" and got == "filename"):
                 raise ValueError(f"{self.file}: {inp.GetAttr().GetPath()}: type {tn}, but "
                                  f"input {name} of {sid} is {t}")
             p = self.port(inp, t, trail)
             if p is not None:
                 out[name] = p
+            elif defs[name][2] in ("UV0", "UV1"):
+                # connected to something not evaluated (e.g. a texcoord node): the uv point
+                out[name] = Parameter(self.uv.copy(), f"uv ({self.uv[0]:g}, {self.uv[1]:g})", "uv")
         # geometry inputs (normals, ...) that nothing supplies are left out
         return {n: out[n] for n in defs if n in out}
 
     # ----------------------------------------------------------------- shader nodes
-    def shader_value(self, shader, output, mx_type, trail):
+    def shader_value(self, shader, output: str, mx_type: str, trail: tuple) -> "Parameter | None":
+        """The value of ``output`` of a shader prim (memoised per shader, output and type)."""
+        key = (shader.GetPath(), output, mx_type)
+        if key in self._memo:
+            return self._memo[key]
+        p = self._shader_value(shader, output, mx_type, trail)
+        self._memo[key] = p
+        return p
+
+    def _shader_value(self, shader, output: str, mx_type: str, trail: tuple) -> "Parameter | None":
         sid = shader.GetShaderId() or ""
         path = str(shader.GetPath())
         trail = self._cycle(shader.GetPath(), trail)
@@ -336,6 +354,8 @@ class _UsdResolver:
             self._note(f"{path} ({sid or 'no info:id'}) is not evaluated by the reader; default used", True)
             return None
         cat = nd.getNodeString()
+        if cat == "texcoord" and nd.getType() == "vector2":
+            return Parameter(self.uv.copy(), f"{path} (texcoord) = uv ({self.uv[0]:g}, {self.uv[1]:g})", "uv")
         outs = mxlib.outputs(sid)
         out_type = outs.get(output) or next(iter(outs.values()))
         if cat not in ops.OPS and cat != "image" and mxlib.implementation_graph(sid) is None:
@@ -352,7 +372,7 @@ class _UsdResolver:
                 value = ops.apply(cat, {n: p.value for n, p in resolved.items()}, out_type)
             except (TypeError, ValueError, IndexError) as exc:
                 raise ValueError(f"{self.file}: {path} ({sid}): {exc}") from None
-            set_ = [f"{n}: {p.provenance}" for n, p in resolved.items() if p.kind != "default"]
+            set_ = [f"{n}: {_short(p.provenance)}" for n, p in resolved.items() if p.kind != "default"]
             kind = "texture" if any(p.kind == "texture" for p in resolved.values()) else "connection"
             return Parameter(value, f"{cat} {path}({'; '.join(set_)})", kind)
         graph = mxlib.implementation_graph(sid)
@@ -409,7 +429,9 @@ class _UsdResolver:
                 rgba = np.array([texel[0], texel[1], texel[2], 1.0])
             else:
                 rgba = texel[:4].copy()
-            srgb = source_cs == "sRGB" or (source_cs == "auto" and bits == 8)
+            # "auto": sRGB for 8-bit textures of 3 or 4 channels only (UsdPreviewSurface
+            # specification; OpenUSD's Hio does the same); 1- and 2-channel ones are data
+            srgb = source_cs == "sRGB" or (source_cs == "auto" and bits == 8 and nch in (3, 4))
             if srgb:
                 rgba[:3] = _srgb_decode(rgba[:3])
             rgba = rgba * scale + bias
@@ -572,6 +594,16 @@ def _entries(stage, file, time, uv, variants, diagnostics):
     return entries
 
 
+def _build(entry: "_Entry", file: str, uv: tuple, variants: dict | None, time: object) -> Material:
+    """Build one material; an error fails that material only (``Material.error``)."""
+    try:
+        with deep_stack():
+            return entry.build()
+    except Exception as exc:  # one bad value fails its own material, never the stage
+        return failed_material(exc, name=entry.name, path=entry.path, file=file, uv=uv, variants=variants,
+                               time=time)
+
+
 def _mtlx_names(path):
     from .materialx import read_document
 
@@ -622,7 +654,8 @@ def load(path, *, time=None, variants=None, uv=(0.5, 0.5), material=None, purpos
             gc.enable()
 
 
-def _load(path, *, time, variants, uv, material, purpose):
+def _load(path, *, time: float | None, variants: dict, uv: tuple, material: str | None,
+          purpose: str) -> list[Material]:
     from pxr import Sdf, UsdShade
 
     file = os.fspath(path)
@@ -650,7 +683,7 @@ def _load(path, *, time, variants, uv, material, purpose):
                     raise ValueError(f"{file}: prim {prim.GetPath()} has no bound material (purpose "
                                      f"{purpose or 'all'})")
                 chosen.append(e)
-    mats = [e.build() for e in chosen]
+    mats = [_build(e, file, uv, variants, time) for e in chosen]
     useful = [d for d in diagnostics if "Cannot determine file format" not in d and ".mtlx" not in d]
     for m in mats:
         m.warnings += [f"USD: {d.strip()[:300]}" for d in useful]

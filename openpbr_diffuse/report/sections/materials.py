@@ -16,7 +16,7 @@ import re
 
 import numpy as np
 
-from ..model import Check, Figure, SectionResult, Table
+from ..model import Check, Context, Figure, SectionResult, Table
 
 TITLE = "Materials"
 KEY = "materials"
@@ -83,11 +83,15 @@ def _render(m, path, size):
     write_image(render_image(m, size, supersample=1), str(path))
 
 
-def _material_rows(mats):
+def _material_rows(mats: list) -> list:
     from ...readers.evaluate import evaluate
 
     rows = []
     for m in mats:
+        if m.error:
+            rows.append([m.file, m.path, "-", "not evaluated", "-", "-", "-", "-", "-", f"error: {m.error}",
+                         len(m.warnings)])
+            continue
         if not m.supported:
             rows.append([m.file, m.path, m.shader_id, "-", "-", "-", "-", "-", "-",
                          "; ".join(m.unsupported), len(m.warnings)])
@@ -103,19 +107,29 @@ def _material_rows(mats):
     return rows
 
 
-def build(ctx):
+def build(ctx: Context) -> SectionResult:
     from ...readers import BUNDLED_MATERIALS, find_material_files, load_materials
     from ...readers.evaluate import directions
 
     res = SectionResult(KEY, TITLE)
     files = find_material_files(ctx.paths or [BUNDLED_MATERIALS])
     mats = []
+    unreadable = []
     for f in files:
         ctx.progress(f"materials: reading {f.name}")
         try:
             mats += load_materials(f)
         except (ValueError, TypeError, OSError) as exc:
+            unreadable.append(f"{f}: {exc}")
             res.warnings.append(f"{f}: cannot be read: {exc}")
+    failed = [m for m in mats if m.error]
+    # an input that cannot be read, or a material that cannot be evaluated, is a failed check
+    res.checks.append(Check(
+        "every given material file is read", float(len(unreadable)), 0.0, "<=", unit="unreadable files",
+        reference=f"{len(files)} files", detail="; ".join(unreadable)))
+    res.checks.append(Check(
+        "every material found is evaluated", float(len(failed)), 0.0, "<=", unit="materials not evaluated",
+        reference=f"{len(mats)} materials", detail="; ".join(f"{m.path}: {m.error}" for m in failed)))
     res.notes.append(
         f"{len(mats)} materials from {len(files)} files"
         + (" (the bundled library)" if not ctx.paths else "")
@@ -134,6 +148,8 @@ def build(ctx):
         ctx.progress(f"materials: {m.name}")
         for w in m.warnings:
             res.warnings.append(f"{m.path}: {w}")
+        if m.error:
+            res.warnings.append(f"{m.path}: not evaluated: {m.error}")
         if not m.supported:
             continue
         slug = _slug(k, m)
