@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import limits
 from .errors import GraderUnavailable
 
 FLAGS = ("-std=c++17", "-O2")
@@ -103,9 +104,13 @@ class Harness:
             src.write_text(text)
             cmd = [compiler(), *FLAGS, *(f"-I{d}" for d in self.include_dirs),
                    *(f"-D{k}={v}" for k, v in self.defines.items()), str(src), "-o", str(Path(tmp) / "a.out")]
-            run = subprocess.run(cmd, capture_output=True, text=True, check=False)
+            run = limits.run_limited(cmd, label=f"compiling {self.label}")
             if run.returncode != 0:
-                err = run.stderr
+                err = run.stderr.decode(errors="replace")
+                if limits.memory_message(err) or run.returncode < 0:
+                    raise GraderUnavailable(f"compiling {self.label} exceeded the memory limit of user code "
+                                            f"({limits.MEMORY / 2**30:g} GiB) or was killed (status "
+                                            f"{run.returncode})")
                 if "glm/glm.hpp" in err and "No such file" in err:
                     raise GraderUnavailable("GLM headers not found (glm/glm.hpp): apt-get install libglm-dev "
                                             "(or pass --include DIR holding glm/)")
@@ -122,8 +127,8 @@ class Harness:
         """Run entry ``name`` on rows of ``inputs``; returns (rows, n_out) float32."""
         e = self.entries[name]
         inputs = np.ascontiguousarray(inputs, dtype=np.float32).reshape(-1, e.n_in)
-        run = subprocess.run([str(self.binary()), name], input=inputs.tobytes(), capture_output=True,
-                             check=False)
+        run = limits.run_limited([str(self.binary()), name], input=inputs.tobytes(),
+                                 label=f"{self.label} (harness entry {name})")
         if run.returncode != 0:
             raise GraderUnavailable(f"{self.label}: harness entry {name} exited with status "
                                     f"{run.returncode}: {run.stderr.decode(errors='replace').strip()[:200]}")
