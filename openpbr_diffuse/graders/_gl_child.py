@@ -23,7 +23,7 @@ def main() -> int:
             shader = ctx.compute_shader(job["source"])
         else:
             shader = ctx.program(vertex_shader=glsl._VERTEX, fragment_shader=job["source"])
-    except Exception as exc:
+    except Exception as exc:  # noqa: BLE001 - moderngl raises plain Exception for compile errors
         log = str(exc).strip().splitlines()
         first = next((line for line in log if "error" in line.lower()), log[0] if log else "")
         sys.stderr.write(first.strip() + "\n")

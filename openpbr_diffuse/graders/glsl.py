@@ -31,7 +31,7 @@ from .errors import GraderUnavailable
 TOLERANCE = (1e-4, 5e-5)
 TOLERANCE_REASON = ("GLSL on llvmpipe: float32 arithmetic (1e-4 relative, as check FILE) plus llvmpipe's "
                     "acos approximation (<= 1.6e-4 in the angle, <= ~5e-5 on f through E_F): 5e-5 absolute")
-_INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$', re.M)
+_INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$', re.MULTILINE)
 _CONTEXT = None
 LOCAL_SIZE = 64
 FRAGMENT_WIDTH = 256

@@ -16,11 +16,12 @@ The limits are module settings, changed by ``check --timeout SECONDS``:
 """
 from __future__ import annotations
 
+import math
 import os
 import re
-import resource
 import signal
 import subprocess
+import sys
 from collections.abc import Sequence
 
 from .errors import GraderUnavailable
@@ -44,7 +45,7 @@ def set_limits(timeout: float | None = None, memory: int | None = None) -> None:
     """
     global TIMEOUT, MEMORY
     if timeout is not None:
-        if not isinstance(timeout, (int, float)) or not timeout > 0 or timeout != timeout or timeout == float("inf"):
+        if not isinstance(timeout, (int, float)) or not timeout > 0 or not math.isfinite(timeout):
             raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
         TIMEOUT = float(timeout)
     if memory is not None:
@@ -94,11 +95,10 @@ _RESERVED = frozenset({"lambda", "if", "else", "for", "while", "do", "return", "
                        "vec2", "vec3", "vec4", "main", "sizeof", "class", "new", "delete", "template"})
 
 
-def _preexec(memory: int):
-    def limit() -> None:
-        resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
-        resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
-    return limit
+#: a small exec wrapper sets the limits in the child (preexec_fn is unsafe when threads run)
+_WRAPPER = ("import os, resource, sys; m = int(sys.argv[1]); "
+            "resource.setrlimit(resource.RLIMIT_AS, (m, m)); resource.setrlimit(resource.RLIMIT_CORE, (0, 0)); "
+            "os.execvp(sys.argv[2], sys.argv[2:])")
 
 
 def kill_group(proc: subprocess.Popen) -> None:
@@ -124,9 +124,8 @@ def run_limited(cmd: Sequence[str], input: bytes | None = None, *, label: str,
     """
     timeout = TIMEOUT if timeout is None else timeout
     memory = MEMORY if memory is None else memory
-    proc = subprocess.Popen(list(cmd), stdin=subprocess.PIPE if input is not None else subprocess.DEVNULL,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
-                            preexec_fn=_preexec(memory), env=env)
+    proc = subprocess.Popen([sys.executable, "-c", _WRAPPER, str(int(memory)), *cmd], stdin=subprocess.PIPE if input is not None else subprocess.DEVNULL,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True, env=env)
     try:
         out, err = proc.communicate(input, timeout=timeout)
     except subprocess.TimeoutExpired:
