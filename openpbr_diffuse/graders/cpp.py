@@ -1,9 +1,5 @@
 """Run C++ functions: a harness compiled at run time with g++ -std=c++17, cached by source hash.
 
-This compiles and runs the given code with the user's rights; the compiler and the harness
-run under the time and memory limits of :mod:`._limits` (a process group each, killed on
-timeout or interruption).
-
 The harness includes the subject's headers unchanged and defines one entry point per graded
 function; it reads rows of float32 inputs on stdin and writes float32 outputs on stdout.  The
 binary is cached under ``$OPENPBR_DIFFUSE_CACHE`` (default ``~/.cache/openpbr-diffuse``), keyed
@@ -22,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._limits import run_limited
+from . import limits
 from .errors import GraderUnavailable
 
 FLAGS = ("-std=c++17", "-O2")
@@ -66,7 +62,6 @@ class Harness:
     defines: dict = field(default_factory=dict)
     sources: list = field(default_factory=list)   # the subject's files, hashed into the cache key
     label: str = "C++ source"
-    timeout: float | None = None   # seconds per compile / run (None: _limits.DEFAULT_TIMEOUT)
 
     def text(self) -> str:
         parts = [self.prelude, "\n#include <cstdio>\n#include <cstring>\n#include <vector>\n"]
@@ -109,12 +104,13 @@ class Harness:
             src.write_text(text)
             cmd = [compiler(), *FLAGS, *(f"-I{d}" for d in self.include_dirs),
                    *(f"-D{k}={v}" for k, v in self.defines.items()), str(src), "-o", str(Path(tmp) / "a.out")]
-            run = run_limited(cmd, timeout=self.timeout, what=f"compiling {self.label}")
+            run = limits.run_limited(cmd, label=f"compiling {self.label}")
             if run.returncode != 0:
                 err = run.stderr.decode(errors="replace")
-                if run.returncode < 0 or "out of memory" in err or "std::bad_alloc" in err:
-                    raise GraderUnavailable(f"compiling {self.label} was stopped: it exceeded the memory "
-                                            f"limit or was killed (status {run.returncode})")
+                if limits.memory_message(err) or run.returncode < 0:
+                    raise GraderUnavailable(f"compiling {self.label} exceeded the memory limit of user code "
+                                            f"({limits.MEMORY / 2**30:g} GiB) or was killed (status "
+                                            f"{run.returncode})")
                 if "glm/glm.hpp" in err and "No such file" in err:
                     raise GraderUnavailable("GLM headers not found (glm/glm.hpp): apt-get install libglm-dev "
                                             "(or pass --include DIR holding glm/)")
@@ -131,8 +127,8 @@ class Harness:
         """Run entry ``name`` on rows of ``inputs``; returns (rows, n_out) float32."""
         e = self.entries[name]
         inputs = np.ascontiguousarray(inputs, dtype=np.float32).reshape(-1, e.n_in)
-        run = run_limited([str(self.binary()), name], input=inputs.tobytes(), timeout=self.timeout,
-                          what=f"{self.label} ({name})")
+        run = limits.run_limited([str(self.binary()), name], input=inputs.tobytes(),
+                                 label=f"{self.label} (harness entry {name})")
         if run.returncode != 0:
             raise GraderUnavailable(f"{self.label}: harness entry {name} exited with status "
                                     f"{run.returncode}: {run.stderr.decode(errors='replace').strip()[:200]}")

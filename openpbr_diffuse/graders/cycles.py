@@ -43,7 +43,8 @@ SCENE_SCRIPT = Path(__file__).with_name("_cycles_scene.py")
 #: environment variable naming a Python interpreter that has bpy (bpy pins its own numpy and
 #: CPython 3.11, so it often lives in a virtual environment of its own)
 PYTHON_VARIABLE = "OPENPBR_DIFFUSE_BPY_PYTHON"
-_INSTALL = (f"pip install bpy (CPython 3.11, ~0.8 GB), or set {PYTHON_VARIABLE} to a Python that has it")
+_INSTALL = ("bpy pins numpy<2, so give it a separate Python 3.11 (~0.8 GB): python3.11 -m venv bpy-env && "
+            f"bpy-env/bin/pip install bpy && export {PYTHON_VARIABLE}=$PWD/bpy-env/bin/python")
 
 
 def bpy_python() -> str:

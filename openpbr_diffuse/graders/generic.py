@@ -19,9 +19,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from . import cpp, glsl
+from . import cpp, glsl, limits
 from ._arrays import rows
-from ._limits import check_define, check_identifier
 from .errors import GraderUnavailable
 from .subject import Subject
 
@@ -34,37 +33,37 @@ def _check_file(path, what):
 
 
 def _defines(defines):
-    return dict(check_define(d) for d in defines or ())
+    return limits.parse_defines(defines)
 
 
 def _names(function, albedo_function):
-    for name, option in ((function, "--function"), (albedo_function, "--albedo-function")):
-        if name:
-            check_identifier(name, option)
+    for name, opt in ((function, "--function"), (albedo_function, "--albedo-function")):
+        if name is not None:
+            limits.check_identifier(name, opt)
 
 
 def glsl_subject(path, function=None, albedo_function=None, *, includes=(), defines=(), model="eon") -> Subject:
     """A GLSL file's BRDF function ``function`` and/or albedo function ``albedo_function``."""
-    _names(function, albedo_function)
     path = _check_file(path, "GLSL")
     if not function and not albedo_function:
         raise ValueError("--function or --albedo-function is required with --glsl")
+    _names(function, albedo_function)
     code = glsl.resolve_includes(path, tuple(Path(i) for i in includes))
     defs = _defines(defines)
     brdf = albedo = None
     label = str(path)
     if function:
         k_brdf = glsl.Kernel(code=code, n_in=10, n_out=3, defines=defs, body=f"""
-    vec3 f = {function}(vec3(IN(0), IN(1), IN(2)), vec3(IN(3), IN(4), IN(5)), IN(6), vec3(IN(7), IN(8), IN(9)));
-    OUT(0) = f.x; OUT(1) = f.y; OUT(2) = f.z;""")
+    vec3 grader_f = {function}(vec3(IN(0), IN(1), IN(2)), vec3(IN(3), IN(4), IN(5)), IN(6), vec3(IN(7), IN(8), IN(9)));
+    OUT(0) = grader_f.x; OUT(1) = grader_f.y; OUT(2) = grader_f.z;""")
 
         def brdf(wi, wo, roughness, rho):
             return k_brdf.run(rows(wi, wo, roughness, rho), label)
 
     if albedo_function:
         k_albedo = glsl.Kernel(code=code, n_in=5, n_out=3, defines=defs, body=f"""
-    vec3 E = {albedo_function}(IN(0), IN(1), vec3(IN(2), IN(3), IN(4)));
-    OUT(0) = E.x; OUT(1) = E.y; OUT(2) = E.z;""")
+    vec3 grader_E = {albedo_function}(IN(0), IN(1), vec3(IN(2), IN(3), IN(4)));
+    OUT(0) = grader_E.x; OUT(1) = grader_E.y; OUT(2) = grader_E.z;""")
 
         def albedo(mu, roughness, rho):
             return k_albedo.run(rows(mu, roughness, rho), label)
@@ -76,31 +75,26 @@ def glsl_subject(path, function=None, albedo_function=None, *, includes=(), defi
                    brdf=brdf, albedo=albedo)
 
 
-def cpp_subject(path, function=None, albedo_function=None, *, includes=(), defines=(), model="eon",
-                timeout=None) -> Subject:
-    """A C++ file's BRDF function ``function`` and/or albedo function ``albedo_function``.
-
-    The file is compiled and run with the user's rights, under ``timeout`` seconds per compile
-    and per run (default :data:`._limits.DEFAULT_TIMEOUT`) and a memory limit.
-    """
-    _names(function, albedo_function)
+def cpp_subject(path, function=None, albedo_function=None, *, includes=(), defines=(), model="eon") -> Subject:
+    """A C++ file's BRDF function ``function`` and/or albedo function ``albedo_function``."""
     path = _check_file(path, "C++")
     if not function and not albedo_function:
         raise ValueError("--function or --albedo-function is required with --cpp")
+    _names(function, albedo_function)
     entries = {}
     if function:
         entries["brdf"] = cpp.Entry(10, 3, f"""
-    const auto f = {function}(glm::vec3(in[0], in[1], in[2]), glm::vec3(in[3], in[4], in[5]), in[6],
+    const auto grader_f = {function}(glm::vec3(in[0], in[1], in[2]), glm::vec3(in[3], in[4], in[5]), in[6],
                               glm::vec3(in[7], in[8], in[9]));
-    out[0] = f[0]; out[1] = f[1]; out[2] = f[2];""")
+    out[0] = grader_f[0]; out[1] = grader_f[1]; out[2] = grader_f[2];""")
     if albedo_function:
         entries["albedo"] = cpp.Entry(5, 3, f"""
-    const auto E = {albedo_function}(in[0], in[1], glm::vec3(in[2], in[3], in[4]));
-    out[0] = E[0]; out[1] = E[1]; out[2] = E[2];""")
+    const auto grader_E = {albedo_function}(in[0], in[1], glm::vec3(in[2], in[3], in[4]));
+    out[0] = grader_E[0]; out[1] = grader_E[1]; out[2] = grader_E[2];""")
     prelude = f'#include <glm/glm.hpp>\n#include "{path.resolve()}"\n'
     h = cpp.Harness(prelude=prelude, entries=entries,
                     include_dirs=[str(path.parent.resolve()), *map(str, includes)],
-                    defines=_defines(defines), sources=[path], label=str(path), timeout=timeout)
+                    defines=_defines(defines), sources=[path], label=str(path))
     h.binary()
     brdf = albedo = None
     if function:

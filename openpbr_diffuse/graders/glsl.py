@@ -11,12 +11,16 @@ llvmpipe evaluates ``acos`` and friends with polynomial approximations (max abs 
 from __future__ import annotations
 
 import hashlib
+import os
+import pickle
 import re
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from . import limits
 from .errors import GraderUnavailable
 
 #: (relative, absolute) tolerance for values computed in GLSL on llvmpipe.  acos's absolute
@@ -27,7 +31,7 @@ from .errors import GraderUnavailable
 TOLERANCE = (1e-4, 5e-5)
 TOLERANCE_REASON = ("GLSL on llvmpipe: float32 arithmetic (1e-4 relative, as check FILE) plus llvmpipe's "
                     "acos approximation (<= 1.6e-4 in the angle, <= ~5e-5 on f through E_F): 5e-5 absolute")
-_INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$', re.M)
+_INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$', re.MULTILINE)
 _CONTEXT = None
 LOCAL_SIZE = 64
 FRAGMENT_WIDTH = 256
@@ -141,43 +145,36 @@ class Kernel:
             "}\n")
 
     def run(self, inputs: np.ndarray, label: str = "shader") -> np.ndarray:
-        """Run on ``inputs`` (rows, n_in) and return (rows, n_out) float32 results."""
-        ctx = gl_context()
+        """Run on ``inputs`` (rows, n_in) and return (rows, n_out) float32 results.
+
+        The shader is compiled and run in a child process (``_gl_child``) under the limits of
+        user code (:mod:`.limits`): a shader that never ends is killed with its process group.
+        """
         inputs = np.ascontiguousarray(inputs, dtype=np.float32).reshape(-1, self.n_in)
         rows = inputs.shape[0]
-        try:
-            if self._program is None:
-                if self.stage == "compute":
-                    self._program = ctx.compute_shader(self.source())
-                else:
-                    self._program = ctx.program(vertex_shader=_VERTEX, fragment_shader=self.source())
-            shader = self._program
-        except Exception as exc:
-            log = str(exc).strip().splitlines()
-            first = next((line for line in log if "error" in line.lower()), log[0] if log else "")
-            raise GraderUnavailable(f"{label} does not compile on {gl_version()}: {first.strip()} "
-                                    "(file 1 = the subject's code, 2 = the grader's wrapper)") from exc
-        for name, value in self.uniforms.items():
-            if name in shader:
-                shader[name].value = value
         if rows == 0:
             return np.zeros((0, self.n_out), np.float32)
-        buf_in = ctx.buffer(inputs.tobytes())
-        buf_out = ctx.buffer(reserve=max(4, rows * self.n_out * 4))
-        try:
-            buf_in.bind_to_storage_buffer(0)
-            buf_out.bind_to_storage_buffer(1)
-            shader["grader_rows"] = rows
-            if self.stage == "compute":
-                shader.run(group_x=(rows + LOCAL_SIZE - 1) // LOCAL_SIZE)
-            else:
-                _draw_rows(ctx, shader, rows)
-            ctx.memory_barrier()
-            out = np.frombuffer(buf_out.read(), dtype=np.float32).reshape(rows, self.n_out).copy()
-        finally:
-            buf_in.release()
-            buf_out.release()
-        return out
+        job = {"source": self.source(), "stage": self.stage, "n_out": self.n_out, "rows": rows,
+               "uniforms": dict(self.uniforms), "inputs": inputs.tobytes()}
+        root = str(Path(__file__).resolve().parents[2])
+        env = dict(os.environ)
+        env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+        run = limits.run_limited([sys.executable, "-m", "openpbr_diffuse.graders._gl_child"],
+                                 input=pickle.dumps(job), label=f"{label} (GLSL on llvmpipe)", env=env)
+        err = run.stderr.decode(errors="replace").strip()
+        if run.returncode == 3:
+            raise GraderUnavailable(f"{label} does not compile on {gl_version()}: {err.splitlines()[-1] if err else ''} "
+                                    "(file 1 = the subject's code, 2 = the grader's wrapper)")
+        if run.returncode != 0:
+            last = err.splitlines()[-1] if err else f"status {run.returncode}"
+            if limits.memory_message(err) or run.returncode < 0:
+                last = (f"exceeded the memory limit of user code ({limits.MEMORY / 2**30:g} GiB) or was killed "
+                        f"(status {run.returncode})")
+            raise GraderUnavailable(f"{label}: the GL child failed: {last}")
+        out = np.frombuffer(run.stdout, dtype=np.float32)
+        if out.size != rows * self.n_out:
+            raise GraderUnavailable(f"{label}: the GL child wrote {out.size} values, expected {rows * self.n_out}")
+        return out.reshape(rows, self.n_out).copy()
 
 
 def _draw_rows(ctx, program, rows):

@@ -1,0 +1,155 @@
+"""Run user code (a compiler, a compiled harness, a GL child) under a wall-time and memory limit.
+
+``--cpp`` and ``--glsl`` compile and run the given code with the user's rights.  Every such
+process runs here: in its own session (so its whole process group can be killed), with
+``RLIMIT_AS`` set in the child, and killed -- the whole group -- when the wall-time limit
+passes or when the parent is interrupted (KeyboardInterrupt, SIGTERM turned into
+``SystemExit`` by the CLI, any exception while waiting).
+
+The limits are module settings, changed by ``check --timeout SECONDS``:
+
+>>> from openpbr_diffuse.graders import limits
+>>> limits.TIMEOUT, limits.MEMORY // 2**30
+(60.0, 4)
+>>> limits.run_limited(["true"], label="true").returncode
+0
+"""
+from __future__ import annotations
+
+import math
+import os
+import re
+import signal
+import subprocess
+import sys
+from collections.abc import Sequence
+
+from .errors import GraderUnavailable
+
+#: default wall-time limit of one compile or one run of user code, seconds
+TIMEOUT: float = 60.0
+#: default address-space limit of one such process, bytes (4 GiB)
+MEMORY: int = 4 * 2**30
+
+_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+
+
+def set_limits(timeout: float | None = None, memory: int | None = None) -> None:
+    """Change the wall-time (seconds) and memory (bytes) limits of user code.
+
+    >>> set_limits(timeout=60)
+    >>> set_limits(timeout=0)
+    Traceback (most recent call last):
+    ...
+    ValueError: timeout must be a positive number of seconds, got 0
+    """
+    global TIMEOUT, MEMORY
+    if timeout is not None:
+        if not isinstance(timeout, (int, float)) or not timeout > 0 or not math.isfinite(timeout):
+            raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
+        TIMEOUT = float(timeout)
+    if memory is not None:
+        if not isinstance(memory, int) or memory <= 0:
+            raise ValueError(f"memory must be a positive number of bytes, got {memory!r}")
+        MEMORY = memory
+
+
+def check_identifier(name: str, option: str) -> str:
+    """Return ``name`` when it is a C/GLSL identifier, else raise ValueError naming ``option``.
+
+    >>> check_identifier("eon_f", "--function")
+    'eon_f'
+    >>> check_identifier("lambda x: x", "--function")
+    Traceback (most recent call last):
+    ...
+    ValueError: --function: 'lambda x: x' is not a function name (a C identifier: letters, digits, _)
+    """
+    if not isinstance(name, str) or not _IDENT.match(name) or name in _RESERVED:
+        raise ValueError(f"{option}: {name!r} is not a function name (a C identifier: letters, digits, _)")
+    return name
+
+
+def parse_defines(defines: Sequence[str] | None) -> dict[str, str]:
+    """``NAME`` / ``NAME=VALUE`` strings to a dict; NAME an identifier, VALUE on one line, no ``#``.
+
+    >>> parse_defines(["A", "B=2.0"])
+    {'A': '1', 'B': '2.0'}
+    >>> parse_defines(["X=1\\n#version 100"])
+    Traceback (most recent call last):
+    ...
+    ValueError: --define: 'X=1\\n#version 100' VALUE must be one line without '#' or '\\\\'
+    """
+    out: dict[str, str] = {}
+    for d in defines or ():
+        name, _, value = str(d).partition("=")
+        if not _IDENT.match(name):
+            raise ValueError(f"--define: {d!r} is not NAME or NAME=VALUE (NAME a C identifier)")
+        if any(c in value for c in "\n\r#\\\0"):
+            raise ValueError(f"--define: {d!r} VALUE must be one line without '#' or '\\\\'")
+        out[name] = value or "1"
+    return out
+
+
+_RESERVED = frozenset({"lambda", "if", "else", "for", "while", "do", "return", "switch", "case", "break",
+                       "continue", "struct", "void", "int", "float", "double", "bool", "true", "false",
+                       "vec2", "vec3", "vec4", "main", "sizeof", "class", "new", "delete", "template"})
+
+
+#: a small exec wrapper sets the limits in the child (preexec_fn is unsafe when threads run)
+_WRAPPER = ("import os, resource, sys; m = int(sys.argv[1]); "
+            "resource.setrlimit(resource.RLIMIT_AS, (m, m)); resource.setrlimit(resource.RLIMIT_CORE, (0, 0)); "
+            "os.execvp(sys.argv[2], sys.argv[2:])")
+
+
+def kill_group(proc: subprocess.Popen) -> None:
+    """SIGKILL the process group of ``proc`` (started with ``start_new_session``) and reap it."""
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        pass
+    try:
+        proc.wait(timeout=5)
+    except subprocess.TimeoutExpired:  # pragma: no cover - SIGKILL is not ignorable
+        pass
+
+
+def run_limited(cmd: Sequence[str], input: bytes | None = None, *, label: str,
+                timeout: float | None = None, memory: int | None = None,
+                env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
+    """Run ``cmd`` in a new session under the limits; its whole group is killed on timeout/interrupt.
+
+    Returns the CompletedProcess (stdout/stderr bytes).  A timeout raises GraderUnavailable with
+    one line; so does a run killed by the memory limit (seen as a failed allocation: the caller
+    reads ``returncode`` and ``stderr``).
+    """
+    timeout = TIMEOUT if timeout is None else timeout
+    memory = MEMORY if memory is None else memory
+    proc = subprocess.Popen([sys.executable, "-c", _WRAPPER, str(int(memory)), *cmd], stdin=subprocess.PIPE if input is not None else subprocess.DEVNULL,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True, env=env)
+    try:
+        out, err = proc.communicate(input, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        kill_group(proc)
+        raise GraderUnavailable(f"{label} did not finish within {timeout:g} s (the time limit of user code; "
+                                "raise it with --timeout SECONDS): killed") from None
+    except BaseException:
+        kill_group(proc)
+        raise
+    # the leader finished: anything it left in its group goes too
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        pass
+    return subprocess.CompletedProcess(list(cmd), proc.returncode, out, err)
+
+
+def memory_message(stderr: bytes | str) -> bool:
+    """True when a child's stderr says it ran out of memory (the RLIMIT_AS limit).
+
+    >>> memory_message(b"cc1plus: out of memory allocating 65536 bytes")
+    True
+    """
+    text = stderr.decode(errors="replace") if isinstance(stderr, bytes) else stderr
+    low = text.lower()
+    return any(s in low for s in ("out of memory", "cannot allocate memory", "std::bad_alloc",
+                                  "memory exhausted", "virtual memory exhausted"))
