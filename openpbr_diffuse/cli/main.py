@@ -88,7 +88,10 @@ def _silence_stdout():
         pass
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> int:
+    from .. import _signals
+
+    _signals.install()  # SIGTERM/SIGHUP like Ctrl-C: clean up, exit 128 + signum
     prog = PROG
     try:
         parser = build_parser()
@@ -100,9 +103,10 @@ def main(argv=None):
     except BrokenPipeError:
         _silence_stdout()
         return EXIT_SIGPIPE
-    except KeyboardInterrupt:
-        print(f"{PROG}: interrupted", file=sys.stderr)
-        return EXIT_SIGINT
+    except KeyboardInterrupt as exc:
+        signum = getattr(exc, "signum", None) or _signals.received() or 2
+        print(f"{PROG}: interrupted" + ("" if signum == 2 else f" ({exc})"), file=sys.stderr)
+        return 128 + signum
     except UsageError as exc:
         print(f"{exc.prog or prog}: error: {_message(exc)}", file=sys.stderr)
         return EXIT_USAGE

@@ -27,12 +27,11 @@ import datetime
 import importlib
 import json
 import math
-import shutil
-import tempfile
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+from . import output
 from .model import Check, Context, SectionResult
 
 SCHEMA = "openpbr-diffuse-report/1"
@@ -214,11 +213,8 @@ def run_report(paths=None, out="report", *, quick=False, progress=True, sections
     if unknown:
         raise ValueError(f"sections: unknown section(s) {', '.join(unknown)}; "
                          f"expected some of {', '.join(section_pkg.SECTIONS)}")
-    out = Path(out).resolve()
-    out.parent.mkdir(parents=True, exist_ok=True)
-    if out.exists() and not out.is_dir():
-        raise NotADirectoryError(f"report: --out {out} exists and is not a directory")
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
+    out = output.check_target(out, paths)
+    tmp = output.staging_dir(out)
     t0 = time.perf_counter()
     try:
         image_dir = tmp / IMAGE_DIR
@@ -238,29 +234,12 @@ def run_report(paths=None, out="report", *, quick=False, progress=True, sections
         run.document = doc
         (tmp / "report.json").write_text(json.dumps(doc, indent=1, allow_nan=False) + "\n")
         (tmp / "index.html").write_text(render_html(doc, image_dir), encoding="utf-8")
-        _replace(tmp, out)
+        output.publish(tmp, out, paths)
     except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
+        output.discard(tmp)
         raise
     run.out_dir = out
     return run
-
-
-def _replace(tmp, out):
-    """Move the complete report ``tmp`` to ``out``, keeping the old one until it is in place."""
-    old = None
-    if out.exists():
-        old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
-        old.rmdir()
-        out.rename(old)
-    try:
-        tmp.rename(out)
-    except BaseException:
-        if old is not None:
-            old.rename(out)
-        raise
-    if old is not None:
-        shutil.rmtree(old, ignore_errors=True)
 
 
 __all__ = ["run_report", "run_section", "ReportRun", "SectionRun", "SCHEMA", "default_paths"]
