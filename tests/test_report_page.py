@@ -134,10 +134,12 @@ def test_failed_run_leaves_the_old_report_intact(tmp_path, monkeypatch):
     assert after == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["rep"]  # temporary directory removed
     monkeypatch.undo()
-    # a complete run replaces it
-    (out / "stale.txt").write_text("old")
+    # a complete run replaces it; a file the tool did not write blocks the replacement
     assert runner.run_report(None, out, quick=True, progress=False, sections=["implementations"]).passed
-    assert not (out / "stale.txt").exists() and (out / "index.html").is_file()
+    (out / "stale.txt").write_text("old")
+    with pytest.raises(ValueError, match="stale.txt"):
+        runner.run_report(None, out, quick=True, progress=False, sections=["implementations"])
+    assert (out / "stale.txt").read_text() == "old" and (out / "index.html").is_file()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["rep"]
 
 
