@@ -88,6 +88,32 @@ def _silence_stdout():
         pass
 
 
+def _suggest(word: str, choices) -> str:
+    """`` (did you mean X?)`` for the closest of ``choices`` to ``word``, or ``""``."""
+    import difflib
+
+    close = difflib.get_close_matches(word.split("=", 1)[0], list(choices), n=1, cutoff=0.6)
+    return f" (did you mean {close[0]}?)" if close else ""
+
+
+def _parse(parser: argparse.ArgumentParser, argv: list[str] | None) -> argparse.Namespace:
+    """``parse_args`` whose one-line errors name the closest option or command and the usage."""
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    words = sys.argv[1:] if argv is None else list(argv)
+    command = next((w for w in words if not w.startswith("-")), None)
+    if command is not None and command not in sub.choices:
+        raise UsageError(f"unknown command {command!r}{_suggest(command, sub.choices)}; "
+                         f"choose from {', '.join(sub.choices)}", prog=PROG)
+    args, extra = parser.parse_known_args(argv)
+    if extra:
+        cmd = sub.choices[args.command]
+        options = [o for a in cmd._actions for o in a.option_strings]
+        usage = " ".join(cmd.format_usage().split())
+        raise UsageError(f"unrecognized argument {extra[0]}{_suggest(extra[0], options)}; {usage}",
+                         prog=cmd.prog)
+    return args
+
+
 def main(argv: list[str] | None = None) -> int:
     from .. import _signals
 
@@ -95,7 +121,7 @@ def main(argv: list[str] | None = None) -> int:
     prog = PROG
     try:
         parser = build_parser()
-        args = parser.parse_args(argv)
+        args = _parse(parser, argv)
         prog = f"{PROG} {args.command}"
         code = int(args.run(args) or 0)
         sys.stdout.flush()  # a closed pipe shows here, inside the handler, not at exit
