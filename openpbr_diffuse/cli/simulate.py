@@ -23,7 +23,7 @@ def add_parser(subparsers):
                    help="vcavity (Oren-Nayar V-grooves) or a Smith microsurface (Heitz et al. 2016)")
     p.add_argument("--roughness", type=float, required=True, metavar="S",
                    help="sigma in radians [0, pi/2] for vcavity; alpha [0, 2] for smith-*")
-    p.add_argument("--mu", type=float, nargs="+", metavar="MU", help="cosine(s) of the incident angle in (0, 1]")
+    p.add_argument("--mu", type=float, nargs="+", metavar="MU", help="cosine(s) of the incident angle in [1e-100, 1]")
     p.add_argument("--average", action="store_true", help="average albedo <E> instead of E(mu)")
     p.add_argument("--rho", type=float, nargs="+", metavar="RHO", default=[1.0],
                    help="microfacet albedo per channel in [0, 1] (default 1)")
@@ -32,8 +32,17 @@ def add_parser(subparsers):
     p.add_argument("--workers", type=int, default=None, metavar="W", help="local threads (default: all cores)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="run the chunks on this Dask distributed scheduler")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument("--yes", action="store_true",
+                   help=f"run even above the work budget of {WORK_BUDGET_PATHS:.0e} paths in total "
+                        "(paths x number of mu; about 25 min on 2 cores)")
     p.set_defaults(run=run)
     return p
+
+
+#: Paths in total (paths x queries) run without ``--yes``.
+WORK_BUDGET_PATHS = 10**9
+#: Rough throughput of the path tracer on 2 cores (paths per second), for the estimate.
+PATHS_PER_S = 7e5
 
 
 def _count(text):
@@ -60,6 +69,10 @@ def run(args):
         raise _usage("--average takes no --mu")
     if not args.average and not args.mu:
         raise _usage("--mu is required (or --average)")
+    total = args.paths * (1 if args.average else len(args.mu))
+    if total > WORK_BUDGET_PATHS and not args.yes:
+        raise _usage(f"{total:.3g} paths in total exceed the work budget of {WORK_BUDGET_PATHS:.0e} "
+                     f"(about {total / PATHS_PER_S / 3600:.3g} h here); pass --yes to run anyway")
     rho = np.array(args.rho, dtype=np.float64)
     kw = dict(rho=rho, paths=args.paths, seed=args.seed, workers=args.workers, scheduler=args.scheduler)
     try:

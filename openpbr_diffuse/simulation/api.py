@@ -81,6 +81,12 @@ def _run_task(task):
     return run_chunk(geometry, roughness, wi, random_wi, wo, rho, n, seed, MAX_BOUNCES)
 
 
+#: Smallest incident cosine simulated (below it the Smith walk's floating point underflows).
+MU_MIN = 1e-100
+#: Seconds to wait for a Dask scheduler given by address.
+SCHEDULER_TIMEOUT_S = 10.0
+
+
 def _client(client, scheduler):
     if client is not None and scheduler is not None:
         raise ValueError("give either client or scheduler, not both")
@@ -93,7 +99,32 @@ def _client(client, scheduler):
                           "pip install 'dask[distributed]' (or openpbr-diffuse[dask])") from exc
     if client is not None:
         return client, False
-    return Client(scheduler), True
+    try:
+        import threading
+
+        # Client(timeout=) bounds the TCP connect, not the handshake with a silent peer:
+        # connect in a daemon thread and give up after the same time
+        box: list = []
+
+        def connect():
+            try:
+                box.append(Client(scheduler, timeout=SCHEDULER_TIMEOUT_S))
+            except BaseException as e:  # noqa: BLE001 -- handed to the caller
+                box.append(e)
+
+        th = threading.Thread(target=connect, daemon=True, name="dask-connect")
+        th.start()
+        th.join(SCHEDULER_TIMEOUT_S + 1.0)
+        if not box:
+            raise TimeoutError("no answer")
+        if isinstance(box[0], BaseException):
+            raise box[0]
+        return box[0], True
+    except (OSError, TimeoutError, MemoryError, ValueError, TypeError) as exc:
+        # a silent port times out; a service that is not a Dask scheduler may answer garbage
+        # (read as an absurd frame length: MemoryError) or close the connection
+        raise ConnectionError(f"scheduler {scheduler}: no Dask scheduler answered within "
+                              f"{SCHEDULER_TIMEOUT_S:g} s ({type(exc).__name__})") from None
 
 
 def _execute(tasks, workers, client, scheduler):
@@ -232,7 +263,8 @@ def simulate_albedo(geometry, roughness, mu, rho=1.0, paths=1_000_000, seed=0, *
         sigma (radians, std of the facet slope angle, [0, pi/2]) for "vcavity"; alpha
         ([0, 2]) for the Smith surfaces.
     mu : array_like, shape (n,)
-        Cosines of the incident direction, in (0, 1].
+        Cosines of the incident direction, in [MU_MIN, 1] (``MU_MIN`` = 1e-100: below it
+        the Smith path tracer's floating point underflows; E(mu) is continuous there).
     rho : array_like, shape (C,)
         Microfacet albedo per channel in [0, 1]; all channels share the same paths.
     paths : int
@@ -261,9 +293,9 @@ def simulate_albedo(geometry, roughness, mu, rho=1.0, paths=1_000_000, seed=0, *
     mu = np.atleast_1d(ar.as_float("mu", mu, np.dtype(np.float64))).astype(np.float64)
     if mu.ndim != 1:
         raise ValueError(f"mu must be a scalar or a 1-D list of cosines, got shape {mu.shape}")
-    bad = ~((mu > 0.0) & (mu <= 1.0))
+    bad = ~((mu >= MU_MIN) & (mu <= 1.0))
     if bad.any():
-        raise ValueError(f"mu must be in (0, 1] (cosine of the incident angle), got {mu[bad][0]!r}")
+        raise ValueError(f"mu must be in [1e-100, 1] (cosine of the incident angle; MU_MIN = 1e-100), got {mu[bad][0]!r}")
     rho = _rho(rho)
     paths = _check_count("paths", paths, 1)
     seed = _check_count("seed", seed, 0)

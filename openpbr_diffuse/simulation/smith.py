@@ -57,7 +57,7 @@ def lam(wz, alpha, dist):
     if dist == BECKMANN:
         return 0.5 * (math.erf(a) - 1.0) + math.exp(-a * a) / (2.0 * a * _SQRT_PI)
     sgn = 1.0 if a > 0.0 else -1.0
-    return 0.5 * (-1.0 + sgn * math.sqrt(1.0 + 1.0 / (a * a)))
+    return 0.5 * (-1.0 + sgn * math.hypot(1.0, 1.0 / a))  # sqrt(1 + 1/a^2) without a^2 underflowing
 
 
 @inline
