@@ -41,7 +41,7 @@ CHILD = textwrap.dedent("""
 
 def _fake_run(out, paths=(MATERIAL,)):
     return subprocess.run([sys.executable, "-c", CHILD, str(paths[0]), str(out), "0"],
-                          capture_output=True, text=True, timeout=120,
+                          check=False, capture_output=True, text=True, timeout=120,
                           env={**os.environ, "PYTHONPATH": str(ROOT)})
 
 
@@ -60,7 +60,7 @@ def test_user_files_left_in_place_cli(tmp_path):
     d.mkdir()
     (d / "thesis.tex").write_text("x")
     r = subprocess.run([sys.executable, "-m", "openpbr_diffuse", "report", str(MATERIAL), "--out", str(d),
-                        "--quick", "--no-progress"], capture_output=True, text=True, timeout=300,
+                        "--quick", "--no-progress"], check=False, capture_output=True, text=True, timeout=300,
                        env={**os.environ, "PYTHONPATH": str(ROOT)})
     assert r.returncode == 2, r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and "thesis.tex" in r.stderr

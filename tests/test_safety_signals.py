@@ -4,11 +4,16 @@ import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import pytest
-
-from test_safety_report_output import CHILD, MATERIAL, ROOT, _fake_run, _is_complete_report, _no_leftovers
+from test_safety_report_output import (
+    CHILD,
+    MATERIAL,
+    ROOT,
+    _fake_run,
+    _is_complete_report,
+    _no_leftovers,
+)
 
 ENV = {**os.environ, "PYTHONPATH": str(ROOT)}
 

@@ -246,4 +246,4 @@ def publish(tmp: os.PathLike | str, out: os.PathLike | str,
             discard(tmp)
 
 
-__all__ = ["MARKER", "UnsafeOutputError", "check_target", "staging_dir", "publish", "discard"]
+__all__ = ["MARKER", "UnsafeOutputError", "check_target", "discard", "publish", "staging_dir"]
