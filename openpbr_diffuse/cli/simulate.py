@@ -9,6 +9,7 @@ standard errors (``--json``: a ``rows`` list with mu, albedo, albedo_by_order, s
 """
 import json
 import math
+import sys
 
 import numpy as np
 
@@ -32,6 +33,7 @@ def add_parser(subparsers):
     p.add_argument("--workers", type=int, default=None, metavar="W", help="local threads (default: all cores)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="run the chunks on this Dask distributed scheduler")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar (off anyway when stderr is not a terminal)")
     p.add_argument("--yes", action="store_true",
                    help=f"run even above the work budget of {WORK_BUDGET_PATHS:.0e} paths in total "
                         "(paths x number of mu; about 25 min on 2 cores)")
@@ -74,7 +76,8 @@ def run(args):
         raise _usage(f"{total:.3g} paths in total exceed the work budget of {WORK_BUDGET_PATHS:.0e} "
                      f"(about {total / PATHS_PER_S / 3600:.3g} h here); pass --yes to run anyway")
     rho = np.array(args.rho, dtype=np.float64)
-    kw = dict(rho=rho, paths=args.paths, seed=args.seed, workers=args.workers, scheduler=args.scheduler)
+    kw = dict(rho=rho, paths=args.paths, seed=args.seed, workers=args.workers, scheduler=args.scheduler,
+              progress=not args.no_progress and sys.stderr.isatty())
     try:
         if args.average:
             est = simulate_average_albedo(args.geometry, args.roughness, **kw)

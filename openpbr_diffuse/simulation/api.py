@@ -127,7 +127,16 @@ def _client(client, scheduler):
                               f"{SCHEDULER_TIMEOUT_S:g} s ({type(exc).__name__})") from None
 
 
-def _execute(tasks, workers, client, scheduler):
+def _bar(iterable, progress, total=None):
+    """``iterable`` wrapped in a tqdm bar on stderr when ``progress`` (chunks done)."""
+    if not progress:
+        return iterable
+    from tqdm.auto import tqdm
+
+    return tqdm(iterable, total=total, desc="simulate", unit="chunk", leave=False)
+
+
+def _execute(tasks, workers, client, scheduler, progress=False):
     """Run the chunk tasks (locally on threads, or on a Dask cluster), results in task order."""
     cl, own = _client(client, scheduler)
     if cl is not None:
@@ -138,9 +147,9 @@ def _execute(tasks, workers, client, scheduler):
             if own:
                 cl.close()
     if workers == 1 or len(tasks) == 1:
-        return [_run_task(t) for t in tasks]
+        return [_run_task(t) for t in _bar(tasks, progress)]
     with ThreadPoolExecutor(max_workers=workers) as pool:  # the kernel releases the GIL
-        return list(pool.map(_run_task, tasks))
+        return list(_bar(pool.map(_run_task, tasks), progress, total=len(tasks)))
 
 
 def _plan(kind, geometry, roughness, queries, random_wi, rho, paths, seed):
@@ -253,7 +262,7 @@ def _albedo_result(geometry, roughness, mu, rho, paths, seed, results, spans):
 
 
 def simulate_albedo(geometry, roughness, mu, rho=1.0, paths=1_000_000, seed=0, *, workers=None,
-                    client=None, scheduler=None):
+                    client=None, scheduler=None, progress=False):
     """Directional albedo E(mu) of a rough Lambertian microsurface, by Monte Carlo.
 
     Parameters
@@ -273,7 +282,10 @@ def simulate_albedo(geometry, roughness, mu, rho=1.0, paths=1_000_000, seed=0, *
         Non-negative seed; results are reproducible per (seed, query, chunk).
     workers : int, optional
         Local threads (default: all cores); ignored when a Dask ``client``/``scheduler``
-        (address) is given.
+        (address) is given.  A ``scheduler`` address must answer within
+        ``SCHEDULER_TIMEOUT_S`` seconds, else ``ConnectionError``.
+    progress : bool
+        Show a tqdm progress bar on stderr (local runs).
 
     Returns
     -------
@@ -303,12 +315,12 @@ def simulate_albedo(geometry, roughness, mu, rho=1.0, paths=1_000_000, seed=0, *
     no_wo = np.zeros((0, 3))
     queries = [(np.array([math.sqrt(max(0.0, 1.0 - m * m)), 0.0, m]), no_wo, [m]) for m in mu]
     tasks, spans = _plan("albedo", geometry, roughness, queries, False, rho, paths, seed)
-    results = _execute(tasks, workers, client, scheduler)
+    results = _execute(tasks, workers, client, scheduler, progress)
     return _albedo_result(geometry, roughness, mu, rho, paths, seed, results, spans)
 
 
 def simulate_average_albedo(geometry, roughness, rho=1.0, paths=1_000_000, seed=0, *, workers=None,
-                            client=None, scheduler=None):
+                            client=None, scheduler=None, progress=False):
     """Average albedo <E> = 2 int_0^1 E(mu) mu dmu (incident directions cosine-distributed).
 
     Same parameters as ``simulate_albedo`` without ``mu``; the result's arrays have a
@@ -327,12 +339,12 @@ def simulate_average_albedo(geometry, roughness, rho=1.0, paths=1_000_000, seed=
     workers = (os.cpu_count() or 1) if workers is None else _check_count("workers", workers, 1)
     queries = [(np.array([0.0, 0.0, 1.0]), np.zeros((0, 3)), [-1.0])]
     tasks, spans = _plan("average", geometry, roughness, queries, True, rho, paths, seed)
-    results = _execute(tasks, workers, client, scheduler)
+    results = _execute(tasks, workers, client, scheduler, progress)
     return _albedo_result(geometry, roughness, None, rho, paths, seed, results, spans)
 
 
 def simulate_brdf(geometry, roughness, wi, wo, rho=1.0, paths=1_000_000, seed=0, *, workers=None,
-                  client=None, scheduler=None):
+                  client=None, scheduler=None, progress=False):
     """BRDF f(wi, wo) (without the cosine) of the microsurface, by next-event estimation.
 
     Light paths start from ``wi``; every bounce adds its exact contribution towards ``wo``
@@ -384,7 +396,7 @@ def simulate_brdf(geometry, roughness, wi, wo, rho=1.0, paths=1_000_000, seed=0,
         rows.append(idx)
         queries.append((np.ascontiguousarray(uniq[g]), np.ascontiguousarray(wo[idx]), uniq[g]))
     tasks, spans = _plan("brdf", geometry, roughness, queries, False, rho, paths, seed)
-    results = _execute(tasks, workers, client, scheduler)
+    results = _execute(tasks, workers, client, scheduler, progress)
     C = rho.shape[0]
     f = np.empty((n, C)); se = np.empty((n, C))
     fo = np.empty((n, N_ORDERS, C)); seo = np.empty((n, N_ORDERS, C))
