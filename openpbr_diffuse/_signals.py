@@ -37,6 +37,7 @@ def install() -> None:
     """Raise :class:`Terminated` on SIGINT/SIGTERM/SIGHUP (main thread only; else a no-op)."""
     if threading.current_thread() is not threading.main_thread():
         return
+    _received.clear()  # a new command starts (main() may run several times in one process)
     for s in SIGNALS:
         signal.signal(s, _handler)
 
