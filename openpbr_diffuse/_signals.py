@@ -1,66 +1,61 @@
-"""Termination signals as exceptions, remembered even when the exception is swallowed.
+"""Termination signals as exceptions, so that every command cleans up and exits 128+signum.
 
-The command line installs :func:`install` first thing: SIGINT raises ``KeyboardInterrupt``
-(as Python's default handler does), SIGTERM and SIGHUP raise :class:`Terminated`, and every
-signal received is recorded.  Code that is about to make a change visible (the report's
-publication step) calls :func:`raise_if_received`: an interrupt that some library swallowed
-(in a finaliser, a thread, a broad ``except``) still stops the run before anything is replaced.
+:func:`install` turns SIGINT, SIGTERM and SIGHUP into :class:`Terminated` (a
+``KeyboardInterrupt``) raised in the main thread; :func:`received` tells whether one
+arrived since, even when the exception was swallowed somewhere (a finalizer, an
+``except`` around an import), so that an output is never published after a signal.
 
-Examples
---------
->>> received()
-()
+Example
+-------
+>>> from openpbr_diffuse import _signals
+>>> issubclass(_signals.Terminated, KeyboardInterrupt)
+True
 """
 from __future__ import annotations
 
 import signal
 import threading
 
-#: The signals turned into exceptions: (signal, what it is called in messages).
-SIGNALS = tuple(s for s in (signal.SIGINT, getattr(signal, "SIGTERM", None), getattr(signal, "SIGHUP", None))
-                if s is not None)
-
+SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n))
 _received: list[int] = []
 
 
-class Terminated(BaseException):
-    """SIGTERM or SIGHUP received (a ``BaseException``, like ``KeyboardInterrupt``)."""
+class Terminated(KeyboardInterrupt):
+    """A termination signal arrived; ``signum`` is its number (exit status 128 + signum)."""
 
-    def __init__(self, signum: int):
-        super().__init__(f"terminated by {signal.Signals(signum).name}")
+    def __init__(self, signum: int) -> None:
+        super().__init__(f"interrupted by {signal.Signals(signum).name}")
         self.signum = signum
 
 
-def _handler(signum, frame):
+def _handler(signum: int, frame: object) -> None:
     _received.append(signum)
-    if signum == signal.SIGINT:
-        raise KeyboardInterrupt
     raise Terminated(signum)
 
 
-def _exit_now(signum, frame):
+def _exit_now(signum: int, frame: object) -> None:
     import os
     import sys
 
-    name = "interrupted" if signum == signal.SIGINT else f"terminated by {signal.Signals(signum).name}"
-    sys.stderr.write(f"openpbr-diffuse: {name}\n")
+    sys.stderr.write(f"openpbr-diffuse: interrupted by {signal.Signals(signum).name}\n")
     os._exit(128 + signum)
 
 
 def install_for_start_up() -> None:
-    """While the command line is still importing (nothing written yet): a signal exits at once.
+    """While the command line is still importing (nothing written yet), a signal exits at once.
 
-    Installed from the package's ``__init__`` only when the process is the command line
-    (``openpbr-diffuse`` or ``python -m openpbr_diffuse``), so that a Ctrl-C during the imports
-    ends the command with its exit status and one line, not a traceback; :func:`install`
-    replaces it when the command starts.
+    Called from the package's ``__init__``; acts only when the process is the command line
+    (``openpbr-diffuse``, or ``python -m openpbr_diffuse`` whose ``sys.argv[0]`` is ``-m`` while
+    the package is imported), so that a Ctrl-C during the imports ends the command with one
+    line and exit 128 + signum instead of a traceback.  :func:`install` replaces it.
     """
     import os
     import sys
 
     argv0 = sys.argv[0] if sys.argv else ""
-    if (argv0 != "-m" and os.path.basename(argv0) != "openpbr-diffuse") or \
-            threading.current_thread() is not threading.main_thread():
+    if argv0 != "-m" and os.path.basename(argv0) != "openpbr-diffuse":
+        return
+    if threading.current_thread() is not threading.main_thread():
         return
     for s in SIGNALS:
         if signal.getsignal(s) in (signal.default_int_handler, signal.SIG_DFL):
@@ -68,44 +63,37 @@ def install_for_start_up() -> None:
 
 
 def install() -> None:
-    """Turn SIGINT/SIGTERM/SIGHUP into exceptions (main thread only; elsewhere a no-op)."""
+    """Raise :class:`Terminated` on SIGINT/SIGTERM/SIGHUP (main thread only; else a no-op)."""
     if threading.current_thread() is not threading.main_thread():
         return
+    _received.clear()  # a new command starts (main() may run several times in one process)
     for s in SIGNALS:
         signal.signal(s, _handler)
 
 
-def received() -> tuple[int, ...]:
-    """The termination signals received so far (in order)."""
-    return tuple(_received)
+def received() -> int | None:
+    """The first termination signal received since :func:`install`, or ``None``."""
+    return _received[0] if _received else None
 
 
-def raise_if_received() -> None:
-    """Raise the exception of the first signal received, if any was (even if it was swallowed)."""
+def check() -> None:
+    """Raise :class:`Terminated` again if a signal arrived (its exception may have been lost)."""
     if _received:
-        s = _received[0]
-        if s == signal.SIGINT:
-            raise KeyboardInterrupt
-        raise Terminated(s)
+        raise Terminated(_received[0])
 
 
 class blocked:
-    """Context manager: the termination signals are held (not lost) while the block runs.
+    """Context manager: hold SIGINT/SIGTERM/SIGHUP during a short critical step.
 
-    Used around a step that must either complete or not start, such as swapping a finished
-    report into place; a signal that arrives meanwhile is delivered when the block ends.
+    Signals that arrive meanwhile are delivered when the block ends.
     """
 
     def __enter__(self):
-        self._on = threading.current_thread() is threading.main_thread() and hasattr(signal, "pthread_sigmask")
-        if self._on:
-            self._old = signal.pthread_sigmask(signal.SIG_BLOCK, set(SIGNALS))
+        self._old = None
+        if hasattr(signal, "pthread_sigmask") and threading.current_thread() is threading.main_thread():
+            self._old = signal.pthread_sigmask(signal.SIG_BLOCK, SIGNALS)
         return self
 
-    def __exit__(self, *exc):
-        if self._on:
+    def __exit__(self, *exc: object) -> None:
+        if self._old is not None:
             signal.pthread_sigmask(signal.SIG_SETMASK, self._old)
-        return False
-
-
-__all__ = ["Terminated", "install", "received", "raise_if_received", "blocked", "SIGNALS"]

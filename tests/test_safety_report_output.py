@@ -1,215 +1,149 @@
-"""`report --out`: nothing is deleted that the tool did not write; replacement is atomic.
-
-Every case ends with the user's files byte-for-byte as they were, one line on stderr and exit
-2, or with a complete report in place; never with a hidden temporary folder left behind.
-"""
-from __future__ import annotations
-
+"""``report --out``: nothing deleted that the tool did not write; atomic, concurrent-safe replace."""
 import json
 import os
-import signal
 import subprocess
 import sys
 import textwrap
-import time
 from pathlib import Path
 
 import pytest
 
-from openpbr_diffuse.report import output, runner
+from openpbr_diffuse.report import output
+from openpbr_diffuse.report.output import MARKER, UnsafeOutputError
 
 ROOT = Path(__file__).resolve().parents[1]
 MATERIAL = ROOT / "materials" / "chalk_white.mtlx"
 
+#: A child process running ``run_report`` with one tiny fake section (a fraction of a second).
+CHILD = textwrap.dedent("""
+    import sys, time, types
+    from openpbr_diffuse.report.model import SectionResult
+    fake = types.ModuleType("openpbr_diffuse.report.sections.timings")
+    fake.TITLE = "Fake"
+    def build(ctx):
+        time.sleep(float(sys.argv[3]))
+        (ctx.image_dir / "x.txt").write_text("x" * 1000)
+        return SectionResult("timings", "Fake")
+    fake.build = build
+    sys.modules[fake.__name__] = fake
+    from openpbr_diffuse import _signals
+    from openpbr_diffuse.report.runner import run_report
+    _signals.install()
+    print("started", flush=True)
+    try:
+        run_report([sys.argv[1]], sys.argv[2], progress=False, sections=["timings"])
+    except KeyboardInterrupt as exc:
+        sys.exit(128 + exc.signum)
+    except ValueError as exc:
+        print(exc, file=sys.stderr); sys.exit(2)
+""")
 
-def _snapshot(folder: Path) -> dict:
-    return {str(p.relative_to(folder)): (p.read_bytes() if p.is_file() else None) for p in sorted(folder.rglob("*"))}
+
+def _fake_run(out, paths=(MATERIAL,)):
+    return subprocess.run([sys.executable, "-c", CHILD, str(paths[0]), str(out), "0"],
+                          check=False, capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "PYTHONPATH": str(ROOT)})
 
 
-def _cli(*argv, cwd, env=None, timeout=120):
-    return subprocess.run([sys.executable, "-m", "openpbr_diffuse", "report", *argv, "--no-progress"], cwd=cwd,
-                          capture_output=True, text=True, env=env, timeout=timeout)
+def _is_complete_report(out: Path) -> bool:
+    doc = json.loads((out / MARKER).read_text())
+    return (out / "report.json").is_file() and (out / "index.html").is_file() and \
+        set(doc["entries"]) == {p.relative_to(out).as_posix() for p in out.rglob("*")} - {MARKER}
 
 
-def _env(**extra):
-    env = dict(os.environ)
-    env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
-    env.update(extra)
-    return env
+def _no_leftovers(parent: Path) -> bool:
+    return not [p for p in parent.iterdir() if ".tmp-" in p.name or ".old-" in p.name]
 
 
-def _report(out, **kw):
-    return runner.run_report(None, out, quick=True, progress=False, sections=(), **kw)
-
-
-def _no_temp_left(parent: Path):
-    assert not [p.name for p in parent.iterdir() if ".tmp-" in p.name or ".old-" in p.name]
-
-
-def test_folder_with_user_files_is_refused_and_untouched(tmp_path):
+def test_user_files_left_in_place_cli(tmp_path):
     d = tmp_path / "d"
     d.mkdir()
-    (d / "thesis.tex").write_text("chapter 1")
-    (d / "sub").mkdir()
-    (d / "sub" / "data.csv").write_text("1,2")
-    before = _snapshot(d)
-    with pytest.raises(ValueError, match="did not write"):
-        _report(d)
-    assert _snapshot(d) == before
-    _no_temp_left(tmp_path)
+    (d / "thesis.tex").write_text("x")
+    r = subprocess.run([sys.executable, "-m", "openpbr_diffuse", "report", str(MATERIAL), "--out", str(d),
+                        "--quick", "--no-progress"], check=False, capture_output=True, text=True, timeout=300,
+                       env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert r.returncode == 2, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1 and "thesis.tex" in r.stderr
+    assert [p.name for p in d.iterdir()] == ["thesis.tex"] and (d / "thesis.tex").read_text() == "x"
+    assert _no_leftovers(tmp_path)
 
 
-@pytest.mark.parametrize("out", [".", "", "..", "~"])
-def test_cwd_empty_parent_and_home_are_refused(tmp_path, out):
-    work = tmp_path / "home" / "project"
-    work.mkdir(parents=True)
-    (work / "renderer.cpp").write_text("int main() {}")
-    (work / "m.mtlx").write_bytes(MATERIAL.read_bytes())
-    (tmp_path / "home" / ".bashrc").write_text("export X=1")
-    before = _snapshot(tmp_path)
-    p = _cli("m.mtlx", "--out", out, "--select", "materials", cwd=work, env=_env(HOME=str(tmp_path / "home")))
-    assert p.returncode == 2, p.stderr
-    assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
-    assert _snapshot(tmp_path) == before
-
-
-def test_ancestor_of_the_inputs_is_refused(tmp_path):
-    src = tmp_path / "scenes"
+@pytest.mark.parametrize("case", ["dot_next_to_input", "empty", "home", "input_parent", "file"])
+def test_unsafe_targets_refused(tmp_path, monkeypatch, case):
+    src = tmp_path / "proj"
     src.mkdir()
-    (src / "m.mtlx").write_bytes(MATERIAL.read_bytes())
-    before = _snapshot(tmp_path)
-    p = _cli(str(src / "m.mtlx"), "--out", str(src), "--select", "materials", cwd=tmp_path, env=_env())
-    assert p.returncode == 2 and "did not write" in p.stderr
-    assert _snapshot(tmp_path) == before
+    inp = src / "m.mtlx"
+    inp.write_text(MATERIAL.read_text())
+    (src / "renderer.cpp").write_text("int main(){}")
+    home = tmp_path / "home"
+    (home / ".ssh").mkdir(parents=True)
+    (home / ".bashrc").write_text("alias x=y")
+    monkeypatch.setenv("HOME", str(home))
+    monkeypatch.chdir(src)
+    out = {"dot_next_to_input": ".", "empty": "", "home": str(home), "input_parent": str(tmp_path),
+           "file": str(src / "renderer.cpp")}[case]
+    before = sorted(str(p) for p in tmp_path.rglob("*"))
+    with pytest.raises(UnsafeOutputError):
+        output.check_target(out, [inp])
+    r = _fake_run(out, [inp])
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert sorted(str(p) for p in tmp_path.rglob("*")) == before
 
 
-def test_a_file_is_refused(tmp_path):
-    f = tmp_path / "report"
-    f.write_text("not a folder")
-    with pytest.raises(ValueError, match="not a folder"):
-        _report(f)
-    assert f.read_text() == "not a folder"
-
-
-def test_empty_folder_and_previous_report_are_used(tmp_path):
-    out = tmp_path / "r"
-    out.mkdir()
-    _report(out)
-    assert (out / output.MARKER).is_file() and (out / "index.html").is_file()
-    first = json.loads((out / "report.json").read_text())["generated"]
-    time.sleep(1.1)
-    _report(out)  # a previous report of this tool: replaced
-    assert json.loads((out / "report.json").read_text())["generated"] != first
-    _no_temp_left(tmp_path)
-
-
-def test_previous_report_with_a_user_file_is_not_replaced(tmp_path):
-    out = tmp_path / "r"
-    _report(out)
-    (out / "images" / "my_notes.txt").write_text("keep me")
-    before = _snapshot(out)
-    with pytest.raises(ValueError, match="my_notes.txt"):
-        _report(out)
-    assert _snapshot(out) == before
-
-
-def test_forged_marker_does_not_cover_unlisted_files(tmp_path):
-    out = tmp_path / "r"
-    out.mkdir()
-    (out / output.MARKER).write_text(json.dumps({"tool": "openpbr-diffuse", "files": ["index.html"]}))
-    (out / "index.html").write_text("x")
-    (out / "precious.db").write_text("data")
-    with pytest.raises(ValueError, match="precious.db"):
-        _report(out)
-    assert (out / "precious.db").read_text() == "data"
-
-
-@pytest.mark.parametrize("umask", [0o022, 0o077, 0o002])
-def test_permissions_follow_the_umask(tmp_path, umask):
-    old = os.umask(umask)
+def test_previous_report_replaced_and_mode_follows_umask(tmp_path):
+    out = tmp_path / "rep"
+    old = os.umask(0o027)
     try:
-        _report(tmp_path / "r")
+        assert _fake_run(out).returncode == 0
     finally:
         os.umask(old)
-    assert (tmp_path / "r").stat().st_mode & 0o777 == 0o777 & ~umask
+    assert _is_complete_report(out)
+    assert (out.stat().st_mode & 0o777) == 0o750
+    first = (out / "report.json").stat().st_mtime_ns
+    r = _fake_run(out)
+    assert r.returncode == 0, r.stderr
+    assert _is_complete_report(out) and (out / "report.json").stat().st_mtime_ns != first
+    assert _no_leftovers(tmp_path)
 
 
-_CONCURRENT = textwrap.dedent("""
-    import sys
-    from openpbr_diffuse.report import runner
-    try:
-        runner.run_report(None, sys.argv[1], quick=True, progress=False, sections=())
-    except (ValueError, OSError) as e:
-        print("error:", e, file=sys.stderr)
-        sys.exit(2)
-""")
+def test_empty_folder_used(tmp_path):
+    out = tmp_path / "empty"
+    out.mkdir()
+    assert _fake_run(out).returncode == 0 and _is_complete_report(out)
 
 
-def test_concurrent_runs_to_one_folder(tmp_path):
-    out = tmp_path / "r"
-    procs = [subprocess.Popen([sys.executable, "-c", _CONCURRENT, str(out)], env=_env(), stderr=subprocess.PIPE,
-                              text=True) for _ in range(4)]
+def test_previous_report_plus_user_file_not_replaced(tmp_path):
+    out = tmp_path / "rep"
+    assert _fake_run(out).returncode == 0
+    (out / "images" / "notes.txt").write_text("mine")
+    listing = sorted(str(p) for p in out.rglob("*"))
+    r = _fake_run(out)
+    assert r.returncode == 2 and "notes.txt" in r.stderr
+    assert sorted(str(p) for p in out.rglob("*")) == listing
+    assert _no_leftovers(tmp_path)
+
+
+def test_forged_marker_does_not_cover_other_files(tmp_path):
+    out = tmp_path / "rep"
+    out.mkdir()
+    (out / MARKER).write_text("{}")
+    (out / "data.csv").write_text("1")
+    with pytest.raises(UnsafeOutputError):
+        output.check_target(out)
+
+
+def test_concurrent_runs_each_complete(tmp_path):
+    out = tmp_path / "rep"
+    assert _fake_run(out).returncode == 0
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    procs = [subprocess.Popen([sys.executable, "-c", CHILD, str(MATERIAL), str(out), "0.2"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+             for _ in range(4)]
     results = [(p.wait(timeout=120), p.stderr.read()) for p in procs]
+    for p in procs:
+        p.stdout.close()
+        p.stderr.close()
     for code, err in results:
-        assert code == 0 or (code == 2 and err.startswith("error:")), err
-    assert any(code == 0 for code, _ in results)
-    assert sorted(p.name for p in out.iterdir()) == sorted([output.MARKER, "images", "index.html", "report.json"])
-    json.loads((out / "report.json").read_text())
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["r"]
-
-
-_SLOW_RUN = textwrap.dedent("""
-    import sys, time, types
-    from openpbr_diffuse import _signals
-    _signals.install()
-    from openpbr_diffuse.report import runner, sections
-    from openpbr_diffuse.report.model import SectionResult
-    mod = types.ModuleType("openpbr_diffuse.report.sections.sleepy")
-    mod.TITLE = "sleepy"
-    def build(ctx):
-        print("started", flush=True)
-        time.sleep(float(sys.argv[2]))
-        return SectionResult("sleepy", "sleepy")
-    mod.build = build
-    sys.modules[mod.__name__] = mod
-    sections.SECTIONS = sections.SECTIONS + ("sleepy",)
-    try:
-        runner.run_report(None, sys.argv[1], quick=True, progress=False, sections=("sleepy",))
-    except KeyboardInterrupt:
-        sys.exit(130)
-    except _signals.Terminated as e:
-        sys.exit(128 + e.signum)
-""")
-
-
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
-@pytest.mark.parametrize("delay", [0.0, 0.5])
-def test_signal_leaves_old_report_and_no_temp_folder(tmp_path, sig, delay):
-    out = tmp_path / "r"
-    _report(out)
-    before = _snapshot(out)
-    p = subprocess.Popen([sys.executable, "-c", _SLOW_RUN, str(out), "30"], env=_env(), stdout=subprocess.PIPE,
-                         text=True)
-    assert p.stdout.readline().strip() == "started"
-    time.sleep(delay)
-    p.send_signal(sig)
-    code = p.wait(timeout=60)
-    assert code == 128 + sig
-    assert _snapshot(out) == before
-    assert sorted(q.name for q in tmp_path.iterdir()) == ["r"]
-
-
-def test_signal_during_start_up_is_honoured(tmp_path):
-    out = tmp_path / "r"
-    _report(out)
-    before = _snapshot(out)
-    p = subprocess.Popen([sys.executable, "-m", "openpbr_diffuse", "report", "--out", str(out), "--select",
-                          "implementations", "--quick", "--no-progress"], env=_env(), cwd=tmp_path,
-                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    time.sleep(0.6)  # inside the imports
-    p.send_signal(signal.SIGINT)
-    code = p.wait(timeout=120)
-    err = p.stderr.read()
-    assert code == 130 and "Traceback" not in err, err
-    assert _snapshot(out) == before
-    assert sorted(q.name for q in tmp_path.iterdir()) == ["r"]
+        assert code == 0 or (code == 2 and len(err.strip().splitlines()) == 1), err
+    assert _is_complete_report(out)
+    assert _no_leftovers(tmp_path)

@@ -11,11 +11,7 @@ Conventions (tested in ``tests/test_cli_conventions.py``):
 - a closed output pipe (``... | head -2``) ends the command quietly with exit status 141
   (128 + SIGPIPE: what a C tool killed by SIGPIPE reports, so ``set -o pipefail`` still
   sees that the output was cut short);
-- Ctrl-C prints ``openpbr-diffuse: interrupted`` and exits 130 (128 + SIGINT), no traceback;
-  SIGTERM and SIGHUP likewise (``terminated by SIGTERM``, exit 143 / 129). The handlers are
-  installed before anything else is imported, so a signal during start-up is honoured too;
-- an unknown option or sub-command names the closest known one (``did you mean --roughness?``)
-  and the sub-command's usage, on the same one line.
+- Ctrl-C prints ``openpbr-diffuse: interrupted`` and exits 130 (128 + SIGINT), no traceback.
 """
 import argparse
 import importlib
@@ -23,7 +19,6 @@ import os
 import re
 import sys
 
-from .. import _signals
 from .._version import __version__
 
 #: sub-command name -> module in this package (added as the commands are built).
@@ -63,31 +58,7 @@ class _Parser(argparse.ArgumentParser):
         self._negative_number_matcher = _NEGATIVE_NUMBER
 
     def error(self, message):  # argparse's multi-line usage dump -> one line, exit 2
-        raise UsageError(_with_suggestion(self, message), prog=self.prog)
-
-
-def _known_options(parser):
-    return [o for a in parser._actions for o in a.option_strings if o.startswith("--")]
-
-
-def _with_suggestion(parser, message):
-    """``message`` plus 'did you mean X?' for an unknown option / choice, and the usage line."""
-    import difflib
-
-    hint = ""
-    m = re.search(r"unrecognized arguments: (\S+)", message)
-    if m:
-        word = m.group(1).split("=")[0]
-        close = difflib.get_close_matches(word, _known_options(parser), n=1, cutoff=0.6)
-        hint = f" (did you mean {close[0]}?)" if close else ""
-    m = m or re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
-    if m and not hint and m.lastindex == 2:
-        choices = re.findall(r"'?([\w.-]+)'?", m.group(2))
-        close = difflib.get_close_matches(m.group(1), choices, n=1, cutoff=0.5)
-        hint = f" (did you mean {close[0]}?)" if close else ""
-    usage = " ".join(parser.format_usage().split())
-    usage = usage.replace(f"usage: {parser.prog}", "usage:", 1)  # the program is named once, up front
-    return f"{message}{hint}; {usage}"
+        raise UsageError(message, prog=self.prog)
 
 
 def build_parser():
@@ -96,7 +67,6 @@ def build_parser():
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
-    parser.commands = sub.choices  # name -> sub-command parser (its usage for option typos)
     for name, module in COMMANDS.items():
         importlib.import_module(f"{__package__}.{module}").add_parser(sub)
     return parser
@@ -119,14 +89,40 @@ def _silence_stdout():
         pass
 
 
-def main(argv=None):
+def _suggest(word: str, choices) -> str:
+    """`` (did you mean X?)`` for the closest of ``choices`` to ``word``, or ``""``."""
+    import difflib
+
+    close = difflib.get_close_matches(word.split("=", 1)[0], list(choices), n=1, cutoff=0.6)
+    return f" (did you mean {close[0]}?)" if close else ""
+
+
+def _parse(parser: argparse.ArgumentParser, argv: list[str] | None) -> argparse.Namespace:
+    """``parse_args`` whose one-line errors name the closest option or command and the usage."""
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    words = sys.argv[1:] if argv is None else list(argv)
+    command = next((w for w in words if not w.startswith("-")), None)
+    if command is not None and command not in sub.choices:
+        raise UsageError(f"unknown command {command!r}{_suggest(command, sub.choices)}; "
+                         f"choose from {', '.join(sub.choices)}", prog=PROG)
+    args, extra = parser.parse_known_args(argv)
+    if extra:
+        cmd = sub.choices[args.command]
+        options = [o for a in cmd._actions for o in a.option_strings]
+        usage = " ".join(cmd.format_usage().split())
+        raise UsageError(f"unrecognized argument {extra[0]}{_suggest(extra[0], options)}; {usage}",
+                         prog=cmd.prog)
+    return args
+
+
+def main(argv: list[str] | None = None) -> int:
+    from .. import _signals
+
+    _signals.install()  # SIGTERM/SIGHUP like Ctrl-C: clean up, exit 128 + signum
     prog = PROG
-    _signals.install()
     try:
         parser = build_parser()
-        args, extra = parser.parse_known_args(argv)
-        if extra:  # an unknown option: the sub-command's usage and a suggestion from its options
-            parser.commands[args.command].error(f"unrecognized arguments: {' '.join(extra)}")
+        args = _parse(parser, argv)
         prog = f"{PROG} {args.command}"
         code = int(args.run(args) or 0)
         sys.stdout.flush()  # a closed pipe shows here, inside the handler, not at exit
@@ -134,12 +130,10 @@ def main(argv=None):
     except BrokenPipeError:
         _silence_stdout()
         return EXIT_SIGPIPE
-    except KeyboardInterrupt:
-        print(f"{PROG}: interrupted", file=sys.stderr)
-        return EXIT_SIGINT
-    except _signals.Terminated as exc:
-        print(f"{PROG}: {exc}", file=sys.stderr)
-        return 128 + exc.signum
+    except KeyboardInterrupt as exc:
+        signum = getattr(exc, "signum", None) or _signals.received() or 2
+        print(f"{PROG}: interrupted" + ("" if signum == 2 else f" ({exc})"), file=sys.stderr)
+        return 128 + signum
     except UsageError as exc:
         print(f"{exc.prog or prog}: error: {_message(exc)}", file=sys.stderr)
         return EXIT_USAGE

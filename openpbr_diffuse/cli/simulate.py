@@ -9,6 +9,7 @@ standard errors (``--json``: a ``rows`` list with mu, albedo, albedo_by_order, s
 """
 import json
 import math
+import sys
 
 import numpy as np
 
@@ -24,7 +25,7 @@ def add_parser(subparsers):
                    help="vcavity (Oren-Nayar V-grooves) or a Smith microsurface (Heitz et al. 2016)")
     p.add_argument("--roughness", type=float, metavar="S",
                    help="sigma in radians [0, pi/2] for vcavity; alpha [0, 2] for smith-*; EON r with --layered")
-    p.add_argument("--mu", type=float, nargs="+", metavar="MU", help="cosine(s) of the incident angle in (0, 1]")
+    p.add_argument("--mu", type=float, nargs="+", metavar="MU", help="cosine(s) of the incident angle in [1e-100, 1]")
     p.add_argument("--average", action="store_true", help="average albedo <E> instead of E(mu)")
     p.add_argument("--rho", type=float, nargs="+", metavar="RHO", default=[1.0],
                    help="microfacet albedo per channel in [0, 1] (default 1)")
@@ -33,12 +34,19 @@ def add_parser(subparsers):
     p.add_argument("--workers", type=int, default=None, metavar="W", help="local threads (default: all cores)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="run the chunks on this Dask distributed scheduler")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar (off anyway when stderr is not a terminal)")
     p.add_argument("--yes", action="store_true",
-                   help=f"run even above the work budget ({BUDGET_PATHS:.0e} paths in total, about 5-10 "
-                        f"minutes on 2 cores)")
+                   help=f"run even above the work budget of {WORK_BUDGET_PATHS:.0e} paths in total "
+                        "(paths x number of mu; about 25 min on 2 cores)")
     simulate_layered.add_arguments(p)
     p.set_defaults(run=run)
     return p
+
+
+#: Paths in total (paths x queries) run without ``--yes``.
+WORK_BUDGET_PATHS = 10**9
+#: Rough throughput of the path tracer on 2 cores (paths per second), for the estimate.
+PATHS_PER_S = 7e5
 
 
 def _count(text):
@@ -60,20 +68,11 @@ def _usage(message):
     return UsageError(f"simulate: {message}")
 
 
-#: Paths of one command (paths x rows) run without --yes: ~5-10 min on 2 cores (~3.5 M bounce
-#: events/s per core, 1-2 bounces per path), so that a mistyped --paths 1e12 (days) is refused.
-BUDGET_PATHS = 10**9
-
-
-def _check_budget(args, rows):
-    total = args.paths * max(1, rows)
-    if total > BUDGET_PATHS and not args.yes:
-        raise _usage(f"{total:.3g} paths is above the work budget of {BUDGET_PATHS:.0e} paths "
-                     f"(about 5-10 minutes on 2 cores): lower --paths or add --yes")
-
-
 def run(args):
-    _check_budget(args, 1 if args.average or not args.mu else len(args.mu))
+    total = args.paths * (1 if args.average or not args.mu else len(args.mu))
+    if total > WORK_BUDGET_PATHS and not args.yes:
+        raise _usage(f"{total:.3g} paths in total exceed the work budget of {WORK_BUDGET_PATHS:.0e} "
+                     f"(about {total / PATHS_PER_S / 3600:.3g} h here); pass --yes to run anyway")
     if args.layered:
         return simulate_layered.run(args)
     if args.geometry is None or args.roughness is None:
@@ -83,7 +82,8 @@ def run(args):
     if not args.average and not args.mu:
         raise _usage("--mu is required (or --average)")
     rho = np.array(args.rho, dtype=np.float64)
-    kw = dict(rho=rho, paths=args.paths, seed=args.seed, workers=args.workers, scheduler=args.scheduler)
+    kw = dict(rho=rho, paths=args.paths, seed=args.seed, workers=args.workers, scheduler=args.scheduler,
+              progress=not args.no_progress and sys.stderr.isatty())
     try:
         if args.average:
             est = simulate_average_albedo(args.geometry, args.roughness, **kw)

@@ -1,38 +1,36 @@
-"""Publishing a finished report folder without ever deleting what this tool did not write.
+"""Publish a finished report folder without ever deleting what this tool did not write.
 
-Rules (``report --out DIR``):
+Rules (see ``docs/guide/safety.md``):
 
-- ``DIR`` may be a new path, an empty folder, or a previous report of this tool: a folder
-  holding the marker file :data:`MARKER` (a JSON manifest of every file and folder the tool
-  wrote there) and nothing that the manifest does not list.  Anything else — a folder with
-  any other file, a file, the current directory or one of its ancestors, the home folder,
-  ``""`` — is refused with one line (``ValueError``: exit 2) before any work starts, and is
-  not touched.
-- The report is written into a hidden sibling ``.DIR.tmp-XXXX`` and swapped into place in
-  one step: ``renameat2(RENAME_EXCHANGE)`` where the kernel has it (Linux), a single
-  ``rename`` when ``DIR`` does not exist.  The replaced report (now under the sibling's name)
-  is removed file by file from its own manifest, so a file added to it meanwhile survives.
-- Concurrent runs to one ``DIR`` take an exclusive ``flock`` on the parent folder for the
-  swap: each ends with a complete report in place (the last one wins) or a clear error.
-- SIGINT/SIGTERM/SIGHUP are held during the swap (see :mod:`openpbr_diffuse._signals`) and
-  a signal received earlier — even one a library swallowed — stops the run before the swap:
-  the old report or the new one is in place, never neither, and no temporary folder stays.
-- The new folder's permissions follow the umask (not ``mkdtemp``'s 0700).
+- ``--out DIR`` may be a new path, an empty folder, or a previous report of this tool:
+  a folder holding the marker file :data:`MARKER` whose manifest lists every other
+  entry in it.  Anything else (user files, ``""``, the home folder, ``/``, a folder
+  holding or above an input, a symbolic link, a file) raises :class:`UnsafeOutputError`
+  (a ``ValueError``: one line, exit status 2) before anything is written.
+- The report is built in a hidden sibling ``.DIR.tmp-XXXX`` whose mode follows the umask.
+- Publishing holds an exclusive ``flock`` on the parent folder (concurrent runs take
+  turns), checks the target again, and swaps the folders in one step with
+  ``renameat2(RENAME_EXCHANGE)`` on Linux (elsewhere: a rename of the complete sibling,
+  signals held).  The old report is then removed entry by entry from its manifest.
 
-Examples
---------
+Example
+-------
 >>> import tempfile, pathlib
->>> d = pathlib.Path(tempfile.mkdtemp())
->>> (d / "thesis.tex").write_text("x")
-1
->>> try:
-...     check_target(d)
-... except ValueError as e:
-...     print(str(e).split(";")[0])
-report: --out ... holds files this tool did not write (thesis.tex)
+>>> root = pathlib.Path(tempfile.mkdtemp())
+>>> stage = staging_dir(root / "rep")
+>>> _ = (stage / "index.html").write_text("<p>hi</p>")
+>>> publish(stage, root / "rep")
+>>> sorted(p.name for p in (root / "rep").iterdir())
+['.openpbr-diffuse-report', 'index.html']
+>>> (root / "mine.txt").write_text("x") and None
+>>> check_target(root)
+Traceback (most recent call last):
+...
+openpbr_diffuse.report.output.UnsafeOutputError: --out ... holds files this tool did not write (mine.txt, rep); choose a new or empty folder
 """
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import errno
 import fcntl
@@ -40,104 +38,137 @@ import json
 import os
 import shutil
 import tempfile
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 from .. import _signals
 
-#: The marker file of a report folder: {"tool": "openpbr-diffuse", "files": [relative paths]}.
+#: Name of the marker file a report folder holds: JSON with the manifest of what was written.
 MARKER = ".openpbr-diffuse-report"
-_TOOL = "openpbr-diffuse"
 _RENAME_EXCHANGE = 2
 _AT_FDCWD = -100
 
 
-def _manifest(folder: Path) -> set[str] | None:
-    """The paths a previous report lists in its marker, or None when ``folder`` is not one."""
-    try:
-        data = json.loads((folder / MARKER).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    if not isinstance(data, dict) or data.get("tool") != _TOOL or not isinstance(data.get("files"), list):
-        return None
-    return {str(p) for p in data["files"]} | {MARKER}
+class UnsafeOutputError(ValueError):
+    """``--out`` names a folder this tool may not replace (nothing was touched)."""
 
 
-def _contents(folder: Path) -> list[str]:
-    """Every file and folder below ``folder``, relative, without following symlinks."""
-    out = []
+def _entries(folder: Path) -> set[str]:
+    """Every file, folder and link below ``folder`` as relative POSIX paths (links not followed)."""
+    found = set()
     for root, dirs, files in os.walk(folder, followlinks=False):
         rel = Path(root).relative_to(folder)
         for name in dirs + files:
-            out.append(str(rel / name) if str(rel) != "." else name)
-    return sorted(out)
+            found.add((rel / name).as_posix())
+    return found
 
 
-def _foreign(folder: Path) -> list[str]:
-    """What ``folder`` holds that this tool did not write ([] for an empty folder)."""
-    contents = _contents(folder)
-    if not contents:
-        return []
-    listed = _manifest(folder)
-    if listed is None:
-        return contents
-    return [c for c in contents if c not in listed]
+def _manifest(folder: Path) -> set[str] | None:
+    """The manifest of a report folder, or ``None`` when ``folder`` holds no valid marker."""
+    marker = folder / MARKER
+    if marker.is_symlink() or not marker.is_file():
+        return None
+    try:
+        data = json.loads(marker.read_text(encoding="utf-8"))
+        if data.get("tool") != "openpbr-diffuse" or not isinstance(data.get("entries"), list):
+            return None
+        return {str(e) for e in data["entries"]}
+    except (OSError, ValueError, UnicodeDecodeError, AttributeError):
+        return None
 
 
-def check_target(out: str | Path) -> Path:
-    """The resolved ``--out`` folder, or ``ValueError`` when it may not be written.
+def _is_previous_report(folder: Path) -> bool:
+    manifest = _manifest(folder)
+    return manifest is not None and _entries(folder) - {MARKER} <= manifest
+
+
+def check_target(out: os.PathLike | str, inputs: Iterable[os.PathLike | str] = ()) -> Path:
+    """Check that ``out`` may receive a report; return its absolute path.
 
     Parameters
     ----------
     out : path-like
-        The requested output folder.
-
-    Returns
-    -------
-    Path
-        ``out`` resolved (absolute).
+        The ``--out`` folder.
+    inputs : iterable of path-like
+        The input files or folders: ``out`` may not be one of them or hold one.
 
     Raises
     ------
-    ValueError
-        ``out`` is empty, a file, the current folder or an ancestor of it, the home folder,
-        the filesystem root, or a folder holding anything this tool did not write.
+    UnsafeOutputError
+        ``out`` is empty, a file, a link, the home or root folder, holds an input, or holds
+        entries this tool did not write.
     """
-    if str(out).strip() == "":
-        raise ValueError("report: --out must name a folder (got an empty string)")
-    path = Path(out).expanduser().resolve()
-    cwd = Path.cwd().resolve()
-    home = Path.home().resolve()
-    if path == Path(path.anchor) or path == home or path == cwd or path in cwd.parents:
-        raise ValueError(f"report: --out {path} is the current folder, one of its parents, the home "
-                         f"folder or the root; choose a new or empty folder for the report")
-    if path.is_symlink() or (path.exists() and not path.is_dir()):
-        raise ValueError(f"report: --out {path} exists and is not a folder; nothing was written")
-    if path.is_dir():
-        foreign = _foreign(path)
-        if foreign:
-            shown = ", ".join(foreign[:3]) + (f" and {len(foreign) - 3} more" if len(foreign) > 3 else "")
-            raise ValueError(f"report: --out {path} holds files this tool did not write ({shown}); "
-                             f"choose a new or empty folder, or a previous report's folder")
+    if not isinstance(out, (str, os.PathLike)) or not str(out).strip():
+        raise UnsafeOutputError("--out is empty; name a new or empty folder")
+    given = Path(os.path.abspath(os.fspath(out)))
+    if given.is_symlink():
+        raise UnsafeOutputError(f"--out {given} is a symbolic link; name a folder")
+    path = given.resolve()
+    protected = {Path("/"), Path(os.path.expanduser("~")).resolve()}
+    if os.environ.get("HOME"):
+        protected.add(Path(os.environ["HOME"]).resolve())
+    if path in protected:
+        raise UnsafeOutputError(f"--out {path} is the home or root folder; name a new folder")
+    for item in inputs:
+        p = Path(os.fspath(item)).resolve()
+        if p == path or path in p.parents:
+            raise UnsafeOutputError(f"--out {path} holds the input {p}; name a separate folder")
+    if path.exists() or path.is_symlink():
+        if not path.is_dir():
+            raise UnsafeOutputError(f"--out {path} exists and is not a folder")
+        entries = _entries(path)
+        if entries and not _is_previous_report(path):
+            manifest = _manifest(path) or set()
+            foreign = sorted(e for e in entries - manifest - {MARKER} if "/" not in e)
+            foreign = foreign or sorted(entries - manifest - {MARKER})
+            shown = ", ".join(foreign[:5]) + (", ..." if len(foreign) > 5 else "")
+            raise UnsafeOutputError(f"--out {path} holds files this tool did not write ({shown}); "
+                                    f"choose a new or empty folder")
     return path
 
 
-def make_temp(out: Path) -> Path:
-    """A hidden sibling folder of ``out`` to write the report into, with umask permissions."""
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def staging_dir(out: os.PathLike | str) -> Path:
+    """Create the hidden sibling ``.NAME.tmp-XXXX`` of ``out`` to build a report in (mode per umask)."""
+    out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
-    mask = os.umask(0)
-    os.umask(mask)
-    os.chmod(tmp, 0o777 & ~mask)
+    os.chmod(tmp, 0o777 & ~_umask())
     return tmp
 
 
-def _write_manifest(tmp: Path) -> None:
-    files = _contents(tmp)
-    (tmp / MARKER).write_text(json.dumps({"tool": _TOOL, "files": files}, indent=1) + "\n", encoding="utf-8")
+def discard(tmp: os.PathLike | str) -> None:
+    """Remove a staging folder made by :func:`staging_dir` (a missing one is fine)."""
+    with _signals.blocked():
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _write_marker(folder: Path) -> None:
+    from .._version import __version__
+
+    entries = sorted(_entries(folder) - {MARKER})
+    doc = {"tool": "openpbr-diffuse", "version": __version__, "entries": entries}
+    (folder / MARKER).write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+
+
+@contextlib.contextmanager
+def _locked(folder: Path) -> Iterator[None]:
+    """Exclusive ``flock`` on ``folder`` itself (no lock file is left behind)."""
+    fd = os.open(folder, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)
 
 
 def _exchange(a: Path, b: Path) -> bool:
-    """Swap two paths atomically (Linux ``renameat2``); False when the call is not available."""
+    """Swap two paths atomically with ``renameat2(RENAME_EXCHANGE)``; ``False`` if unsupported."""
     try:
         libc = ctypes.CDLL(None, use_errno=True)
         fn = libc.renameat2
@@ -147,75 +178,72 @@ def _exchange(a: Path, b: Path) -> bool:
     if fn(_AT_FDCWD, os.fsencode(a), _AT_FDCWD, os.fsencode(b), _RENAME_EXCHANGE) == 0:
         return True
     err = ctypes.get_errno()
-    if err in (errno.ENOSYS, errno.EINVAL, errno.ENOTSUP if hasattr(errno, "ENOTSUP") else errno.EINVAL):
+    if err in (errno.ENOSYS, errno.EINVAL, errno.ENOTSUP, errno.EOPNOTSUPP):
         return False
     raise OSError(err, os.strerror(err), str(b))
 
 
-def _remove_report(folder: Path) -> None:
-    """Remove a replaced report: only what its manifest lists, then the folder if empty."""
-    listed = _manifest(folder)
-    if listed is None:  # an empty folder that was replaced
-        try:
-            folder.rmdir()
-        except OSError:
-            pass
-        return
-    for rel in sorted(listed, key=lambda p: -p.count("/")):
+def _remove_report(folder: Path, manifest: set[str]) -> None:
+    """Delete the listed entries of an old report, deepest first, then the folder if empty."""
+    for rel in sorted(manifest | {MARKER}, key=lambda e: e.count("/"), reverse=True):
         p = folder / rel
         try:
             if p.is_dir() and not p.is_symlink():
                 p.rmdir()
             else:
                 p.unlink()
-        except OSError:
-            pass  # absent, or a folder that now holds something else: left in place
-    try:
+        except FileNotFoundError:
+            pass
+    with contextlib.suppress(OSError):
         folder.rmdir()
-    except OSError:
-        pass
 
 
-def publish(tmp: Path, out: Path) -> None:
-    """Swap the complete report ``tmp`` into ``out`` (see the module docstring for the rules).
+def publish(tmp: os.PathLike | str, out: os.PathLike | str,
+            inputs: Iterable[os.PathLike | str] = ()) -> None:
+    """Put the complete report ``tmp`` at ``out`` in one step and remove the previous one.
+
+    Writes the marker into ``tmp``, then under an exclusive lock on the parent folder checks
+    ``out`` again (:func:`check_target`) and swaps.  On any error ``out`` is left as it was and
+    ``tmp`` is removed.
 
     Raises
     ------
-    ValueError
-        ``out`` changed meanwhile into something that may not be replaced (``tmp`` is removed).
-    KeyboardInterrupt, openpbr_diffuse._signals.Terminated
-        A termination signal was received during the run: nothing is replaced.
+    UnsafeOutputError
+        ``out`` became unsafe to replace meanwhile.
+    _signals.Terminated
+        A termination signal arrived during the run (nothing is published).
     """
-    _write_manifest(tmp)
-    _signals.raise_if_received()
-    with _signals.blocked():
-        fd = os.open(out.parent, os.O_RDONLY)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX)
-            _signals.raise_if_received()
-            check_target(out)  # again, under the lock
-            if not out.exists():
-                os.rename(tmp, out)
+    tmp, out = Path(tmp), Path(out)
+    inputs = list(inputs)
+    try:
+        _write_marker(tmp)
+        with _locked(out.parent), _signals.blocked():
+            _signals.check()
+            target = check_target(out, inputs)
+            if not target.exists():
+                os.rename(tmp, target)
                 return
-            if _exchange(tmp, out):
-                _remove_report(tmp)  # tmp now holds the replaced report
-                return
-            old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
+            manifest = _manifest(target) or set()
+            if _exchange(tmp, target):
+                old = tmp  # the previous report now sits at the staging name
+                if _entries(old) - {MARKER} <= manifest:
+                    _remove_report(old, manifest)
+                    return
+                _exchange(tmp, target)  # something was added meanwhile: put it back
+                raise UnsafeOutputError(f"--out {target} changed while the report was written; "
+                                        f"left as it was")
+            old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old-", dir=target.parent))
             old.rmdir()
-            out.rename(old)
+            os.rename(target, old)
             try:
-                tmp.rename(out)
+                os.rename(tmp, target)
             except BaseException:
-                old.rename(out)
+                os.rename(old, target)
                 raise
-            _remove_report(old)
-        finally:
-            os.close(fd)  # releases the lock
+            _remove_report(old, manifest)
+    finally:
+        if tmp.exists() and tmp.resolve() != Path(out).resolve():
+            discard(tmp)
 
 
-def discard(tmp: Path) -> None:
-    """Remove an unfinished report folder (it holds only what this run wrote)."""
-    shutil.rmtree(tmp, ignore_errors=True)
-
-
-__all__ = ["MARKER", "check_target", "make_temp", "publish", "discard"]
+__all__ = ["MARKER", "UnsafeOutputError", "check_target", "discard", "publish", "staging_dir"]

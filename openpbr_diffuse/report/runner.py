@@ -310,8 +310,8 @@ def run_report(paths: list | None = None, out: str | Path = "report", *, quick: 
     if select and not keys and not (under_test is not None and matches(select, "implementation.x")):
         raise ValueError(f"--select: no section or check id matches {' '.join(select)} "
                          f"(sections: {', '.join(section_pkg.SECTIONS)}; see --list-checks)")
-    out = output.check_target(out)  # before any work: never replace what this tool did not write
-    tmp = output.make_temp(out)
+    out = output.check_target(out, paths)  # before any work: never replace what this tool did not write
+    tmp = output.staging_dir(out)
     t0 = time.perf_counter()
     try:
         image_dir = tmp / IMAGE_DIR
@@ -333,7 +333,7 @@ def run_report(paths: list | None = None, out: str | Path = "report", *, quick: 
         run.document = doc
         (tmp / "report.json").write_text(json.dumps(doc, indent=1, allow_nan=False) + "\n")
         (tmp / "index.html").write_text(render_html(doc, image_dir), encoding="utf-8")
-        output.publish(tmp, out)
+        output.publish(tmp, out, paths)
     except BaseException:
         output.discard(tmp)
         raise

@@ -29,8 +29,6 @@ GEOMETRIES = {
     "smith-beckmann": ("alpha", 0.0, 2.0),
     "smith-ggx": ("alpha", 0.0, 2.0),
 }
-#: seconds to wait for a Dask scheduler to answer (``scheduler=``)
-SCHEDULER_TIMEOUT = 10.0
 #: paths per chunk (the unit of work and of reproducibility)
 CHUNK_PATHS = 1 << 15
 #: a path still inside the surface after this many bounces is cut (counted in ``truncated``)
@@ -83,6 +81,12 @@ def _run_task(task):
     return run_chunk(geometry, roughness, wi, random_wi, wo, rho, n, seed, MAX_BOUNCES)
 
 
+#: Smallest incident cosine simulated (below it the Smith walk's floating point underflows).
+MU_MIN = 1e-100
+#: Seconds to wait for a Dask scheduler given by address.
+SCHEDULER_TIMEOUT_S = 10.0
+
+
 def _client(client, scheduler):
     if client is not None and scheduler is not None:
         raise ValueError("give either client or scheduler, not both")
@@ -96,16 +100,43 @@ def _client(client, scheduler):
     if client is not None:
         return client, False
     try:
-        return Client(scheduler, timeout=SCHEDULER_TIMEOUT), True
-    except (OSError, TimeoutError, MemoryError, ValueError) as exc:
-        # a silent service times out; one that answers with something else than Dask's protocol
-        # can make the client decode a garbage frame length (MemoryError): both are "not a scheduler"
+        import threading
+
+        # Client(timeout=) bounds the TCP connect, not the handshake with a silent peer:
+        # connect in a daemon thread and give up after the same time
+        box: list = []
+
+        def connect():
+            try:
+                box.append(Client(scheduler, timeout=SCHEDULER_TIMEOUT_S))
+            except BaseException as e:  # noqa: BLE001 -- handed to the caller
+                box.append(e)
+
+        th = threading.Thread(target=connect, daemon=True, name="dask-connect")
+        th.start()
+        th.join(SCHEDULER_TIMEOUT_S + 1.0)
+        if not box:
+            raise TimeoutError("no answer")
+        if isinstance(box[0], BaseException):
+            raise box[0]
+        return box[0], True
+    except (OSError, TimeoutError, MemoryError, ValueError, TypeError) as exc:
+        # a silent port times out; a service that is not a Dask scheduler may answer garbage
+        # (read as an absurd frame length: MemoryError) or close the connection
         raise ConnectionError(f"scheduler {scheduler}: no Dask scheduler answered within "
-                              f"{SCHEDULER_TIMEOUT:g} s ({type(exc).__name__}: "
-                              f"{' '.join(str(exc).split())[:160]})") from None
+                              f"{SCHEDULER_TIMEOUT_S:g} s ({type(exc).__name__})") from None
 
 
-def _execute(tasks, workers, client, scheduler):
+def _bar(iterable, progress, total=None):
+    """``iterable`` wrapped in a tqdm bar on stderr when ``progress`` (chunks done)."""
+    if not progress:
+        return iterable
+    from tqdm.auto import tqdm
+
+    return tqdm(iterable, total=total, desc="simulate", unit="chunk", leave=False)
+
+
+def _execute(tasks, workers, client, scheduler, progress=False):
     """Run the chunk tasks (locally on threads, or on a Dask cluster), results in task order."""
     cl, own = _client(client, scheduler)
     if cl is not None:
@@ -116,9 +147,9 @@ def _execute(tasks, workers, client, scheduler):
             if own:
                 cl.close()
     if workers == 1 or len(tasks) == 1:
-        return [_run_task(t) for t in tasks]
+        return [_run_task(t) for t in _bar(tasks, progress)]
     with ThreadPoolExecutor(max_workers=workers) as pool:  # the kernel releases the GIL
-        return list(pool.map(_run_task, tasks))
+        return list(_bar(pool.map(_run_task, tasks), progress, total=len(tasks)))
 
 
 def _plan(kind, geometry, roughness, queries, random_wi, rho, paths, seed):
@@ -231,7 +262,7 @@ def _albedo_result(geometry, roughness, mu, rho, paths, seed, results, spans):
 
 
 def simulate_albedo(geometry, roughness, mu, rho=1.0, paths=1_000_000, seed=0, *, workers=None,
-                    client=None, scheduler=None):
+                    client=None, scheduler=None, progress=False):
     """Directional albedo E(mu) of a rough Lambertian microsurface, by Monte Carlo.
 
     Parameters
@@ -241,7 +272,8 @@ def simulate_albedo(geometry, roughness, mu, rho=1.0, paths=1_000_000, seed=0, *
         sigma (radians, std of the facet slope angle, [0, pi/2]) for "vcavity"; alpha
         ([0, 2]) for the Smith surfaces.
     mu : array_like, shape (n,)
-        Cosines of the incident direction, in (0, 1].
+        Cosines of the incident direction, in [MU_MIN, 1] (``MU_MIN`` = 1e-100: below it
+        the Smith path tracer's floating point underflows; E(mu) is continuous there).
     rho : array_like, shape (C,)
         Microfacet albedo per channel in [0, 1]; all channels share the same paths.
     paths : int
@@ -250,7 +282,10 @@ def simulate_albedo(geometry, roughness, mu, rho=1.0, paths=1_000_000, seed=0, *
         Non-negative seed; results are reproducible per (seed, query, chunk).
     workers : int, optional
         Local threads (default: all cores); ignored when a Dask ``client``/``scheduler``
-        (address) is given.
+        (address) is given.  A ``scheduler`` address must answer within
+        ``SCHEDULER_TIMEOUT_S`` seconds, else ``ConnectionError``.
+    progress : bool
+        Show a tqdm progress bar on stderr (local runs).
 
     Returns
     -------
@@ -270,9 +305,9 @@ def simulate_albedo(geometry, roughness, mu, rho=1.0, paths=1_000_000, seed=0, *
     mu = np.atleast_1d(ar.as_float("mu", mu, np.dtype(np.float64))).astype(np.float64)
     if mu.ndim != 1:
         raise ValueError(f"mu must be a scalar or a 1-D list of cosines, got shape {mu.shape}")
-    bad = ~((mu > 0.0) & (mu <= 1.0))
+    bad = ~((mu >= MU_MIN) & (mu <= 1.0))
     if bad.any():
-        raise ValueError(f"mu must be in (0, 1] (cosine of the incident angle), got {mu[bad][0]!r}")
+        raise ValueError(f"mu must be in [1e-100, 1] (cosine of the incident angle; MU_MIN = 1e-100), got {mu[bad][0]!r}")
     rho = _rho(rho)
     paths = _check_count("paths", paths, 1)
     seed = _check_count("seed", seed, 0)
@@ -280,12 +315,12 @@ def simulate_albedo(geometry, roughness, mu, rho=1.0, paths=1_000_000, seed=0, *
     no_wo = np.zeros((0, 3))
     queries = [(np.array([math.sqrt(max(0.0, 1.0 - m * m)), 0.0, m]), no_wo, [m]) for m in mu]
     tasks, spans = _plan("albedo", geometry, roughness, queries, False, rho, paths, seed)
-    results = _execute(tasks, workers, client, scheduler)
+    results = _execute(tasks, workers, client, scheduler, progress)
     return _albedo_result(geometry, roughness, mu, rho, paths, seed, results, spans)
 
 
 def simulate_average_albedo(geometry, roughness, rho=1.0, paths=1_000_000, seed=0, *, workers=None,
-                            client=None, scheduler=None):
+                            client=None, scheduler=None, progress=False):
     """Average albedo <E> = 2 int_0^1 E(mu) mu dmu (incident directions cosine-distributed).
 
     Same parameters as ``simulate_albedo`` without ``mu``; the result's arrays have a
@@ -304,12 +339,12 @@ def simulate_average_albedo(geometry, roughness, rho=1.0, paths=1_000_000, seed=
     workers = (os.cpu_count() or 1) if workers is None else _check_count("workers", workers, 1)
     queries = [(np.array([0.0, 0.0, 1.0]), np.zeros((0, 3)), [-1.0])]
     tasks, spans = _plan("average", geometry, roughness, queries, True, rho, paths, seed)
-    results = _execute(tasks, workers, client, scheduler)
+    results = _execute(tasks, workers, client, scheduler, progress)
     return _albedo_result(geometry, roughness, None, rho, paths, seed, results, spans)
 
 
 def simulate_brdf(geometry, roughness, wi, wo, rho=1.0, paths=1_000_000, seed=0, *, workers=None,
-                  client=None, scheduler=None):
+                  client=None, scheduler=None, progress=False):
     """BRDF f(wi, wo) (without the cosine) of the microsurface, by next-event estimation.
 
     Light paths start from ``wi``; every bounce adds its exact contribution towards ``wo``
@@ -361,7 +396,7 @@ def simulate_brdf(geometry, roughness, wi, wo, rho=1.0, paths=1_000_000, seed=0,
         rows.append(idx)
         queries.append((np.ascontiguousarray(uniq[g]), np.ascontiguousarray(wo[idx]), uniq[g]))
     tasks, spans = _plan("brdf", geometry, roughness, queries, False, rho, paths, seed)
-    results = _execute(tasks, workers, client, scheduler)
+    results = _execute(tasks, workers, client, scheduler, progress)
     C = rho.shape[0]
     f = np.empty((n, C)); se = np.empty((n, C))
     fo = np.empty((n, N_ORDERS, C)); seo = np.empty((n, N_ORDERS, C))

@@ -1,0 +1,66 @@
+"""SIGINT/SIGTERM/SIGHUP: exit 128+signum, one line, old report or new one, no temporary folder."""
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+from test_safety_report_output import (
+    CHILD,
+    MATERIAL,
+    ROOT,
+    _fake_run,
+    _is_complete_report,
+    _no_leftovers,
+)
+
+ENV = {**os.environ, "PYTHONPATH": str(ROOT)}
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
+@pytest.mark.parametrize("delay", [0.0, 0.3, 0.9])
+def test_signal_during_report_leaves_old_or_new(tmp_path, signum, delay):
+    out = tmp_path / "rep"
+    assert _fake_run(out).returncode == 0
+    old = (out / "report.json").read_bytes()
+    p = subprocess.Popen([sys.executable, "-c", CHILD, str(MATERIAL), str(out), "0.6"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV)
+    try:
+        assert p.stdout.readline().strip() == "started"
+        time.sleep(delay)
+        p.send_signal(signum)
+        code = p.wait(timeout=60)
+    finally:
+        p.kill()
+        p.stdout.close()
+        p.stderr.close()
+    assert code in (0, 128 + signum)
+    assert _is_complete_report(out)
+    if code != 0:
+        assert (out / "report.json").read_bytes() == old
+    assert _no_leftovers(tmp_path)
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGHUP])
+def test_cli_signal_exit_status_one_line(tmp_path, signum):
+    """Any command: a termination signal gives exit 128+signum and one line, no traceback."""
+    script = ("import sys, time\nfrom openpbr_diffuse.cli import main as m\n"
+              "def add_parser(sub):\n p = sub.add_parser('sleep'); p.set_defaults(run=run)\n"
+              "def run(args):\n print('started', flush=True); time.sleep(30); return 0\n"
+              "import types; mod = types.ModuleType('openpbr_diffuse.cli.sleep'); mod.add_parser = add_parser\n"
+              "sys.modules[mod.__name__] = mod; m.COMMANDS['sleep'] = 'sleep'\n"
+              "sys.exit(m.main(['sleep']))\n")
+    p = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True, env=ENV, cwd=tmp_path)
+    try:
+        assert p.stdout.readline().strip() == "started"
+        p.send_signal(signum)
+        code = p.wait(timeout=60)
+        err = p.stderr.read()
+    finally:
+        p.kill()
+        p.stdout.close()
+        p.stderr.close()
+    assert code == 128 + signum
+    assert len(err.strip().splitlines()) == 1 and "interrupted" in err and "Traceback" not in err
