@@ -33,11 +33,21 @@ def wrap_name(mode):
     return mode.lower()
 
 
+#: Pixels an untiled texture may declare (8192 x 8192): TextureSystem reads an untiled file
+#: whole, so a small PNG that declares 30000 x 30000 would cost gigabytes for one texel.
+#: Tiled files (OpenEXR, tiled TIFF) are read a tile at a time and have no such limit.
+MAX_UNTILED_PIXELS = 8192 * 8192
+#: Memory OpenImageIO's texture cache may hold, MB.
+CACHE_MB = 512
+
+
 @functools.lru_cache(maxsize=1)
 def _system():
     import OpenImageIO as oiio
 
-    return oiio.TextureSystem(shared=False)
+    ts = oiio.TextureSystem(shared=False)
+    ts.attribute("max_memory_MB", float(CACHE_MB))
+    return ts
 
 
 @functools.lru_cache(maxsize=256)
@@ -50,6 +60,10 @@ def file_info(path, mtime):
         raise TextureError(f"texture {path!r} cannot be read: {oiio.geterror() or 'unknown format'}")
     try:
         spec = inp.spec()
+        if spec.tile_width == 0 and spec.width * spec.height > MAX_UNTILED_PIXELS:
+            raise TextureError(f"texture {path!r} declares {spec.width} x {spec.height} pixels, untiled: "
+                               f"above the limit of {MAX_UNTILED_PIXELS} pixels read whole (tile it, e.g. "
+                               f"with maketx)")
         return spec.nchannels, spec.format.size() * 8, spec.get_string_attribute("oiio:ColorSpace", "")
     finally:
         inp.close()
