@@ -112,3 +112,20 @@ def test_usd_shared_shaders_are_evaluated_once(tmp_path, monkeypatch):
     (m,) = load_materials(tmp_path / "d.usda")
     assert m.error == "" and calls.count("add") == n
     assert m.parameters["base_diffuse_roughness"].value == pytest.approx(1.0, rel=1e-6)  # float32 2^-24 * 2^24
+
+
+def test_pathologically_nested_usd_layer_is_refused_before_usd_core(tmp_path):
+    """~10^5 nested prims crash usd-core (segfault); the reader refuses the layer with one line."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    depth = 100_000
+    text = "#usda 1.0\n" + "".join(f'def Xform "p{i}" {{\n' for i in range(depth)) + "}\n" * depth
+    f = tmp_path / "nested.usda"
+    f.write_text(text)
+    root = Path(__file__).resolve().parents[1]
+    p = subprocess.run([sys.executable, "-m", "openpbr_diffuse", "eval", str(f)], capture_output=True, text=True,
+                       env={"PYTHONPATH": str(root), "PATH": "/usr/bin:/bin"}, timeout=120)
+    assert p.returncode == 2, (p.returncode, p.stderr[-500:])
+    assert "nested 100000 levels deep" in p.stderr and len(p.stderr.strip().splitlines()) == 1

@@ -65,9 +65,37 @@ def captured_stderr(lines):
             lines += [ln for ln in tmp.read().decode("utf-8", "replace").splitlines() if ln.strip()]
 
 
+#: Deepest nesting of braces (prims, dictionaries) a text layer may have: usd-core recurses per
+#: level and crashes the process (segmentation fault) on ~10^5 nested prims; real assets nest
+#: a few tens of levels.
+MAX_NESTING = 1000
+
+
+def _nesting(path):
+    """The deepest brace nesting of a text (usda) layer, 0 for a binary one (cheap: one pass)."""
+    import numpy as np
+
+    with open(path, "rb") as f:
+        head = f.read(6)
+        if head != b"#usda ":
+            return 0
+        data = np.frombuffer(head + f.read(), dtype=np.uint8)
+    step = (data == ord("{")).astype(np.int32) - (data == ord("}"))
+    return int(np.max(np.cumsum(step), initial=0))
+
+
 def open_stage(path, diagnostics):
-    """Open a stage (ValueError with one line if it cannot be read)."""
+    """Open a stage (ValueError with one line if it cannot be read).
+
+    A text layer nested deeper than :data:`MAX_NESTING` levels is refused before usd-core
+    sees it (usd-core would crash the process on it).
+    """
     from pxr import Tf, Usd
+
+    depth = _nesting(path)
+    if depth > MAX_NESTING:
+        raise ValueError(f"{path}: nested {depth} levels deep, more than the {MAX_NESTING} this reader "
+                         f"accepts (usd-core cannot open such a layer safely)")
 
     try:
         with captured_stderr(diagnostics):
