@@ -23,3 +23,16 @@ def test_no_suggestion_when_nothing_is_close(capsys):
     assert main(["report", "--zzzzzz"]) == 2
     err = capsys.readouterr().err
     assert "did you mean" not in err and "usage: openpbr-diffuse report" in err
+
+
+@pytest.mark.parametrize("value", ["nan", "inf", "-inf"])
+def test_eval_time_must_be_finite(value):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    p = subprocess.run([sys.executable, "-m", "openpbr_diffuse", "eval", str(root / "materials" / "velvet_animated.usda"),
+                        "--time", value], capture_output=True, text=True, env={"PYTHONPATH": str(root), "PATH": "/usr/bin:/bin"})
+    assert p.returncode == 2 and "--time" in p.stderr and "finite" in p.stderr, p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1
