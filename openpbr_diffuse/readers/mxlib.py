@@ -150,7 +150,8 @@ def mx_value(elem, type_name: str):
     Examples
     --------
     >>> import MaterialX as mx
-    >>> n = mx.createDocument().addNode("constant", "c", "color3")
+    >>> doc = mx.createDocument()  # kept: a node of a collected document is orphaned
+    >>> n = doc.addNode("constant", "c", "color3")
     >>> i = n.addInput("value", "color3"); i.setValueString("1 0 0.5")
     >>> mx_value(i, "color3")
     (1.0, 0.0, 0.5)

@@ -82,8 +82,8 @@ class LayeredSurface:
 
     Example
     -------
-    >>> LayeredSurface("smooth", 1.5, coat_color=0.5).tau
-    array([0.69314718])
+    >>> [round(float(t), 8) for t in LayeredSurface("smooth", 1.5, coat_color=0.5).tau]
+    [0.69314718]
     """
 
     interface: str
