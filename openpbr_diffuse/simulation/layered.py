@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import _arrays as ar
-from .api import _client
+from .api import _client, _mean_err
 
 INTERFACES = ("smooth", "ggx")
 BASES = ("lambert", "eon", "smith-ggx")
@@ -198,12 +198,6 @@ def _plan(kind, surface, queries, random_wi, rho, tau, paths, seed):
                           wi, random_wi, wo, n, _chunk_seed(seed, kind, surface, key, i)))
         spans.append((start, len(tasks)))
     return tasks, spans
-
-
-def _mean_err(s1, s2, n):
-    mean = s1 / n
-    var = np.maximum(s2 - s1 * s1 / n, 0.0) / max(n - 1, 1)
-    return mean, np.sqrt(var / n)
 
 
 @dataclass
