@@ -16,6 +16,7 @@ eon-diffuse-glsl       portsmouth/EON-diffuse main.glsl (paper listings)        
 openpbr-viewer-glsl    OpenPBR-viewer glsl/pathtracing/                             required
 adobe-openpbr-bsdf     adobe/openpbr-bsdf openpbr.h (C++17 + GLM)                   required
 cycles                 bpy (Blender) Cycles Diffuse BSDF, rendered                  unused
+babylonjs              npm @babylonjs/core: EON as each light type computes it      optional
 =====================  ==========================================================  =========
 """
 from __future__ import annotations
@@ -54,6 +55,7 @@ IMPLEMENTATIONS = {i.name: i for i in (
                    "github.com/AcademySoftwareFoundation/OpenPBR-viewer"),
     Implementation("adobe-openpbr-bsdf", "adobe", True, "adobe-openpbr-bsdf", "github.com/adobe/openpbr-bsdf"),
     Implementation("cycles", "cycles", False, None, "pip install bpy"),
+    Implementation("babylonjs", "babylon", False, None, "npm install @babylonjs/core"),
 )}
 
 

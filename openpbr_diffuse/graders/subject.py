@@ -44,6 +44,10 @@ class Subject:
         ``brdf_domain(wi, wo) -> (n,) bool``: the rows inside the implementation's documented
         input domain (e.g. a view direction face-forwarded to the normal); rows outside it are
         not graded and are reported as such.  ``albedo_domain(mu) -> (n,) bool`` likewise.
+    paths : list of (str, Subject)
+        For an implementation whose lobe is computed differently per code path (Babylon.js: one
+        per light type): ``(label, subject)`` pairs, each graded on its own; the quantities are
+        named ``"<kind> <label>"``.
     """
 
     name: str
@@ -61,3 +65,4 @@ class Subject:
     selection: str | None = None
     notes: list = field(default_factory=list)
     noise: dict = field(default_factory=dict)
+    paths: list = field(default_factory=list)
