@@ -75,7 +75,7 @@ EXPECTED = {
     "pbrBlockFinalUnlitComponents": ("finalDiffuse*=surfaceAlbedo;",),
     "pbrBlockFinalLitComponents": ("finalIrradiance*=surfaceAlbedo.rgb;",),
     "pbrBlockReflection": ("environmentIrradiance=irradiance(reflectionSampler,irradianceVector,"
-                           "vReflectionFilteringInfo,diffuseRoughness,surfaceAlbedo,irradianceView",),
+                           "vReflectionFilteringInfo,diffuseRoughness,surfaceAlbedo,irradianceView"),
 }
 #: GLSL ES / WebGL names the engine's shader processor maps for desktop GLSL
 PROLOGUE = "#define texture2D texture\n#define textureCubeLodEXT textureLod\n#define texture2DLodEXT textureLod\n"
@@ -389,9 +389,9 @@ def path_subject(key: str, folder: Path | None = None) -> Subject:
     version = package_version(folder)
     code = "" if key.startswith("wgsl_") else source(folder, {**_DEFINES, **_PATH_DEFINES.get(key, {})})
     files = [f"Shaders/ShadersInclude/{n}.js" for n in INCLUDES]
-    common = dict(tolerance=TOLERANCE, tolerance_reason=TOLERANCE_REASON,
-                  version={"babylonjs": version, "source": str(folder), "files": files,
-                           "sha256": glsl.sources_hash([folder / f for f in files])})
+    common = {"tolerance": TOLERANCE, "tolerance_reason": TOLERANCE_REASON,
+              "version": {"babylonjs": version, "source": str(folder), "files": files,
+                          "sha256": glsl.sources_hash([folder / f for f in files])}}
     name = f"babylonjs {label}"
     run_label = f"Babylon.js {version} ({label})"
     if key.startswith("wgsl_"):
