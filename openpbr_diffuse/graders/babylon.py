@@ -33,6 +33,21 @@ run for that light type (their presence in the installed package is checked, see
 - albedo paths: the response to a uniform white environment of radiance 1 (hemispheric light
   with sky = ground = 1; the filtered IBL with ``CUSTOM_IRRADIANCE_FILTERING_FUNCTION`` set to a
   white texel), which is the directional albedo E(μ_o).
+
+The WGSL copies (``ShadersWGSL/ShadersInclude``) of the function and of the directional, point
+and spot lights' functions run as a WGSL compute shader through ``wgpu`` (PyPI) on Mesa's Vulkan
+driver (lavapipe), in a child process under the limits of user code (:mod:`._wgsl_child`); their
+``#define``/``#if`` lines, which Babylon's shader processor resolves, are resolved by the C
+preprocessor.  The paths that need textures (area light: LTC samplers; filtered environment: a
+cube map sampler) are graded in GLSL only.
+
+Not graded: the spherical-harmonics and irradiance-map environment paths (``pbrBlockReflection``
+without ``REALTIME_FILTERING``): they never call the lobe with the environment's directions, only
+bend the normal towards V by (1 - N.V) r / 2 or scale a pre-filtered irradiance by the lobe at a
+"dominant direction" computed on the CPU from the environment map.  Under a uniform environment
+the first answers the environment's irradiance times rho, the same for every mu_o and roughness
+(as the hemispheric light), and the second's dominant direction is the zero vector
+(normalize(0): undefined).
 """
 from __future__ import annotations
 
@@ -40,7 +55,6 @@ import json
 import os
 import re
 import shutil
-import subprocess
 from functools import lru_cache
 from pathlib import Path
 
@@ -491,16 +505,3 @@ def subject(source: Path | None = None) -> Subject:
                    notes=[f"{PACKAGE} {version}: graded per light type and environment path"]
                    + [n for _, s in paths for n in s.notes],
                    paths=paths)
-
-
-def install(prefix: Path | None = None, timeout: float = 300.0) -> Path:
-    """``npm install --prefix PREFIX @babylonjs/core`` (what ``.ci/run`` does); returns the package folder."""
-    prefix = npm_prefix() if prefix is None else Path(prefix)
-    if shutil.which("npm") is None:
-        raise GraderUnavailable("npm is not installed: apt-get install nodejs npm")
-    prefix.mkdir(parents=True, exist_ok=True)
-    run = subprocess.run(["npm", "install", "--prefix", str(prefix), "--no-audit", "--no-fund", "--ignore-scripts",
-                          PACKAGE], capture_output=True, text=True, timeout=timeout, check=False)
-    if run.returncode != 0:
-        raise GraderUnavailable(f"npm install {PACKAGE} failed: {(run.stderr.strip().splitlines() or ['?'])[-1]}")
-    return package_folder(prefix)
