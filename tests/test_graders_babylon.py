@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+from _quad import hemisphere_grid
 
 from openpbr_diffuse.conformance.vectors import default_vectors
 from openpbr_diffuse.graders import babylon, load
@@ -16,8 +17,6 @@ from openpbr_diffuse.graders.errors import GraderUnavailable
 from openpbr_diffuse.graders.grading import grade_subject
 from openpbr_diffuse.models import directional_albedo, evaluate
 from openpbr_diffuse.models.eon import eon_terms, rho_ms
-
-from _quad import hemisphere_grid
 
 REL, ABS = babylon.TOLERANCE
 
@@ -101,8 +100,9 @@ def test_not_installed_is_could_not_run(tmp_path, monkeypatch):
 def test_shaders_are_read_from_the_package_not_the_project(folder):
     text = babylon.shaders(["pbrBRDFFunctions"], folder)["pbrBRDFFunctions"]
     assert "diffuseBRDF_EON" in text and "E_FON_approx" in text
-    import openpbr_diffuse
     from pathlib import Path
+
+    import openpbr_diffuse
 
     root = Path(openpbr_diffuse.__file__).parents[1]
     assert not any("diffuseBRDF_EON(" in p.read_text(errors="ignore")
@@ -226,3 +226,10 @@ def test_report_and_check_name_every_path(graded, tmp_path):
     assert len(ids) == len(set(ids)) == len(babylon.PATHS)
     assert "implementation.brdf_point_light" in ids and "implementation.albedo_filtered_environment" in ids
     assert ut.status == "does not conform" and ut.headline.startswith("babylonjs does not conform")
+
+
+def test_docstring_examples():
+    import doctest
+
+    result = doctest.testmod(babylon, optionflags=doctest.ELLIPSIS)
+    assert result.attempted > 0 and result.failed == 0

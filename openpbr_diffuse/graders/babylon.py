@@ -142,7 +142,14 @@ def npm_prefix() -> Path:
 
 
 def package_folder(prefix: Path | str | None = None) -> Path:
-    """``node_modules/@babylonjs/core`` under ``prefix`` (default :func:`npm_prefix`), checked."""
+    """``node_modules/@babylonjs/core`` under ``prefix`` (default :func:`npm_prefix`), checked.
+
+    ``prefix`` may also be the package folder itself.  Raises GraderUnavailable (with the
+    install command) when the package is not there.
+
+    >>> (package_folder() / "Shaders" / "ShadersInclude" / "pbrBRDFFunctions.js").is_file()
+    True
+    """
     root = Path(prefix) if prefix is not None else npm_prefix()
     folder = root / "node_modules" / "@babylonjs" / "core"
     if not (folder / "package.json").is_file():
@@ -153,7 +160,11 @@ def package_folder(prefix: Path | str | None = None) -> Path:
 
 
 def package_version(folder: Path) -> str:
-    """The ``version`` of the installed package's package.json."""
+    """The ``version`` of the installed package's package.json.
+
+    >>> package_version(package_folder()).split(".")[0].isdigit()
+    True
+    """
     return str(json.loads((folder / "package.json").read_text())["version"])
 
 
@@ -182,7 +193,12 @@ def _shaders(folder: Path, names: tuple, wgsl: bool) -> dict:
 
 
 def shaders(names, folder: Path | None = None, *, wgsl: bool = False) -> dict[str, str]:
-    """The GLSL (or WGSL) text of the named shader modules of the installed package."""
+    """The GLSL (or WGSL) text of the named shader modules of the installed package.
+
+    >>> text = shaders(["pbrBRDFFunctions"])["pbrBRDFFunctions"]
+    >>> "vec3 diffuseBRDF_EON(vec3 albedo" in text
+    True
+    """
     folder = package_folder() if folder is None else folder
     return dict(_shaders(Path(folder).resolve(), tuple(names), bool(wgsl)))
 
@@ -190,18 +206,18 @@ def shaders(names, folder: Path | None = None, *, wgsl: bool = False) -> dict[st
 _INCLUDE = re.compile(r"^[ \t]*#include<(\w+)>[^\n]*$", re.MULTILINE)
 
 
-def resolve(text: str, folder: Path, seen: set) -> str:
+def _resolve(text: str, folder: Path, seen: set) -> str:
     """Babylon's ``#include<name>`` lines replaced by the modules' text (each once)."""
     def sub(m):
         name = m.group(1)
         if name in seen:
             return ""
         seen.add(name)
-        return resolve(shaders([name], folder)[name], folder, seen)
+        return _resolve(shaders([name], folder)[name], folder, seen)
     return _INCLUDE.sub(sub, text)
 
 
-def check_expected(folder: Path) -> None:
+def _check_expected(folder: Path) -> None:
     """Raise GraderUnavailable when a statement the harness replays is not in the package."""
     texts = shaders(tuple(EXPECTED), folder)
     missing = [f"{k}: {s}" for k, stmts in EXPECTED.items() for s in stmts if s not in texts[k]]
@@ -210,12 +226,12 @@ def check_expected(folder: Path) -> None:
                                 f"({missing[0]}{' and more' if len(missing) > 1 else ''}): the grader needs updating")
 
 
-def source(folder: Path, defines: dict) -> str:
+def _source(folder: Path, defines: dict) -> str:
     """The concatenated include modules, with the material's defines (EON diffuse model)."""
     seen = set(INCLUDES)
     texts = shaders(INCLUDES, folder)
     head = "".join(f"#define {k} {v}\n" for k, v in defines.items())
-    return PROLOGUE + head + "\n".join(resolve(texts[n], folder, seen) for n in INCLUDES)
+    return PROLOGUE + head + "\n".join(_resolve(texts[n], folder, seen) for n in INCLUDES)
 
 
 # The harness bodies.  N = +z (the local frame); posW = 0; IN(0..2) = wi, IN(3..5) = wo,
@@ -329,7 +345,7 @@ WGSL_BODIES = {
 }
 
 
-def wgsl_source(folder: Path, key: str) -> str:
+def _wgsl_source(folder: Path, key: str) -> str:
     """The WGSL include modules, preprocessed (EON diffuse model, physical falloff), and the harness."""
     if shutil.which("cpp") is None:
         raise GraderUnavailable("cpp (the C preprocessor, for Babylon's #if lines in WGSL) is missing: apt-get install g++")
@@ -344,7 +360,7 @@ def wgsl_source(folder: Path, key: str) -> str:
     return run.stdout.decode() + _WGSL_MAIN.replace("BODY", WGSL_BODIES[key])
 
 
-def run_wgsl(source_text: str, inputs: np.ndarray, n_out: int, label: str) -> np.ndarray:
+def _run_wgsl(source_text: str, inputs: np.ndarray, n_out: int, label: str) -> np.ndarray:
     """Run a WGSL compute shader (10 floats in, ``n_out`` out per row) in a child under the limits."""
     import pickle
     import sys
@@ -370,9 +386,11 @@ def rect_cosine_solid_angle(wi: np.ndarray, half: float = AREA_HALF) -> np.ndarr
     """∫ cos θ dω over the area light's rectangle (centre wi at distance 1, half-size ``half``),
     exact for a polygon above the horizon (Lambert's formula), float64: (n,).
 
+    A square of side 0.02 seen head-on: 4e-4 (1 - 4 a^2 / 3) to second order in a = 0.01:
+
     >>> w = np.array([[0.0, 0.0, 1.0]])
-    >>> bool(abs(rect_cosine_solid_angle(w, 0.01)[0] - 4e-4) < 1e-8)
-    True
+    >>> float(rect_cosine_solid_angle(w, 0.01)[0] / 4e-4 - 1).__round__(7)
+    -0.0001333
     """
     wi = np.asarray(wi, float)
     z = np.array([0.0, 0.0, 1.0])
@@ -393,15 +411,22 @@ def rect_cosine_solid_angle(wi: np.ndarray, half: float = AREA_HALF) -> np.ndarr
 
 
 def path_subject(key: str, folder: Path | None = None) -> Subject:
-    """The :class:`~.subject.Subject` of one path of :data:`PATHS` (``"point"``, ``"ibl_filtered"``, ...)."""
+    """The :class:`~.subject.Subject` of one path of :data:`PATHS` (``"point"``, ``"ibl_filtered"``, ...).
+
+    >>> s = path_subject("directional")
+    >>> f = s.brdf(np.array([[0.0, 0.0, 1.0]]), np.array([[0.6, 0.0, 0.8]]), np.array([0.0]),
+    ...            np.array([[0.5, 0.5, 0.5]]))
+    >>> bool(np.allclose(f, 0.5 / np.pi, rtol=1e-6))    # roughness 0: Lambert
+    True
+    """
     labels = {k: (label, kind) for k, label, kind in PATHS}
     if key not in labels:
         raise ValueError(f"path: {key!r} is not one of {', '.join(labels)}")
     folder = package_folder() if folder is None else Path(folder)
-    check_expected(folder)
+    _check_expected(folder)
     label, kind = labels[key]
     version = package_version(folder)
-    code = "" if key.startswith("wgsl_") else source(folder, {**_DEFINES, **_PATH_DEFINES.get(key, {})})
+    code = "" if key.startswith("wgsl_") else _source(folder, {**_DEFINES, **_PATH_DEFINES.get(key, {})})
     files = [f"Shaders/ShadersInclude/{n}.js" for n in INCLUDES]
     common = {"tolerance": TOLERANCE, "tolerance_reason": TOLERANCE_REASON,
               "version": {"babylonjs": version, "source": str(folder), "files": files,
@@ -409,14 +434,14 @@ def path_subject(key: str, folder: Path | None = None) -> Subject:
     name = f"babylonjs {label}"
     run_label = f"Babylon.js {version} ({label})"
     if key.startswith("wgsl_"):
-        wgsl_text = wgsl_source(folder, key)
+        wgsl_text = _wgsl_source(folder, key)
         wfiles = [f"ShadersWGSL/ShadersInclude/{n}.js" for n in WGSL_INCLUDES]
         common["version"] = {**common["version"], "files": wfiles,
                              "sha256": glsl.sources_hash([folder / f for f in wfiles])}
     if kind == "brdf":
         if key.startswith("wgsl_"):
             def run(x):
-                return run_wgsl(wgsl_text, x, 4, run_label)
+                return _run_wgsl(wgsl_text, x, 4, run_label)
         else:
             kernel = glsl.Kernel(code=code, n_in=10, n_out=4, body=BODIES[key])
 
@@ -493,6 +518,9 @@ def subject(source: Path | None = None) -> Subject:
     ``source`` is an npm prefix or a ``@babylonjs/core`` folder (default: the project's npm cache).
     The top-level ``brdf`` is the directional light's path and ``albedo`` the filtered
     environment's (the report's pictures); the grades are per path.
+
+    >>> [label for label, _ in subject().paths][:3]
+    ['diffuseBRDF_EON alone', 'directional light', 'point light']
     """
     folder = package_folder(source)
     paths = [(label, path_subject(key, folder)) for key, label, _ in PATHS]
