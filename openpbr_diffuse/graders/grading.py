@@ -257,7 +257,7 @@ def grade_subject(subject, *, vectors=None, quick=False, quantities=("brdf", "al
                   selection=None) -> ImplementationGrade:
     """Grade every quantity ``subject`` offers; returns an :class:`ImplementationGrade`."""
     result = ImplementationGrade(subject.name, subject.model, dict(subject.version), notes=list(subject.notes))
-    if subject.paths:  # one subject per code path (light type): each graded, quantities named by path
+    if getattr(subject, "paths", None):  # one subject per code path (light type): each graded, quantities named by path
         for label, path in subject.paths:
             for q in grade_subject(path, vectors=vectors, quick=quick, quantities=quantities,
                                    selection=selection).quantities:
