@@ -20,7 +20,7 @@ def main() -> int:
     job = pickle.loads(sys.stdin.buffer.read())
     os.environ.setdefault("XDG_RUNTIME_DIR", "/tmp")
     try:
-        import wgpu
+        import wgpu  # type: ignore[import-untyped]
     except ImportError:
         sys.stderr.write("wgpu is not installed: pip install wgpu\n")
         return 3

@@ -57,6 +57,7 @@ import re
 import shutil
 from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -428,16 +429,15 @@ def path_subject(key: str, folder: Path | None = None) -> Subject:
     version = package_version(folder)
     code = "" if key.startswith("wgsl_") else _source(folder, {**_DEFINES, **_PATH_DEFINES.get(key, {})})
     files = [f"Shaders/ShadersInclude/{n}.js" for n in INCLUDES]
-    common = {"tolerance": TOLERANCE, "tolerance_reason": TOLERANCE_REASON,
-              "version": {"babylonjs": version, "source": str(folder), "files": files,
-                          "sha256": glsl.sources_hash([folder / f for f in files])}}
+    info: dict[str, Any] = {"babylonjs": version, "source": str(folder), "files": files,
+                            "sha256": glsl.sources_hash([folder / f for f in files])}
+    common: dict[str, Any] = {"tolerance": TOLERANCE, "tolerance_reason": TOLERANCE_REASON, "version": info}
     name = f"babylonjs {label}"
     run_label = f"Babylon.js {version} ({label})"
     if key.startswith("wgsl_"):
         wgsl_text = _wgsl_source(folder, key)
         wfiles = [f"ShadersWGSL/ShadersInclude/{n}.js" for n in WGSL_INCLUDES]
-        common["version"] = {**common["version"], "files": wfiles,
-                             "sha256": glsl.sources_hash([folder / f for f in wfiles])}
+        info.update(files=wfiles, sha256=glsl.sources_hash([folder / f for f in wfiles]))
     if kind == "brdf":
         if key.startswith("wgsl_"):
             def run(x):
