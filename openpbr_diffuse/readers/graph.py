@@ -239,7 +239,7 @@ class Resolver:
         uv = np.asarray(resolved["texcoord"].value, dtype=np.float64).reshape(-1)[:2]
         path = fp.value
         space = fp.authored if fp.kind == "file" and fp.authored else "raw"
-        label = f"texture {os.path.basename(path) if path else '(none)'} at uv ({uv[0]:.6g}, {uv[1]:.6g})"
+        label = f"texture {textures.display_name(path) if path else '(none)'} at uv ({uv[0]:.6g}, {uv[1]:.6g})"
         fallback = Parameter(ops._as(default, out_type), f"{label}: default of {where}", "texture")
         if not path:
             self._note(f"image node {where} has no file; its default is used")

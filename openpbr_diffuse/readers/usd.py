@@ -270,11 +270,7 @@ class _UsdResolver:
         if mx_type == "filename":
             _, _, Sdf = _pxr()
             if isinstance(v, Sdf.AssetPath):
-                path = v.resolvedPath or v.path
-                if path and not os.path.isabs(path):
-                    layer = attr.GetStage().GetRootLayer()
-                    path = layer.ComputeAbsolutePath(path)
-                v = path
+                v = v.resolvedPath or _anchored(attr, v.path)
         return v, note
 
     def port(self, port, mx_type, trail=()):
@@ -433,7 +429,7 @@ class _UsdResolver:
         scale = np.asarray(_raw(shader, "scale", (1.0, 1.0, 1.0, 1.0), self), dtype=np.float64)
         bias = np.asarray(_raw(shader, "bias", (0.0, 0.0, 0.0, 0.0), self), dtype=np.float64)
         source_cs = str(get("sourceColorSpace", "string", "auto"))
-        label = f"texture {os.path.basename(file) if file else '(none)'} at uv ({st[0]:.6g}, {st[1]:.6g})"
+        label = f"texture {textures.display_name(file) if file else '(none)'} at uv ({st[0]:.6g}, {st[1]:.6g})"
         try:
             if not file:
                 raise textures.TextureError(f"{path} has no file")
@@ -479,6 +475,24 @@ class _UsdResolver:
                 prov += f" ({decoded_space} -> {colorspace.WORKING_SPACE})"
         return Parameter(ops._as(rgb, mx_type) if mx_type != "float" else float(rgb[0]),
                          f"{path}.outputs:rgb <- {prov}", "texture")
+
+
+def _anchored(attr, path: str) -> str:
+    """An asset path the resolver did not resolve, anchored to the layer that authors it
+    (inside a package: the package member ``pkg.usdz[path]``), for the warning to name."""
+    from pxr import Ar
+
+    if not path or os.path.isabs(path) or Ar.IsPackageRelativePath(path):
+        return path
+    stack = attr.GetPropertyStack()
+    layer = stack[0].layer if stack else attr.GetStage().GetRootLayer()
+    real = layer.realPath or layer.identifier
+    if Ar.IsPackageRelativePath(real):   # a layer inside a package: relative to its member folder
+        outer, inner = Ar.SplitPackageRelativePathInner(real)
+        return Ar.JoinPackageRelativePath([outer, os.path.normpath(os.path.join(os.path.dirname(inner), path))])
+    if os.path.splitext(real)[1].lower() == ".usdz":
+        return Ar.JoinPackageRelativePath([real, os.path.normpath(path)])
+    return os.path.normpath(os.path.join(os.path.dirname(real), path))
 
 
 def _raw(shader, name, default, res):
