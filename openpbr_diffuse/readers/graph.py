@@ -3,7 +3,9 @@
 Value resolution follows the MaterialX 1.39 specification: an input's value is its
 connection (``nodename`` / ``nodegraph`` + ``output``; the connected output is followed
 whatever its name), else its ``interfacename`` (the enclosing nodegraph's input), else its
-authored ``value``, else the nodedef default from the MaterialX data library.  Connected
+authored ``value`` (a value with a ``unit`` converted to the target unit by MaterialX's
+``LinearUnitConverter``; a relative file name resolved against the document the element was
+read from, after ``fileprefix``), else the nodedef default from the MaterialX data library.  Connected
 nodes are evaluated at one surface point (``uv``): stdlib math nodes (``ops``), ``constant``,
 ``image`` (sampled with OpenImageIO, ``textures``) and every node whose nodedef is
 implemented by a nodegraph in the library (e.g. ``tiledimage``, evaluated through that

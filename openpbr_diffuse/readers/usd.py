@@ -10,8 +10,10 @@ Resolution as USD defines it:
 - an input's value follows its connection (``GetConnectedSources``): to a Material or
   NodeGraph interface input, through NodeGraph outputs, to a shader output (whatever its
   name) -- ``UsdUVTexture`` (sampled with OpenImageIO at ``uv``, wrapS/wrapT, scale, bias,
-  fallback, sourceColorSpace), ``UsdPrimvarReader_float2`` (the uv), MaterialX ``ND_`` nodes
-  (evaluated like the MaterialX reader: stdlib math, constant, image, tiledimage);
+  fallback, sourceColorSpace; a texture inside a ``.usdz`` is read through usd-core's asset
+  resolver), ``UsdPrimvarReader_float2`` (the uv), other primvar readers (their fallback, with
+  a warning naming the primvar: no geometry is read), ``UsdTransform2d`` and MaterialX ``ND_``
+  nodes (evaluated like the MaterialX reader: stdlib math, constant, image, tiledimage);
   else the authored value at ``time`` (an input with only time samples and no ``time``
   given takes its earliest sample); else the MaterialX nodedef default (usd-core has no
   registry for ``ND_`` nodes);
