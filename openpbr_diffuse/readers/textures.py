@@ -107,11 +107,18 @@ _PRIVATE = []
 
 def _private_dir() -> str:
     """A temporary folder of this process (made on first use, removed at exit)."""
-    if not _PRIVATE:
+    if not _PRIVATE or _PRIVATE[1] != os.getpid():   # a forked child makes (and removes) its own
         d = tempfile.mkdtemp(prefix="openpbr_diffuse_packaged_")
-        atexit.register(shutil.rmtree, d, True)
-        _PRIVATE.append(d)
+        atexit.register(_remove, d, os.getpid())
+        _PRIVATE[:] = [d, os.getpid()]
+        _member_file.cache_clear()
     return _PRIVATE[0]
+
+
+def _remove(folder: str, pid: int) -> None:
+    """Remove the private folder, only in the process that made it."""
+    if os.getpid() == pid:
+        shutil.rmtree(folder, ignore_errors=True)
 
 
 def _package_stamp(path: str) -> int:
