@@ -120,7 +120,7 @@ MIXED = """<?xml version="1.0"?>
     <input name="base_color" type="color3" value="0.5, 0.5, 0.5" colorspace="{space}" />
   </open_pbr_surface>
   <surfacematerial name="A" type="material"><input name="surfaceshader" type="surfaceshader" nodename="Sa" /></surfacematerial>
-  <gltf_pbr name="G" type="surfaceshader" />
+  <disney_principled name="G" type="surfaceshader" />
   <surfacematerial name="Gltf" type="material"><input name="surfaceshader" type="surfaceshader" nodename="G" /></surfacematerial>
 </materialx>"""
 
@@ -133,7 +133,7 @@ def test_eval_exit_codes_per_material(tmp_path, capfd, space, rc_want):
     f.write_text(MIXED.format(space=space))
     assert main(["eval", str(f)]) == rc_want
     out, err = capfd.readouterr()
-    assert "Traceback" not in err and "# Gltf  [ND_gltf_pbr_surfaceshader]" in out and "not supported" in out
+    assert "Traceback" not in err and "# Gltf  [ND_disney_principled]" in out and "not supported" in out
     if rc_want:
         assert "# A  [not evaluated]" in out and "gamma22" in out and "could not be evaluated: A" in err
     else:

@@ -152,11 +152,11 @@ def test_unsupported_material_is_listed_not_an_error(tmp_path, capfd):
     f = tmp_path / "g.mtlx"
     f.write_text("""<?xml version="1.0"?>
 <materialx version="1.39">
-  <gltf_pbr name="G" type="surfaceshader"><input name="base_color" type="color3" value="1, 0, 0" /></gltf_pbr>
+  <disney_principled name="G" type="surfaceshader"><input name="base_color" type="color3" value="1, 0, 0" /></disney_principled>
   <surfacematerial name="M" type="material"><input name="surfaceshader" type="surfaceshader" nodename="G" /></surfacematerial>
 </materialx>""")
     rc, out, _ = _run(capfd, "eval", str(f))
-    assert rc == 0 and "ND_gltf_pbr_surfaceshader" in out and "not supported" in out
+    assert rc == 0 and "ND_disney_principled" in out and "not supported" in out
 
 
 def test_files_are_never_modified(tmp_path, capfd):

@@ -334,13 +334,13 @@ def test_unsupported_shader_listed_never_crashes(tmp_path):
     from pxr import Sdf
 
     st = _stage(tmp_path)
-    _, sh = _material(st, "/X", "ND_gltf_pbr_surfaceshader", "out")
+    _, sh = _material(st, "/X", "ND_disney_principled", "out")
     sh.CreateInput("base_color", Sdf.ValueTypeNames.Color3f).Set((1, 0, 0))
     _material(st, "/Y", "MyStudioShader_v3", "out")
     st.Save()
     mats = load_materials(tmp_path / "s.usda")
     assert [m.supported for m in mats] == [False, False]
-    assert mats[0].shader_id == "ND_gltf_pbr_surfaceshader" and "ND_gltf_pbr_surfaceshader" in mats[0].unsupported[0]
+    assert mats[0].shader_id == "ND_disney_principled" and "ND_disney_principled" in mats[0].unsupported[0]
     assert mats[1].node() is None and "MyStudioShader_v3" in mats[1].unsupported[0]
 
 

@@ -16,7 +16,7 @@ def test_materials_section_on_given_files(tmp_path):
     (src / "broken.mtlx").write_text("<materialx version='1.39'><oops")
     (src / "gltf.mtlx").write_text("""<?xml version="1.0"?>
 <materialx version="1.39">
-  <gltf_pbr name="G" type="surfaceshader" />
+  <disney_principled name="G" type="surfaceshader" />
   <surfacematerial name="G_mat" type="material"><input name="surfaceshader" type="surfaceshader" nodename="G" /></surfacematerial>
 </materialx>""")
     images = tmp_path / "img"
@@ -26,7 +26,7 @@ def test_materials_section_on_given_files(tmp_path):
     summary = res.tables[0]
     assert len(summary.rows) == 4 and len(summary.columns) == len(summary.rows[0])
     row = {r[1]: r for r in summary.rows}
-    assert row["G_mat"][2] == "ND_gltf_pbr_surfaceshader" and "maps onto no node" in row["G_mat"][9]
+    assert row["G_mat"][2] == "ND_disney_principled" and "maps onto no node" in row["G_mat"][9]
     assert any("broken.mtlx" in w for w in res.warnings)
     files = {f.file for f in res.figures}
     assert "materials_albedo.png" in files and sum(f.endswith("_render.png") for f in files) == 3

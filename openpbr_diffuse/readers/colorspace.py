@@ -129,6 +129,8 @@ def to_working(rgb, space):
     space = canonical(space)
     if space in ("raw", WORKING_SPACE):
         return rgb.copy()
+    if space in _SRGB_CURVE:
+        return _srgb_eotf(rgb) @ matrix(_LINEAR_OF[space]).T
     if space in _LINEAR_OF:
         return _convert(rgb, _OCIO[space], _OCIO[WORKING_SPACE]).reshape(rgb.shape)
     return rgb @ matrix(space).T
@@ -146,7 +148,22 @@ def decode(values, space):
     v = np.asarray(values, dtype=np.float64)
     if space not in _LINEAR_OF:
         return v.copy()
+    if space in _SRGB_CURVE:
+        return _srgb_eotf(v)
     return _convert(v, _OCIO[space], _OCIO[_LINEAR_OF[space]]).reshape(v.shape)
+
+
+#: Spaces whose transfer function is the sRGB piecewise curve: decoded in closed form in
+#: double precision (OpenColorIO's CPU processor approximates the power, 1.0 -> 1.000024,
+#: which would read white as out of range).
+_SRGB_CURVE = ("srgb_texture", "srgb_ap1", "srgb_displayp3")
+
+
+def _srgb_eotf(v):
+    """The sRGB decoding of IEC 61966-2-1 (odd-symmetric below 0), float64."""
+    a = np.abs(v)
+    lin = np.where(a <= 0.04045, a / 12.92, ((a + 0.055) / 1.055) ** 2.4)
+    return np.sign(v) * lin
 
 
 def is_linear(space):

@@ -3,7 +3,9 @@
 Value resolution follows the MaterialX 1.39 specification: an input's value is its
 connection (``nodename`` / ``nodegraph`` + ``output``; the connected output is followed
 whatever its name), else its ``interfacename`` (the enclosing nodegraph's input), else its
-authored ``value``, else the nodedef default from the MaterialX data library.  Connected
+authored ``value`` (a value with a ``unit`` converted to the target unit by MaterialX's
+``LinearUnitConverter``; a relative file name resolved against the document the element was
+read from, after ``fileprefix``), else the nodedef default from the MaterialX data library.  Connected
 nodes are evaluated at one surface point (``uv``): stdlib math nodes (``ops``), ``constant``,
 ``image`` (sampled with OpenImageIO, ``textures``) and every node whose nodedef is
 implemented by a nodegraph in the library (e.g. ``tiledimage``, evaluated through that
@@ -84,6 +86,7 @@ class Resolver:
         # node outputs already evaluated, per (node, output, interface context, library):
         # a graph that reads one node many times evaluates it once
         self._memo = {}
+        self._folders = {}  # source URI -> folder of that document
 
     # ----------------------------------------------------------------- helpers
     def _note(self, text, unsupported=False):
@@ -107,6 +110,19 @@ class Resolver:
             raise ValueError(f"{self.file}: connection cycle: {' -> '.join(loop)}")
         return trail + (key,)
 
+    def _source_folder(self, elem) -> str:
+        """The folder of the document ``elem`` was read from: relative file names resolve
+        against it (after MaterialX's ``fileprefix``, applied by ``getResolvedValueString``).
+
+        MaterialX keeps an ``xi:include``d document's source URI as its ``href`` was written,
+        relative to the including document; it is looked up, as MaterialX's reader looks an
+        include up, in the folder of the document read and of the documents it includes.
+        """
+        uri = elem.getActiveSourceUri()
+        if uri not in self._folders:
+            self._folders[uri] = mxlib.source_folder(self.file, uri, elem.getDocument())
+        return self._folders[uri]
+
     def _authored(self, port, library: bool) -> Parameter:
         t = port.getType()
         text = port.getValueString()
@@ -116,8 +132,8 @@ class Resolver:
         if t == "filename":
             resolved = port.getResolvedValueString() or raw
             if resolved and not os.path.isabs(resolved):
-                base = port.getActiveSourceUri() or self.file
-                resolved = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(base)), resolved))
+                folder = self._source_folder(port)
+                resolved = os.path.normpath(os.path.join(folder, resolved))
             space = "raw" if library else self._space(port)
             return Parameter(resolved, f"file {raw}", "file", authored=space)
         if t in _COLORS and not library:
@@ -126,9 +142,15 @@ class Resolver:
             prov = f"authored at {port.getNamePath()}" + ("" if space == colorspace.WORKING_SPACE
                                                            else f" ({space} -> {colorspace.WORKING_SPACE})")
             return Parameter(value, prov, "authored", authored=raw)
-        if isinstance(raw, tuple):
-            raw = np.asarray(raw, dtype=np.float64)
-        return Parameter(raw, f"authored at {port.getNamePath()}", "authored")
+        prov = f"authored at {port.getNamePath()}"
+        if port.hasUnit() and t in ("float", "vector2", "vector3", "vector4"):
+            try:
+                converted, note = mxlib.convert_unit(port, raw)
+            except ValueError as exc:
+                raise ValueError(f"{self.file}: {exc}") from None
+            if note:
+                return Parameter(_array(converted), f"{prov} ({note})", "authored", authored=raw)
+        return Parameter(_array(raw), prov, "authored")
 
     # ----------------------------------------------------------------- ports
     def port(self, port, trail=(), iface=None, library=False):
@@ -239,7 +261,7 @@ class Resolver:
         uv = np.asarray(resolved["texcoord"].value, dtype=np.float64).reshape(-1)[:2]
         path = fp.value
         space = fp.authored if fp.kind == "file" and fp.authored else "raw"
-        label = f"texture {os.path.basename(path) if path else '(none)'} at uv ({uv[0]:.6g}, {uv[1]:.6g})"
+        label = f"texture {textures.display_name(path) if path else '(none)'} at uv ({uv[0]:.6g}, {uv[1]:.6g})"
         fallback = Parameter(ops._as(default, out_type), f"{label}: default of {where}", "texture")
         if not path:
             self._note(f"image node {where} has no file; its default is used")
@@ -262,6 +284,11 @@ class Resolver:
         cs = "" if space in ("raw", colorspace.WORKING_SPACE) else f", {space} -> {colorspace.WORKING_SPACE}"
         return Parameter(value, f"{label}, wrap {modes[0]}/{modes[1]}{cs} ({path})", "texture",
                          authored=to_python(_channels(texel, out_type)))
+
+
+def _array(v):
+    """Tuples of floats as float64 arrays (the evaluator's vectors); other values unchanged."""
+    return np.asarray(v, dtype=np.float64) if isinstance(v, tuple) else v
 
 
 def _channels(texel, out_type):

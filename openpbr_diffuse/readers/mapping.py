@@ -11,6 +11,11 @@ A table (shader id -> ``Family``), not an if-chain:
   base_color, metallic -> base_metalness, roughness -> specular_roughness (it is the specular
   roughness), ior -> specular_ior, clearcoat -> coat_weight, clearcoatRoughness ->
   coat_roughness, opacity -> geometry_opacity;
+- ``ND_gltf_pbr_surfaceshader`` -> ``OpenPBRSurface(diffuse_model="lambert")`` (its diffuse is
+  MaterialX's oren_nayar_diffuse_bsdf of roughness 0): base_color, metallic -> base_metalness,
+  roughness -> specular_roughness, ior, specular / specular_color, transmission, clearcoat ->
+  coat (IOR 1.5), sheen -> fuzz, iridescence -> thin film (nm -> um), alpha by alpha_mode ->
+  geometry_opacity;
 - ``ND_oren_nayar_diffuse_bsdf`` (bare, or as the bsdf of a ``surface`` node) ->
   ``OrenNayarDiffuseBSDF``.
 
@@ -33,6 +38,7 @@ OPENPBR = "ND_open_pbr_surface_surfaceshader"
 STANDARD_SURFACE = "ND_standard_surface_surfaceshader"
 PREVIEW = "ND_UsdPreviewSurface_surfaceshader"
 OREN_NAYAR = "ND_oren_nayar_diffuse_bsdf"
+GLTF_PBR = "ND_gltf_pbr_surfaceshader"
 TRANSLATION = "ND_standard_surface_to_open_pbr_surface"
 
 #: Shader ids written in USD files that name the same nodedefs.
@@ -211,6 +217,64 @@ def _map_preview(m):
     return _openpbr_inputs(mapped, m)
 
 
+#: glTF PBR input -> OpenPBR input (MaterialX's ``gltf_pbr`` graph / the glTF 2.0 specification and
+#: its KHR_materials_{specular,ior,transmission,clearcoat,sheen,iridescence} extensions).
+_GLTF_MAP = {"base_color": "base_color", "metallic": "base_metalness", "roughness": "specular_roughness",
+             "ior": "specular_ior", "specular": "specular_weight", "specular_color": "specular_color",
+             "transmission": "transmission_weight", "clearcoat": "coat_weight",
+             "clearcoat_roughness": "coat_roughness", "sheen_color": "fuzz_color",
+             "sheen_roughness": "fuzz_roughness", "iridescence": "thin_film_weight",
+             "iridescence_ior": "thin_film_ior"}
+_GLTF_UNMODELLED = ("occlusion", "emissive", "thickness", "attenuation_color", "attenuation_distance",
+                    "anisotropy_strength", "anisotropy_rotation", "dispersion")
+
+
+def _gltf_opacity(params):
+    """geometry_opacity of a glTF material: 1 (OPAQUE), alpha >= alpha_cutoff (MASK), alpha (BLEND)."""
+    mode = int(params["alpha_mode"].value)
+    alpha = float(params["alpha"].value)
+    if mode == 1:
+        return (1.0 if alpha >= float(params["alpha_cutoff"].value) else 0.0), "alpha_mode MASK: alpha >= alpha_cutoff"
+    if mode == 2:
+        return alpha, "alpha_mode BLEND: alpha"
+    return 1.0, "alpha_mode OPAQUE: alpha ignored"
+
+
+def _map_gltf(m):
+    """glTF PBR (``ND_gltf_pbr_surfaceshader``) -> OpenPBRSurface(diffuse_model="lambert").
+
+    MaterialX's ``gltf_pbr`` graph uses a bare ``oren_nayar_diffuse_bsdf`` of roughness 0 --
+    Lambertian -- for base_color, under a dielectric specular layer (its diffuse is
+    base_color x (1 - metallic), attenuated by the layer's Fresnel): OpenPBR's Lambert diffuse
+    under its specular layer, with the inputs renamed.
+    """
+    p = m.parameters
+    mapped = {}
+    for src, dst in _GLTF_MAP.items():
+        q = p[src]
+        mapped[dst] = Parameter(q.value, f"glTF PBR {src} -> {dst}: {q.provenance}", "mapped", q.authored)
+    sheen = p["sheen_color"].value
+    on = any(float(x) != 0.0 for x in (sheen if isinstance(sheen, tuple) else (sheen,)))
+    mapped["fuzz_weight"] = Parameter(1.0 if on else 0.0, "glTF PBR sheen_color != 0 -> fuzz_weight 1", "mapped")
+    t = p["iridescence_thickness"]
+    mapped["thin_film_thickness"] = Parameter(float(t.value) / 1000.0, f"glTF PBR iridescence_thickness nm -> "
+                                              f"thin_film_thickness um: {t.provenance}", "mapped", t.authored)
+    mapped["coat_ior"] = Parameter(1.5, "glTF clearcoat IOR 1.5 (KHR_materials_clearcoat)", "mapped")
+    opacity, how = _gltf_opacity(p)
+    mapped["geometry_opacity"] = Parameter(opacity, f"glTF PBR {how}", "mapped")
+    defs = mxlib.inputs(GLTF_PBR)
+    for name in _GLTF_UNMODELLED:
+        if name in p and p[name].kind != "default" and _differs(p[name].value, defs[name][1]):
+            m.unsupported.append(f"{name} = {_fmt(p[name].value)} (glTF PBR input not modelled)")
+    m.approximations += [
+        "diffuse: Lambertian, as MaterialX's gltf_pbr graph (oren_nayar_diffuse_bsdf of roughness 0): "
+        "OpenPBRSurface(diffuse_model='lambert')",
+        "the specular layer, metal and clearcoat are OpenPBR's (exact dielectric Fresnel, F82-tint metal, "
+        "albedo-scaled layering), not gltf_pbr's generalized Schlick lobes; sheen maps onto OpenPBR's fuzz",
+    ]
+    return _openpbr_inputs(mapped, m)
+
+
 def _map_oren_nayar(m):
     out = {n: p for n, p in m.parameters.items() if n != "normal"}
     m.diffuse_model = "eon" if out["energy_compensation"].value else "qon"
@@ -222,6 +286,7 @@ FAMILIES = {
     STANDARD_SURFACE: Family("OpenPBRSurface", "qon", "lin_rec709", _map_standard_surface),
     PREVIEW: Family("OpenPBRSurface", "lambert", "lin_rec709", _map_preview),
     OREN_NAYAR: Family("OrenNayarDiffuseBSDF", "", "lin_rec709", _map_oren_nayar),
+    GLTF_PBR: Family("OpenPBRSurface", "lambert", "lin_rec709", _map_gltf),
 }
 
 
@@ -290,6 +355,16 @@ def clamp_inputs(m: Material) -> None:
 
 
 # ----------------------------------------------------------------------- building
+def _unmapped(sid: str, inner) -> str:
+    """Why a shader maps onto no node (for a ``surface`` node: the BSDF it wraps)."""
+    if sid == "ND_surface":
+        what = f"{inner.path} ({inner.shader_id()})" if inner is not None else "nothing connected"
+        return (f"shader ND_surface maps onto no node of the library: its bsdf is {what}; only a bare "
+                f"oren_nayar_diffuse_bsdf is a library node (OrenNayarDiffuseBSDF), other BSDF graphs are not "
+                f"evaluated")
+    return f"shader {sid or '(none)'} maps onto no node of the library"
+
+
 def build_material(shader, *, name, path, file, uv, variants=None, time=None):
     """A Material from a shader adapter (MaterialX node or USD shader prim)."""
     m = Material(name=name, path=path, file=str(file), shader_id="", supported=False,
@@ -308,7 +383,7 @@ def build_material(shader, *, name, path, file, uv, variants=None, time=None):
     m.shader_path = shader.path
     fam = family(sid)
     if fam is None:
-        m.unsupported.append(f"shader {sid or '(none)'} maps onto no node of the library")
+        m.unsupported.append(_unmapped(sid, inner))
         return m
     canonical = ALIASES.get(sid, sid)
     m.parameters = shader.resolve(canonical, fam.default_space, m, uv)

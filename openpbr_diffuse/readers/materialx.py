@@ -35,7 +35,7 @@ def read_document(path):
 
 
 #: Node categories that are surface shaders (or bare BSDFs) the readers look at.
-SHADER_CATEGORIES = ("open_pbr_surface", "standard_surface", "UsdPreviewSurface",
+SHADER_CATEGORIES = ("open_pbr_surface", "standard_surface", "UsdPreviewSurface", "gltf_pbr",
                      "oren_nayar_diffuse_bsdf", "surface")
 
 

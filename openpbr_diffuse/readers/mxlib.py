@@ -5,6 +5,7 @@ usd-core has no shader registry for MaterialX ``ND_`` nodes, so defaults of ever
 ``ND_UsdPreviewSurface_surfaceshader``, ``ND_image_color3``, ...) come from here.
 """
 import functools
+import os
 import re
 
 from ..nodes.materialx_defs import parse_value
@@ -142,6 +143,134 @@ def _graph_of(nd, doc):
     return None
 
 
+@functools.lru_cache(maxsize=None)
+def _unit_converter(unittype: str):
+    """MaterialX's own ``LinearUnitConverter`` of a unit type of the data library (None if unknown)."""
+    import MaterialX as mx
+
+    typedef = library().getUnitTypeDef(unittype)
+    return mx.LinearUnitConverter.create(typedef) if typedef is not None else None
+
+
+@functools.lru_cache(maxsize=None)
+def base_unit(unittype: str) -> str:
+    """The unit of scale 1 of a unit type of the data library ("meter", "degree"), or "".
+
+    Examples
+    --------
+    >>> base_unit("distance"), base_unit("angle")
+    ('meter', 'degree')
+    """
+    for unitdef in library().getUnitDefs():
+        if unitdef.getUnitType() == unittype:
+            for unit in unitdef.getUnits():
+                if float(unit.getAttribute("scale") or "nan") == 1.0:
+                    return unit.getName()
+    return ""
+
+
+def target_unit(elem) -> str:
+    """The unit a value with a ``unit`` is converted to, as MaterialX's shader generation
+    chooses it: the unit of the nodedef's input (``getActiveUnit``, e.g. degree for
+    ``rotate2d``'s amount), else the global target -- the unit type's unit of scale 1
+    (meter, the distance unit MaterialX's viewer and test renders target; degree)."""
+    return elem.getActiveUnit() or base_unit(elem.getUnitType())
+
+
+def convert_unit(elem, value):
+    """``(value in the target unit, note)`` of an element with ``unit`` / ``unittype``
+    (float or tuple of floats), converted by MaterialX's ``LinearUnitConverter``; the value
+    unchanged with an empty note when it has no unit.  ValueError for an unknown unit.
+
+    Examples
+    --------
+    >>> import MaterialX as mx
+    >>> doc = mx.createDocument()
+    >>> i = doc.addNode("constant", "c", "float").addInput("value", "float")
+    >>> i.setValueString("75"); i.setUnit("centimeter"); i.setUnitType("distance")
+    >>> convert_unit(i, 75.0)
+    (0.75, '75 centimeter -> 0.75 meter')
+    """
+    if not elem.hasUnit():
+        return value, ""
+    unit, unittype = elem.getUnit(), elem.getUnitType() or "distance"
+    conv = _unit_converter(unittype)
+    if conv is None:
+        raise ValueError(f"{elem.getNamePath()}: unit type {unittype!r} is not defined by the MaterialX library")
+    target = target_unit(elem) if elem.getUnitType() else base_unit(unittype)
+    for u in (unit, target):
+        if conv.getUnitAsInteger(u) < 0:
+            raise ValueError(f"{elem.getNamePath()}: {u!r} is not a {unittype} unit of the MaterialX library")
+    if unit == target:
+        return value, ""
+    if isinstance(value, tuple):
+        out = tuple(conv.convert(float(x), unit, target) for x in value)
+    else:
+        out = conv.convert(float(value), unit, target)
+    show = (lambda v: "(" + ", ".join(f"{x:g}" for x in v) + ")") if isinstance(value, tuple) else "{:g}".format
+    return out, f"{show(value)} {unit} -> {show(out)} {target}"
+
+
+def source_folder(file: str, uri: str, doc=None) -> str:
+    """The folder of the document an element was read from, given its source URI.
+
+    Parameters
+    ----------
+    file : str
+        The document that was read (``readFromXmlFile``).
+    uri : str
+        The element's ``getActiveSourceUri()``: empty or ``file`` itself for its own elements,
+        absolute for the data library's, and for an ``xi:include``d document its ``href`` as
+        written (relative to the document that includes it).
+    doc : MaterialX Document, optional
+        The document read: the source URIs of its elements name the included documents, whose
+        folders are searched too (nested includes), as MaterialX's reader searches them.
+
+    Examples
+    --------
+    >>> source_folder("/a/b/look.mtlx", "")
+    '/a/b'
+    >>> source_folder("/a/b/look.mtlx", "/lib/stdlib_defs.mtlx")
+    '/lib'
+    >>> source_folder("/a/b/look.mtlx", "sub/inc.mtlx")   # not found: relative to the document read
+    '/a/b/sub'
+    """
+    root = os.path.dirname(os.path.abspath(file))
+    if not uri:
+        return root
+    if os.path.isabs(uri):
+        return os.path.dirname(os.path.normpath(uri))
+    for folder in _include_folders(os.path.abspath(file), doc):
+        cand = os.path.join(folder, uri)
+        if os.path.isfile(cand):
+            return os.path.dirname(os.path.normpath(cand))
+    return os.path.dirname(os.path.normpath(os.path.join(root, uri)))
+
+
+def _include_folders(file: str, doc) -> list:
+    """Folders of ``file`` and of the documents it includes (found from its elements'
+    source URIs, each looked up in the folders found before it)."""
+    folders = [os.path.dirname(file)]
+    if doc is None:
+        return folders
+    uris = {e.getSourceUri() for e in doc.traverseTree()} - {"", file}
+    uris = sorted(u for u in uris if not os.path.isabs(u))
+    changed = True
+    while changed and uris:
+        changed = False
+        for u in list(uris):
+            for folder in folders:
+                cand = os.path.join(folder, u)
+                if os.path.isfile(cand):
+                    d = os.path.dirname(os.path.normpath(cand))
+                    if d not in folders:
+                        folders.append(d)
+                    uris.remove(u)
+                    changed = True
+                    break
+    return folders
+
+
 def mx_value(elem, type_name: str):
     """The value of a MaterialX input / output element as parsed by MaterialX itself
     (``getValue``: "1 0 0" and "1, 0, 0" alike), as a Python value: float, int, bool, str
@@ -182,4 +311,5 @@ def mx_value(elem, type_name: str):
     return vals
 
 
-__all__ = ["library", "nodedef", "inputs", "outputs", "category", "implementation_graph", "mx_value"]
+__all__ = ["library", "nodedef", "inputs", "outputs", "category", "implementation_graph", "mx_value",
+           "source_folder", "convert_unit", "target_unit", "base_unit"]

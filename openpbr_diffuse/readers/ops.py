@@ -41,6 +41,22 @@ def _if(cmp):
                             else i["in2"], t)
 
 
+def _rotate2d(i, t):
+    """MaterialX ``rotate2d``: (c x + s y, -s x + c y) with amount in degrees (its GLSL
+    implementation ``mx_rotate_vector2``; a positive amount turns the vector clockwise)."""
+    x, y = np.asarray(_num(i["in"]), dtype=np.float64).reshape(-1)[:2]
+    a = np.radians(float(i["amount"]))
+    c, s = np.cos(a), np.sin(a)
+    return _as(np.array([c * x + s * y, -s * x + c * y]), t)
+
+
+def _switch(i, t):
+    """MaterialX ``switch``: ``which`` 0 selects in1, 1 in2, ... (floored, clamped to the inputs)."""
+    names = sorted((n for n in i if n.startswith("in") and n[2:].isdigit()), key=lambda n: int(n[2:]))
+    k = min(max(int(np.floor(float(i["which"]))), 0), len(names) - 1)
+    return _as(i[names[k]], t)
+
+
 OPS = {
     "dot": lambda i, t: _as(i["in"], t),
     "constant": lambda i, t: _as(i["value"], t),
@@ -64,6 +80,8 @@ OPS = {
     "ifgreater": _if(lambda a, b: a > b),
     "ifgreatereq": _if(lambda a, b: a >= b),
     "ifequal": _if(lambda a, b: a == b),
+    "rotate2d": _rotate2d,
+    "switch": _switch,
 }
 
 
@@ -76,6 +94,8 @@ def apply(category, inputs, out_type):
     0.25
     >>> apply("multiply", {"in1": (0.5, 0.5, 0.5), "in2": 0.5}, "color3").tolist()
     [0.25, 0.25, 0.25]
+    >>> [round(float(x), 12) for x in apply("rotate2d", {"in": (1.0, 0.0), "amount": 90.0}, "vector2")]
+    [0.0, -1.0]
     """
     return OPS[category](inputs, out_type)
 

@@ -9,9 +9,18 @@ Wrap modes (USD ``wrapS/wrapT`` and MaterialX ``uaddressmode/vaddressmode``):
 repeat / periodic, mirror, clamp, black; MaterialX "constant" returns the node's ``default``
 outside [0, 1] (handled by the caller through ``outside_unit``), USD "useMetadata" uses the
 file's own wrap metadata (OpenImageIO's Wrap.Default).
+
+Textures inside a USD package (``scene.usdz[textures/a.png]``, as usd-core's asset resolver
+resolves them) are read through that resolver (``Ar.GetResolver().OpenAsset``), never through
+the file system.  OpenImageIO's Python bindings have no IOProxy (no reading from memory), so
+the member's bytes are written once to a private temporary folder this module creates (never
+next to the package) and removed when the interpreter exits.
 """
+import atexit
 import functools
 import os
+import shutil
+import tempfile
 
 import numpy as np
 
@@ -69,12 +78,101 @@ def file_info(path, mtime):
         inp.close()
 
 
-def info(path):
-    """Channels, bits and colour space metadata of ``path`` (TextureError if unreadable)."""
+def is_packaged(path: str) -> bool:
+    """Whether ``path`` names a member of a USD package (``pkg.usdz[member]``).
+
+    Examples
+    --------
+    >>> is_packaged("/a/b.usdz[textures/c.png]"), is_packaged("/a/c.png")
+    (True, False)
+    """
+    return path.endswith("]") and "[" in path
+
+
+def display_name(path: str) -> str:
+    """The file name of a texture path, of the innermost member for a packaged one.
+
+    Examples
+    --------
+    >>> display_name("/a/b.usdz[textures/c.png]"), display_name("/a/c.png")
+    ('c.png', 'c.png')
+    """
+    if is_packaged(path):
+        path = path[path.rindex("[") + 1:-1]
+    return os.path.basename(path)
+
+
+_PRIVATE = []
+
+
+def _private_dir() -> str:
+    """A temporary folder of this process (made on first use, removed at exit)."""
+    if not _PRIVATE or _PRIVATE[1] != os.getpid():   # a forked child makes (and removes) its own
+        d = tempfile.mkdtemp(prefix="openpbr_diffuse_packaged_")
+        atexit.register(_remove, d, os.getpid())
+        _PRIVATE[:] = [d, os.getpid()]
+        _member_file.cache_clear()
+    return _PRIVATE[0]
+
+
+def _remove(folder: str, pid: int) -> None:
+    """Remove the private folder, only in the process that made it."""
+    if os.getpid() == pid:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def _package_stamp(path: str) -> int:
+    """Modification time (ns) of the outermost package file of a packaged path."""
+    from pxr import Ar
+
+    outer, _ = Ar.SplitPackageRelativePathOuter(path)
+    if not os.path.isfile(outer):
+        raise TextureError(f"texture {path!r}: its package {outer!r} does not exist")
+    return os.stat(outer).st_mtime_ns
+
+
+@functools.lru_cache(maxsize=256)
+def _member_file(path: str, stamp: int) -> str:
+    """A private copy of the package member ``path`` read through usd-core's asset resolver."""
+    from pxr import Ar
+
+    asset = Ar.GetResolver().OpenAsset(Ar.ResolvedPath(path))
+    if asset is None:
+        raise TextureError(f"texture {path!r} is not in its package")
+    data = asset.GetBuffer()
+    fd, tmp = tempfile.mkstemp(suffix=os.path.splitext(display_name(path))[1], dir=_private_dir())
+    with os.fdopen(fd, "wb") as f:
+        f.write(data)
+    return tmp
+
+
+def local_file(path) -> str:
+    """A file OpenImageIO can open for ``path``: itself, or for a packaged member a private
+    copy of its bytes (TextureError if missing).
+
+    Examples
+    --------
+    >>> local_file("/no/such/texture.png")
+    Traceback (most recent call last):
+    ...
+    openpbr_diffuse.readers.textures.TextureError: texture file '/no/such/texture.png' does not exist
+    """
     path = os.fspath(path)
+    if is_packaged(path):
+        return _member_file(path, _package_stamp(path))
     if not os.path.isfile(path):
         raise TextureError(f"texture file {path!r} does not exist")
-    return file_info(path, os.stat(path).st_mtime_ns)
+    return path
+
+
+def info(path):
+    """Channels, bits and colour space metadata of ``path`` (TextureError if unreadable)."""
+    name = os.fspath(path)
+    local = local_file(name)
+    try:
+        return file_info(local, os.stat(local).st_mtime_ns)
+    except TextureError as exc:  # name the texture as the file names it, not the private copy
+        raise TextureError(str(exc).replace(local, name)) from None
 
 
 def sample(path, uv, wrap_s="periodic", wrap_t="periodic"):
@@ -98,8 +196,9 @@ def sample(path, uv, wrap_s="periodic", wrap_t="periodic"):
     """
     import OpenImageIO as oiio
 
-    path = os.fspath(path)
-    nch, _, _ = info(path)
+    name = os.fspath(path)
+    nch, _, _ = info(name)
+    path = local_file(name)
     u, v = (float(x) for x in uv)
     if not (np.isfinite(u) and np.isfinite(v)):
         raise ValueError(f"uv must be finite, got {uv!r}")
@@ -111,7 +210,7 @@ def sample(path, uv, wrap_s="periodic", wrap_t="periodic"):
     out = ts.texture(path, opt, u, 1.0 - v, 0.0, 0.0, 0.0, 0.0, nch)
     err = ts.geterror()
     if err:
-        raise TextureError(f"texture {path!r}: {err.strip().splitlines()[0]}")
+        raise TextureError(f"texture {name!r}: {err.strip().splitlines()[0].replace(path, name)}")
     return np.asarray(out, dtype=np.float64)
 
 
@@ -120,4 +219,5 @@ def outside_unit(uv):
     return bool(np.any((np.asarray(uv, dtype=np.float64) < 0.0) | (np.asarray(uv, dtype=np.float64) > 1.0)))
 
 
-__all__ = ["TextureError", "sample", "info", "wrap_name", "outside_unit"]
+__all__ = ["TextureError", "sample", "info", "wrap_name", "outside_unit", "local_file", "is_packaged",
+           "display_name"]

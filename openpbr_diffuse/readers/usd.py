@@ -10,8 +10,10 @@ Resolution as USD defines it:
 - an input's value follows its connection (``GetConnectedSources``): to a Material or
   NodeGraph interface input, through NodeGraph outputs, to a shader output (whatever its
   name) -- ``UsdUVTexture`` (sampled with OpenImageIO at ``uv``, wrapS/wrapT, scale, bias,
-  fallback, sourceColorSpace), ``UsdPrimvarReader_float2`` (the uv), MaterialX ``ND_`` nodes
-  (evaluated like the MaterialX reader: stdlib math, constant, image, tiledimage);
+  fallback, sourceColorSpace; a texture inside a ``.usdz`` is read through usd-core's asset
+  resolver), ``UsdPrimvarReader_float2`` (the uv), other primvar readers (their fallback, with
+  a warning naming the primvar: no geometry is read), ``UsdTransform2d`` and MaterialX ``ND_``
+  nodes (evaluated like the MaterialX reader: stdlib math, constant, image, tiledimage);
   else the authored value at ``time`` (an input with only time samples and no ``time``
   given takes its earliest sample); else the MaterialX nodedef default (usd-core has no
   registry for ``ND_`` nodes);
@@ -270,11 +272,7 @@ class _UsdResolver:
         if mx_type == "filename":
             _, _, Sdf = _pxr()
             if isinstance(v, Sdf.AssetPath):
-                path = v.resolvedPath or v.path
-                if path and not os.path.isabs(path):
-                    layer = attr.GetStage().GetRootLayer()
-                    path = layer.ComputeAbsolutePath(path)
-                v = path
+                v = v.resolvedPath or _anchored(attr, v.path)
         return v, note
 
     def port(self, port, mx_type, trail=()):
@@ -343,7 +341,10 @@ class _UsdResolver:
             got = _MX_TYPES.get(tn, tn)
             # float3 / float4 colours: how Blender and the glTF converters write them
             as_colour = t in ("color3", "color4") and got == "vector" + t[-1]
-            if got != t and not as_colour and not (t == "string" and got == "filename"):
+            # a connected input takes its source's value: its own declared type does not matter
+            # (exporters write connected inputs as token)
+            connected = inp.GetAttr().HasAuthoredConnections()
+            if got != t and not as_colour and not connected and not (t == "string" and got == "filename"):
                 raise ValueError(f"{self.file}: {inp.GetAttr().GetPath()}: type {tn}, but "
                                  f"input {name} of {sid} is {t}")
             p = self.port(inp, t, trail)
@@ -375,8 +376,8 @@ class _UsdResolver:
             if sid.endswith("float2") or output == "result" and mx_type == "vector2":
                 return Parameter(self.uv.copy(), f"{path} (primvar reader) = uv ({self.uv[0]:g}, {self.uv[1]:g})",
                                  "uv")
-            self._note(f"{path} ({sid}) needs geometry primvars: not evaluated; default used", True)
-            return None
+            return self.primvar_fallback(shader, sid, trail)
+        sid = _USD_NODES.get(sid, sid)
         nd = mxlib.nodedef(sid) if sid.startswith("ND_") else None
         if nd is None:
             self._note(f"{path} ({sid or 'no info:id'}) is not evaluated by the reader; default used", True)
@@ -409,6 +410,27 @@ class _UsdResolver:
         return p and Parameter(p.value, f"{cat} {path} ({sid} via {graph.getName()}) <- {p.provenance}",
                                _kind(p), p.authored)
 
+    def primvar_fallback(self, shader, sid: str, trail: tuple) -> "Parameter | None":
+        """A primvar reader other than the uv one: the reader has no geometry, so the
+        reader's ``fallback`` (else its nodedef default) is used, with a warning naming the
+        primvar."""
+        path = str(shader.GetPath())
+        nd_name = _PRIMVAR_READERS.get(sid)
+        if nd_name is None:
+            self._note(f"{path} ({sid}) is not a primvar reader the reader knows; default used", True)
+            return None
+        var = shader.GetInput("varname")
+        v = self.port(var, "string", trail) if var else None
+        name = v.value if v is not None else ""
+        t, default, _ = mxlib.inputs(nd_name)["fallback"]
+        fb = shader.GetInput("fallback")
+        p = self.port(fb, t, trail) if fb else None
+        value = p.value if p is not None else default
+        shown = _fmt4(value) if isinstance(value, (tuple, np.ndarray)) else f"{value}"
+        self._note(f"{path} ({sid}) reads primvar {name!r}: no geometry is read, its fallback {shown} is used")
+        return Parameter(value, f"{path} ({sid}) primvar {name!r}: fallback {shown} (no geometry)",
+                         "connection")
+
     def uv_texture(self, shader, sid, output, mx_type, trail):
         """UsdUVTexture: file, st, wrapS/T, fallback, scale, bias, sourceColorSpace."""
         path = str(shader.GetPath())
@@ -433,7 +455,7 @@ class _UsdResolver:
         scale = np.asarray(_raw(shader, "scale", (1.0, 1.0, 1.0, 1.0), self), dtype=np.float64)
         bias = np.asarray(_raw(shader, "bias", (0.0, 0.0, 0.0, 0.0), self), dtype=np.float64)
         source_cs = str(get("sourceColorSpace", "string", "auto"))
-        label = f"texture {os.path.basename(file) if file else '(none)'} at uv ({st[0]:.6g}, {st[1]:.6g})"
+        label = f"texture {textures.display_name(file) if file else '(none)'} at uv ({st[0]:.6g}, {st[1]:.6g})"
         try:
             if not file:
                 raise textures.TextureError(f"{path} has no file")
@@ -479,6 +501,39 @@ class _UsdResolver:
                 prov += f" ({decoded_space} -> {colorspace.WORKING_SPACE})"
         return Parameter(ops._as(rgb, mx_type) if mx_type != "float" else float(rgb[0]),
                          f"{path}.outputs:rgb <- {prov}", "texture")
+
+
+#: USD shader ids of UsdPreviewSurface nodes that MaterialX's data library defines (the
+#: ``ND_`` nodedef gives the inputs' types and defaults, its nodegraph the evaluation).
+_USD_NODES = {"UsdTransform2d": "ND_UsdTransform2d"}
+
+#: Primvar readers (UsdPreviewSurface specification) -> the MaterialX nodedef of their type.
+_PRIMVAR_READERS = {
+    "UsdPrimvarReader_float": "ND_UsdPrimvarReader_float", "UsdPrimvarReader_float3": "ND_UsdPrimvarReader_vector3",
+    "UsdPrimvarReader_float4": "ND_UsdPrimvarReader_vector4", "UsdPrimvarReader_int": "ND_UsdPrimvarReader_integer",
+    "UsdPrimvarReader_string": "ND_UsdPrimvarReader_string", "UsdPrimvarReader_normal": "ND_UsdPrimvarReader_vector3",
+    "UsdPrimvarReader_point": "ND_UsdPrimvarReader_vector3", "UsdPrimvarReader_vector": "ND_UsdPrimvarReader_vector3",
+    "UsdPrimvarReader_matrix": None,
+}
+_PRIMVAR_READERS = {k: v for k, v in _PRIMVAR_READERS.items() if v is not None}
+
+
+def _anchored(attr, path: str) -> str:
+    """An asset path the resolver did not resolve, anchored to the layer that authors it
+    (inside a package: the package member ``pkg.usdz[path]``), for the warning to name."""
+    from pxr import Ar
+
+    if not path or os.path.isabs(path) or Ar.IsPackageRelativePath(path):
+        return path
+    stack = attr.GetPropertyStack()
+    layer = stack[0].layer if stack else attr.GetStage().GetRootLayer()
+    real = layer.realPath or layer.identifier
+    if Ar.IsPackageRelativePath(real):   # a layer inside a package: relative to its member folder
+        outer, inner = Ar.SplitPackageRelativePathInner(real)
+        return Ar.JoinPackageRelativePath([outer, os.path.normpath(os.path.join(os.path.dirname(inner), path))])
+    if os.path.splitext(real)[1].lower() == ".usdz":
+        return Ar.JoinPackageRelativePath([real, os.path.normpath(path)])
+    return os.path.normpath(os.path.join(os.path.dirname(real), path))
 
 
 def _raw(shader, name, default, res):
