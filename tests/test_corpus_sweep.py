@@ -559,3 +559,31 @@ def test_sample_values_equal_an_independent_reading(rel, mpath):
             # (a texel step of an 8-bit texture is 4e-3)
             tol = 5e-5 if m.parameters[name].kind == "texture" else 2e-6
             assert np.allclose(got, want, rtol=0, atol=tol), (name, uv, got, want, m.parameters[name].provenance)
+
+
+def test_a_nodedef_implementation_graph_reads_the_nodedef_interface(tmp_path):
+    """A nodegraph implementing a nodedef (rendered by MaterialX on its own): an interfacename
+    refers to the nodedef's input, whose value is the default."""
+    from openpbr_diffuse.readers import load_materials
+
+    f = tmp_path / "impl.mtlx"
+    f.write_text("""<?xml version="1.0"?>
+<materialx version="1.39" colorspace="acescg">
+  <nodedef name="ND_metalish" node="metalish">
+    <input name="tint" type="color3" value="0.25, 0.5, 0.75" />
+    <input name="rough" type="float" value="0.375" />
+    <output name="out" type="surfaceshader" />
+  </nodedef>
+  <nodegraph name="NG_metalish" nodedef="ND_metalish">
+    <standard_surface name="s" type="surfaceshader">
+      <input name="base_color" type="color3" interfacename="tint" />
+      <input name="diffuse_roughness" type="float" interfacename="rough" />
+    </standard_surface>
+    <output name="out" type="surfaceshader" nodename="s" />
+  </nodegraph>
+</materialx>
+""")
+    (m,) = load_materials(f)
+    assert m.path == "NG_metalish/out" and m.supported and not m.warnings, m.warnings
+    assert m.parameters["base_color"].value == (0.25, 0.5, 0.75)
+    assert m.parameters["diffuse_roughness"].value == 0.375
