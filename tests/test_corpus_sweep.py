@@ -116,7 +116,6 @@ def _check_file(path):
             assert len(error) > len(str(path)) + 2, (mpath, error)
 
 
-@pytest.mark.slow
 @pytest.mark.corpus
 @pytest.mark.skipif(not HAS_CORPUS, reason="../shared/corpus/realworld is absent")
 @pytest.mark.parametrize("path", FILES, ids=_rel)
@@ -124,18 +123,11 @@ def test_file_is_read_and_every_material_listed(path):
     _check_file(path)
 
 
-@pytest.mark.corpus
-@pytest.mark.skipif(not HAS_CORPUS, reason="../shared/corpus/realworld is absent")
-def test_whole_corpus_is_read_and_every_material_listed():
-    """Aggregate of the per-file test (which runs under ``-m slow``): every file, one report."""
+def test_corpus_is_whole():
+    if not HAS_CORPUS:
+        pytest.skip("../shared/corpus/realworld is absent")
     assert len(FILES) >= 390
-    bad = []
-    for path in FILES:
-        try:
-            _check_file(path)
-        except AssertionError as exc:
-            bad.append(f"{_rel(path)}: {str(exc).splitlines()[0][:300]}")
-    assert not bad, "\n".join(bad)
+    assert {_rel(f).split("/")[0] for f in FILES} == {"MaterialX", "usd-wg-assets", "materialxusd"}
 
 
 @pytest.mark.corpus
