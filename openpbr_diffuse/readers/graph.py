@@ -161,6 +161,12 @@ class Resolver:
             if iface is not None:
                 return iface.get(name)
             ii = port.getInterfaceInput() if hasattr(port, "getInterfaceInput") else None
+            if ii is None:  # a nodedef's own implementation graph: its interface is the nodedef's
+                graph = port.getParent()
+                while graph is not None and graph.getCategory() != "nodegraph":
+                    graph = graph.getParent()
+                nd = graph.getNodeDef() if graph is not None else None
+                ii = nd.getActiveInput(name) if nd is not None else None
             if ii is None:
                 self._note(f"{port.getNamePath()}: interface input {name!r} does not exist; default used")
                 return None

@@ -11,7 +11,7 @@ import os
 from . import mxlib
 from .graph import Resolver, deep_stack, to_python
 from .mapping import build_material
-from .material import Parameter, failed_material
+from .material import Material, Parameter, failed_material
 
 # ----------------------------------------------------------------------- documents
 def read_document(path):
@@ -50,11 +50,17 @@ def id_of(node) -> str:
     return node.getNamePath()
 
 
+#: The ``unsupported`` reason of a renderable nodegraph output that is not a surface shader.
+NOT_A_SHADER = "not a surface shader: MaterialX renders it unlit, there is no diffuse lobe to evaluate"
+
+
 def graph_shaders(doc, known: set) -> list:
-    """[(name, path, shader node)] of the surface shaders that are outputs of nodegraphs
-    (e.g. a ``surface`` over an ``oren_nayar_diffuse_bsdf``), as MaterialX's own
-    ``findRenderableElements`` finds them; shaders in ``known`` (reached through a material
-    node) are left out.  Named by the output's path ("graph/out1")."""
+    """[(name, path, shader node or output)] of the renderable nodegraph / document outputs that
+    MaterialX's own ``findRenderableElements`` finds: a surface shader output (e.g. a ``surface``
+    over an ``oren_nayar_diffuse_bsdf``), a ``material`` output (followed to the shader of its
+    ``surfacematerial``), or another output (a colour, a float, a displacement shader: the
+    Output itself, listed unsupported).  Named by the output's path ("graph/out1"); a shader in
+    ``known`` (reached through a material node), by the same output of the same node, is left out."""
     import MaterialX as mx
 
     try:
@@ -65,14 +71,31 @@ def graph_shaders(doc, known: set) -> list:
         elements = [o for g in doc.getNodeGraphs() if not g.hasNodeDefString() for o in g.getOutputs()]
     out = []
     for e in elements:
-        if not e.isA(mx.Output) or e.getType() != "surfaceshader":
+        if not e.isA(mx.Output):
             continue
         node = e.getConnectedNode()
-        if node is None or id_of(node) in known:
+        if e.getType() == "material" and node is not None and node.getType() == "material":
+            node = shader_of(node)
+            if node is None:  # listed: "no surface shader is connected to the material"
+                out.append((e.getNamePath(), e.getNamePath(), None))
+                continue
+        elif e.getType() != "surfaceshader":
+            out.append((e.getNamePath(), e.getNamePath(), e))
             continue
-        known.add(id_of(node))
+        if node is None or (id_of(node), e.getOutputString()) in known:
+            continue
         out.append((e.getNamePath(), e.getNamePath(), node))
     return out
+
+
+def _not_a_shader(output, *, name, path, file, uv, variants):
+    """The Material listed for a renderable output that is not a surface shader."""
+    node = output.getConnectedNode()
+    nd = node.getNodeDef() if node is not None else None
+    return Material(name=name, path=path, file=file, shader_id=nd.getName() if nd is not None else "",
+                    supported=False, uv=tuple(float(x) for x in uv), variants=dict(variants or {}),
+                    shader_path=node.getNamePath() if node is not None else "",
+                    unsupported=[f"{output.getNamePath()}: a {output.getType()} output, {NOT_A_SHADER}"])
 
 
 def load(path: "str | os.PathLike", *, uv: tuple = (0.5, 0.5), material: str | None = None,
@@ -94,10 +117,13 @@ def load(path: "str | os.PathLike", *, uv: tuple = (0.5, 0.5), material: str | N
     -------
     list of Material
     """
+    import MaterialX as mx
+
     doc = read_document(path)
     file = os.fspath(path)
     doc_space = doc.getColorSpace()
-    pairs = [(m.getName(), m.getNamePath(), shader_of(m)) for m in doc.getMaterialNodes()]
+    material_nodes = doc.getMaterialNodes()
+    pairs = [(m.getName(), m.getNamePath(), shader_of(m)) for m in material_nodes]
     if not pairs:  # bare shaders or BSDFs without a material node
         used = set()
         for n in doc.getNodes():
@@ -106,11 +132,18 @@ def load(path: "str | os.PathLike", *, uv: tuple = (0.5, 0.5), material: str | N
                     used.add(i.getNodeName())
         pairs = [(n.getName(), n.getNamePath(), n) for n in doc.getNodes()
                  if n.getCategory() in SHADER_CATEGORIES and n.getName() not in used]
-    pairs += graph_shaders(doc, {id_of(sh) for _, _, sh in pairs if sh is not None})
+    outputs = graph_shaders(doc, {(id_of(sh), "") for _, _, sh in pairs if sh is not None} if material_nodes else set())
+    if not material_nodes:  # a bare shader that a renderable output reaches is listed by that output
+        reached = {id_of(sh) for _, _, sh in outputs if sh is not None and not sh.isA(mx.Output)}
+        pairs = [p for p in pairs if p[2] is None or id_of(p[2]) not in reached]
+    pairs += outputs
     out = []
     for name, npath, shader in pairs:
         full = f"{path_prefix.rstrip('/')}/{name}" if path_prefix else npath
         if material is not None and material not in (name, npath, full):
+            continue
+        if shader is not None and shader.isA(mx.Output):
+            out.append(_not_a_shader(shader, name=name, path=full, file=file, uv=uv, variants=variants))
             continue
         try:
             with deep_stack():
