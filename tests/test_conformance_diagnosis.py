@@ -1,6 +1,8 @@
 """The common bugs, named: each deviation written independently (``tests/_hand_impl.py``,
 formulas typed from the EON paper in plain NumPy) is diagnosed by name through the public
-``grade()`` API; mutants that match no known deviation say so, with no "closest".
+``grade()`` API and as the rows of a filled CSV template through ``check FILE``; mutants that
+match no known deviation say so, with no "closest".  (The same bugs written as GLSL and C++
+code: tests/test_subjects_deviations.py.)
 """
 import json
 import math
@@ -68,6 +70,10 @@ def _mutants():
     yield "offset", ref + 0.01
     both = hand.answer(V, np.float64, scale=math.pi, mu_floor=0.02)  # two bugs at once: neither alone
     yield "two_bugs", both
+    wavy = ref.copy()  # f x (1 + 0.3 sin(7 mu_i)): like no known bug
+    brdf = V.kind == "brdf"
+    wavy[brdf] *= (1.0 + 0.3 * np.sin(7.0 * np.maximum(V.wi[brdf, 2], 0.0)))[:, None]
+    yield "sin_mu_i", wavy
 
 
 @pytest.mark.parametrize("case,out", list(_mutants()), ids=lambda x: x if isinstance(x, str) else "")
@@ -117,3 +123,39 @@ def test_check_text_names_nan_and_shows_inputs(tmp_path, capsys):
     assert "NaN output" in text and "Inf output" in text and "infx" not in text
     assert "1 NaN values, 1 Inf values" in text
     assert "mu_i" in text and "L.V" in text and "by region" in text and "grazing (mu < 0.1)" in text
+
+
+def _fill_template(template, out, rows):
+    """The CSV template as a user fills it: out_r, out_g, out_b written on ``rows`` only."""
+    lines, k = [], 0
+    for line in template.read_text().splitlines():
+        if not line.startswith("#") and not line.startswith("id,"):
+            if rows[k]:
+                line = line[: -len(",,")] + ",".join(repr(float(x)) for x in out[k])
+            k += 1
+        lines.append(line)
+    assert k == len(V)
+    return "\n".join(lines) + "\n"
+
+
+@pytest.fixture(scope="module")
+def csv_template(tmp_path_factory):
+    path = tmp_path_factory.mktemp("template") / "vectors.csv"
+    assert main(["template", "csv", "--out", str(path)]) == 0
+    return path
+
+
+@pytest.mark.parametrize("case", sorted(COMMON_BUGS))
+def test_common_bug_named_from_the_filled_csv_template(case, csv_template, tmp_path, capsys):
+    """Only the EON rows of the template filled (float32 values, as a shader writes them):
+    check FILE skips the blank rows and names the bug."""
+    name, switches, fragment = COMMON_BUGS[case]
+    eon = V.model == "eon"
+    path = tmp_path / "filled.csv"
+    path.write_text(_fill_template(csv_template, hand.answer(V, np.float32, **switches), eon))
+    capsys.readouterr()
+    assert main(["check", str(path), "--json"]) == 1
+    d = json.loads(capsys.readouterr().out)
+    assert d["diagnosis"] == name and fragment in d["diagnosis_detail"], d["diagnosis_detail"]
+    assert d["n_rows"] == int(eon.sum()) and d["n_skipped"] == len(V) - int(eon.sum())
+    assert "closest" not in d["diagnosis_detail"]

@@ -1,11 +1,15 @@
 """Benchmark ``openpbr-diffuse report --glsl FILE --function f`` (warm: after one untimed run).
 
-    python tools/bench_report.py [--runs 3]
+    python tools/bench_report.py [--runs 3] [--quick] [--breakdown]
 
-Writes a conforming EON GLSL function (the one of tests/test_report_under_test.py) to a
-temporary folder, runs the report on it once to warm the caches (numba, the shader compiler),
-then times ``--runs`` runs as subprocesses: wall seconds and CPU seconds (user + sys of the
-child).  Prints one line per run and the CPU model; the numbers go into docs/benchmarks/report.md.
+The subjects are the conforming EON functions of tests/subjects/ (eon_conforming.glsl and
+eon_conforming.cpp, written from the paper's equations).  Each variant is run once to warm the
+caches (numba, the C++ harness cache), then timed ``--runs`` times as subprocesses: wall seconds
+and CPU seconds (user + sys of the child and its children: the GL child processes, g++).
+``--breakdown`` also times, in this process, the parts of ``report --glsl FILE --function f
+--albedo-function albedo``: grading the subject, drawing its pictures (each call of the subject
+is one GL child process), the evidence sections.  Prints one line per run, the CPU model and the
+load average; the numbers go into docs/benchmarks/report.md.
 """
 from __future__ import annotations
 
@@ -20,6 +24,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+SUBJECTS = ROOT / "tests" / "subjects"
 
 
 def cpu_model() -> str:
@@ -50,21 +55,24 @@ def main(argv: list[str] | None = None) -> int:
     """Run the benchmark; 0 when every run exited 0."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=3)
-    ap.add_argument("--quick", action="store_true", help="time report --quick too")
+    ap.add_argument("--quick", action="store_true", help="time report --quick and report (no implementation) too")
+    ap.add_argument("--breakdown", action="store_true", help="time the parts of report --glsl in this process")
     opts = ap.parse_args(argv)
-    sys.path.insert(0, str(ROOT / "tests"))
-    from test_report_under_test import EON_GLSL
 
     with tempfile.TemporaryDirectory() as tmp:
-        glsl = Path(tmp) / "mine.glsl"
-        glsl.write_text(EON_GLSL)
-        variants = {"report --glsl FILE --function eon": ["--glsl", str(glsl), "--function", "eon"]}
-        variants["report --glsl FILE --function eon --albedo-function eon_albedo"] = [
-            "--glsl", str(glsl), "--function", "eon", "--albedo-function", "eon_albedo"]
+        glsl, cpp = str(SUBJECTS / "eon_conforming.glsl"), str(SUBJECTS / "eon_conforming.cpp")
+        both = ["--function", "f", "--albedo-function", "albedo"]
+        variants = {"report --glsl FILE --function f": ["--glsl", glsl, "--function", "f"],
+                    "report --glsl FILE --function f --albedo-function albedo": ["--glsl", glsl, *both],
+                    "report --quick --glsl FILE --function f --albedo-function albedo": ["--quick", "--glsl", glsl,
+                                                                                        *both],
+                    "report --cpp FILE --function f --albedo-function albedo": ["--cpp", cpp, *both]}
         if opts.quick:
             variants["report --quick"] = ["--quick"]
             variants["report"] = []
         print(f"CPU: {cpu_model()}, {os.cpu_count()} logical cores; load average {os.getloadavg()[0]:.1f}")
+        if opts.breakdown:
+            breakdown(glsl, Path(tmp))
         ok = True
         for label, extra in variants.items():
             args = [*extra, "--out", str(Path(tmp) / "r"), "--no-progress"]
@@ -73,7 +81,46 @@ def main(argv: list[str] | None = None) -> int:
                 wall, cpu, rc = run_once(args)
                 ok &= rc == 0
                 print(f"{label}: run {i + 1}: {wall:.1f} s wall, {cpu:.1f} s CPU, exit {rc}")
+        print(f"load average at the end {os.getloadavg()[0]:.1f}")
     return 0 if ok else 1
+
+
+def _cpu() -> float:
+    own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def breakdown(glsl: str, tmp: Path) -> None:
+    """Time the parts of ``report --glsl FILE --function f --albedo-function albedo`` in this process."""
+    sys.path.insert(0, str(ROOT))
+    from openpbr_diffuse.graders import glsl as gl
+    from openpbr_diffuse.graders.generic import glsl_subject
+    from openpbr_diffuse.report import runner
+    from openpbr_diffuse.report.subject import figures, grade_subject_under_test
+
+    runs = []
+    run = gl.Kernel.run
+
+    def counted(self, *args, **kwargs):
+        runs.append(1)
+        return run(self, *args, **kwargs)
+
+    gl.Kernel.run = counted
+    try:
+        subject = glsl_subject(glsl, "f", "albedo")
+        parts = {}
+        for label, work in (
+                ("grade the subject", lambda: grade_subject_under_test(subject)),
+                ("its pictures", lambda: figures(subject, parts["grade the subject"][2], tmp, quick=False)),
+                ("evidence sections", lambda: runner.run_report([], tmp / "r", quick=False, progress=False,
+                                                                sections=["implementations", "approximations"]))):
+            n, t0, c0 = len(runs), time.perf_counter(), _cpu()
+            value = work()
+            parts[label] = (time.perf_counter() - t0, _cpu() - c0, value, len(runs) - n)
+            wall, cpu, _, n_gl = parts[label]
+            print(f"breakdown: {label}: {wall:.1f} s wall, {cpu:.1f} s CPU, {n_gl} GL child runs")
+    finally:
+        gl.Kernel.run = run
 
 
 if __name__ == "__main__":

@@ -299,10 +299,11 @@ def _eq14(listing_albedo):
     return predict
 
 
-def _mu_floor_predict(vectors, floor):
+def _mu_floor_predict(vectors, floor, base=None):
     """mu_i, mu_o (and the albedo's mu) raised to ``floor`` while L.V is kept: the
     directions are rebuilt with z = max(mu, floor) and the azimuth that gives the
-    implementation's s = L.V - mu_i' mu_o'."""
+    implementation's s = L.V - mu_i' mu_o'.  Only the rows with a mu below the floor are
+    evaluated; the others are ``base`` (the reference of ``vectors``, computed when None)."""
     wi, wo = vectors.wi.copy(), vectors.wo.copy()
     brdf = vectors.kind == "brdf"
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -320,8 +321,14 @@ def _mu_floor_predict(vectors, floor):
     new_wo = np.stack([so, np.zeros_like(so), mo], axis=-1)
     new_wi = np.stack([si * np.cos(dphi), si * np.sin(dphi), mi], axis=-1)
     wi[up], wo[up] = new_wi[up], new_wo[up]
-    mu = np.where(vectors.kind == "albedo", np.maximum(vectors.mu, floor), vectors.mu)
-    out = _predict(vectors, wi=wi, wo=wo, mu=mu)
+    albedo = vectors.kind == "albedo"
+    mu = np.where(albedo, np.maximum(vectors.mu, floor), vectors.mu)
+    with np.errstate(invalid="ignore"):
+        changed = up | (albedo & (vectors.mu < floor))
+    out = reference(vectors) if base is None else np.array(base, dtype=np.float64, copy=True)
+    if changed.any():
+        sel = np.flatnonzero(changed)
+        out[sel] = _predict(vectors.subset(changed), wi=wi[sel], wo=wo[sel], mu=mu[sel])
     out[infeasible] = np.nan
     return out
 
@@ -387,8 +394,10 @@ def _floor_fit(vectors, out, ref, weight):
     if mus.size == 0:
         return 0.0, ref.copy()
 
+    base = reference(vectors)  # the rows above every floor tried keep their reference value
+
     def score(m):  # a robust residual, continuous in m (capped per value at 1e3 tolerances)
-        e = np.abs(out - _mu_floor_predict(vectors, m)) * weight
+        e = np.abs(out - _mu_floor_predict(vectors, m, base)) * weight
         return float(np.sum(np.minimum(np.where(np.isfinite(e), e, 1e3), 1e3) ** 2))
 
     grid = np.geomspace(1e-4, 0.3, 60)
@@ -401,7 +410,7 @@ def _floor_fit(vectors, out, ref, weight):
         else:
             lo = a
     m = 0.5 * (lo + hi)
-    return float(m), _mu_floor_predict(vectors, m)
+    return float(m), _mu_floor_predict(vectors, m, base)
 
 
 @dataclass(frozen=True)

@@ -12,12 +12,13 @@ name                   code run                                                 
 =====================  ==========================================================  =========
 materialx-glsl         MaterialX wheel: pbrlib/genglsl/mx_oren_nayar_diffuse_bsdf   optional
 materialx-glsl-qon     the same node with energy_compensation = false (QON)         optional
-eon-diffuse-glsl       portsmouth/EON-diffuse main.glsl (paper listings)            required
-openpbr-viewer-glsl    OpenPBR-viewer glsl/pathtracing/                             required
-adobe-openpbr-bsdf     adobe/openpbr-bsdf openpbr.h (C++17 + GLM)                   required
 cycles                 bpy (Blender) Cycles Diffuse BSDF, rendered                  unused
 babylonjs              npm @babylonjs/core: EON as each light type computes it      optional
 =====================  ==========================================================  =========
+
+Code that is not installed by a package -- a checkout of another project, your own
+renderer's lobe -- is graded with the generic adapters (:mod:`.generic`: ``check --glsl FILE``
+/ ``check --cpp FILE`` with the documented signatures).
 """
 from __future__ import annotations
 
@@ -35,7 +36,6 @@ class Implementation:
     name: str
     module: str
     needs_source: bool
-    corpus_folder: str | None   # its folder under shared/corpus/implementations (tests)
     upstream: str
     options: tuple = ()         # (keyword, value) pairs for the module's subject()
 
@@ -47,15 +47,11 @@ class Implementation:
 
 
 IMPLEMENTATIONS = {i.name: i for i in (
-    Implementation("materialx-glsl", "materialx", False, None, "pip install MaterialX"),
-    Implementation("materialx-glsl-qon", "materialx", False, None, "pip install MaterialX",
+    Implementation("materialx-glsl", "materialx", False, "pip install MaterialX"),
+    Implementation("materialx-glsl-qon", "materialx", False, "pip install MaterialX",
                    (("energy_compensation", False),)),
-    Implementation("eon-diffuse-glsl", "eon_glsl", True, "eon-diffuse", "github.com/portsmouth/EON-diffuse"),
-    Implementation("openpbr-viewer-glsl", "viewer_glsl", True, "openpbr-viewer",
-                   "github.com/AcademySoftwareFoundation/OpenPBR-viewer"),
-    Implementation("adobe-openpbr-bsdf", "adobe", True, "adobe-openpbr-bsdf", "github.com/adobe/openpbr-bsdf"),
-    Implementation("cycles", "cycles", False, None, "pip install bpy"),
-    Implementation("babylonjs", "babylon", False, None, "npm install @babylonjs/core"),
+    Implementation("cycles", "cycles", False, "pip install bpy"),
+    Implementation("babylonjs", "babylon", False, "npm install @babylonjs/core"),
 )}
 
 
@@ -78,12 +74,6 @@ def load(name: str, source: Path | str | None = None):
     return impl.factory()(Path(source) if source is not None else None)
 
 
-def corpus_source(name: str, shared: Path) -> Path | None:
-    """Where ``name``'s code sits in the project's sibling ``shared/corpus/implementations``."""
-    folder = IMPLEMENTATIONS[name].corpus_folder
-    return None if folder is None else Path(shared) / "corpus" / "implementations" / folder
-
-
 def grade_implementation(name: str, source=None, *, quick: bool = False, vectors=None):
     """Run implementation ``name``'s own code and grade it: an :class:`~.grading.ImplementationGrade`."""
     from .grading import grade_subject
@@ -91,5 +81,4 @@ def grade_implementation(name: str, source=None, *, quick: bool = False, vectors
     return grade_subject(load(name, source), quick=quick, vectors=vectors)
 
 
-__all__ = ["IMPLEMENTATIONS", "Implementation", "GraderUnavailable", "load", "corpus_source",
-           "grade_implementation"]
+__all__ = ["IMPLEMENTATIONS", "GraderUnavailable", "Implementation", "grade_implementation", "load"]

@@ -7,19 +7,16 @@ verdict is a finding, not a failure of this report: the section adds no pass/fai
 them; an implementation that cannot run here (no GL driver, compiler, bpy, sources) is listed
 as a warning naming the missing piece.
 
-Which implementations run: ``materialx-glsl`` always and ``materialx-glsl-qon`` unless quick
-(their code ships in the MaterialX wheel);
-the three repositories when their checkouts are known — ``ctx.extra["grader_sources"]``
-({name: path}) or the folder in ``$OPENPBR_DIFFUSE_IMPLEMENTATIONS`` holding ``eon-diffuse/``,
-``openpbr-viewer/`` and ``adobe-openpbr-bsdf/``; ``cycles`` only when asked
+Which implementations run: every registered one, whose code comes with an installed package --
+``materialx-glsl`` always, the others unless quick; ``cycles`` only when asked
 (``ctx.extra["cycles"] = True`` or ``$OPENPBR_DIFFUSE_REPORT_CYCLES=1``: its renders take about
-80 s).  ``ctx.quick``: MaterialX only.
+80 s).  ``ctx.quick``: MaterialX only.  Code that no package installs (a checkout, the user's
+own) is graded as the implementation under test (``report --glsl/--cpp``), not here.
 """
 from __future__ import annotations
 
 import math
 import os
-from pathlib import Path
 
 from ..model import SectionResult, Table
 
@@ -27,29 +24,16 @@ TITLE = "Third-party implementations, graded by running their own code (findings
 KEY = "graders"
 
 
-def _sources(ctx) -> dict:
-    from ...graders import IMPLEMENTATIONS
-
-    given = dict(ctx.extra.get("grader_sources") or {})
-    root = os.environ.get("OPENPBR_DIFFUSE_IMPLEMENTATIONS")
-    for name, impl in IMPLEMENTATIONS.items():
-        if name not in given and root and impl.corpus_folder and (Path(root) / impl.corpus_folder).is_dir():
-            given[name] = Path(root) / impl.corpus_folder
-    return given
-
-
 def _plan(ctx):
-    """[(name, source or None)] in registry order."""
+    """[(name, source)] in registry order (source None: the installed package's code)."""
     from ...graders import IMPLEMENTATIONS
 
-    sources = _sources(ctx)
     plan = [("materialx-glsl", None)]
     if ctx.quick:
         return plan
-    plan.append(("materialx-glsl-qon", None))
     for name, impl in IMPLEMENTATIONS.items():
-        if impl.needs_source and name in sources:
-            plan.append((name, sources[name]))
+        if name not in ("materialx-glsl", "cycles") and not impl.needs_source:
+            plan.append((name, None))
     if ctx.extra.get("cycles") or os.environ.get("OPENPBR_DIFFUSE_REPORT_CYCLES") == "1":
         plan.append(("cycles", None))
     return plan
@@ -102,7 +86,6 @@ def build(ctx) -> SectionResult:
     ctx.extra.setdefault("graders", run)
     if not rows:
         result.not_run = "no implementation could run here: " + ("; ".join(result.warnings) or "none planned")
-    if not any(s for n, s in _plan(ctx) if s is not None) and not ctx.quick:
-        result.notes.append("Only MaterialX's GLSL ran: point $OPENPBR_DIFFUSE_IMPLEMENTATIONS at a folder holding "
-                            "eon-diffuse/, openpbr-viewer/ and adobe-openpbr-bsdf/ checkouts to grade those too.")
+    result.notes.append("Code no package installs (a checkout of another renderer, your own) is graded as the "
+                        "implementation under test: report --glsl FILE --function F, or --cpp FILE.")
     return result
