@@ -51,6 +51,19 @@ def run_once(args: list[str]) -> tuple[float, float, int]:
     return wall, cpu, proc.returncode
 
 
+def sampler_variants(tmp: Path) -> dict[str, list[str]]:
+    """The report with a sampler graded: the conforming EON subject (tests/subjects/) plus the EON
+    sampler and pdf of tests/test_graders_sampler.py (Listings 2-4, written there)."""
+    sys.path.insert(0, str(ROOT / "tests"))
+    from test_graders_sampler import GLSL as SAMPLER_GLSL
+
+    path = Path(tmp) / "mine_sampler.glsl"
+    path.write_text((SUBJECTS / "eon_conforming.glsl").read_text() + SAMPLER_GLSL)
+    return {"report --glsl FILE --function f --sample-function eon_sample --pdf-function eon_pdf "
+            "--sampler-model eon": ["--glsl", str(path), "--function", "f", "--sample-function", "eon_sample",
+                                    "--pdf-function", "eon_pdf", "--sampler-model", "eon"]}
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the benchmark; 0 when every run exited 0."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -67,6 +80,7 @@ def main(argv: list[str] | None = None) -> int:
                     "report --quick --glsl FILE --function f --albedo-function albedo": ["--quick", "--glsl", glsl,
                                                                                         *both],
                     "report --cpp FILE --function f --albedo-function albedo": ["--cpp", cpp, *both]}
+        variants.update(sampler_variants(Path(tmp)))
         if opts.quick:
             variants["report --quick"] = ["--quick"]
             variants["report"] = []

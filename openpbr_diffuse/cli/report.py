@@ -162,7 +162,7 @@ def _under_test(args):
         ut = UnderTest(name=str(label), kind="code", error=" ".join(str(exc).split()))
         ut.verdicts = [Verdict(q, COULD_NOT_RUN, detail=ut.error) for q in ("brdf",)]
         return ut, None
-    return grade_subject_under_test(subject, quick=True), subject
+    return grade_subject_under_test(subject, quick=True, sampler_model=getattr(args, "sampler_model", None)), subject
 
 
 def _sections(args, under):
@@ -192,6 +192,9 @@ def run(args) -> int:
                     print(f"{c['id']}\t{c['name']}")
         for q in ("brdf", "albedo", "sampler_pdf", "sampler_chi2"):
             print(f"implementation.{q}\t(with --glsl / --cpp / --vectors / --implementation)")
+        for q in ("sampler_pdf.normalisation", "sampler_pdf.reference", "sampler_chi2.chi2", "sampler_chi2.valid",
+                  "sampler_chi2.variance"):
+            print(f"implementation.{q}\t(with --sample-function / --pdf-function)")
         return 0
     under, subject = _under_test(args)
     result = run_report(args.paths, args.out, quick=args.quick, progress=progress,

@@ -32,7 +32,8 @@ _GLSL = """\
 // roughness: r in [0, 1] for FON/EON (sigma in radians for QON); rho: linear RGB albedo.
 //
 // Grade it:
-//   openpbr-diffuse check --glsl THIS_FILE --function f --albedo-function albedo
+//   openpbr-diffuse check --glsl THIS_FILE --function f --albedo-function albedo \
+//       --sample-function sample_wi --pdf-function pdf
 //
 // >>> PLACEHOLDER: a Lambertian lobe, so that this file compiles and runs as it is. <<<
 // >>> Replace the four bodies with your implementation.                             <<<
@@ -72,7 +73,8 @@ _CPP = """\
 // roughness: r in [0, 1] for FON/EON (sigma in radians for QON); rho: linear RGB albedo.
 //
 // Grade it:
-//   openpbr-diffuse check --cpp THIS_FILE --function f --albedo-function albedo
+//   openpbr-diffuse check --cpp THIS_FILE --function f --albedo-function albedo \
+//       --sample-function sample_wi --pdf-function pdf
 //
 // >>> PLACEHOLDER: a Lambertian lobe, so that this file compiles and runs as it is. <<<
 // >>> Replace the four bodies with your implementation.                             <<<

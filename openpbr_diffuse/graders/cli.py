@@ -3,6 +3,7 @@
     openpbr-diffuse check --implementation NAME [--source PATH] [--json]
     openpbr-diffuse check --glsl FILE --function NAME [--albedo-function NAME] [--include DIR] [--define N=V]
     openpbr-diffuse check --cpp FILE --function NAME [--albedo-function NAME] [--include DIR] [--define N=V]
+    openpbr-diffuse check --glsl FILE --sample-function S --pdf-function P [--sampler-model eon] [--function F]
 
 --glsl and --cpp compile and run the given code with the user's rights, each compile and run in a
 child process under a wall-time limit (--timeout, default 60 s) and a 4 GiB memory limit; its whole
@@ -62,6 +63,16 @@ def add_arguments(parser: argparse.ArgumentParser | argparse._ArgumentGroup) -> 
                    help="BRDF function: vec3 NAME(vec3 wi, vec3 wo, float roughness, vec3 rho), local frame, no cosine")
     g.add_argument("--albedo-function", metavar="NAME",
                    help="albedo function: vec3 NAME(float mu, float roughness, vec3 rho)")
+    g.add_argument("--sample-function", metavar="NAME",
+                   help="sampler: vec3 NAME(vec3 wo, vec2 u, float roughness) -> wi, u in [0, 1)^2, local frame "
+                        "(with --pdf-function)")
+    g.add_argument("--pdf-function", metavar="NAME",
+                   help="its solid-angle pdf: float NAME(vec3 wo, vec3 wi, float roughness)")
+    from ..sampling.registry import STRATEGIES
+
+    g.add_argument("--sampler-model", choices=STRATEGIES, metavar="STRATEGY",
+                   help="the reference strategy the sampler claims to implement (e.g. eon): its pdf must then "
+                        "match that one's; default: compared and reported, not graded")
     g.add_argument("--include", metavar="DIR", action="append", default=[], help="include path (repeatable)")
     g.add_argument("--define", metavar="NAME=VALUE", action="append", default=[],
                    help="preprocessor define (repeatable)")
@@ -79,7 +90,13 @@ def _print_text(result) -> None:
         verdict = "pass" if q.passed else "FAIL"
         print(f"  {q.quantity:30s} {verdict}  max {q.max_abs_error:.3g}  rms {q.rms_error:.3g}  "
               f"[{q.tolerance}]" + (f"  ({q.excluded} rows outside its input domain)" if q.excluded else ""))
-        if q.diagnosis or not q.passed:
+        if q.sentence is not None:  # the sampler's quantities: a sentence and sub-checks with ids
+            print(f"      {'diagnosis: ' + (q.diagnosis or 'none') + ' -- ' if not q.passed else ''}{q.sentence}")
+            for c in q.checks:
+                print(f"      [{c['status']}] {c['id']}: {c['detail']}")
+            for label, text in (q.regions or {}).items():
+                print(f"        {label}: {text}")
+        elif q.diagnosis or not q.passed:
             print(f"      diagnosis: {q.diagnosis or 'none'} -- {q.detail}")
         else:
             print(f"      {q.detail}")
@@ -104,22 +121,26 @@ def subject_from_args(args: argparse.Namespace) -> Subject | None:
 
     modes = [m for m in ("implementation", "glsl", "cpp") if getattr(args, m, None)]
     if not modes:
-        for opt in ("source", "function", "albedo_function"):
+        for opt in ("source", "function", "albedo_function", "sample_function", "pdf_function",
+                    "sampler_model"):
             if getattr(args, opt, None):
                 raise ValueError(f"check: --{opt.replace('_', '-')} needs --implementation, --glsl or --cpp")
         return None
     if len(modes) > 1 or getattr(args, "file", None):
         raise ValueError("check: give one of FILE, --implementation, --glsl, --cpp")
     if args.implementation:
-        if args.function or args.albedo_function:
-            raise ValueError("check: --function is for --glsl / --cpp, not --implementation")
+        if args.function or args.albedo_function or getattr(args, "sample_function", None) \
+                or getattr(args, "pdf_function", None):
+            raise ValueError("check: --function / --sample-function are for --glsl / --cpp, not --implementation")
         subject = load(args.implementation, args.source)
     else:
         if args.source:
             raise ValueError("check: --source is for --implementation")
         make = glsl_subject if args.glsl else cpp_subject
         subject = make(args.glsl or args.cpp, args.function, args.albedo_function, includes=args.include,
-                       defines=args.define, model=getattr(args, "model", None) or "eon")
+                       defines=args.define, model=getattr(args, "model", None) or "eon",
+                       sample_function=getattr(args, "sample_function", None),
+                       pdf_function=getattr(args, "pdf_function", None))
     return subject
 
 
@@ -142,7 +163,8 @@ def run(args: argparse.Namespace) -> int | None:
     if subject is None:
         return None
     _exit_on_sigterm()  # so a SIGTERM unwinds through run_limited, which kills the child's group
-    result = grade_subject(subject, quick=args.quick)  # GraderUnavailable (an OSError): exit 2
+    result = grade_subject(subject, quick=args.quick,  # GraderUnavailable (an OSError): exit 2
+                           sampler_model=getattr(args, "sampler_model", None))
     if args.json:
         print(json.dumps(result.to_dict()))
     else:

@@ -137,3 +137,42 @@ class Harness:
             raise GraderUnavailable(f"{self.label}: harness entry {name} wrote {out.size} values, "
                                     f"expected {inputs.shape[0] * e.n_out}")
         return out.reshape(-1, e.n_out).copy()
+
+
+def sampler_entries(sample_function: str, pdf_function: str) -> dict[str, Entry]:
+    """Harness entries ``sample`` (wo, u, roughness -> wi, pdf(wi)) and ``pdf`` (wo, wi, roughness).
+
+    The C++ signatures (any types constructible from these arguments, indexable with [0..2])::
+
+        glm::vec3 SAMPLE(glm::vec3 wo, glm::vec2 u, float roughness);
+        float     PDF(glm::vec3 wo, glm::vec3 wi, float roughness);
+
+    Examples
+    --------
+    >>> sorted(sampler_entries("sample_wi", "pdf"))
+    ['pdf', 'sample']
+    """
+    return {
+        "sample": Entry(6, 4, f"""
+    const glm::vec3 grader_wo(in[0], in[1], in[2]);
+    const auto grader_wi = {sample_function}(grader_wo, glm::vec2(in[3], in[4]), in[5]);
+    out[0] = grader_wi[0]; out[1] = grader_wi[1]; out[2] = grader_wi[2];
+    out[3] = {pdf_function}(grader_wo, glm::vec3(grader_wi[0], grader_wi[1], grader_wi[2]), in[5]);"""),
+        "pdf": Entry(7, 1, f"""
+    out[0] = {pdf_function}(glm::vec3(in[0], in[1], in[2]), glm::vec3(in[3], in[4], in[5]), in[6]);"""),
+    }
+
+
+def sampler_functions(harness: Harness):
+    """``(sample, pdf)`` array functions running a harness's :func:`sampler_entries`
+    (the same calling convention as :func:`.glsl.sampler_functions`)."""
+    from ._arrays import rows
+
+    def sample(wo, roughness, u):
+        out = harness.run("sample", rows(wo, u, roughness))
+        return out[:, :3], out[:, 3]
+
+    def pdf(wo, wi, roughness):
+        return harness.run("pdf", rows(wo, wi, roughness))[:, 0]
+
+    return sample, pdf

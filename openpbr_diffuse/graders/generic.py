@@ -4,11 +4,15 @@ GLSL (run on llvmpipe in a compute shader)::
 
     vec3 NAME(vec3 wi, vec3 wo, float roughness, vec3 rho)   // BRDF f, no cosine, local frame
     vec3 NAME(float mu, float roughness, vec3 rho)           // directional albedo E(mu)
+    vec3 NAME(vec3 wo, vec2 u, float roughness)              // sampler: wi for u in [0, 1)^2
+    float NAME(vec3 wo, vec3 wi, float roughness)            // its solid-angle pdf
 
 C++ (compiled with g++ -std=c++17 against GLM)::
 
     glm::vec3 NAME(glm::vec3 wi, glm::vec3 wo, float roughness, glm::vec3 rho);
     glm::vec3 NAME(float mu, float roughness, glm::vec3 rho);
+    glm::vec3 NAME(glm::vec3 wo, glm::vec2 u, float roughness);   // sampler
+    float NAME(glm::vec3 wo, glm::vec3 wi, float roughness);      // its pdf
 
 (any types constructible from those arguments and indexable with ``[0..2]`` work in C++).
 The file is included unchanged; ``#include`` paths and preprocessor defines come from the
@@ -36,18 +40,24 @@ def _defines(defines):
     return limits.parse_defines(defines)
 
 
-def _names(function, albedo_function):
-    for name, opt in ((function, "--function"), (albedo_function, "--albedo-function")):
+def _names(function, albedo_function, sample_function=None, pdf_function=None):
+    for name, opt in ((function, "--function"), (albedo_function, "--albedo-function"),
+                      (sample_function, "--sample-function"), (pdf_function, "--pdf-function")):
         if name is not None:
             limits.check_identifier(name, opt)
+    if (sample_function is None) != (pdf_function is None):
+        raise ValueError("--sample-function and --pdf-function go together (the sampler is graded "
+                         "against its own pdf)")
+    if not (function or albedo_function or sample_function):
+        raise ValueError("--function, --albedo-function or --sample-function/--pdf-function is required")
 
 
-def glsl_subject(path, function=None, albedo_function=None, *, includes=(), defines=(), model="eon") -> Subject:
-    """A GLSL file's BRDF function ``function`` and/or albedo function ``albedo_function``."""
+def glsl_subject(path, function=None, albedo_function=None, *, includes=(), defines=(), model="eon",
+                 sample_function=None, pdf_function=None) -> Subject:
+    """A GLSL file's BRDF function ``function``, albedo function ``albedo_function`` and/or
+    sampler ``sample_function`` with its pdf ``pdf_function`` (given together)."""
     path = _check_file(path, "GLSL")
-    if not function and not albedo_function:
-        raise ValueError("--function or --albedo-function is required with --glsl")
-    _names(function, albedo_function)
+    _names(function, albedo_function, sample_function, pdf_function)
     code = glsl.resolve_includes(path, tuple(Path(i) for i in includes))
     defs = _defines(defines)
     brdf = albedo = None
@@ -68,19 +78,21 @@ def glsl_subject(path, function=None, albedo_function=None, *, includes=(), defi
         def albedo(mu, roughness, rho):
             return k_albedo.run(rows(mu, roughness, rho), label)
 
-    return Subject(name=f"glsl:{path.name}:{function or albedo_function}", model=model,
+    sample, pdf = (glsl.sampler_functions(code, sample_function, pdf_function, defs, label)
+                   if sample_function else (None, None))
+    return Subject(name=f"glsl:{path.name}:{function or albedo_function or sample_function}", model=model,
                    tolerance=glsl.TOLERANCE, tolerance_reason=glsl.TOLERANCE_REASON,
                    version={"source": str(path.resolve()), "sha256": glsl.sources_hash([path]),
                             "gl": glsl.gl_version(), "defines": defs},
-                   brdf=brdf, albedo=albedo)
+                   brdf=brdf, albedo=albedo, sample=sample, pdf=pdf)
 
 
-def cpp_subject(path, function=None, albedo_function=None, *, includes=(), defines=(), model="eon") -> Subject:
-    """A C++ file's BRDF function ``function`` and/or albedo function ``albedo_function``."""
+def cpp_subject(path, function=None, albedo_function=None, *, includes=(), defines=(), model="eon",
+                sample_function=None, pdf_function=None) -> Subject:
+    """A C++ file's BRDF function ``function``, albedo function ``albedo_function`` and/or
+    sampler ``sample_function`` with its pdf ``pdf_function`` (given together)."""
     path = _check_file(path, "C++")
-    if not function and not albedo_function:
-        raise ValueError("--function or --albedo-function is required with --cpp")
-    _names(function, albedo_function)
+    _names(function, albedo_function, sample_function, pdf_function)
     entries = {}
     if function:
         entries["brdf"] = cpp.Entry(10, 3, f"""
@@ -91,6 +103,8 @@ def cpp_subject(path, function=None, albedo_function=None, *, includes=(), defin
         entries["albedo"] = cpp.Entry(5, 3, f"""
     const auto grader_E = {albedo_function}(in[0], in[1], glm::vec3(in[2], in[3], in[4]));
     out[0] = grader_E[0]; out[1] = grader_E[1]; out[2] = grader_E[2];""")
+    if sample_function:
+        entries.update(cpp.sampler_entries(sample_function, pdf_function))
     prelude = f'#include <glm/glm.hpp>\n#include "{path.resolve()}"\n'
     h = cpp.Harness(prelude=prelude, entries=entries,
                     include_dirs=[str(path.parent.resolve()), *map(str, includes)],
@@ -103,8 +117,9 @@ def cpp_subject(path, function=None, albedo_function=None, *, includes=(), defin
     if albedo_function:
         def albedo(mu, roughness, rho):
             return h.run("albedo", rows(mu, roughness, rho))
-    return Subject(name=f"cpp:{path.name}:{function or albedo_function}", model=model, tolerance=None,
-                   tolerance_reason="compiled C++: the float32 tolerance of check FILE",
+    sample, pdf = cpp.sampler_functions(h) if sample_function else (None, None)
+    return Subject(name=f"cpp:{path.name}:{function or albedo_function or sample_function}", model=model,
+                   tolerance=None, tolerance_reason="compiled C++: the float32 tolerance of check FILE",
                    version={"source": str(path.resolve()), "sha256": glsl.sources_hash([path]),
                             "compiler": cpp.compiler_version(), "defines": _defines(defines)},
-                   brdf=brdf, albedo=albedo)
+                   brdf=brdf, albedo=albedo, sample=sample, pdf=pdf)

@@ -193,3 +193,68 @@ def _draw_rows(ctx, program, rows):
         quad.release()
         fbo.release()
         target.release()
+
+
+def sampler_functions(code: str, sample_function: str, pdf_function: str, defines: dict | None = None,
+                      label: str = "shader"):
+    """``(sample, pdf)`` array functions around a subject's GLSL sampler and pdf.
+
+    The GLSL signatures (local frame, normal +z, directions pointing away from the surface)::
+
+        vec3  SAMPLE(vec3 wo, vec2 u, float roughness)   // a sampled wi for u in [0, 1)^2
+        float PDF(vec3 wo, vec3 wi, float roughness)     // its solid-angle density
+
+    ``sample(wo (n,3), roughness (n,), u (n,2)) -> (wi (n,3), pdf (n,))`` runs both in one
+    shader invocation per row (``pdf`` is PDF at the returned wi, as a renderer would call it);
+    ``pdf(wo, wi, roughness) -> (n,)`` runs PDF alone.  Each call is one run of the GL child
+    (about 1 s on llvmpipe whatever the row count), so callers batch their rows;
+    ``sample.combined(wo_s, roughness_s, u, wo_p, wi_p, roughness_p) -> (wi, pdf at wi, pdf)``
+    runs both batches in one shader run (what ``graders.grading.grade_sampler`` uses).
+
+    Examples
+    --------
+    >>> s, p = sampler_functions("vec3 S(vec3 wo, vec2 u, float r) { return vec3(0, 0, 1); }"
+    ...                          "float P(vec3 wo, vec3 wi, float r) { return 1.0; }", "S", "P")
+    >>> callable(s) and callable(p)       # nothing runs until called
+    True
+    """
+    from ._arrays import rows
+
+    defs = dict(defines or {})
+    k_sample = Kernel(code=code, n_in=6, n_out=4, defines=defs, body=f"""
+    vec3 grader_wo = vec3(IN(0), IN(1), IN(2));
+    float grader_r = IN(5);
+    vec3 grader_wi = {sample_function}(grader_wo, vec2(IN(3), IN(4)), grader_r);
+    float grader_p = {pdf_function}(grader_wo, grader_wi, grader_r);
+    OUT(0) = grader_wi.x; OUT(1) = grader_wi.y; OUT(2) = grader_wi.z; OUT(3) = grader_p;""")
+    k_pdf = Kernel(code=code, n_in=7, n_out=1, defines=defs, body=f"""
+    OUT(0) = {pdf_function}(vec3(IN(0), IN(1), IN(2)), vec3(IN(3), IN(4), IN(5)), IN(6));""")
+    # both in one run: IN(0) = 1 for a sample row (wo, u, -, r), 0 for a pdf row (wo, wi, r)
+    k_both = Kernel(code=code, n_in=8, n_out=4, defines=defs, body=f"""
+    vec3 grader_wo = vec3(IN(1), IN(2), IN(3));
+    float grader_r = IN(7);
+    if (IN(0) > 0.5) {{
+        vec3 grader_wi = {sample_function}(grader_wo, vec2(IN(4), IN(5)), grader_r);
+        OUT(0) = grader_wi.x; OUT(1) = grader_wi.y; OUT(2) = grader_wi.z;
+        OUT(3) = {pdf_function}(grader_wo, grader_wi, grader_r);
+    }} else {{
+        OUT(0) = 0.0; OUT(1) = 0.0; OUT(2) = 0.0;
+        OUT(3) = {pdf_function}(grader_wo, vec3(IN(4), IN(5), IN(6)), grader_r);
+    }}""")
+
+    def sample(wo, roughness, u):
+        out = k_sample.run(rows(wo, u, roughness), f"{label} ({sample_function})")
+        return out[:, :3], out[:, 3]
+
+    def pdf(wo, wi, roughness):
+        return k_pdf.run(rows(wo, wi, roughness), f"{label} ({pdf_function})")[:, 0]
+
+    def combined(wo_s, roughness_s, u, wo_p, wi_p, roughness_p):
+        n_s = np.asarray(u).shape[0]
+        a = rows(1.0, wo_s, u, 0.0, roughness_s, n=n_s)
+        b = rows(0.0, wo_p, wi_p, roughness_p, n=np.asarray(wi_p).shape[0])
+        out = k_both.run(np.concatenate([a, b]), f"{label} ({sample_function}, {pdf_function})")
+        return out[:n_s, :3], out[:n_s, 3], out[n_s:, 3]
+
+    sample.combined = combined
+    return sample, pdf

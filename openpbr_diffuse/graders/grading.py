@@ -10,19 +10,45 @@ surface implementations by the diffuse lobe's weight x albedo and selection prob
 """
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass, field
+from typing import Any
 
 import numpy as np
 
 from ._arrays import direction
 
-#: sampler: (mu_o, r) configurations, phi_o off the x axis (the LTC frame is exercised)
+#: sampler: pdf normalisation over a (mu_o, roughness) grid, grazing mu_o included (mu_o < 0.2)
+SAMPLER_NORM_MU = (0.02, 0.05, 0.1, 0.15, 0.3, 0.5, 0.8, 1.0)
+SAMPLER_NORM_R = (0.0, 0.25, 0.5, 1.0)
+#: (cos theta, phi) bins of the quadrature and of the chi-square histogram; Gauss-Legendre nodes per bin
+SAMPLER_BINS = (16, 32)
+SAMPLER_NQ = 4
+#: |int pdf dw - 1|: the rule integrates the reference strategies' pdfs to < 1e-5 (measured over this
+#: grid), float32 pdf values add < 1e-6; 5e-3 flags a pdf 0.5 % off and stays 20x below a 10 % error
+SAMPLER_MASS_TOL = 5e-3
+#: sampler: the (mu_o, r) cases whose samples are drawn (a subset of the normalisation grid),
+#: phi_o off the x axis (an anisotropic pdf's frame is exercised)
 SAMPLER_CASES = tuple((mu, r) for mu in (0.05, 0.3, 0.8) for r in (0.5, 1.0))
 SAMPLER_PHI = 0.7
 SAMPLER_N = {True: 40_000, False: 200_000}
 SAMPLER_ALPHA = 0.01
-#: agreement of a sampler's reported pdf with a reference strategy's (float32 + llvmpipe)
+#: agreement of a pdf with a reference strategy's: relative to max(reference, SAMPLER_PDF_FLOOR)
+#: (float32 + llvmpipe arithmetic; the strategies differ by > 10 % somewhere)
 SAMPLER_PDF_TOL = 2e-3
+SAMPLER_PDF_FLOOR = 1e-2
+#: a sampled wi is a unit vector to this absolute tolerance on its length
+SAMPLER_UNIT_TOL = 1e-3
+#: z in [-SAMPLER_HORIZON_TOL, 0): a direction on the horizon rounded below it (float32 rounding of a
+#: unit vector is ~1e-7); counted, not failed.  Below -SAMPLER_HORIZON_TOL: below the horizon, a failure
+SAMPLER_HORIZON_TOL = 1e-5
+#: variance of f mu_i / pdf: a warning (not a failure) above this ratio to the reference sampler's
+SAMPLER_VARIANCE_WARN = 2.0
+SAMPLER_VARIANCE_N = 50_000
+#: the reference sampler the variance is compared with
+SAMPLER_REFERENCE = "eon"
+#: u values at the corners of [0, 1)^2 added to every case (not histogrammed): NaN hunting
+_U_EDGES = (0.0, 0.5, 1.0 - 2.0 ** -24)
 #: surface: the materials and view directions; tolerances and why
 SURFACE_MATERIALS = (
     {"base_color": (0.8, 0.5, 0.2), "base_diffuse_roughness": 0.5, "specular_roughness": 0.3},
@@ -55,6 +81,17 @@ class QuantityGrade:
     n: int = 0
     excluded: int = 0
     grade: dict | None = None
+    #: the inputs where the largest error occurs, in words
+    where: str = ""
+    #: the one-sentence diagnosis shown on the report's first screen (None: derived from ``diagnosis``)
+    sentence: str | None = None
+    #: sub-checks with stable ids: [{"id", "status" (pass/fail/warn/info), "measured", "threshold", "detail"}]
+    checks: list = field(default_factory=list)
+    warnings: list = field(default_factory=list)
+    #: per-case breakdown {label: text}
+    regions: dict | None = None
+    #: data for the report's pictures (not serialised)
+    plot: Any = field(default=None, repr=False, compare=False)
 
     @classmethod
     def from_grade(cls, quantity, g, excluded=0, tolerance_reason=None):
@@ -83,7 +120,8 @@ class ImplementationGrade:
 
         return json_safe({"implementation": self.name, "model": self.model, "passed": self.passed,
                       "version": self.version, "notes": self.notes,
-                      "quantities": [asdict(q) for q in self.quantities]})
+                      "quantities": [{k: v for k, v in asdict(q).items() if k != "plot"}
+                                     for q in self.quantities]})
 
 
 def _tolerance_pair(tolerance):
@@ -145,58 +183,357 @@ def grade_values(subject, vectors=None, kinds=("brdf", "albedo")) -> list[Quanti
     return results
 
 
-def grade_sampler(subject, quick=False, seed=12) -> list[QuantityGrade]:
-    """The sampler's reported pdf against the reference strategies, and chi-square of its samples."""
+def _sampler_nodes():
+    """Unit directions (m, 3) and solid-angle weights (m,) of the (cos theta, phi) Gauss-Legendre
+    rule, ordered bin by bin: node k lies in bin k // SAMPLER_NQ**2 (row-major over the bins)."""
+    from .chi2 import _nodes
+
+    z_edges = np.linspace(0.0, 1.0, SAMPLER_BINS[0] + 1)
+    phi_edges = np.linspace(0.0, 2.0 * np.pi, SAMPLER_BINS[1] + 1)
+    zn, zw = _nodes(z_edges, SAMPLER_NQ)
+    pn, pw = _nodes(phi_edges, SAMPLER_NQ)
+    shape = (zn.shape[0], pn.shape[0], SAMPLER_NQ, SAMPLER_NQ)
+    Z = np.broadcast_to(zn[:, None, :, None], shape)
+    P = np.broadcast_to(pn[None, :, None, :], shape)
+    S = np.sqrt(np.clip(1.0 - Z * Z, 0.0, None))
+    d = np.stack([S * np.cos(P), S * np.sin(P), Z], axis=-1).reshape(-1, 3)
+    w = (zw[:, None, :, None] * pw[None, :, None, :]).reshape(-1)
+    return d, w, z_edges, phi_edges
+
+
+def _case_label(mu, r):
+    return f"mu_o {mu:g}, roughness {r:g}"
+
+
+def _sample_counts(wi, p):
+    """Validity counts of sampled directions ``wi`` (n,3) and their pdf values ``p`` (n,)."""
+    finite = np.all(np.isfinite(wi), axis=1)
+    length = np.linalg.norm(np.where(finite[:, None], wi, 0.0), axis=1)
+    below = finite & (wi[:, 2] < -SAMPLER_HORIZON_TOL)
+    rounded = finite & (wi[:, 2] < 0.0) & ~below
+    not_unit = finite & ~below & (np.abs(length - 1.0) > SAMPLER_UNIT_TOL)
+    p_bad = finite & ~below & ~(np.isfinite(p) & (p >= 0.0))
+    zero = finite & ~below & np.isfinite(p) & (p == 0.0)
+    valid = finite & ~below & ~not_unit & ~p_bad
+    return {"nan": int((~finite).sum()), "below_horizon": int(below.sum()),
+            "horizon_rounding": int(rounded.sum()), "not_unit": int(not_unit.sum()),
+            "pdf_not_finite_or_negative": int(p_bad.sum()), "pdf_zero": int(zero.sum()),
+            "max_length_error": float(np.max(np.abs(length[finite & ~below] - 1.0), initial=0.0)),
+            "valid": valid}
+
+
+def grade_sampler(subject, quick: bool = False, seed: int = 12, claim: str | None = None) -> list[QuantityGrade]:
+    """Grade a subject's sampler and pdf: normalisation, chi-square, reference pdf, variance.
+
+    Four measurements, each a sub-check with a stable id:
+
+    - ``sampler_pdf.normalisation``: the integral of ``pdf(wo, ., roughness)`` over the upper
+      hemisphere is 1 within ``SAMPLER_MASS_TOL`` at every (mu_o, roughness) of
+      ``SAMPLER_NORM_MU x SAMPLER_NORM_R`` (Gauss-Legendre in (cos theta, phi), 16 x 32 bins of
+      4 x 4 nodes); NaN, Inf or negative pdf values at the nodes fail it.
+    - ``sampler_pdf.reference``: the pdf at those nodes against every reference strategy's
+      (``openpbr_diffuse.sampling.pdf``), relative to max(reference, ``SAMPLER_PDF_FLOOR``); a
+      failure only when ``claim`` names the strategy the sampler claims to implement.
+    - ``sampler_chi2.chi2``: Pearson chi-square (``sampling.quality.pearson_chi2``, the project's one
+      harness) of ``SAMPLER_N`` samples per ``SAMPLER_CASES`` case binned over (cos theta, phi)
+      against n times the pdf's integral over each bin; Sidak-corrected ``SAMPLER_ALPHA``.
+    - ``sampler_chi2.valid``: samples that are NaN/Inf, below the horizon (z < 0), not unit
+      vectors, or whose pdf is NaN/negative, counted and named (any fails; z in
+      [-``SAMPLER_HORIZON_TOL``, 0) is float32 rounding of a horizon direction, counted only); u
+      includes the corners 0 and 1 - 2^-24 of [0, 1)^2.
+    - ``sampler_chi2.variance``: the variance of f mu_i / pdf (the subject's f at rho = 1, else the
+      reference model's; the subject's sampler) over the reference ``eon`` sampler's with the same
+      f: a warning, not a failure, above ``SAMPLER_VARIANCE_WARN``.
+
+    Every call of the subject's code is batched: one pdf call (all nodes of all cases), one sample
+    call (all samples) -- one shader run for both when ``subject.sample`` has ``combined``
+    (:func:`.glsl.sampler_functions`) -- and one BRDF call (f at theirs and at the reference
+    sampler's samples).
+
+    Parameters
+    ----------
+    subject : Subject
+        With ``sample(wo, roughness, u) -> (wi, pdf)`` and ``pdf(wo, wi, roughness)``; without
+        them nothing is graded ([] is returned).
+    quick : bool
+        40 000 samples per case instead of 200 000.
+    seed : int
+        Seed of the uniform numbers.
+    claim : str, optional
+        The reference strategy (``openpbr_diffuse.STRATEGIES``) the sampler claims to be.
+
+    Returns
+    -------
+    list of QuantityGrade
+        ``"sampler pdf"`` (normalisation, reference) and ``"sampler chi2"`` (chi-square, validity,
+        variance), each with ``sentence`` (one-sentence diagnosis), ``checks`` and ``regions``.
+
+    Examples
+    --------
+    A Python subject: cosine-weighted sampling with its exact pdf conforms (its pdf is the
+    reference "cosine" strategy's, not "eon"'s), and the same samples with a uniform pdf do not:
+
+    >>> import numpy as np, openpbr_diffuse as od
+    >>> from openpbr_diffuse.graders.subject import Subject
+    >>> def sample(wo, r, u):
+    ...     return od.sample("cosine", wo, 0.0, u)
+    >>> def pdf(wo, wi, r):
+    ...     return od.pdf("cosine", wo, wi, 0.0)
+    >>> good = Subject("cosine", "eon", None, "", sample=sample, pdf=pdf)
+    >>> q_pdf, q_chi = grade_sampler(good, quick=True)
+    >>> q_pdf.passed, q_chi.passed, q_pdf.checks[1]["detail"].startswith("matches the reference 'cosine'")
+    (True, True, True)
+    >>> bad = Subject("mixed", "eon", None, "", sample=sample,
+    ...               pdf=lambda wo, wi, r: np.full(len(wi), 1 / (2 * np.pi)))
+    >>> q_pdf, q_chi = grade_sampler(bad, quick=True)
+    >>> q_pdf.passed, q_chi.passed, q_chi.diagnosis
+    (True, False, 'samples_do_not_follow_pdf')
+    """
     import openpbr_diffuse as od
 
-    from .chi2 import chi2_test
+    from ..models import evaluate
+    from ..sampling.quality import pearson_chi2
+    from .chi2 import histogram
 
     if subject.sample is None or subject.pdf is None:
         return []
+    if claim is not None and claim not in od.STRATEGIES:
+        raise ValueError(f"claim: expected one of {', '.join(od.STRATEGIES)}, got {claim!r}")
     rng = np.random.default_rng(seed)
     n = SAMPLER_N[bool(quick)]
-    worst = {s: 0.0 for s in od.STRATEGIES}
-    tests = []
-    self_err = 0.0
-    for mu, r in SAMPLER_CASES:
-        wo1 = direction(mu, SAMPLER_PHI)
-        wo = np.broadcast_to(wo1, (n, 3))
-        rough = np.full(n, r)
-        wi, pdf = subject.sample(wo, rough, rng.random((n, 2)))
-        wi, pdf = np.asarray(wi, float), np.asarray(pdf, float)
-        ok = pdf > 0
-        m = min(n, 4000)
-        own = np.asarray(subject.pdf(wo[:m], wi[:m], rough[:m]), float)
-        self_err = max(self_err, float(np.max(np.abs(own - pdf[:m]) / np.maximum(pdf[:m], 1e-6))))
-        for s in od.STRATEGIES:
-            ref = od.pdf(s, wo[ok], wi[ok], rough[ok])
-            worst[s] = max(worst[s], float(np.max(np.abs(pdf[ok] - ref) / np.maximum(ref, 1e-3))))
+    cases = [(mu, r) for mu in SAMPLER_NORM_MU for r in SAMPLER_NORM_R]
+    nodes, weights, z_edges, phi_edges = _sampler_nodes()
+    m = nodes.shape[0]
+    nbins = SAMPLER_BINS[0] * SAMPLER_BINS[1]
 
-        def own_pdf(d, wo1=wo1, r=r):
-            k = d.shape[0]
-            return subject.pdf(np.broadcast_to(wo1, (k, 3)), d, np.full(k, r))
-
-        tests.append((mu, r, chi2_test(wi[ok], own_pdf)))
-    best = min(worst, key=worst.get)
+    # (a) the pdf on every node of every case: one call
+    wo_c = np.stack([direction(mu, SAMPLER_PHI) for mu, _ in cases])
+    r_c = np.array([r for _, r in cases])
+    WO = np.repeat(wo_c, m, axis=0)
+    WI = np.tile(nodes, (len(cases), 1))
+    R = np.repeat(r_c, m)
+    # (b) the samples' inputs: random u, then the corners of [0, 1)^2, per case
+    corners = np.array([(a, b) for a in _U_EDGES for b in _U_EDGES])
+    per = n + corners.shape[0]
+    idx = [cases.index(c) for c in SAMPLER_CASES]
+    U = np.concatenate([np.concatenate([rng.random((n, 2)), corners]) for _ in SAMPLER_CASES])
+    WO_s = np.repeat(wo_c[idx], per, axis=0)
+    R_s = np.repeat(r_c[idx], per)
+    combined = getattr(subject.sample, "combined", None)   # GLSL: both in one shader run
+    if combined is not None:
+        wi_all, p_all, p_nodes = combined(WO_s, R_s, U, WO, WI, R)
+    else:
+        p_nodes = subject.pdf(WO, WI, R)
+        wi_all, p_all = subject.sample(WO_s, R_s, U)
+    p_nodes = np.asarray(p_nodes, np.float64).reshape(len(cases), m)
+    bad_nodes = ~(np.isfinite(p_nodes) & (p_nodes >= 0.0))
+    bin_mass = np.where(bad_nodes, 0.0, p_nodes * weights).reshape(len(cases), nbins, -1).sum(axis=2)
+    mass = bin_mass.sum(axis=1)
+    mass_err = np.where(bad_nodes.any(axis=1), np.inf, np.abs(mass - 1.0))
+    k_worst = int(np.argmax(mass_err))
+    norm_ok = bool(np.all(mass_err <= SAMPLER_MASS_TOL))
+    n_off = int((mass_err > SAMPLER_MASS_TOL).sum())
+    mu_w, r_w = cases[k_worst]
+    grazing = "grazing " if mu_w < 0.2 else ""
+    if bad_nodes.any():
+        k = int(np.argmax(bad_nodes.any(axis=1)))
+        n_nan = int(np.isnan(p_nodes).sum())
+        n_neg = int((p_nodes < 0).sum())
+        n_inf = int(np.isinf(p_nodes).sum())
+        what = ", ".join(f"{c} {name}" for c, name in ((n_nan, "NaN"), (n_inf, "Inf"), (n_neg, "negative"))
+                         if c)
+        norm_sentence = (f"pdf is not a density: {what} values at the {m * len(cases)} quadrature "
+                         f"directions (first at {_case_label(*cases[k])})")
+    else:
+        off_mu = sorted({mu for (mu, _), e in zip(cases, mass_err) if e > SAMPLER_MASS_TOL})
+        norm_sentence = (f"pdf integrates to {mass[k_worst]:.4g} at {grazing}{_case_label(mu_w, r_w)}"
+                         + (f" ({n_off} of {len(cases)} (mu_o, roughness) cases off by more than "
+                            f"{SAMPLER_MASS_TOL:g}, at mu_o {off_mu[0]:g} to {off_mu[-1]:g})" if n_off > 1 else ""))
+    # (c) against every reference strategy at the same nodes
+    ok = ~bad_nodes.reshape(-1)
+    ref_err = {}
+    for strategy in od.STRATEGIES:
+        ref = od.pdf(strategy, WO[ok], WI[ok], R[ok])
+        ref_err[strategy] = float(np.max(np.abs(p_nodes.reshape(-1)[ok] - ref)
+                                         / np.maximum(ref, SAMPLER_PDF_FLOOR), initial=0.0))
+    best = min(ref_err, key=ref_err.get)
+    matches = ref_err[best] <= SAMPLER_PDF_TOL
+    ref_detail = (f"matches the reference '{best}' strategy's pdf to {ref_err[best]:.2g} relative"
+                  if matches else f"matches no reference strategy's pdf (closest '{best}', {ref_err[best]:.2g})")
+    if best != "eon":
+        ref_detail += f"; differs from the reference 'eon' pdf by up to {ref_err['eon']:.2g} relative"
+    if claim is not None:
+        ref_ok = ref_err[claim] <= SAMPLER_PDF_TOL
+        ref_status = "pass" if ref_ok else "fail"
+        ref_detail = (f"claimed '{claim}': " + (f"matches to {ref_err[claim]:.2g} relative" if ref_ok else
+                      f"differs by up to {ref_err[claim]:.2g} relative") + "; " + ref_detail)
+    else:
+        ref_ok, ref_status = True, "info"
+        ref_detail += " (no sampler model claimed: reported, not graded)"
+    pdf_checks = [
+        {"id": "sampler_pdf.normalisation", "status": "pass" if norm_ok else "fail",
+         "measured": float(mass_err.max()), "threshold": SAMPLER_MASS_TOL,
+         "detail": (f"|integral of pdf - 1| <= {mass_err.max():.2g} over {len(cases)} (mu_o, roughness) cases"
+                    if norm_ok else norm_sentence)},
+        {"id": "sampler_pdf.reference", "status": ref_status,
+         "measured": ref_err[claim if claim else "eon"], "threshold": SAMPLER_PDF_TOL, "detail": ref_detail,
+         "by_strategy": ref_err}]
+    if not norm_ok:
+        pdf_diag, pdf_sentence = ("pdf_not_finite" if bad_nodes.any() else "pdf_not_normalised"), norm_sentence
+    elif not ref_ok:
+        pdf_diag = f"pdf_differs_from_{claim}"
+        pdf_sentence = (f"pdf differs from the reference '{claim}' pdf by up to {ref_err[claim]:.2g} relative"
+                        + (f" (it matches '{best}')" if matches else ""))
+    else:
+        pdf_diag = None
+        pdf_sentence = f"pdf integrates to 1 within {mass_err.max():.1g} at every (mu_o, roughness) and "
+        if claim is not None:
+            pdf_sentence += f"matches the claimed '{claim}' pdf to {ref_err[claim]:.2g} relative"
+        elif matches:
+            pdf_sentence += (f"matches the reference '{best}' strategy's pdf"
+                             + (f" (not the 'eon' one: relative difference up to {ref_err['eon']:.2g})"
+                                if best != "eon" else ""))
+        else:
+            pdf_sentence += f"matches no reference strategy's pdf (closest '{best}', {ref_err[best]:.2g} relative)"
+    regions = {}
+    for i, mu in enumerate(SAMPLER_NORM_MU):
+        row = [mass[i * len(SAMPLER_NORM_R) + j] for j in range(len(SAMPLER_NORM_R))]
+        regions[f"mu_o {mu:g}"] = ("integral of pdf " + " / ".join(f"{v:.4f}" for v in row) + " at roughness "
+                                   + ", ".join(f"{r:g}" for r in SAMPLER_NORM_R))
     q_pdf = QuantityGrade(
-        "sampler pdf", bool(worst[best] <= SAMPLER_PDF_TOL and self_err <= SAMPLER_PDF_TOL),
-        float(worst[best]), float("nan"), f"relative {SAMPLER_PDF_TOL:g}",
-        "float32 / llvmpipe pdf arithmetic; the strategies differ by > 10 % somewhere",
-        None if best == "eon" else f"strategy_{best}",
-        f"reported pdf matches the reference strategy '{best}' to {worst[best]:.2g} relative "
-        f"(vs 'eon': {worst['eon']:.2g}); sample pdf vs its own pdf(): {self_err:.2g}",
-        n=len(SAMPLER_CASES) * n)
-    sidak = 1.0 - (1.0 - SAMPLER_ALPHA) ** (1.0 / len(tests))
-    pmin = min(t[2]["p"] for t in tests)
-    outside = sum(t[2]["outside"] for t in tests)
-    mass = max(abs(t[2]["mass"] - 1.0) for t in tests)
+        "sampler pdf", bool(norm_ok and ref_ok), float(mass_err.max()), float("nan"),
+        f"|integral of pdf - 1| <= {SAMPLER_MASS_TOL:g}"
+        + (f"; pdf vs '{claim}' relative {SAMPLER_PDF_TOL:g}" if claim else ""),
+        "quadrature error < 1e-5 on the reference pdfs, float32 values; 20x below a 10 % error",
+        pdf_diag, f"{pdf_checks[0]['detail']}; {ref_detail}", n=m * len(cases),
+        where=(f"{_case_label(mu_w, r_w)}: integral of pdf {mass[k_worst]:.4g}" if not norm_ok else ""),
+        sentence=pdf_sentence, checks=pdf_checks, regions=regions)
+
+    wi_all = np.asarray(wi_all, np.float64).reshape(len(SAMPLER_CASES), per, 3)
+    p_all = np.asarray(p_all, np.float64).reshape(len(SAMPLER_CASES), per)
+    # (d) f at their samples and at the reference sampler's: one BRDF call
+    nv = min(n, SAMPLER_VARIANCE_N)
+    ref_wi, ref_p = [], []
+    for c, k in enumerate(idx):
+        w, pr = od.sample_rng(SAMPLER_REFERENCE, wo_c[k], r_c[k], seed + 1 + c, shape=(nv,))
+        ref_wi.append(w)
+        ref_p.append(pr)
+    ref_wi, ref_p = np.stack(ref_wi), np.stack(ref_p)
+    their_wi = np.nan_to_num(wi_all[:, :nv], nan=0.0, posinf=0.0, neginf=0.0)
+    f_wi = np.concatenate([their_wi.reshape(-1, 3), ref_wi.reshape(-1, 3)])
+    f_wo = np.concatenate([np.repeat(wo_c[idx], nv, axis=0)] * 2)
+    f_r = np.concatenate([np.repeat(r_c[idx], nv)] * 2)
+    ones = np.ones((f_wi.shape[0], 3))
+    if subject.brdf is not None:
+        f_all = np.asarray(subject.brdf(f_wi, f_wo, f_r, ones), np.float64)[:, 0]
+        f_whose = "their f"
+    else:
+        f_all = evaluate(subject.model if subject.model in ("eon", "fon", "eon_approx", "lambert") else "eon",
+                         f_wi, f_wo, f_r, ones)[:, 0]
+        f_whose = "the reference f (no BRDF function given)"
+    f_theirs = f_all[: len(idx) * nv].reshape(len(idx), nv)
+    f_ref = f_all[len(idx) * nv:].reshape(len(idx), nv)
+
+    sidak = 1.0 - (1.0 - SAMPLER_ALPHA) ** (1.0 / len(SAMPLER_CASES))
+    tests, counts_total, first_bad, warnings, chi_regions, plot = [], {}, None, [], {}, []
+    for c, (mu, r) in enumerate(SAMPLER_CASES):
+        wi, p = wi_all[c], p_all[c]
+        cnt = _sample_counts(wi, p)
+        valid = cnt.pop("valid")
+        for key, v in cnt.items():
+            if key == "max_length_error":
+                counts_total[key] = max(counts_total.get(key, 0.0), v)
+            else:
+                counts_total[key] = counts_total.get(key, 0) + v
+        if first_bad is None and not valid.all():
+            j = int(np.argmin(valid))
+            first_bad = (f"first at {_case_label(mu, r)}, u = ({U[c * per + j, 0]:.8g}, {U[c * per + j, 1]:.8g}): "
+                         f"wi = ({', '.join(f'{x:.4g}' for x in wi[j])}), pdf {p[j]:.4g}")
+        rnd = valid[:n]
+        d = wi[:n][rnd]
+        d = d / np.linalg.norm(d, axis=1, keepdims=True)
+        d[:, 2] = np.maximum(d[:, 2], 0.0)       # rounded just below the horizon: the first bin
+        observed = histogram(d, z_edges, phi_edges)
+        k = idx[c]
+        expected = rnd.sum() * bin_mass[k].reshape(SAMPLER_BINS)
+        pval, chi2, dof = pearson_chi2(observed, expected)
+        p_norm = pearson_chi2(observed, expected / mass[k])[0] if mass[k] > 0 else float("nan")
+        tests.append({"mu_o": mu, "roughness": r, "p": pval, "chi2": chi2, "dof": dof,
+                      "p_normalised": p_norm, "n": int(rnd.sum())})
+        # variance of f mu_i / pdf, theirs and the reference sampler's with the same f
+        pt, zt = p[:nv], wi[:nv, 2]
+        good = np.isfinite(pt) & (pt > 0) & np.isfinite(zt) & (zt > 0)
+        wt = np.where(good, f_theirs[c] * np.where(good, zt, 0.0) / np.where(good, pt, 1.0), 0.0)
+        wr = np.where(ref_p[c] > 0, f_ref[c] * np.maximum(ref_wi[c, :, 2], 0.0) / np.where(ref_p[c] > 0, ref_p[c], 1.0),
+                      0.0)
+        vt, vr = float(np.var(wt)), float(np.var(wr))
+        ratio = vt / vr if vr > 1e-12 else (1.0 if vt <= 1e-12 else math.inf)
+        tests[-1].update({"variance": vt, "variance_reference": vr, "variance_ratio": ratio,
+                          "mean": float(wt.mean()), "mean_reference": float(wr.mean())})
+        if ratio > SAMPLER_VARIANCE_WARN:
+            warnings.append(f"variance of f mu_i / pdf is {ratio:.3g}x the reference '{SAMPLER_REFERENCE}' "
+                            f"sampler's at {_case_label(mu, r)}")
+        chi_regions[_case_label(mu, r)] = (
+            f"chi2 p = {pval:.3g} ({int(rnd.sum())} samples, {dof} dof); variance of f mu_i / pdf {vt:.3g} "
+            f"vs {vr:.3g} for '{SAMPLER_REFERENCE}' (ratio {ratio:.3g}); mean {wt.mean():.4f} vs {wr.mean():.4f}")
+        plot.append({"mu_o": mu, "roughness": r, "observed": observed, "expected": expected, "p": pval})
+    pmin_t = min(tests, key=lambda t: t["p"])
+    chi_ok = pmin_t["p"] >= sidak
+    invalid = sum(counts_total[k] for k in ("nan", "below_horizon", "not_unit", "pdf_not_finite_or_negative"))
+    n_total = per * len(SAMPLER_CASES)
+    named = [f"{counts_total[k]} {label}" for k, label in (
+        ("nan", "NaN/Inf"), ("below_horizon", f"below the horizon (z < -{SAMPLER_HORIZON_TOL:g})"),
+        ("not_unit", f"not unit vectors (|wi| off by up to {counts_total['max_length_error']:.2g})"),
+        ("pdf_not_finite_or_negative", "with a NaN/Inf/negative pdf")) if counts_total[k]]
+    valid_detail = (f"{', '.join(named)} of {n_total} samples ({first_bad})" if named else
+                    f"all {n_total} samples finite, unit and above the horizon (u corners included)")
+    if counts_total["horizon_rounding"]:
+        valid_detail += (f"; {counts_total['horizon_rounding']} on the horizon rounded below it "
+                         f"(-{SAMPLER_HORIZON_TOL:g} <= z < 0; f = 0 there: not a failure)")
+    if counts_total["pdf_zero"]:
+        valid_detail += f"; {counts_total['pdf_zero']} samples with pdf 0 (discarded by a renderer)"
+    worst_var = max(tests, key=lambda t: t["variance_ratio"])
+    chi_checks = [
+        {"id": "sampler_chi2.chi2", "status": "pass" if chi_ok else "fail", "measured": pmin_t["p"],
+         "threshold": sidak, "detail": f"min p = {pmin_t['p']:.3g} at {_case_label(pmin_t['mu_o'], pmin_t['roughness'])} "
+                                       f"over {len(tests)} cases (Sidak threshold {sidak:.2g})"},
+        {"id": "sampler_chi2.valid", "status": "fail" if invalid else "pass", "measured": invalid,
+         "threshold": 0, "detail": valid_detail, "counts": counts_total},
+        {"id": "sampler_chi2.variance", "status": "warn" if warnings else "pass",
+         "measured": worst_var["variance_ratio"], "threshold": SAMPLER_VARIANCE_WARN,
+         "detail": (f"variance of f mu_i / pdf ({f_whose}) at most {worst_var['variance_ratio']:.3g}x the reference "
+                    f"'{SAMPLER_REFERENCE}' sampler's (at {_case_label(worst_var['mu_o'], worst_var['roughness'])}); "
+                    f"a warning above {SAMPLER_VARIANCE_WARN:g}x, not a failure")}]
+    if invalid:
+        key = next(k for k in ("nan", "below_horizon", "not_unit", "pdf_not_finite_or_negative") if counts_total[k])
+        diag = {"nan": "samples_not_finite", "below_horizon": "samples_below_horizon",
+                "not_unit": "samples_not_unit", "pdf_not_finite_or_negative": "pdf_not_finite"}[key]
+        sentence = f"the sampler returns {', '.join(named)} of {n_total} samples ({first_bad})"
+    elif not chi_ok:
+        diag = "samples_do_not_follow_pdf"
+        sentence = (f"samples do not follow the pdf (chi² p = {pmin_t['p']:.2g}, chi² = {pmin_t['chi2']:.4g} "
+                    f"on {pmin_t['dof']} dof, at {_case_label(pmin_t['mu_o'], pmin_t['roughness'])})")
+        k = cases.index((pmin_t["mu_o"], pmin_t["roughness"]))
+        if abs(mass[k] - 1.0) > SAMPLER_MASS_TOL:
+            sentence += (f"; the pdf integrates to {mass[k]:.4g} there (against it rescaled to 1: "
+                         f"p = {pmin_t['p_normalised']:.2g})")
+    else:
+        diag = None
+        sentence = f"samples follow the pdf (min chi² p = {pmin_t['p']:.2g} over {len(tests)} cases)"
+        if warnings:
+            sentence += (f"; warning: the variance of f mu_i / pdf is {worst_var['variance_ratio']:.3g}x the "
+                         f"reference '{SAMPLER_REFERENCE}' sampler's at "
+                         f"{_case_label(worst_var['mu_o'], worst_var['roughness'])}")
     q_chi = QuantityGrade(
-        "sampler chi2", bool(pmin >= sidak and outside == 0), float("nan"), float("nan"),
-        f"p >= {sidak:.2g} (Sidak, alpha {SAMPLER_ALPHA})",
-        "chi-square of its samples against its own pdf over 16 x 32 (cos theta, phi) bins",
-        None if pmin >= sidak else "samples_do_not_follow_pdf",
-        f"min p = {pmin:.3g} over {len(tests)} (mu_o, r) cases; {outside} samples below the horizon; "
-        f"|pdf mass - 1| <= {mass:.2g}", n=len(SAMPLER_CASES) * n)
+        "sampler chi2", bool(chi_ok and not invalid), float("nan"), float("nan"),
+        f"p >= {sidak:.2g} (Sidak, alpha {SAMPLER_ALPHA}); no NaN / below-horizon / non-unit sample",
+        f"chi-square of its samples against its own pdf over {SAMPLER_BINS[0]} x {SAMPLER_BINS[1]} "
+        "(cos theta, phi) bins (sparse bins pooled)",
+        diag, "; ".join(c["detail"] for c in chi_checks), n=n_total, sentence=sentence, checks=chi_checks,
+        where=(first_bad if invalid else (f"{_case_label(pmin_t['mu_o'], pmin_t['roughness'])}: chi2 p = "
+                                          f"{pmin_t['p']:.3g}" if not chi_ok else "")),
+        warnings=warnings, regions=chi_regions,
+        plot={"cases": plot, "z_edges": z_edges, "phi_edges": phi_edges})
     return [q_pdf, q_chi]
 
 
@@ -254,8 +591,12 @@ def grade_surface(subject, selection) -> list[QuantityGrade]:
 
 
 def grade_subject(subject, *, vectors=None, quick=False, quantities=("brdf", "albedo", "sampler", "surface"),
-                  selection=None) -> ImplementationGrade:
-    """Grade every quantity ``subject`` offers; returns an :class:`ImplementationGrade`."""
+                  selection=None, sampler_model=None) -> ImplementationGrade:
+    """Grade every quantity ``subject`` offers; returns an :class:`ImplementationGrade`.
+
+    ``sampler_model`` names the reference strategy the sampler claims to implement (e.g.
+    ``"eon"``): its pdf must then match that strategy's (see :func:`grade_sampler`).
+    """
     result = ImplementationGrade(subject.name, subject.model, dict(subject.version), notes=list(subject.notes))
     if getattr(subject, "paths", None):  # one subject per code path (light type): each graded, quantities named by path
         for label, path in subject.paths:
@@ -267,7 +608,7 @@ def grade_subject(subject, *, vectors=None, quick=False, quantities=("brdf", "al
     kinds = tuple(k for k in ("brdf", "albedo") if k in quantities)
     result.quantities += grade_values(subject, vectors, kinds)
     if "sampler" in quantities:
-        result.quantities += grade_sampler(subject, quick=quick)
+        result.quantities += grade_sampler(subject, quick=quick, claim=sampler_model)
     if "surface" in quantities and subject.surface is not None:
         result.quantities += grade_surface(subject, selection or getattr(subject, "selection", "length"))
     return result

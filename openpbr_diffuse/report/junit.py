@@ -37,6 +37,12 @@ def junit_xml(doc: dict) -> str:
                 ET.SubElement(case, "failure", message=f"does not conform: {v['sentence']}").text = v.get("where", "")
             elif v["status"] == "could not run":
                 ET.SubElement(case, "error", message=f"could not run: {v.get('detail', '')}")
+            for c in v.get("checks") or ():  # sub-checks (the sampler's), by their stable ids
+                sub = _case(suite, "implementation", c["id"])
+                if c.get("status") == "fail":
+                    ET.SubElement(sub, "failure", message=f"{c['id']}: {c.get('detail', '')}")
+                elif c.get("status") == "warn":
+                    ET.SubElement(sub, "system-out").text = f"warning: {c.get('detail', '')}"
         if ut.get("error") or not ut.get("verdicts"):
             case = _case(suite, "implementation", "implementation.run")
             ET.SubElement(case, "error", message=f"could not run: {ut.get('error') or 'nothing to grade'}")

@@ -48,6 +48,12 @@ materials: {% for p in doc.paths %}<code>{{ p }}</code>{% if not loop.last %}, {
 <td>{{ v.sentence }}</td><td class="num">{{ v.max_abs_error | num }}</td><td>{{ v.where }}</td>
 <td class="num">{{ v.n_failed }} / {{ v.n }}</td></tr>
 {% endfor %}</table>
+{% for v in ut.verdicts if v.checks %}<table class="data checks"><caption>{{ v.label }}: checks</caption>
+<tr><th>id</th><th>status</th><th>measured</th><th>threshold</th><th>detail</th></tr>
+{% for c in v.checks %}<tr data-id="{{ c.id }}"><td><code>{{ c.id }}</code></td>
+<td class="{{ 'pass' if c.status == 'pass' else ('fail' if c.status == 'fail' else 'na') }}">{{ c.status }}</td>
+<td class="num">{{ c.measured | num }}</td><td class="num">{{ c.threshold | num }}</td><td>{{ c.detail }}</td></tr>
+{% endfor %}</table>{% endfor %}
 {% for n in ut.notes %}<p class="meta">{{ n }}</p>{% endfor %}
 {% for f in ut.figures %}<figure><img src="{{ f.file }}" alt="{{ f.caption }}" loading="eager">
 <figcaption>{{ f.caption }}</figcaption></figure>{% endfor %}

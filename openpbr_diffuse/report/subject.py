@@ -43,6 +43,11 @@ class Verdict:
     detail: str = ""
     worst: list = field(default_factory=list)
     regions: Any = None
+    #: sub-checks with stable ids (the sampler's: normalisation, reference pdf, chi2, valid, variance)
+    checks: list = field(default_factory=list)
+    warnings: list = field(default_factory=list)
+    #: data for the pictures (the sampler's histograms); not serialised
+    plot: Any = field(default=None, repr=False, compare=False)
 
     @property
     def id(self) -> str:
@@ -52,7 +57,9 @@ class Verdict:
         return {"id": self.id, "quantity": self.quantity, "label": _QUANTITY_LABEL.get(self.quantity, self.quantity),
                 "status": self.status, "diagnosis": self.diagnosis, "sentence": self.sentence,
                 "max_abs_error": self.max_abs_error, "where": self.where, "n": self.n, "n_failed": self.n_failed,
-                "detail": self.detail, "worst": self.worst, "regions": _regions_rows(self.regions)}
+                "detail": self.detail, "worst": self.worst, "regions": _regions_rows(self.regions),
+                "checks": [_json_safe({**c, "id": "implementation." + c["id"]}) for c in self.checks],
+                "warnings": list(self.warnings)}
 
 
 @dataclass
@@ -91,6 +98,12 @@ class UnderTest:
         return {"name": self.name, "kind": self.kind, "status": self.status, "headline": self.headline,
                 "error": self.error, "version": {k: str(v) for k, v in self.version.items()},
                 "notes": list(self.notes), "verdicts": [v.to_dict() for v in self.verdicts]}
+
+
+def _json_safe(x):
+    from ..conformance.grade import json_safe
+
+    return json_safe(x)
 
 
 def _regions_rows(regions) -> list | None:
@@ -188,10 +201,20 @@ def verdict_from_grade(quantity: str, g: dict) -> Verdict:
 
 
 def verdict_from_quantity(q) -> Verdict:
-    """A :class:`Verdict` from a ``graders.grading.QuantityGrade``."""
+    """A :class:`Verdict` from a ``graders.grading.QuantityGrade``.
+
+    The sampler's quantities carry their own one-sentence diagnosis (``q.sentence``, e.g. "pdf
+    integrates to 0.9 at grazing mu_o 0.05, roughness 0.5"), sub-checks and per-case breakdown.
+    """
     if q.grade:
         return verdict_from_grade(q.quantity, q.grade)
     passed = bool(q.passed)
+    if getattr(q, "sentence", None) is not None:
+        failed = [c for c in q.checks if c.get("status") == "fail"]
+        return Verdict(q.quantity, CONFORMS if passed else DOES_NOT_CONFORM, None if passed else q.diagnosis,
+                       q.sentence, _finite(q.max_abs_error), getattr(q, "where", ""),
+                       len(q.checks), len(failed), q.detail, [], q.regions, list(q.checks), list(q.warnings),
+                       q.plot)
     return Verdict(q.quantity, CONFORMS if passed else DOES_NOT_CONFORM, None if passed else q.diagnosis,
                    q.detail if passed else (_deviation_sentence(q.diagnosis) if q.diagnosis in _known()
                                             else (q.diagnosis or NO_KNOWN).replace("_", " ") + f" ({q.detail})"),
@@ -224,18 +247,23 @@ def grade_vectors_file(path) -> UnderTest:
     return ut
 
 
-def grade_subject_under_test(subject, *, quick: bool = True) -> UnderTest:
-    """Grade a :class:`~openpbr_diffuse.graders.subject.Subject`; missing pieces become "could not run"."""
+def grade_subject_under_test(subject, *, quick: bool = True, sampler_model: str | None = None) -> UnderTest:
+    """Grade a :class:`~openpbr_diffuse.graders.subject.Subject`; missing pieces become "could not run".
+
+    ``sampler_model``: the reference strategy its sampler claims (``graders.grading.grade_sampler``).
+    """
     from ..graders.errors import GraderUnavailable
     from ..graders.grading import grade_subject
 
     ut = UnderTest(name=subject.name, kind="code", version=dict(subject.version), notes=list(subject.notes))
     try:
-        result = grade_subject(subject, quick=quick, quantities=("brdf", "albedo", "sampler"))
+        result = grade_subject(subject, quick=quick, quantities=("brdf", "albedo", "sampler"),
+                               sampler_model=sampler_model)
     except GraderUnavailable as exc:
         ut.error = " ".join(str(exc).split())
         return ut
     ut.verdicts = [verdict_from_quantity(q) for q in result.quantities]
+    ut.notes += ["sampler: warning: " + "; ".join(v.warnings) for v in ut.verdicts if v.warnings]
     if any(n.startswith("sampler: not graded") for n in ut.notes):
         ut.verdicts.append(Verdict("sampler chi2", COULD_NOT_RUN, detail="the graders here do not run samplers"))
     elif subject.sample is None and subject.pdf is None:
@@ -335,37 +363,55 @@ def figures(subject, ut: UnderTest, image_dir, *, quick: bool = True) -> list:
         ax.legend(fontsize=6)
         fig.tight_layout()
         out.append(("subject_albedo.png", fig, "Directional albedo: theirs (dashed) against the reference (pale)"))
-    if subject.sample is not None and subject.pdf is not None:
-        rng = np.random.default_rng(5)
-        k = 20_000 if quick else 100_000
-        mu_o, r = 0.3, 1.0
-        wo = np.broadcast_to(_dirs(np.array(mu_o), 0.7), (k, 3))
-        wi, _ = subject.sample(wo, np.full(k, r), rng.random((k, 2)))
-        wi = np.asarray(wi, float)
-        edges = np.linspace(0, 1, 21)
-        hist, _ = np.histogram(wi[:, 2], bins=edges)
-        # expected: integral over phi of their pdf, per cos-theta bin (midpoint rule in mu, 64 phi)
-        mids = 0.5 * (edges[1:] + edges[:-1])
-        phis = np.linspace(0, 2 * np.pi, 64, endpoint=False)
-        M, P = np.meshgrid(mids, phis, indexing="ij")
-        d = _dirs(M.ravel(), P.ravel())
-        p = np.asarray(subject.pdf(np.broadcast_to(wo[0], d.shape), d, np.full(d.shape[0], r)), float)
-        expected = p.reshape(M.shape).mean(axis=1) * 2 * np.pi * np.diff(edges) * k
-        fig, ax = plt.subplots(figsize=(4.5, 3.2))
-        ax.bar(mids, hist, width=np.diff(edges), alpha=0.5, label="their samples")
-        ax.plot(mids, expected, "k.-", label="n x their pdf over each bin")
-        ax.set_xlabel("cos theta_i")
-        ax.set_ylabel("samples per bin")
-        ax.legend(fontsize=7)
-        fig.tight_layout()
-        out.append(("subject_sampler_histogram.png", fig,
-                    f"Their sampler's histogram of cos theta_i against their pdf (mu_o = {mu_o}, r = {r}, {k} samples)"))
+    sampler = next((v for v in ut.verdicts if v.quantity == "sampler chi2" and v.plot), None)
+    if sampler is not None:
+        out += _sampler_figures(plt, sampler.plot)
     written = []
     for name, fig, caption in out:
         fig.savefig(image_dir / name, dpi=80)
         plt.close(fig)
         written.append((name, caption))
     return written
+
+
+def _sampler_figures(plt, plot) -> list:
+    """The sampler's histograms against its pdf, from the counts the grading computed
+    (``graders.grading.grade_sampler``'s ``plot``): marginals over cos theta_i and phi_i per
+    case, and the worst case's (observed - expected) / sqrt(expected) over the 2-D bins."""
+    cases = plot["cases"]
+    z, ph = plot["z_edges"], plot["phi_edges"]
+    out = []
+    for axis, edges, label, name in ((1, z, "cos theta_i", "cos"), (0, ph, "phi_i (rad)", "phi")):
+        fig, axes = plt.subplots(2, (len(cases) + 1) // 2, figsize=(3.2 * ((len(cases) + 1) // 2), 5.4),
+                                 squeeze=False)
+        for ax, c in zip(axes.T.ravel(), cases):
+            obs, exp = c["observed"].sum(axis=axis), c["expected"].sum(axis=axis)
+            mids = 0.5 * (edges[1:] + edges[:-1])
+            ax.bar(mids, obs, width=np.diff(edges), alpha=0.5, label="their samples")
+            ax.plot(mids, exp, "k.-", ms=3, lw=1, label="n x their pdf's integral")
+            ax.set_title(f"mu_o {c['mu_o']:g}, r {c['roughness']:g}: chi2 p = {c['p']:.2g}", fontsize=8)
+            ax.set_xlabel(label, fontsize=8)
+            ax.tick_params(labelsize=7)
+        axes[0, 0].set_ylabel("samples per bin", fontsize=8)
+        axes[0, 0].legend(fontsize=6)
+        fig.tight_layout()
+        out.append((f"subject_sampler_{name}.png", fig,
+                    (f"Their sampler: sample counts over {label} (bars) against the counts their pdf expects "
+                     "(dots: n times its integral over each bin, Gauss-Legendre), per (mu_o, roughness) case")))
+    worst = min(cases, key=lambda c: c["p"])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        res = (worst["observed"] - worst["expected"]) / np.sqrt(np.maximum(worst["expected"], 1e-12))
+    fig, ax = plt.subplots(figsize=(5.0, 3.2))
+    im = ax.imshow(np.clip(res, -6, 6), origin="lower", aspect="auto", cmap="coolwarm", vmin=-6, vmax=6,
+                   extent=(ph[0], ph[-1], z[0], z[-1]))
+    fig.colorbar(im, ax=ax, label="(observed - expected) / sqrt(expected)")
+    ax.set_xlabel("phi_i (rad)")
+    ax.set_ylabel("cos theta_i")
+    ax.set_title(f"worst case mu_o {worst['mu_o']:g}, r {worst['roughness']:g} (p = {worst['p']:.2g})", fontsize=8)
+    fig.tight_layout()
+    out.append(("subject_sampler_residuals.png", fig,
+                "Their sampler's worst case: standardised residuals of the sample counts per (cos theta, phi) bin"))
+    return out
 
 
 __all__ = [
