@@ -446,8 +446,6 @@ _NAMES = {"ND_open_pbr_surface_surfaceshader": ("base_color", "base_diffuse_roug
           "ND_gltf_pbr_surfaceshader": ("base_color", "roughness", "metallic"),
           "ND_oren_nayar_diffuse_bsdf": ("color", "roughness", "weight")}
 _MX, _WG, _MU = "MaterialX/resources/Materials/", "usd-wg-assets/", "materialxusd/tests/"
-_GLTF_XFAIL = "ND_gltf_pbr_surfaceshader is not evaluated yet (its Lambertian diffuse maps onto the library)"
-_USDZ_XFAIL = "textures inside a .usdz are not read through usd-core's asset resolver yet"
 SAMPLE = [
     # (file relative to the corpus, material path, reason of a known failure or None)
     *[(_MX + f"Examples/StandardSurface/standard_surface_{n}.mtlx", m, None) for n, m in
@@ -456,7 +454,7 @@ SAMPLE = [
        ("greysphere", "Greysphere"), ("metal_brushed", "Metal_Brushed")]],
     *[(_MX + f"Examples/UsdPreviewSurface/usd_preview_surface_{n}.mtlx", m, None) for n, m in
       [("gold", "USD_Gold"), ("plastic", "USD_Plastic"), ("default", "USD_Default"), ("glass", "USD_Glass")]],
-    *[(_MX + f"Examples/GltfPbr/gltf_pbr_{n}.mtlx", m, _GLTF_XFAIL) for n, m in
+    *[(_MX + f"Examples/GltfPbr/gltf_pbr_{n}.mtlx", m, None) for n, m in
       [("gold", "PBR_Gold"), ("plastic", "PBR_Plastic"), ("default", "Default")]],
     *[(_MX + "TestSuite/pbrlib/bsdf/oren_nayar_diffuse.mtlx", f"oren_nayar_diffuse/out{i}", None) for i in (1, 2, 5)],
     (_MX + "TestSuite/pbrlib/surfaceshader/transparency_hints.mtlx", "geom_hint", None),
@@ -471,10 +469,10 @@ SAMPLE = [
     (_WG + "full_assets/McUsd/McUsd.usda", "/McUsd/Looks/fern", None),
     (_WG + "full_assets/StandardShaderBall/layers/environment.usda",
      "/standard_shader_ball_scene/materials/box_base", None),
-    (_WG + "test_assets/USDZ/AnimatedCube/AnimatedCube.usdz", None, _USDZ_XFAIL),
-    (_WG + "test_assets/USDZ/CesiumMan/CesiumMan.usdz", "/CesiumMan/Materials/Cesium_Man_effect", _USDZ_XFAIL),
-    (_WG + "test_assets/RoughnessTest/RoughnessTest.usdz", "/Roughness/Materials/Tex033", _USDZ_XFAIL),
-    (_WG + "test_assets/RoughnessTest/RoughnessTest.usdz", "/Roughness/Materials/Const066", _USDZ_XFAIL),
+    (_WG + "test_assets/USDZ/AnimatedCube/AnimatedCube.usdz", None, None),
+    (_WG + "test_assets/USDZ/CesiumMan/CesiumMan.usdz", "/CesiumMan/Materials/Cesium_Man_effect", None),
+    (_WG + "test_assets/RoughnessTest/RoughnessTest.usdz", "/Roughness/Materials/Tex033", None),
+    (_WG + "test_assets/RoughnessTest/RoughnessTest.usdz", "/Roughness/Materials/Const066", None),
     (_WG + "test_assets/USDZ/InterpolationTest/InterpolationTest.usdz", "/InterpolationTest/Materials/Material_001",
      None),
     (_WG + "test_assets/USDZ/BoxAnimated/BoxAnimated.usdz", "/BoxAnimated/Materials/outer", None),
@@ -483,7 +481,7 @@ SAMPLE = [
     *[(_MU + f"resources/Materials/Examples/StandardSurface/{n}.usda", f"/MaterialX/Materials/{n}", None)
       for n in ("Chrome", "Copper", "Jade", "Plastic")],
     (_MU + "resources/Materials/Examples/UsdPreviewSurface/USD_Default.usda", "/MaterialX/Materials/USD_Default", None),
-    *[(_MU + f"resources/Materials/Examples/GltfPbr/{n}.usda", f"/MaterialX/Materials/{n}", _GLTF_XFAIL)
+    *[(_MU + f"resources/Materials/Examples/GltfPbr/{n}.usda", f"/MaterialX/Materials/{n}", None)
       for n in ("PBR_Gold", "PBR_Plastic")],
     *[(_MU + "physically_based/Brick_OPBR_MAT_PBM.usda", f"/MaterialX/Materials/{n}_OPBR_MAT_PBM", None)
       for n in ("Aluminum", "Banana", "Brick", "Charcoal")],
