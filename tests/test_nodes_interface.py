@@ -12,8 +12,7 @@ import warnings
 import numpy as np
 import pytest
 
-from openpbr_diffuse.nodes import IgnoredInputWarning, OpenPBRSurface, OrenNayarDiffuseBSDF
-from openpbr_diffuse.nodes import materialx_defs
+from openpbr_diffuse.nodes import IgnoredInputWarning, OpenPBRSurface, OrenNayarDiffuseBSDF, materialx_defs
 
 mx = pytest.importorskip("MaterialX")
 

@@ -338,7 +338,7 @@ def surface_rows(n, reps):
                                         for s, _ in surfaces.values()]
         times = interleaved_best_times(calls, reps)
         ref = times[0] / n * 1e9
-        for (label, (s, bound)), t in zip(surfaces.items(), times[1:]):
+        for (label, (_s, bound)), t in zip(surfaces.items(), times[1:]):
             ns = t / n * 1e9
             rows.append({"kind": f"surface.{verb}", "name": label, "dtype": "float64", "n": n, "ns": ns,
                          "rate_per_s": n / t, "mem_extra_x": None, "ref": "OrenNayarDiffuseBSDF",

@@ -225,12 +225,13 @@ def run(args) -> int:
     for c in failed[:20]:
         print(f"  FAIL {c['id']}: {c['name']} (measured {c['measured']}, {c['comparison']} {c['threshold']})")
     ev = doc["evidence"]
+    index = result.out_dir / "index.html" if result.out_dir is not None else "(not written)"
     if ev["n_checks"] == 0:
-        print(f"NOT RUN: no check of the library's evidence ran; report in {result.out_dir / 'index.html'} "
+        print(f"NOT RUN: no check of the library's evidence ran; report in {index} "
               f"({doc['elapsed_s']:.1f} s)")
         return result.exit_status
     print(f"{'PASS' if result.passed else 'FAIL'}: {ev['n_checks'] - ev['n_failed']}/{ev['n_checks']} checks "
-          f"of the library's evidence; report in {result.out_dir / 'index.html'} ({doc['elapsed_s']:.1f} s)")
+          f"of the library's evidence; report in {index} ({doc['elapsed_s']:.1f} s)")
     return result.exit_status
 
 

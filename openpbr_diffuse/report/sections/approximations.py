@@ -60,6 +60,7 @@ def _at(row):
 def _live_checks(rows):
     """Recompute a few rows at their worst points with independent code paths."""
     import openpbr_diffuse as od
+
     from ...approximations import gotanda2012 as gt
     from ...approximations import kulla_conty as kc
 
@@ -118,6 +119,7 @@ def _plots(ctx, figures):
     import matplotlib.pyplot as plt
 
     import openpbr_diffuse as od
+
     from ...approximations import gotanda2012 as gt
     from ...approximations import kulla_conty as kc
     from ...approximations import sh
