@@ -1,4 +1,4 @@
-"""Report section "approximations": the seeds' real-time approximations graded against exact
+"""Report section "approximations": published real-time approximations graded against exact
 quantities (Gotanda 2012 Eq. 20-29; table-based energy compensation as in patapom's post).
 
 Reads the shipped grading table (``data/approximation_errors.csv``, made by
@@ -188,7 +188,7 @@ def build(ctx):
         ["approximation", "equation", "approximates", "metric", "max error", "RMS error", "worst at", "note"],
         [[r["approximation"], r["equation"], r["approximates"], r["metric"], float(r["max_error"]),
           float(r["rms_error"]), r["at"], r["note"]] for r in rows.values()]))
-    res.tables.append(Table("Seed errata and ambiguities (with the evidence)", ["where", "as printed", "evidence"],
+    res.tables.append(Table("Published errata and ambiguities (with the evidence)", ["where", "as printed", "evidence"],
                             [list(e) for e in ERRATA]))
     ctx.progress("approximations: colour shift")
     from ...approximations.grading import colour_shift
