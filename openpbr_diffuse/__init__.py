@@ -12,8 +12,8 @@ from ._version import __version__  # noqa: E402
 from .albedo.tables import reference_albedo, reference_average_albedo
 from .models import COLOR_MODES, MODELS, average_albedo, directional_albedo, evaluate
 from .nodes import OpenPBRSurface, OrenNayarDiffuseBSDF
-from .sampling import STRATEGIES, pdf, sample, sample_rng
 from .readers import BUNDLED_MATERIALS, load_materials
+from .sampling import STRATEGIES, pdf, sample, sample_rng
 from .simulation import simulate_albedo, simulate_average_albedo, simulate_brdf
 
 __all__ = ["__version__", "MODELS", "COLOR_MODES", "evaluate", "directional_albedo", "average_albedo",

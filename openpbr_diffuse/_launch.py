@@ -164,7 +164,7 @@ def launch(drive, head: tuple, inputs: list, outputs: list, n: int, split: bool 
     B = min(n, CHUNK, max(MIN_CHUNK, n * out_width // sum(k for _, k, m in inputs if m != FULL)))
     reps = []
     lead = None
-    for b, k, m in inputs:
+    for b, _k, m in inputs:
         if m == TILED:
             b = np.tile(b, B)
             b.flags.writeable = False

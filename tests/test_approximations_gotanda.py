@@ -9,13 +9,12 @@ import math
 
 import numpy as np
 import pytest
-
-import openpbr_diffuse as od
-from openpbr_diffuse.approximations import gotanda2012 as gt
-
 from _approx_table import at, shipped_rows
 from _quad import hemisphere_grid, wo_of
 from conftest import random_directions
+
+import openpbr_diffuse as od
+from openpbr_diffuse.approximations import gotanda2012 as gt
 
 C1_FON = 0.5 - 2.0 / (3.0 * math.pi)   # G_F(0)/pi: FON's E_F(0) = 1 for every r
 

@@ -6,14 +6,13 @@ import math
 
 import numpy as np
 import pytest
+from _approx_table import at, shipped_rows
+from _quad import hemisphere_grid, wo_of
+from conftest import random_directions
 
 import openpbr_diffuse as od
 from openpbr_diffuse.approximations import kulla_conty as kc
 from openpbr_diffuse.approximations import sh
-
-from _approx_table import at, shipped_rows
-from _quad import hemisphere_grid, wo_of
-from conftest import random_directions
 
 Y = (lambda m: 0.5 / math.sqrt(math.pi) + 0 * m, lambda m: math.sqrt(3 / (4 * math.pi)) * m,
      lambda m: math.sqrt(5 / (16 * math.pi)) * (3 * m * m - 1))

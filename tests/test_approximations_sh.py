@@ -4,11 +4,10 @@ import math
 
 import numpy as np
 import pytest
+from conftest import random_directions
 
 import openpbr_diffuse as od
 from openpbr_diffuse.approximations import sh
-
-from conftest import random_directions
 
 
 def sphere_grid(n=64):

@@ -1,8 +1,7 @@
 """Broadcast inputs are never expanded: peak memory is the output plus a few fixed-size blocks.
 
-Issue 13, finding 3: outer-product inputs were copied to full size first (directional albedo
-on (n, 1) x (1, n) peaked at 3x its output, evaluate on (n, 1, 3) x (1, n, 3) at 7x, full_on
-at 3e4 x 3e4 used 21 GB).  Measured with tracemalloc (NumPy reports its allocations to it).
+Outer-product inputs (directional albedo on (n, 1) x (1, n), evaluate on (n, 1, 3) x (1, n, 3),
+full_on at 3e4 x 3e4) must not be copied to full size first.  Measured with tracemalloc (NumPy reports its allocations to it).
 """
 import tracemalloc
 

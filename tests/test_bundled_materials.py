@@ -77,8 +77,8 @@ def test_standard_surface_diffuse_is_qon_with_sigma_diffuse_roughness():
 
 def test_white_preview_surface_is_a_white_furnace():
     """UsdPreviewSurface -> Lambert diffuse under the specular layer: white preserves energy."""
-    from openpbr_diffuse.readers.material import Material, Parameter
     from openpbr_diffuse.readers import mapping
+    from openpbr_diffuse.readers.material import Material, Parameter
 
     (m,) = load_materials(BUNDLED_MATERIALS / "plaster_preview.usda")
     m.node_inputs["base_color"] = Parameter((1.0, 1.0, 1.0), "test", "authored")

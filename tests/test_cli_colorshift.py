@@ -122,7 +122,7 @@ def main_json(capsys):
 
 
 def test_material_files_need_the_readers_or_work(tmp_path, capsys):
-    """Material files go through openpbr_diffuse.readers.load_materials (issue 10)."""
+    """Material files go through openpbr_diffuse.readers.load_materials."""
     path = tmp_path / "m.mtlx"
     path.write_text("""<?xml version="1.0"?>
 <materialx version="1.39">

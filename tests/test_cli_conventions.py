@@ -1,4 +1,4 @@
-"""Command-line conventions (issue 13, finding 5): one-line errors naming the program once,
+"""Command-line conventions: one-line errors naming the program once,
 negative numbers as values, no silently ignored options, quiet broken pipes and Ctrl-C."""
 import json
 import os

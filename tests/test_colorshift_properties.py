@@ -210,7 +210,7 @@ def test_other_illuminant_uses_its_own_white():
 
 # ColorChecker at r = 1, D65: per working space and mu, per field:
 # (max, max patch, max over in-gamut patches, its patch, median, median patches).
-# The numbers in the README notes (issue 11); print them with
+# The numbers the documentation quotes; print them with
 #   openpbr-diffuse colorshift --roughness 1 --mu 1 0.5 [--working-space acescg]
 HEADLINE = {
     ("lin_rec709", 1.0): {

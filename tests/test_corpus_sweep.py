@@ -46,7 +46,7 @@ def _rel(p):
     return str(Path(p).relative_to(REALWORLD))
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _record(path):
     return _bench().sweep_file(path)
 
@@ -270,7 +270,7 @@ def _local(file):
     return str(out)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _pixels(file):
     import OpenImageIO as oiio
 

@@ -1,6 +1,5 @@
-"""Metadata and text match the data (issue 13, finding 6)."""
+"""Metadata and text match the data."""
 import json
-import math
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Seeded fuzz over the edge sets of issue 13, every model and sampling strategy, float32 and float64.
+"""Seeded fuzz over the edge sets (horizon, grazing, unit-length tolerance), every model and sampling strategy, float32 and float64.
 
 Promises checked (the README states them):
 

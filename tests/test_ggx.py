@@ -10,11 +10,10 @@ import math
 
 import numpy as np
 import pytest
-
 from _quad import gauss_legendre
+
 from openpbr_diffuse.albedo.quadrature import hemisphere_albedo
-from openpbr_diffuse.microfacet import fresnel, ggx, quadrature
-from openpbr_diffuse.microfacet import tables
+from openpbr_diffuse.microfacet import fresnel, ggx, quadrature, tables
 
 
 def _wo(mu):

@@ -6,9 +6,9 @@ import tracemalloc
 
 import numpy as np
 import pytest
+from conftest import random_directions, roughness_max
 
 import openpbr_diffuse as od
-from conftest import random_directions, roughness_max
 from openpbr_diffuse import _arrays as ar
 from openpbr_diffuse import _launch
 from openpbr_diffuse._jit import acos

@@ -9,9 +9,9 @@ from decimal import Decimal, getcontext
 
 import numpy as np
 import pytest
-
 from _chi2 import chi2_test
 from _quad import sphere_rule
+
 from openpbr_diffuse.microfacet import ggx, kernels, sheen
 from openpbr_diffuse.microfacet import tables as T
 

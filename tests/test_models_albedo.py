@@ -4,10 +4,10 @@ import math
 
 import numpy as np
 import pytest
+from _quad import gauss_legendre, quad_albedo, quad_average
+from conftest import roughness_max
 
 import openpbr_diffuse as od
-from conftest import roughness_max
-from _quad import gauss_legendre, quad_albedo, quad_average
 
 MUS = (0.01, 0.05, 0.2, 0.5, 0.8, 1.0)
 CLOSED_FORM = [m for m in od.MODELS if m != "full_on"]

@@ -4,11 +4,11 @@ import math
 
 import numpy as np
 import pytest
+from conftest import random_directions, roughness_max
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import openpbr_diffuse as od
-from conftest import random_directions, roughness_max
 
 NONNEGATIVE = [m for m in od.MODELS if m != "full_on"]
 

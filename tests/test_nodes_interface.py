@@ -12,8 +12,7 @@ import warnings
 import numpy as np
 import pytest
 
-from openpbr_diffuse.nodes import IgnoredInputWarning, OpenPBRSurface, OrenNayarDiffuseBSDF
-from openpbr_diffuse.nodes import materialx_defs
+from openpbr_diffuse.nodes import IgnoredInputWarning, OpenPBRSurface, OrenNayarDiffuseBSDF, materialx_defs
 
 mx = pytest.importorskip("MaterialX")
 
@@ -196,7 +195,7 @@ class TestBadInput:
 # ----------------------------------------------------------------------------- ignored inputs
 class TestIgnoredInputs:
     def test_reported_and_warned(self):
-        # coat, fuzz, transmission, subsurface are modelled (issue 9); thin film and emission are not
+        # coat, fuzz, transmission, subsurface are modelled; thin film and emission are not
         with pytest.warns(IgnoredInputWarning, match="thin_film_weight.*emission_color|emission_color.*thin_film_weight"):
             s = OpenPBRSurface(thin_film_weight=0.5, emission_color=(1.0, 0.0, 0.0), base_metalness=0.2,
                                coat_weight=0.5)

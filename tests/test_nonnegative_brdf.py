@@ -1,8 +1,8 @@
 """A BRDF is never negative: not even for not-quite-unit directions at grazing, opposite azimuth.
 
-Issue 13, finding 1.  Directions are accepted within |w| = 1 +- UNIT_TOL; for such vectors
-s = wi.wo - mu_i mu_o reached -(1 + 2 UNIT_TOL), and FON's 1 + r s/t (hence FON, EON and
-"eon_approx") went negative.  Full Oren-Nayar is excepted: its published formula is negative
+Directions are accepted within |w| = 1 +- UNIT_TOL; for such vectors s = wi.wo - mu_i mu_o
+can reach -(1 + 2 UNIT_TOL), where an unclamped FON 1 + r s/t (hence FON, EON and
+"eon_approx") would go negative.  Full Oren-Nayar is excepted: its published formula is negative
 at forward-grazing pairs (README, kept unclamped).
 """
 import math

@@ -9,9 +9,9 @@ import math
 
 import numpy as np
 import pytest
-
 from _chi2 import chi2_test
 from _quad import gauss_legendre
+
 from openpbr_diffuse.albedo.quadrature import hemisphere_albedo
 from openpbr_diffuse.nodes import OpenPBRSurface, OrenNayarDiffuseBSDF
 

@@ -1,8 +1,6 @@
 """Bad input to the readers and the eval/render commands: one clear line on stderr and exit
 status 2 (or a warning and a defined result), never a traceback; files never modified."""
 import json
-
-import numpy as np
 import re
 
 import pytest

@@ -32,7 +32,7 @@ def _mx_values(path):
     return out, doc.getColorSpace()
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _nodedef_default(name):
     import MaterialX as mx
 

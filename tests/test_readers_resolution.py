@@ -3,8 +3,8 @@ dir): interface connections, NodeGraphs, constant nodes, time samples, variants,
 purposes, textures (wrap modes, scale/bias, fallback, sRGB), colour spaces.  Expected values
 are computed by hand in each test (colour conversions with USD's own Gf.ColorSpace, an
 implementation independent of the colour-science path the readers use)."""
-import re
 import itertools
+import re
 
 import numpy as np
 import pytest
@@ -169,7 +169,7 @@ def test_bindings_and_purposes(tmp_path):
     ball = UsdGeom.Sphere.Define(st, "/World/Ball")
     UsdShade.MaterialBindingAPI.Apply(ball.GetPrim()).Bind(full, materialPurpose=UsdShade.Tokens.full)
     UsdShade.MaterialBindingAPI.Apply(ball.GetPrim()).Bind(prev, materialPurpose=UsdShade.Tokens.preview)
-    other = UsdGeom.Sphere.Define(st, "/World/Other")  # inherits the parent's all-purpose binding
+    UsdGeom.Sphere.Define(st, "/World/Other")  # inherits the parent's all-purpose binding
     UsdShade.MaterialBindingAPI.Apply(parent.GetPrim()).Bind(prev)
     UsdGeom.Sphere.Define(st, "/Lonely")
     st.Save()

@@ -18,10 +18,15 @@ import numpy as np
 import pytest
 
 import openpbr_diffuse as od
+from openpbr_diffuse.albedo import (
+    hemisphere_albedo,
+    hemisphere_average_albedo,
+    load_table,
+    reference_albedo,
+    reference_average_albedo,
+)
 from openpbr_diffuse.albedo import quadrature as Q
 from openpbr_diffuse.albedo import tables as T
-from openpbr_diffuse.albedo import (hemisphere_albedo, hemisphere_average_albedo, load_table,
-                                    reference_albedo, reference_average_albedo)
 from openpbr_diffuse.models.registry import INFO, MIX_RHO_MS
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

@@ -1,10 +1,10 @@
 """Samplers at the ends of [0, 1): the returned pdf is pdf(wo, wi), the horizon promise holds,
 and nothing is discarded while wo is above the horizon.
 
-Issue 13, finding 2: "uniform"/"eon" at u1 = 0 returned wi on the horizon with pdf 1/(2 pi)
-where pdf() said 0; "cltc"/"eon" at u0 = 1 - 2^-53 returned wi.z < 0 with pdf > 0; "ltc*",
-"cltc" and "eon" at that u0 returned pdf 0 for wo above the horizon, and "eon" at r = 0
-differed from cosine sampling there.
+The cases: "uniform"/"eon" at u1 = 0 must not return wi on the horizon with pdf 1/(2 pi) where
+pdf() says 0; "cltc"/"eon" at u0 = 1 - 2^-53 must not return wi.z < 0 with pdf > 0; "ltc*",
+"cltc" and "eon" at that u0 must not return pdf 0 for wo above the horizon, and "eon" at r = 0
+must agree with cosine sampling there.
 """
 import numpy as np
 import pytest

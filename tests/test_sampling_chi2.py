@@ -10,10 +10,10 @@ M tests of this module.  Deliberately wrong pdfs must be rejected by the same te
 """
 import numpy as np
 import pytest
-from scipy import stats
-
 from _chi2 import chi2_pvalue
 from _chi2 import chi2_test as chi2_goodness
+from scipy import stats
+
 from openpbr_diffuse.sampling import STRATEGIES, pdf, sample_rng
 
 ALPHA = 0.01

@@ -14,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _quad import gauss_legendre, hemisphere_grid, wo_of
 
 import openpbr_diffuse as od
-from _quad import gauss_legendre, hemisphere_grid, wo_of
 from openpbr_diffuse.sampling import INFO, STRATEGIES, pdf, sample, sample_rng
 from openpbr_diffuse.sampling.ltc import ltc_coeffs
 

@@ -5,8 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from openpbr_diffuse.simulation import (GEOMETRIES, simulate_albedo, simulate_average_albedo,
-                                        simulate_brdf)
+from openpbr_diffuse.simulation import GEOMETRIES, simulate_albedo, simulate_average_albedo, simulate_brdf
 
 SMOOTH = {"vcavity": 1e-4, "smith-beckmann": 1e-4, "smith-ggx": 1e-4}
 

@@ -1,10 +1,9 @@
 """Smith random walk against the single-scattering microfacet BRDF by quadrature."""
 import numpy as np
 import pytest
+from _smith_quad import first_order_brdf
 
 from openpbr_diffuse.simulation import simulate_brdf
-
-from _smith_quad import first_order_brdf
 
 
 def _dir(theta, phi):

@@ -69,7 +69,7 @@ def test_there_are_83_examples():
 def test_example_builds_and_reports_the_diffuse_lobe(path):
     inputs, s, rows = diffuse_report(path)
     g = lambda name: inputs.get(name, s.defaults()[name])  # noqa: E731
-    for mu, (lobes, w, P) in rows.items():
+    for _mu, (lobes, w, P) in rows.items():
         total = sum(float(lb.probability) for lb in lobes.values())
         assert total == pytest.approx(1.0, abs=1e-12)
         if g("base_metalness") == 1.0 or g("transmission_weight") == 1.0 or g("subsurface_weight") == 1.0:

@@ -14,9 +14,9 @@ import warnings
 
 import numpy as np
 import pytest
+from test_surface_scores import directions, random_material
 
 from openpbr_diffuse import OpenPBRSurface
-from test_surface_scores import directions, random_material
 
 U_TOP = 1.0 - 2.0 ** -53
 #: Bound on |sample's pdf - pdf(wo, wi)|, in units in the last place of the larger.

@@ -19,9 +19,9 @@ import warnings
 
 import numpy as np
 import pytest
-
 from _chi2 import chi2_test
-from _quad import gauss_legendre, sphere_rule
+from _quad import sphere_rule
+
 from openpbr_diffuse.albedo.quadrature import hemisphere_albedo
 from openpbr_diffuse.microfacet import fresnel, ggx, sheen
 from openpbr_diffuse.microfacet import tables as spec_tables

@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Benchmark of the spectral colour-shift validation (issue 11).
+"""Benchmark of the spectral colour-shift validation.
 
     python tools/bench_colorshift.py            # table on stdout
     python tools/bench_colorshift.py --quick    # one repetition of each

@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Benchmark of the microsurface simulator (issue 15).
+"""Benchmark of the microsurface simulator.
 
     python tools/bench_simulation.py [--quick]
 

@@ -21,7 +21,6 @@ from openpbr_diffuse import reference_albedo
 from openpbr_diffuse._version import __version__
 from openpbr_diffuse.spectral import checker, colorimetry, colour_shift
 from openpbr_diffuse.spectral import reference as ref
-from openpbr_diffuse.spectral.validation import SCALAR_FIELDS
 
 
 def quadrature_check(res, cm):
@@ -50,8 +49,8 @@ def build(working_space):
         "quantity: EON directional albedo of the 24 measured ColorChecker spectra evaluated per wavelength "
         "(albedo_spectral), per RGB channel (albedo_rgb) and white then tint (albedo_white_tint), as working-space "
         "linear RGB; CIEDE2000 differences with relative luminance (Y ratio - 1) and chroma (C*ab) differences",
-        f"colours: colour.SDS_COLOURCHECKERS['BabelColor Average'] (measured, 380-730 nm / 10 nm; aligned by "
-        f"colour-science: Sprague interpolation, constant extrapolation)",
+        "colours: colour.SDS_COLOURCHECKERS['BabelColor Average'] (measured, 380-730 nm / 10 nm; aligned by "
+        "colour-science: Sprague interpolation, constant extrapolation)",
         f"colorimetry: illuminant {s['illuminant']}, {s['observer']}, spectral shape {shape['start_nm']:g}-"
         f"{shape['end_nm']:g} nm / {shape['interval_nm']:g} nm ({shape['samples']} samples), {s['xyz_integration']}; "
         f"RGB: colour.XYZ_to_RGB to {s['working_space_colour_science']} with {s['chromatic_adaptation']}; "

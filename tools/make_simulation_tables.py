@@ -23,8 +23,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from openpbr_diffuse import __version__  # noqa: E402
-from openpbr_diffuse.simulation import (CHUNK_PATHS, MAX_BOUNCES, simulate_albedo,  # noqa: E402
-                                        simulate_average_albedo, simulate_brdf)
+from openpbr_diffuse.simulation import CHUNK_PATHS, MAX_BOUNCES, simulate_albedo, simulate_average_albedo, simulate_brdf  # noqa: E402
 from openpbr_diffuse.simulation import grading as gr  # noqa: E402
 
 SURFACES = {

@@ -33,8 +33,7 @@ sys.path.insert(0, os.path.dirname(HERE))
 
 from openpbr_diffuse import __version__  # noqa: E402
 from openpbr_diffuse.microfacet import fresnel, ggx, quadrature  # noqa: E402
-from openpbr_diffuse.microfacet.tables import (  # noqa: E402
-    CONDUCTOR_FILE, DIELECTRIC_FILE, MU0, mu_grid, roughness_grid, x_grid)
+from openpbr_diffuse.microfacet.tables import CONDUCTOR_FILE, DIELECTRIC_FILE, MU0, mu_grid, roughness_grid, x_grid  # noqa: E402
 
 #: Conductor (2-D) grid, and the dielectric (3-D) grid, a sub-grid of it in (r, mu).
 N_R_C, N_MU_C = 65, 65

@@ -17,9 +17,25 @@ import numpy as np
 from .._version import __version__
 from ..models.api import evaluate
 from ..models.registry import INFO, MIX_LINEAR, MIX_RHO2, MIX_RHO_MS, model_info
-from ..models.tables import (DECIMALS, HALF_PI, N_ROUGH, N_THETA, REGENERATE, ROUNDING, SIGMA_SCALE,
-                             data_dir, is_sigma_model, interpolate_grid, interpolate_line, load_table,
-                             mix_weight, n_columns, roughness_of_u, t_of_mu, theta_of_t)
+from ..models.tables import (
+    DECIMALS,
+    HALF_PI,
+    N_ROUGH,
+    N_THETA,
+    REGENERATE,
+    ROUNDING,
+    SIGMA_SCALE,
+    data_dir,
+    interpolate_grid,
+    interpolate_line,
+    is_sigma_model,
+    load_table,
+    mix_weight,
+    n_columns,
+    roughness_of_u,
+    t_of_mu,
+    theta_of_t,
+)
 from .quadrature import DEFAULT_ORDER, GRAZING_DELTA, hemisphere_albedo, hemisphere_average_albedo
 
 #: Quadrature orders used for the shipped tables (value at 2n, error estimate n vs 2n).
@@ -61,7 +77,7 @@ def _solve_terms(name, E, dE, roughness):
 # --------------------------------------------------------------------------- quadrature
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def model_kinks(name):
     """theta_i of kinks of a model's integrand besides theta_i = theta_o and s = 0.
 
@@ -245,9 +261,9 @@ def provenance(model, res, interpolation_error):
         "rows": (f"j = 0..{N_THETA}: theta_j = (pi/2) (1 - (1 - j/{N_THETA})^3), mu_j = cos(theta_j) "
                  "(mu = 0 row: the limit mu -> 0)"),
         "columns": _map_text(name),
-        "method": (f"numerical integration of openpbr_diffuse.evaluate (no closed-form albedo): "
-                   f"Gauss-Legendre x Gauss-Legendre in (theta_i, phi_i), panels split at "
-                   f"theta_i = theta_o (graded towards it) and phi = pi/2, phi in [0, pi] by symmetry"
+        "method": ("numerical integration of openpbr_diffuse.evaluate (no closed-form albedo): "
+                   "Gauss-Legendre x Gauss-Legendre in (theta_i, phi_i), panels split at "
+                   "theta_i = theta_o (graded towards it) and phi = pi/2, phi in [0, pi] by symmetry"
                    + (f", extra panel edge at theta_i = {kinks[0]:.10f} (eps clamp of the Eq. 14 fit)"
                       if kinks else "")
                    + f"; order {2 * res['order']} per panel (error estimate: order {res['order']}); rho = {RHO_PAIR} as two channels, "

@@ -1,4 +1,4 @@
-"""The seeds' real-time approximations, implemented as published and graded against exact
+"""Published real-time approximations, implemented as published and graded against exact
 quantities.
 
 - ``gotanda2012``: Gotanda 2012 Eq. 20-25 (simplified / shininess / improved Oren-Nayar) and

@@ -1,5 +1,5 @@
 """Table-based energy compensation (Kulla-Conty 2017, Kelemen 2001), as in the blog post
-"Energy Compensation Pt. 2" (P. Mounier, patapom.com, seed ``energy-compensation-pt2-patapom.txt``).
+"Energy Compensation Pt. 2" (P. Mounier, patapom.com).
 
 The multiple-scattering (MS) lobe added to a single-scattering lobe with directional albedo
 E(mu) (tabulated at rho = 1) and E_avg = 2 pi int_0^1 E(mu) mu dmu = pi <E>:

@@ -22,9 +22,9 @@ renderer's lobe -- is graded with the generic adapters (:mod:`.generic`: ``check
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
 from .errors import GraderUnavailable
 

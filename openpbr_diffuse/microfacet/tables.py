@@ -69,7 +69,7 @@ def _check_grid(name, ok):
         raise RuntimeError(f"{name}: grid does not match the layout microfacet.tables assumes")
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _conductor():
     head, cols, data = _read(CONDUCTOR_FILE)
     rs, mus = np.unique(data[:, 0]), np.unique(data[:, 1])
@@ -80,7 +80,7 @@ def _conductor():
     return data[:, 2:5].reshape(len(rs), len(mus), 3), head
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _dielectric():
     head, cols, data = _read(DIELECTRIC_FILE)
     mus = np.array([float(c) for c in cols[2:]])
@@ -176,13 +176,13 @@ def conductor_basis(mu, roughness):
     return np.minimum(out[..., 0], 1.0), out[..., 1], out[..., 2]
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _padded_conductor():
     C, head = _conductor()
     return _pad(C, 2), head
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _padded_dielectric():
     R, head = _dielectric()
     return _pad(R, 3), head

@@ -268,7 +268,7 @@ def parse_table(model, text):
     return AlbedoTable(name, meta, grid)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def load_table(model):
     """The shipped ``AlbedoTable`` of ``model`` (read once, cached)."""
     name = model_info(model).name

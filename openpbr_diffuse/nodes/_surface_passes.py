@@ -25,12 +25,44 @@ from ..microfacet import kernels as mf
 from ..microfacet.sheen import sheen_albedo_at
 from ..models.qon import qon_albedo
 from ..sampling.simple import U_MAX
-from ._surface_kernels import (COAT, D_EON, DIFFUSE, FUZZ, METAL, N_LOBES, N_SAMPLERS, P_ALPHA_S, P_COAT_W, P_CURVE_C,
-                               P_CURVE_S, P_E1C, P_E1S, P_E5S, P_E6S, P_FUZZ_W, P_K, P_QON_AB, P_SHEEN_FIT,
-                               P_THIN, P_X_C, P_X_S, SPECULAR, SUBSURFACE, SUBSURFACE_T, TRANSMISSION,
-                               diffuse_albedo_terms, layer_albedos,
-                               layer_factor, lobe_albedo, lobe_f, lobe_pdf, lobe_sample, lobe_score, sampler_of,
-                               uses_base_ggx)
+from ._surface_kernels import (
+    COAT,
+    D_EON,
+    DIFFUSE,
+    FUZZ,
+    METAL,
+    N_LOBES,
+    N_SAMPLERS,
+    P_ALPHA_S,
+    P_COAT_W,
+    P_CURVE_C,
+    P_CURVE_S,
+    P_E1C,
+    P_E1S,
+    P_E5S,
+    P_E6S,
+    P_FUZZ_W,
+    P_K,
+    P_QON_AB,
+    P_SHEEN_FIT,
+    P_THIN,
+    P_X_C,
+    P_X_S,
+    SPECULAR,
+    SUBSURFACE,
+    SUBSURFACE_T,
+    TRANSMISSION,
+    diffuse_albedo_terms,
+    layer_albedos,
+    layer_factor,
+    lobe_albedo,
+    lobe_f,
+    lobe_pdf,
+    lobe_sample,
+    lobe_score,
+    sampler_of,
+    uses_base_ggx,
+)
 
 #: Rows per block: a block's scratch (NROWS x B float64, 25 KB) stays in the L1 cache.
 B = 64

@@ -92,7 +92,7 @@ def _records_from_snapshot():
     return snap["nodedefs"], f"snapshot {os.path.basename(SNAPSHOT_FILE)} ({snap['source']})"
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _records(prefer_materialx=True):
     if prefer_materialx:
         try:

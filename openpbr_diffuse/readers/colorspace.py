@@ -45,7 +45,7 @@ def _config():
     return oiio.ColorConfig()
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def canonical(name):
     """The short (MaterialX) spelling of a colour-space name, or "raw".
 
@@ -86,7 +86,7 @@ def _convert(values, src, dst):
     return np.asarray(out.get_pixels(oiio.FLOAT), dtype=np.float64).reshape(-1, 3)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def matrix(space):
     """The 3x3 matrix from a linear ``space`` to ACEScg (rows: output channels).
 

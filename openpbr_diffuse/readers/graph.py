@@ -230,7 +230,7 @@ class Resolver:
             self._note(f"node {node.getNamePath()} ({ndname}) is not evaluated by the reader; default used", True)
             return None
         resolved = {}
-        for name, (t, default, geomprop) in mxlib.inputs(ndname, nd).items():
+        for name, (_t, default, geomprop) in mxlib.inputs(ndname, nd).items():
             inp = node.getInput(name)
             p = self.port(inp, trail, iface, library) if inp is not None else None
             if p is None:

@@ -26,8 +26,8 @@ accept only the nodedef's [uimin, uimax]).
 """
 import functools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
@@ -296,7 +296,7 @@ def family(shader_id):
 
 
 # ----------------------------------------------------------------------- clamping
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _ranges(node_class, diffuse_model):
     """{input: (lo, hi)} of the node's numeric inputs (the nodedef's uimin / uimax)."""
     from ..nodes.materialx_defs import nodedef_inputs

@@ -13,6 +13,7 @@ from .graph import Resolver, deep_stack, to_python
 from .mapping import build_material
 from .material import Material, Parameter, failed_material
 
+
 # ----------------------------------------------------------------------- documents
 def read_document(path):
     """Read a .mtlx file (never modified) with the MaterialX data library attached.

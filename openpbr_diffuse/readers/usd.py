@@ -35,9 +35,9 @@ import tempfile
 import numpy as np
 
 from . import colorspace, mxlib, ops, textures
+from .graph import MAX_CHAIN, Resolver, _short, convert_color, deep_stack, to_python
 from .mapping import build_material
 from .material import Material, Parameter, failed_material
-from .graph import MAX_CHAIN, Resolver, _short, convert_color, deep_stack, to_python
 
 _MX_TYPES = {
     "color3f": "color3", "color3d": "color3", "color3h": "color3", "color4f": "color4", "color4d": "color4",
@@ -184,7 +184,7 @@ def _f32(x):
         y = float(digits % x)
         if _F32.unpack(_F32.pack(y))[0] == x:
             return y
-    return float("%.9g" % x)
+    return float(f"{x:.9g}")
 
 
 class _UsdResolver:
@@ -330,7 +330,7 @@ class _UsdResolver:
             authored = {i.GetBaseName(): i for i in shader.GetInputs()}
         defs = mxlib.inputs(sid)
         out = dict(mxlib.default_parameters(sid))
-        for name, (t, default, geomprop) in defs.items():
+        for name, (_t, _default, geomprop) in defs.items():
             if geomprop in ("UV0", "UV1") and name not in authored:
                 out[name] = Parameter(self.uv.copy(), f"uv ({self.uv[0]:g}, {self.uv[1]:g})", "uv")
         for name, inp in authored.items():
@@ -665,7 +665,7 @@ def _entries(stage, file, time, uv, variants, diagnostics):
                     continue
                 path = f"{prefix}/{name}" if only is None else str(prim.GetPath())
 
-                def build(mtlx=mtlx, name=name, path=path, prim_path=str(prim.GetPath())):
+                def build(mtlx=mtlx, name=name, path=path, prim_path=str(prim.GetPath())):  # noqa: B008 (bound per prim)
                     got = materialx.load(mtlx, uv=uv, material=name)
                     m = got[0]
                     m.path = path

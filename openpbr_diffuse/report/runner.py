@@ -99,7 +99,7 @@ class ReportRun:
 
 
 def default_paths():
-    """The bundled ``materials/`` folder (issue 10's readers), or [] when not available."""
+    """The bundled ``materials/`` folder (read by openpbr_diffuse.readers), or [] when not available."""
     try:
         from ..readers import BUNDLED_MATERIALS
     except ImportError:

@@ -69,4 +69,4 @@ def run_chunk(geometry, roughness, wi, random_wi, wo, rho, n_paths, seed, max_bo
     return run_chunk_smith(roughness, dist, wi, random_wi, wo, rho, n_paths, seed, max_bounces)
 
 
-run_chunk.__doc__ += "\n\n    " + _DOC
+run_chunk.__doc__ = (run_chunk.__doc__ or "") + "\n\n    " + _DOC

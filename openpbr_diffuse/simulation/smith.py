@@ -32,7 +32,7 @@ import math
 import numpy as np
 
 from ..microfacet.kernels import ggx_visible_normal
-from ._common import INV_PI, PI, cosine_about, inline, order_class
+from ._common import INV_PI, cosine_about, inline, order_class
 
 BECKMANN = 0
 GGX = 1

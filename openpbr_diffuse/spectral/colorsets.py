@@ -171,7 +171,7 @@ def from_spectra_csv(path, cm):
 
 
 def _material_inputs(material):
-    # the library node's inputs after the reader's mapping (issue 10), else the shader's own
+    # the library node's inputs after the reader's mapping, else the shader's own
     return getattr(material, "node_inputs", None) or material.parameters
 
 

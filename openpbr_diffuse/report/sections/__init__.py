@@ -6,8 +6,8 @@
 - colorshift: spectral versus RGB, the EON colour shift
 - materials: each material of the given files
 - implementations: the test vectors, the grader and its self-test on the known deviations
-- graders: real implementations graded by running their own code (issue 12)
-- approximations: the seeds' real-time approximations (Gotanda, table compensation, SH)
+- graders: real implementations graded by running their own code
+- approximations: published real-time approximations (Gotanda, table compensation, SH)
 - simulation: the microsurface ground truth
 - layered: the diffuse lobe under a dielectric layer against the layered-surface simulation
 - timings: the paper's Table 1 on this machine

@@ -26,6 +26,7 @@ def _rmax(info):
 def _fit_error(ctx, n_mu, n_r):
     """(mu, r, exact table E_F, Eq. 14 fit) on a grid."""
     import openpbr_diffuse as od
+
     from ...models.fon import E_F_approx
 
     mu = np.linspace(0.0, 1.0, n_mu)
@@ -52,6 +53,7 @@ STATED = (
 def _stated(ctx, res):
     """The library's quadrature of ``evaluate`` against the stated values."""
     import openpbr_diffuse as od
+
     from ...albedo.quadrature import hemisphere_albedo, hemisphere_average_albedo
 
     rows = []
@@ -75,6 +77,7 @@ def _stated(ctx, res):
 
 def build(ctx):
     import openpbr_diffuse as od
+
     from ...albedo.tables import load_table, table_path
     from ...models.registry import INFO
 

@@ -1,4 +1,4 @@
-"""Report section "approximations": the seeds' real-time approximations graded against exact
+"""Report section "approximations": published real-time approximations graded against exact
 quantities (Gotanda 2012 Eq. 20-29; table-based energy compensation as in patapom's post).
 
 Reads the shipped grading table (``data/approximation_errors.csv``, made by
@@ -60,6 +60,7 @@ def _at(row):
 def _live_checks(rows):
     """Recompute a few rows at their worst points with independent code paths."""
     import openpbr_diffuse as od
+
     from ...approximations import gotanda2012 as gt
     from ...approximations import kulla_conty as kc
 
@@ -118,6 +119,7 @@ def _plots(ctx, figures):
     import matplotlib.pyplot as plt
 
     import openpbr_diffuse as od
+
     from ...approximations import gotanda2012 as gt
     from ...approximations import kulla_conty as kc
     from ...approximations import sh
@@ -186,7 +188,7 @@ def build(ctx):
         ["approximation", "equation", "approximates", "metric", "max error", "RMS error", "worst at", "note"],
         [[r["approximation"], r["equation"], r["approximates"], r["metric"], float(r["max_error"]),
           float(r["rms_error"]), r["at"], r["note"]] for r in rows.values()]))
-    res.tables.append(Table("Seed errata and ambiguities (with the evidence)", ["where", "as printed", "evidence"],
+    res.tables.append(Table("Published errata and ambiguities (with the evidence)", ["where", "as printed", "evidence"],
                             [list(e) for e in ERRATA]))
     ctx.progress("approximations: colour shift")
     from ...approximations.grading import colour_shift

@@ -1,7 +1,7 @@
 """Report section "colorshift": spectral versus RGB evaluation of EON's colour shift.
 
 Computes with ``openpbr_diffuse.spectral`` on the 24 measured ColorChecker spectra
-(colour-science's 'BabelColor Average'): the property checks of issue 11 against independent
+(colour-science's 'BabelColor Average'): the property checks against independent
 references (colour-science's own ``sd_to_XYZ``, the quadrature albedo tables, the shipped
 colour-shift table), the r = 1 summary per working space, the round trip of the recovery
 methods and how much the recovered spectrum changes the answer, a plot and a swatch image.

@@ -14,7 +14,7 @@ TITLE = "Grader self-test: test vectors and known deviations"
 
 def build(ctx):
     from ...conformance.deviations import DEVIATIONS, reference
-    from ...conformance.grade import REL_TOL, ABS_TOL, TOLERANCE_REASON, grade
+    from ...conformance.grade import ABS_TOL, REL_TOL, TOLERANCE_REASON, grade
     from ...conformance.vectors import default_vectors
 
     v = default_vectors()

@@ -31,6 +31,7 @@ def _random_dirs(rng, n):
 def _slices(ctx, models):
     """Fig. 2: f in the plane of incidence at rho = 0.8, 50 % roughness, several theta_o."""
     import openpbr_diffuse as od
+
     from ...models.registry import INFO
 
     plt = pyplot()
@@ -61,6 +62,7 @@ def _albedo_curves(ctx):
     """Fig. 5: directional albedo against theta_o at rho = 1 for QON, FON, full ON (EON at
     rho = 0.8: at rho = 1 it is 1 everywhere)."""
     import openpbr_diffuse as od
+
     from ...models.registry import INFO
 
     plt = pyplot()
@@ -87,6 +89,7 @@ def _albedo_curves(ctx):
 
 def build(ctx):
     import openpbr_diffuse as od
+
     from ...albedo.quadrature import hemisphere_albedo
     from ...models.registry import INFO
 

@@ -130,7 +130,6 @@ def plot_all(table_dir, image_dir, prefix="simulation"):
 def _live_check(albedo_cols, quick):
     """A fresh simulation (another seed) against the shipped table."""
     from ...simulation import simulate_albedo
-    from ...simulation import grading as gr
 
     paths = 20_000 if quick else 100_000
     sel = (albedo_cols["geometry"] == "vcavity") & np.isclose(albedo_cols["roughness"], 0.4) \
