@@ -17,6 +17,7 @@ and checked against MaterialX's and usd-core's own reading, done here.
 import functools
 import importlib.util
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -25,7 +26,7 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-SHARED = ROOT.parent / "shared"
+SHARED = Path(os.environ.get("OPENPBR_DIFFUSE_SHARED") or ROOT.parent / "shared")
 REALWORLD = SHARED / "corpus" / "realworld"
 HAS_CORPUS = REALWORLD.is_dir()
 corpus = [pytest.mark.corpus, pytest.mark.skipif(not HAS_CORPUS, reason="../shared/corpus/realworld is absent")]

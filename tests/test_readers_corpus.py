@@ -1,6 +1,7 @@
 """Real material files written elsewhere (../shared/corpus): every OpenPBR example loads with
 the values the document holds (read here with MaterialX directly, not through the reader), and
 the USD working group's shader-ball layer gives its seven materials in three variant settings."""
+import os
 import functools
 from pathlib import Path
 
@@ -9,7 +10,7 @@ import pytest
 
 from openpbr_diffuse.readers import load_materials
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared"
+SHARED = Path(os.environ.get("OPENPBR_DIFFUSE_SHARED") or Path(__file__).resolve().parents[1].parent / "shared")
 EXAMPLES = SHARED / "corpus" / "openpbr" / "examples"
 SHADERBALL = SHARED / "corpus" / "usd-wg-shaderball" / "layers" / "example_materials.usda"
 

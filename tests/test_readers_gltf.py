@@ -2,6 +2,7 @@
 Expected values: the glTF 2.0 closed form of the diffuse, f = (1 - metallic) base_color / pi
 when the specular layer is off (KHR_materials_specular ``specular`` = 0), the inputs renamed as
 MaterialX's gltf_pbr graph uses them, and the colour converted by USD's Gf.ColorSpace."""
+import os
 import math
 import textwrap
 from pathlib import Path
@@ -11,7 +12,7 @@ import pytest
 
 from openpbr_diffuse.readers import load_materials
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared"
+SHARED = Path(os.environ.get("OPENPBR_DIFFUSE_SHARED") or Path(__file__).resolve().parents[1].parent / "shared")
 GLTF_EXAMPLES = SHARED / "corpus/realworld/MaterialX/resources/Materials/Examples/GltfPbr"
 
 DOC = """

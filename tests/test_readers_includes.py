@@ -12,7 +12,7 @@ import pytest
 
 from openpbr_diffuse.readers import load_materials
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared"
+SHARED = Path(os.environ.get("OPENPBR_DIFFUSE_SHARED") or Path(__file__).resolve().parents[1].parent / "shared")
 REAL = SHARED / "corpus" / "realworld"
 BRASS_LOOK = REAL / "MaterialX/resources/Materials/Examples/StandardSurface/standard_surface_look_brass_tiled.mtlx"
 BRASS_USDWG = REAL / "usd-wg-assets/test_assets/MaterialXTest/standard_surface_brass_tiled.mtlx"

@@ -12,7 +12,7 @@ import pytest
 
 from openpbr_diffuse.readers import load_materials
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared"
+SHARED = Path(os.environ.get("OPENPBR_DIFFUSE_SHARED") or Path(__file__).resolve().parents[1].parent / "shared")
 ANIMATED_CUBE = SHARED / "corpus" / "realworld" / "usd-wg-assets" / "test_assets" / "USDZ" / "AnimatedCube" \
     / "AnimatedCube.usdz"
 

@@ -4,6 +4,7 @@ Expected values are computed here: the transformed uv by hand from the attribute
 pxr, as the UsdPreviewSurface specification defines it (st' = R(rotation, counter-clockwise,
 degrees) . (scale * st) + translation), and the texel sampled with OpenImageIO's
 TextureSystem directly at that uv (bilinear, t = 1 - v)."""
+import os
 import textwrap
 from pathlib import Path
 
@@ -12,7 +13,7 @@ import pytest
 
 from openpbr_diffuse.readers import load_materials
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared"
+SHARED = Path(os.environ.get("OPENPBR_DIFFUSE_SHARED") or Path(__file__).resolve().parents[1].parent / "shared")
 TRANSFORM_TEST = SHARED / "corpus/realworld/usd-wg-assets/test_assets/TextureTransformTest/TextureTransformTest.usd"
 
 LAYER = """

@@ -2,6 +2,7 @@
 (the nodedef input's unit, else the unit type's unit of scale 1: meter, degree) before it is
 used.  Expected values: closed forms with the scales of the data library's own ``unitdef``
 (read here from the library document) -- 75 centimeter = 75 x 0.01 / 1 meter."""
+import os
 import math
 import textwrap
 from pathlib import Path
@@ -11,7 +12,7 @@ import pytest
 
 from openpbr_diffuse.readers import load_materials
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared"
+SHARED = Path(os.environ.get("OPENPBR_DIFFUSE_SHARED") or Path(__file__).resolve().parents[1].parent / "shared")
 UNIT_FILE = SHARED / "corpus/realworld/MaterialX/resources/Materials/TestSuite/stdlib/units/standard_surface_unit.mtlx"
 
 DOC = """

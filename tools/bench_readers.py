@@ -43,7 +43,8 @@ TARGET_S = 10.0
 CORPUS_TARGET_S = 180.0
 EVAL_TARGET_S = 2.0
 #: The shared real-world corpus (used when --root is not given).
-CORPUS = Path(__file__).resolve().parents[1].parent / "shared" / "corpus" / "realworld"
+CORPUS = Path(os.environ.get("OPENPBR_DIFFUSE_SHARED") or Path(__file__).resolve().parents[1].parent / "shared") \
+    / "corpus" / "realworld"
 #: Files whose ``eval`` is timed (relative to the corpus root).
 EVAL_FILES = ("usd-wg-assets/full_assets/StandardShaderBall/layers/environment.usda",
               "MaterialX/resources/Materials/Examples/StandardSurface/standard_surface_chrome.mtlx")
