@@ -3,6 +3,7 @@
 Outer-product inputs (directional albedo on (n, 1) x (1, n), evaluate on (n, 1, 3) x (1, n, 3),
 full_on at 3e4 x 3e4) must not be copied to full size first.  Measured with tracemalloc (NumPy reports its allocations to it).
 """
+
 import tracemalloc
 
 import numpy as np
@@ -16,7 +17,7 @@ EXTRA = 12 << 20
 
 
 def peak(f):
-    f()                                   # compile / load tables outside the measurement
+    f()  # compile / load tables outside the measurement
     tracemalloc.start()
     try:
         base = tracemalloc.get_traced_memory()[0]
@@ -58,8 +59,7 @@ def test_directional_albedo_outer_product(model):
     assert out.shape == (n, n, 1)
     assert extra <= EXTRA, f"{extra / out.nbytes:.2f} x the output"
     i, j = rng.integers(0, n, 20), rng.integers(0, n, 20)
-    np.testing.assert_allclose(out[i, j, 0], od.directional_albedo(model, mu[i, 0], r[0, j], 0.7)[:, 0],
-                               rtol=1e-14)
+    np.testing.assert_allclose(out[i, j, 0], od.directional_albedo(model, mu[i, 0], r[0, j], 0.7)[:, 0], rtol=1e-14)
 
 
 def test_sample_and_pdf_outer_product():

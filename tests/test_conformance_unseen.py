@@ -3,6 +3,7 @@ reported with its value, f_ms with rho in place of rho_ms and a clamped L.V are 
 compound (f mu_i pi) or an altered FON coefficient is honestly left unexplained, never "closest".
 (The subjects are ``tests/_hand_impl.py``: formulas typed from the EON paper in plain NumPy.)
 """
+
 import math
 
 import _hand_impl as hand
@@ -27,11 +28,14 @@ def test_unseen_constant_factor_reported_with_value(base, factor, text):
     assert text in g.diagnosis_detail
 
 
-@pytest.mark.parametrize("switches, name", [
-    (dict(ms_scale="rho"), "rho_ms_extra_rho"),
-    (dict(clamp_ldotv=True), "ldotv_clamped"),
-    (dict(white_tint=True), "white_tint"),
-])
+@pytest.mark.parametrize(
+    "switches, name",
+    [
+        (dict(ms_scale="rho"), "rho_ms_extra_rho"),
+        (dict(clamp_ldotv=True), "ldotv_clamped"),
+        (dict(white_tint=True), "white_tint"),
+    ],
+)
 def test_unseen_bug_named(switches, name):
     g = grade(V, hand.answer(V, **switches))
     assert not g.passed

@@ -1,5 +1,6 @@
 """The documentation site: every public name is in the API reference, the generated pages are
 current, and the site builds in strict mode (warnings are errors, internal links checked)."""
+
 import shutil
 import subprocess
 import sys
@@ -20,8 +21,9 @@ def test_every_public_name_is_in_the_api_reference():
 
 
 def test_generated_pages_are_current():
-    r = subprocess.run([sys.executable, str(ROOT / "tools" / "gen_docs.py"), "--check"],
-                       capture_output=True, text=True, cwd=ROOT)
+    r = subprocess.run(
+        [sys.executable, str(ROOT / "tools" / "gen_docs.py"), "--check"], capture_output=True, text=True, cwd=ROOT
+    )
     assert r.returncode == 0, r.stdout + r.stderr
 
 
@@ -29,8 +31,9 @@ def test_site_builds_strictly(tmp_path):
     mkdocs = shutil.which("mkdocs")
     if mkdocs is None:
         pytest.skip("mkdocs not installed (pip install -e '.[docs]')")
-    r = subprocess.run([mkdocs, "build", "--strict", "-d", str(tmp_path / "site")],
-                       capture_output=True, text=True, cwd=ROOT)
+    r = subprocess.run(
+        [mkdocs, "build", "--strict", "-d", str(tmp_path / "site")], capture_output=True, text=True, cwd=ROOT
+    )
     assert r.returncode == 0, r.stderr[-3000:]
     assert (tmp_path / "site" / "index.html").exists()
     assert 'id="openpbr_diffuse.evaluate"' in (tmp_path / "site" / "reference" / "api" / "index.html").read_text()

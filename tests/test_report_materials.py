@@ -1,4 +1,5 @@
 """The report section "materials": the contract of report/model.py, its images, its checks."""
+
 import shutil
 
 from openpbr_diffuse.readers import BUNDLED_MATERIALS

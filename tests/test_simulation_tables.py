@@ -1,5 +1,6 @@
 """The shipped simulation tables: checked against the independent single-bounce quadrature,
 the white furnace, and a re-grading from the tables; the report section builds from them."""
+
 import numpy as np
 import pytest
 from _vgroove_quad import single_bounce_albedo

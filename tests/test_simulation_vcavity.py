@@ -1,5 +1,6 @@
 """V-cavity simulator against an independent quadrature of the same single-bounce geometry,
 and against Oren and Nayar's own single-scattering model."""
+
 import numpy as np
 import pytest
 from _vgroove_quad import single_bounce_albedo

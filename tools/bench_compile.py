@@ -8,6 +8,7 @@ unless one is set) and prints, per compiled function, its compile time without t
 the functions it compiles in turn ("self"), with them ("tot"), and its number of
 specialisations ("xN"), most expensive first.
 """
+
 import collections
 import os
 import sys
@@ -54,9 +55,11 @@ def main(argv: list) -> int:
         rc = cli(argv)
     except SystemExit as x:
         rc = x.code
-    print(f"exit {rc}: CPU {time.process_time() - t:.1f} s, wall {time.perf_counter() - w:.1f} s; compiling "
-          f"{sum(self_s.values()):.1f} s, {sum(count.values())} specialisations of {len(count)} functions",
-          file=sys.stderr)
+    print(
+        f"exit {rc}: CPU {time.process_time() - t:.1f} s, wall {time.perf_counter() - w:.1f} s; compiling "
+        f"{sum(self_s.values()):.1f} s, {sum(count.values())} specialisations of {len(count)} functions",
+        file=sys.stderr,
+    )
     for k, v in self_s.most_common(int(os.environ.get("TOP", "30"))):
         print(f"{v:7.2f} self {total_s[k]:7.2f} tot  x{count[k]:<3d} {k}", file=sys.stderr)
     return rc or 0

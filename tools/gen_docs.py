@@ -13,6 +13,7 @@ Usage::
 
 ``tests/test_docs_site.py`` runs the check.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -37,12 +38,20 @@ def cli_page() -> str:
 
     parser = build_parser()
     sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
-    out = ["# Command-line reference", "",
-           "Generated from the argument parsers by `python tools/gen_docs.py` (a test checks that",
-           "this page is up to date). Conventions shared by every command (exit status, errors,",
-           "numbers that start with a minus, pipes, Ctrl-C): [Command-line conventions]"
-           "(../guide/command-line.md).", "",
-           "## `openpbr-diffuse`", "", "```text", parser.format_help().rstrip(), "```", ""]
+    out = [
+        "# Command-line reference",
+        "",
+        "Generated from the argument parsers by `python tools/gen_docs.py` (a test checks that",
+        "this page is up to date). Conventions shared by every command (exit status, errors,",
+        "numbers that start with a minus, pipes, Ctrl-C): [Command-line conventions](../guide/command-line.md).",
+        "",
+        "## `openpbr-diffuse`",
+        "",
+        "```text",
+        parser.format_help().rstrip(),
+        "```",
+        "",
+    ]
     for name, cmd in sub.choices.items():
         out += [f"## `openpbr-diffuse {name}`", "", "```text", cmd.format_help().rstrip(), "```", ""]
     return "\n".join(out)
@@ -74,7 +83,7 @@ def import_graph() -> dict[str, set[str]]:
                     base = name.split(".")
                     if not is_package:
                         base = base[:-1]
-                    base = base[:len(base) - (node.level - 1)]
+                    base = base[: len(base) - (node.level - 1)]
                     mod = ".".join(base + ([node.module] if node.module else []))
                 else:
                     mod = node.module or ""
@@ -120,8 +129,7 @@ def layering_page(current: str) -> str:
 
 
 def targets() -> dict[Path, str]:
-    return {CLI_PAGE: cli_page() + "\n",
-            LAYERING_PAGE: layering_page(LAYERING_PAGE.read_text(encoding="utf-8"))}
+    return {CLI_PAGE: cli_page() + "\n", LAYERING_PAGE: layering_page(LAYERING_PAGE.read_text(encoding="utf-8"))}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -11,6 +11,7 @@ check independent of EON's closed form, every albedo is recomputed from the quad
 reference tables (``reference_albedo``, data/albedo_eon.csv) and the largest difference of
 each field is written into the header.
 """
+
 import argparse
 import sys
 from pathlib import Path
@@ -31,10 +32,13 @@ def quadrature_check(res, cm):
     tint = cm.XYZ_to_RGB(cm.spectra_to_XYZ(reference_albedo("eon", mu, r, S, color_mode="white_tint")))
     rgb = reference_albedo("eon", mu, r, np.clip(res.rho_rgb, 0, 1)[:, None, None, :])
     lab = {k: cm.XYZ_to_Lab(cm.RGB_to_XYZ(v)) for k, v in (("s", spec), ("t", tint), ("r", rgb))}
-    d_rgb = max(abs(a - b).max() for a, b in ((spec, res.albedo_spectral), (tint, res.albedo_white_tint),
-                                                (rgb, res.albedo_rgb)))
-    d_de = max(abs(cm.delta_E(lab["r"], lab["s"]) - res.delta_e_rgb_vs_spectral).max(),
-               abs(cm.delta_E(lab["s"], lab["t"]) - res.delta_e_shift).max())
+    d_rgb = max(
+        abs(a - b).max() for a, b in ((spec, res.albedo_spectral), (tint, res.albedo_white_tint), (rgb, res.albedo_rgb))
+    )
+    d_de = max(
+        abs(cm.delta_E(lab["r"], lab["s"]) - res.delta_e_rgb_vs_spectral).max(),
+        abs(cm.delta_E(lab["s"], lab["t"]) - res.delta_e_shift).max(),
+    )
     return float(d_rgb), float(d_de)
 
 
@@ -80,7 +84,7 @@ def main(argv=None):
             _, new = ref.load_table(ws, path=_tmp(lines))
             _, old = ref.load_table(ws)
             worst = max(float(abs(new[c] - old[c]).max()) for c in new if c != "patch")
-            ok = new["patch"] == old["patch"] and worst <= 2 * 10.0 ** -ref.DECIMALS
+            ok = new["patch"] == old["patch"] and worst <= 2 * 10.0**-ref.DECIMALS
             print(f"{ws}: max |difference| {worst:.2e} {'ok' if ok else 'DIFFERS'}")
             status |= not ok
             continue

@@ -15,6 +15,7 @@ only when the new one is complete.  Exit status: 0 the implementation conforms (
 library's evidence passes), 1 it does not conform (or a check of the evidence fails),
 2 unusable input, 3 the implementation could not run (no GL driver, no compiler, ...).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -30,10 +31,14 @@ FAST_EVIDENCE = ("implementations", "approximations")
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
     """Add the ``report`` sub-command."""
-    p = subparsers.add_parser("report", help="does your implementation conform? HTML + JSON + images",
-                              description=__doc__.splitlines()[0].strip("`").replace("``", ""))
-    p.add_argument("paths", nargs="*", metavar="PATHS",
-                   help="USD / MaterialX files or folders (default: the bundled materials/)")
+    p = subparsers.add_parser(
+        "report",
+        help="does your implementation conform? HTML + JSON + images",
+        description=__doc__.splitlines()[0].strip("`").replace("``", ""),
+    )
+    p.add_argument(
+        "paths", nargs="*", metavar="PATHS", help="USD / MaterialX files or folders (default: the bundled materials/)"
+    )
     p.add_argument("--out", default="report", metavar="DIR", help="output directory (default: report)")
     p.add_argument("--quick", action="store_true", help="smaller grids and sample counts")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -42,13 +47,25 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     _grader_arguments(g)
     g.add_argument("--model", default=None, metavar="MODEL", help="the model it claims (default eon)")
     c = p.add_argument_group("checks")
-    c.add_argument("--evidence", choices=("all", "fast", "none"), default=None,
-                   help="the library's own evidence to run: all sections, the fast ones "
-                        f"({', '.join(FAST_EVIDENCE)}; default with an implementation) or none")
-    c.add_argument("--select", nargs="+", metavar="ID", default=None,
-                   help="run only these checks / sections (ids or glob patterns, e.g. 'albedo.*' models)")
-    c.add_argument("--list-checks", action="store_true",
-                   help="print the check ids (from a run of the selected sections into a scratch folder) and exit")
+    c.add_argument(
+        "--evidence",
+        choices=("all", "fast", "none"),
+        default=None,
+        help="the library's own evidence to run: all sections, the fast ones "
+        f"({', '.join(FAST_EVIDENCE)}; default with an implementation) or none",
+    )
+    c.add_argument(
+        "--select",
+        nargs="+",
+        metavar="ID",
+        default=None,
+        help="run only these checks / sections (ids or glob patterns, e.g. 'albedo.*' models)",
+    )
+    c.add_argument(
+        "--list-checks",
+        action="store_true",
+        help="print the check ids (from a run of the selected sections into a scratch folder) and exit",
+    )
     c.add_argument("--junit", metavar="FILE", help="also write the checks as JUnit XML")
     p.set_defaults(run=run)
     return p
@@ -143,8 +160,14 @@ def run(args) -> int:
         import tempfile
 
         with tempfile.TemporaryDirectory(prefix="openpbr-diffuse-checks-") as tmp:
-            result = run_report(args.paths, f"{tmp}/r", quick=args.quick, progress=progress,
-                                sections=_sections(args, None), select=args.select)
+            result = run_report(
+                args.paths,
+                f"{tmp}/r",
+                quick=args.quick,
+                progress=progress,
+                sections=_sections(args, None),
+                select=args.select,
+            )
             for s in result.document["sections"]:
                 if not s["checks"]:
                     print(f"{s['key']}.section\t({s['status']}{': ' + s['not_run'] if s['not_run'] else ''})")
@@ -152,13 +175,26 @@ def run(args) -> int:
                     print(f"{c['id']}\t{c['name']}")
         for q in ("brdf", "albedo", "sampler_pdf", "sampler_chi2"):
             print(f"implementation.{q}\t(with --glsl / --cpp / --vectors / --implementation)")
-        for q in ("sampler_pdf.normalisation", "sampler_pdf.reference", "sampler_chi2.chi2", "sampler_chi2.valid",
-                  "sampler_chi2.variance"):
+        for q in (
+            "sampler_pdf.normalisation",
+            "sampler_pdf.reference",
+            "sampler_chi2.chi2",
+            "sampler_chi2.valid",
+            "sampler_chi2.variance",
+        ):
             print(f"implementation.{q}\t(with --sample-function / --pdf-function)")
         return 0
     under, subject = _under_test(args)
-    result = run_report(args.paths, args.out, quick=args.quick, progress=progress,
-                        sections=_sections(args, under), select=args.select, under_test=under, subject=subject)
+    result = run_report(
+        args.paths,
+        args.out,
+        quick=args.quick,
+        progress=progress,
+        sections=_sections(args, under),
+        select=args.select,
+        under_test=under,
+        subject=subject,
+    )
     doc = result.document
     if args.junit:
         from ..report.junit import write_junit
@@ -173,8 +209,10 @@ def run(args) -> int:
             if v["status"] == "does not conform" and v["where"]:
                 print(f"           worst row (error / tolerance): {v['where']}")
     else:
-        print("No implementation under test: this report shows the reference's own evidence. "
-              "Use --glsl/--cpp/--vectors/--implementation to grade yours.")
+        print(
+            "No implementation under test: this report shows the reference's own evidence. "
+            "Use --glsl/--cpp/--vectors/--implementation to grade yours."
+        )
     print("The library's own evidence:")
     for s in doc["sections"]:
         ran = [c for c in s["checks"] if c["status"] != "not run"]
@@ -187,11 +225,12 @@ def run(args) -> int:
     ev = doc["evidence"]
     index = result.out_dir / "index.html" if result.out_dir is not None else "(not written)"
     if ev["n_checks"] == 0:
-        print(f"NOT RUN: no check of the library's evidence ran; report in {index} "
-              f"({doc['elapsed_s']:.1f} s)")
+        print(f"NOT RUN: no check of the library's evidence ran; report in {index} ({doc['elapsed_s']:.1f} s)")
         return result.exit_status
-    print(f"{'PASS' if result.passed else 'FAIL'}: {ev['n_checks'] - ev['n_failed']}/{ev['n_checks']} checks "
-          f"of the library's evidence; report in {index} ({doc['elapsed_s']:.1f} s)")
+    print(
+        f"{'PASS' if result.passed else 'FAIL'}: {ev['n_checks'] - ev['n_failed']}/{ev['n_checks']} checks "
+        f"of the library's evidence; report in {index} ({doc['elapsed_s']:.1f} s)"
+    )
     return result.exit_status
 
 

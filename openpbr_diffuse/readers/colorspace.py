@@ -12,6 +12,7 @@ by converting the unit primaries with ``ImageBufAlgo.colorconvert`` and cached; 
 (sRGB, gamma) are converted value by value with the same call.  OpenImageIO imports in
 ~0.1 s, where colour-science takes 1-2 s, which matters when thousands of materials are read.
 """
+
 import functools
 
 import numpy as np
@@ -22,19 +23,33 @@ WORKING_SPACE_USD = "lin_ap1_scene"
 
 # short (MaterialX) name -> OpenColorIO colour space of OpenImageIO's built-in config
 _OCIO = {
-    "lin_rec709": "Linear Rec.709 (sRGB)", "srgb_texture": "sRGB Encoded Rec.709 (sRGB)",
-    "g22_rec709": "Gamma 2.2 Encoded Rec.709", "g18_rec709": "Gamma 1.8 Encoded Rec.709",
-    "g24_rec709": "Gamma 2.4 Encoded Rec.709", "acescg": "ACEScg", "aces2065-1": "ACES2065-1",
-    "g22_ap1": "Gamma 2.2 Encoded AP1", "srgb_ap1": "sRGB Encoded AP1",
-    "lin_adobergb": "Linear AdobeRGB", "adobergb": "Gamma 2.2 Encoded AdobeRGB",
-    "lin_displayp3": "Linear P3-D65", "srgb_displayp3": "sRGB Encoded P3-D65",
+    "lin_rec709": "Linear Rec.709 (sRGB)",
+    "srgb_texture": "sRGB Encoded Rec.709 (sRGB)",
+    "g22_rec709": "Gamma 2.2 Encoded Rec.709",
+    "g18_rec709": "Gamma 1.8 Encoded Rec.709",
+    "g24_rec709": "Gamma 2.4 Encoded Rec.709",
+    "acescg": "ACEScg",
+    "aces2065-1": "ACES2065-1",
+    "g22_ap1": "Gamma 2.2 Encoded AP1",
+    "srgb_ap1": "sRGB Encoded AP1",
+    "lin_adobergb": "Linear AdobeRGB",
+    "adobergb": "Gamma 2.2 Encoded AdobeRGB",
+    "lin_displayp3": "Linear P3-D65",
+    "srgb_displayp3": "sRGB Encoded P3-D65",
     "lin_rec2020": "Linear Rec.2020",
 }
 _SHORT = {v: k for k, v in _OCIO.items()}
 # encoded space -> the linear space with the same primaries (what ``decode`` returns)
-_LINEAR_OF = {"srgb_texture": "lin_rec709", "g22_rec709": "lin_rec709", "g18_rec709": "lin_rec709",
-              "g24_rec709": "lin_rec709", "g22_ap1": "acescg", "srgb_ap1": "acescg",
-              "adobergb": "lin_adobergb", "srgb_displayp3": "lin_displayp3"}
+_LINEAR_OF = {
+    "srgb_texture": "lin_rec709",
+    "g22_rec709": "lin_rec709",
+    "g18_rec709": "lin_rec709",
+    "g24_rec709": "lin_rec709",
+    "g22_ap1": "acescg",
+    "srgb_ap1": "acescg",
+    "adobergb": "lin_adobergb",
+    "srgb_displayp3": "lin_displayp3",
+}
 _RAW = {"raw", "data", "identity", "none", "utility - raw", ""}
 
 
@@ -71,8 +86,10 @@ def canonical(name):
         return _SHORT[resolved]
     if _config().isData(resolved) if resolved in _config().getColorSpaceNames() else False:
         return "raw"
-    raise ValueError(f"colour space {name!r} is not known; known: {', '.join(sorted(_OCIO))}, raw "
-                     "(and their USD *_scene / OpenColorIO names)")
+    raise ValueError(
+        f"colour space {name!r} is not known; known: {', '.join(sorted(_OCIO))}, raw "
+        "(and their USD *_scene / OpenColorIO names)"
+    )
 
 
 def _convert(values, src, dst):

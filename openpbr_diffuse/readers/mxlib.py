@@ -4,6 +4,7 @@ usd-core has no shader registry for MaterialX ``ND_`` nodes, so defaults of ever
 (``ND_open_pbr_surface_surfaceshader``, ``ND_standard_surface_surfaceshader``,
 ``ND_UsdPreviewSurface_surfaceshader``, ``ND_image_color3``, ...) come from here.
 """
+
 import functools
 import os
 import re
@@ -311,5 +312,16 @@ def mx_value(elem, type_name: str):
     return vals
 
 
-__all__ = ["library", "nodedef", "inputs", "outputs", "category", "implementation_graph", "mx_value",
-           "source_folder", "convert_unit", "target_unit", "base_unit"]
+__all__ = [
+    "library",
+    "nodedef",
+    "inputs",
+    "outputs",
+    "category",
+    "implementation_graph",
+    "mx_value",
+    "source_folder",
+    "convert_unit",
+    "target_unit",
+    "base_unit",
+]
