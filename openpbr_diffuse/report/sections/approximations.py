@@ -4,7 +4,7 @@ quantities (Gotanda 2012 Eq. 20-29; table-based energy compensation as in patapo
 Reads the shipped grading table (``data/approximation_errors.csv``, made by
 ``tools/grade_approximations.py``), recomputes a few of its rows live with independent code
 paths (closed-form albedos, the reference tables, ``od.evaluate``), and plots the fits against
-the exact curves.  Runs in a few seconds.
+the exact curves.  One of the fast sections (it evaluates closed forms and shipped tables).
 """
 
 import csv
