@@ -1,7 +1,6 @@
 """The documentation site: every public name is in the API reference, the generated pages are
 current, and the site builds in strict mode (warnings are errors, internal links checked)."""
 
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -27,13 +26,58 @@ def test_generated_pages_are_current():
     assert r.returncode == 0, r.stdout + r.stderr
 
 
-def test_site_builds_strictly(tmp_path):
-    mkdocs = shutil.which("mkdocs")
-    if mkdocs is None:
-        pytest.skip("mkdocs not installed (pip install -e '.[docs]')")
+@pytest.fixture(scope="module")
+def site(tmp_path_factory):
+    """The site built once, strictly (warnings are errors, internal links checked)."""
+    out = tmp_path_factory.mktemp("site")
     r = subprocess.run(
-        [mkdocs, "build", "--strict", "-d", str(tmp_path / "site")], capture_output=True, text=True, cwd=ROOT
+        [sys.executable, "-m", "mkdocs", "build", "--strict", "-d", str(out)], capture_output=True, text=True, cwd=ROOT
     )
     assert r.returncode == 0, r.stderr[-3000:]
-    assert (tmp_path / "site" / "index.html").exists()
-    assert 'id="openpbr_diffuse.evaluate"' in (tmp_path / "site" / "reference" / "api" / "index.html").read_text()
+    return out
+
+
+def test_site_builds_strictly(site):
+    assert (site / "index.html").exists()
+    assert 'id="openpbr_diffuse.evaluate"' in (site / "reference" / "api" / "index.html").read_text()
+    assert "0.1.0" in (site / "changelog" / "index.html").read_text()
+
+
+@pytest.mark.parametrize("page", ["index.html", "reference/api/index.html"])
+def test_pages_render_in_chromium_with_search_and_no_console_error(site, page):
+    """The home page and the API page, served over HTTP (the search index loads in a web worker)
+    and opened in headless Chromium: they render, a search box is there, nothing errs."""
+    import functools
+    import http.server
+    import threading
+
+    from test_report_page import CHROMIUM, FLAGS
+
+    sync_api = pytest.importorskip("playwright.sync_api")
+    handler = functools.partial(http.server.SimpleHTTPRequestHandler, directory=str(site))
+    handler.log_message = lambda *a, **k: None  # type: ignore[attr-defined]
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    errors: list[str] = []
+    try:
+        with sync_api.sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS)
+            try:
+                tab = browser.new_page(viewport={"width": 1280, "height": 800})
+                tab.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+                tab.on("pageerror", lambda e: errors.append(str(e)))
+                tab.goto(f"http://127.0.0.1:{server.server_address[1]}/{page}", wait_until="networkidle")
+                title = tab.inner_text("h1")
+                search = tab.query_selector('input[data-md-component="search-query"]')
+                assert search is not None
+                search.click()
+                tab.keyboard.type("evaluate", delay=20)
+                tab.wait_for_selector(".md-search-result__item", timeout=20_000)
+                hits = tab.inner_text(".md-search-result")
+            finally:
+                browser.close()
+    finally:
+        server.shutdown()
+    assert title.strip()
+    assert "evaluate" in hits.lower()
+    assert not errors, errors
