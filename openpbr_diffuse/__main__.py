@@ -1,4 +1,5 @@
 """``python -m openpbr_diffuse``: the ``openpbr-diffuse`` command line."""
+
 import sys
 
 from .cli.main import main

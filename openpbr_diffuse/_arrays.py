@@ -8,6 +8,7 @@ float64, mixed gives float64; Python scalars and lists do not promote.
 Every error is a ``ValueError`` (or ``TypeError`` for wrong types) whose message names the
 argument and the allowed range.
 """
+
 import math
 import numbers
 import os
@@ -71,9 +72,11 @@ def as_float(name, value, dtype):
     """
     if isinstance(value, np.ma.MaskedArray):
         if np.ma.is_masked(value):
-            raise ValueError(f"{name} is a masked array with {int(np.ma.count_masked(value))} masked "
-                             f"value(s); masks are not supported: fill them ({name}.filled(v)) "
-                             "or keep only the unmasked rows")
+            raise ValueError(
+                f"{name} is a masked array with {int(np.ma.count_masked(value))} masked "
+                f"value(s); masks are not supported: fill them ({name}.filled(v)) "
+                "or keep only the unmasked rows"
+            )
         value = np.ma.getdata(value)
     if isinstance(value, np.ndarray):
         arr = value
@@ -145,8 +148,9 @@ def _first_not_unit(name, w, tol, shown_dtype):
     what = "is not finite" if not np.isfinite(flat[i]).all() else f"has length {show(n[i], shown_dtype)}"
     vec = ", ".join(show(c, shown_dtype) for c in flat[i])
     dt = f" ({np.dtype(shown_dtype).name} input)" if np.dtype(shown_dtype).itemsize < 8 else ""
-    return ValueError(f"{name}{where} = [{vec}] {what}; directions must be finite unit vectors "
-                      f"(|w| = 1 within {tol:g}{dt})")
+    return ValueError(
+        f"{name}{where} = [{vec}] {what}; directions must be finite unit vectors (|w| = 1 within {tol:g}{dt})"
+    )
 
 
 def directions(name, value, dtype, check=True):
@@ -212,8 +216,9 @@ def in_range(name, value, dtype, lo, hi, what="", lo_open=False, hi_open=False, 
             if not finite.reshape(-1)[i]:
                 raise ValueError(f"{name} must be finite{what}; got {show(val)}{where}")
             lb, hb = "(" if lo_open else "[", ")" if hi_open else "]"
-            raise ValueError(f"{name} must lie in {lb}{show(lo)}, {show(hi)}{hb}{what}; "
-                             f"got {show(val, a.dtype)}{where}")
+            raise ValueError(
+                f"{name} must lie in {lb}{show(lo)}, {show(hi)}{hb}{what}; got {show(val, a.dtype)}{where}"
+            )
     return a
 
 
@@ -223,8 +228,9 @@ def model_roughness(info, roughness, dtype, check=True):
     ``info`` is the model's ``models.registry.ModelInfo`` (name, roughness_name, roughness_max).
     """
     unit = "radians (sigma)" if info.roughness_name == "sigma" else "(r, a weight)"
-    return in_range("roughness", roughness, dtype, 0.0, info.roughness_max,
-                    f" for model {info.name!r}, {unit}", check=check)
+    return in_range(
+        "roughness", roughness, dtype, 0.0, info.roughness_max, f" for model {info.name!r}, {unit}", check=check
+    )
 
 
 #: EON colour modes: "reference" (chromatic rho inside rho_ms) and "white_tint".
@@ -257,8 +263,9 @@ def broadcast_leading(**shapes):
         return np.broadcast_shapes(*shapes.values())
     except ValueError:
         listed = ", ".join(f"{k} {v}" for k, v in shapes.items())
-        raise ValueError(f"leading shapes do not broadcast: {listed} "
-                         "(directions (..., 3), rho (..., C), roughness (...))") from None
+        raise ValueError(
+            f"leading shapes do not broadcast: {listed} (directions (..., 3), rho (..., C), roughness (...))"
+        ) from None
 
 
 def unit_samples(name, value, dtype):

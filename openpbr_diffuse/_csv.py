@@ -1,4 +1,5 @@
 """Reading the shipped CSV tables whose provenance header is ``# key: value`` lines."""
+
 import csv
 from pathlib import Path
 

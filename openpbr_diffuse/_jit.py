@@ -16,6 +16,7 @@ That only happens when a loop body has no calls into libm: ``math.acos`` is one,
 formulas use the ``acos`` below (a polynomial, accurate to ~1 ulp in float64).  PyPI's
 llvmlite is built without Intel SVML, so numba has no vector ``acos`` of its own.
 """
+
 import math
 
 import numba
@@ -42,14 +43,26 @@ def max_mu(mu_i, mu_o):
     """max(mu_i, mu_o), floored at ``MU_FLOOR``: the denominator of QON's and FON's s/t."""
     return max(max(mu_i, mu_o), MU_FLOOR)
 
+
 #: asin(y) = y + y^3 P(y^2) for 0 <= y <= 1/2: P is the degree-11 polynomial interpolating
 #: the Maclaurin series of (asin(sqrt z) - sqrt z) / z^(3/2) (evaluated in exact rational
 #: arithmetic, 89 terms) at the 12 Chebyshev nodes of [0, 1/4].  Interpolation error of P
 #: < 1.4e-15 relative, i.e. < 6e-17 relative in asin; ``tests/test_kernels.py`` checks
 #: ``acos`` against ``math.acos`` (<= 2 ulp over [-1, 1]).
-_ASIN_P = (0.1666666666666665, 0.07500000000020764, 0.044642857103423646, 0.03038194736709848,
-           0.02237204763174451, 0.017355259955786323, 0.013929652902326633, 0.011875494382636922,
-           0.007802949477353317, 0.016035514349148825, -0.01074905033969781, 0.028169218060881414)
+_ASIN_P = (
+    0.1666666666666665,
+    0.07500000000020764,
+    0.044642857103423646,
+    0.03038194736709848,
+    0.02237204763174451,
+    0.017355259955786323,
+    0.013929652902326633,
+    0.011875494382636922,
+    0.007802949477353317,
+    0.016035514349148825,
+    -0.01074905033969781,
+    0.028169218060881414,
+)
 _P0, _P1, _P2, _P3, _P4, _P5, _P6, _P7, _P8, _P9, _P10, _P11 = _ASIN_P
 
 
@@ -105,6 +118,7 @@ def stack_buffer(size, dtype=numba.float64):
     def _alloca(typingctx):
         def codegen(context, builder, signature, args):
             return cgutils.alloca_once(builder, context.get_value_type(dtype), size=size)
+
         return numba.types.CPointer(dtype)(), codegen
 
     @numba.njit(inline="always")
@@ -126,8 +140,10 @@ def _opaque_intrinsic():
         compiled eight to ten times each (and every kernel they call with it).  Passing
         ``opaque(k)`` compiles them once; LLVM still folds the constant once the pass is
         inlined into its driver, so the code is the same."""
+
         def codegen(context, builder, signature, args):
             return args[0]
+
         return numba.types.unliteral(x)(x), codegen
 
     return opaque

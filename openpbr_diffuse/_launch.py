@@ -13,6 +13,7 @@ every row (a tiled buffer) or broadcasts along some axes (gathered one block at 
 so no input is ever expanded to full size: the extra memory of a call is a few blocks of
 CHUNK rows (~3 MB) beyond its output, whatever the broadcast shapes.
 """
+
 import concurrent.futures
 import itertools
 import os
@@ -37,7 +38,7 @@ SPLIT_ROWS = 1 << 15
 
 _PREFIX = "openpbr-diffuse"
 _pool_lock = threading.Lock()
-_pool = None   # (pool, threads, pid)
+_pool = None  # (pool, threads, pid)
 
 
 def threads() -> int:
@@ -54,8 +55,7 @@ def executor(count: int) -> concurrent.futures.ThreadPoolExecutor:
         if _pool is None or _pool[1] != count or _pool[2] != os.getpid():
             if _pool is not None and _pool[2] == os.getpid():
                 _pool[0].shutdown(wait=False)
-            _pool = (concurrent.futures.ThreadPoolExecutor(count, thread_name_prefix=_PREFIX), count,
-                     os.getpid())
+            _pool = (concurrent.futures.ThreadPoolExecutor(count, thread_name_prefix=_PREFIX), count, os.getpid())
         return _pool[0]
 
 
@@ -70,12 +70,13 @@ def _call(drive, head, args, widths, n, split=True):
     cuts = [n * t // count for t in range(count + 1)]
     pool = executor(count)
     runs = list(itertools.pairwise(cuts))
-    jobs = [pool.submit(drive, *head, *(a[s * k:e * k] for a, k in zip(args, widths))) for s, e in runs[1:]]
-    s, e = runs[0]   # the calling thread takes the first run (one hand-off fewer)
-    bad = drive(*head, *(a[s * k:e * k] for a, k in zip(args, widths))) or 0
+    jobs = [pool.submit(drive, *head, *(a[s * k : e * k] for a, k in zip(args, widths))) for s, e in runs[1:]]
+    s, e = runs[0]  # the calling thread takes the first run (one hand-off fewer)
+    bad = drive(*head, *(a[s * k : e * k] for a, k in zip(args, widths))) or 0
     return bad + sum(job.result() or 0 for job in jobs)
 
-_U = numba.uint64   # unsigned row offsets: lets LLVM prove the accesses are affine
+
+_U = numba.uint64  # unsigned row offsets: lets LLVM prove the accesses are affine
 _F = numba.float64
 #: Rows per driver call when an input is tiled or broadcast (bounds the per-call buffers to
 #: ~3 MB, and to the output's size when that is larger than MIN_CHUNK rows' worth).
@@ -174,7 +175,9 @@ def launch(drive, head: tuple, inputs: list, outputs: list, n: int, split: bool 
     blocks = row_blocks(lead, B) if lead is not None else ((s, min(n, s + B), None) for s in range(0, n, B))
     bad = 0
     for s, e, index in blocks:
-        args = [b[:(e - s) * k] if m == TILED else gather(b, index) if m == BROADCAST else b[s * k:e * k]
-                for b, (_, k, m) in zip(reps, inputs)]
-        bad += _call(drive, head, args + [o[s * k:e * k] for o, k in outputs], widths, e - s, split)
+        args = [
+            b[: (e - s) * k] if m == TILED else gather(b, index) if m == BROADCAST else b[s * k : e * k]
+            for b, (_, k, m) in zip(reps, inputs)
+        ]
+        bad += _call(drive, head, args + [o[s * k : e * k] for o, k in outputs], widths, e - s, split)
     return bad

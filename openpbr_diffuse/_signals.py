@@ -11,6 +11,7 @@ Example
 >>> issubclass(_signals.Terminated, KeyboardInterrupt)
 True
 """
+
 from __future__ import annotations
 
 import signal

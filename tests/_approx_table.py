@@ -1,4 +1,5 @@
 """The shipped grading table (openpbr_diffuse/data/approximation_errors.csv) as dicts by id."""
+
 import csv
 import importlib.resources
 

@@ -1,5 +1,6 @@
 """Open a report page in headless Chromium (Debian's /usr/bin/chromium through playwright, the
 way tests/test_report_page.py drives it) and read what the first screen shows."""
+
 from pathlib import Path
 
 import pytest
@@ -27,8 +28,16 @@ def first_screen(html: Path, selector: str = "#headline", width: int = 1280, hei
             bottom = page.eval_on_selector(selector, "e => e.getBoundingClientRect().bottom")
             body = page.inner_text("body")
             images = page.eval_on_selector_all(
-                "img", "els => els.map(e => [e.getAttribute('src'), e.complete, e.naturalWidth])")
+                "img", "els => els.map(e => [e.getAttribute('src'), e.complete, e.naturalWidth])"
+            )
         finally:
             browser.close()
-    return {"text": text, "bottom": bottom, "height": height, "body": body, "errors": errors, "failed": failed,
-            "images": images}
+    return {
+        "text": text,
+        "bottom": bottom,
+        "height": height,
+        "body": body,
+        "errors": errors,
+        "failed": failed,
+        "images": images,
+    }

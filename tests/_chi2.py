@@ -8,8 +8,8 @@ rule); a remainder that never reaches it counts as one more bin.  The statistic 
 (dof = bins - 1) come from the library's one implementation,
 ``openpbr_diffuse.sampling.quality.pearson_chi2``, which the report and the graders use too.
 """
-import numpy as np
 
+import numpy as np
 from _quad import gauss_legendre
 
 from openpbr_diffuse.sampling.quality import pearson_chi2

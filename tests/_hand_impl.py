@@ -6,6 +6,7 @@ for (float32 computes every step in float32, like a GLSL shader), with switches 
 each known deviation the way such an implementation would -- never through
 ``openpbr_diffuse.conformance.deviations``.
 """
+
 import numpy as np
 
 PI = np.pi
@@ -49,11 +50,11 @@ def _map_roughness(model, x, how):
     if how is None:
         return x
     r_model = model in ("fon", "eon", "eon_approx")
-    if how == "sigma_vs_r":     # it believes the value is in the other parameterisation
+    if how == "sigma_vs_r":  # it believes the value is in the other parameterisation
         return x / (PI / 2) if r_model else x * (PI / 2)
     if how == "squared":
         return x * x
-    if how == "degrees":        # a radians value (or r) converted as if it were degrees
+    if how == "degrees":  # a radians value (or r) converted as if it were degrees
         return x * (PI / 180.0)
     raise ValueError(how)
 
@@ -68,9 +69,25 @@ def srgb_decode(x):
     return np.where(x <= 0.04045, x / 12.92, ((np.maximum(x, 0) + 0.055) / 1.055) ** 2.4)
 
 
-def answer(vectors, dtype=np.float64, *, energy="eon", ms_scale=None, clamp_ldotv=False,
-           white_tint=False, times_cos=False, roughness=None, scale=None, scale_brdf_only=False,
-           divide_cos=False, cos_wo=False, rho_srgb=None, mu_floor=None, ef_fit=False, c1=C1):
+def answer(
+    vectors,
+    dtype=np.float64,
+    *,
+    energy="eon",
+    ms_scale=None,
+    clamp_ldotv=False,
+    white_tint=False,
+    times_cos=False,
+    roughness=None,
+    scale=None,
+    scale_brdf_only=False,
+    divide_cos=False,
+    cos_wo=False,
+    rho_srgb=None,
+    mu_floor=None,
+    ef_fit=False,
+    c1=C1,
+):
     """(n, 3) results of this hand implementation for the rows of ``vectors``.
 
     energy: "eon" (reference), "qon" (QON with sigma = r for EON rows) or "fon" (no f_ms);

@@ -6,6 +6,7 @@ integrand is smooth in (theta_i, phi) except at theta_i = theta_o (the max(mu_i,
 switch) and at |phi| = pi/2 (the sign of s), so the panels are split there; with wo in the
 xz-plane the integrand is even in phi and phi in [0, pi] suffices.
 """
+
 import numpy as np
 
 import openpbr_diffuse as od

@@ -2,6 +2,7 @@
 microfacet normals, independent of the random walk: Lambda by integrating the projected
 area of D, and the height-correlated shadowing-masking 1 / (1 + Lambda_i + Lambda_o)
 (Heitz 2014, "Understanding the masking-shadowing function", Eq. 99 for uniform heights)."""
+
 import numpy as np
 
 

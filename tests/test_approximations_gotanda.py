@@ -5,19 +5,19 @@ Independent references: ``od.evaluate`` of QON / fullON / the Eq. 25 lobe (numba
 the closed-form albedo of the Eq. 25 lobe (``od.directional_albedo``), and the test-side
 quadrature of ``tests/_quad.py`` for the linear SH response.
 """
+
 import math
 
 import numpy as np
 import pytest
-
-import openpbr_diffuse as od
-from openpbr_diffuse.approximations import gotanda2012 as gt
-
 from _approx_table import at, shipped_rows
 from _quad import hemisphere_grid, wo_of
 from conftest import random_directions
 
-C1_FON = 0.5 - 2.0 / (3.0 * math.pi)   # G_F(0)/pi: FON's E_F(0) = 1 for every r
+import openpbr_diffuse as od
+from openpbr_diffuse.approximations import gotanda2012 as gt
+
+C1_FON = 0.5 - 2.0 / (3.0 * math.pi)  # G_F(0)/pi: FON's E_F(0) = 1 for every r
 
 
 def AB(sigma):
@@ -40,7 +40,7 @@ def test_eq23_is_eq20_up_to_the_printed_constant(dirs):
     wi, wo, sig = dirs
     sig = np.maximum(sig, 1e-3)
     f20 = gt.simplified_qon(wi, wo, sig)
-    rel = np.abs(gt.shininess_qon(wi, wo, 2.0 / sig ** 2) - f20) / f20
+    rel = np.abs(gt.shininess_qon(wi, wo, 2.0 / sig**2) - f20) / f20
     row = shipped_rows()["gotanda_eq23_vs_qon"]
     # 2.22222 vs 1/0.45: B relatively 2.2e-6/(2.22222 + 0.1 shi) too large, at most 1e-6
     assert 0 < rel.max() <= float(row["max_error"]) * 1.01
@@ -51,31 +51,46 @@ def test_eq25_is_the_printed_formula(dirs):
     """The library lobe against Gotanda's printed Eq. 25 (shininess form), re-stated here."""
     wi, wo, sig = dirs
     sig = np.maximum(sig, 1e-3)
-    shi = 2.0 / sig ** 2
+    shi = 2.0 / sig**2
     NL, NE, EL = wi[:, 2], wo[:, 2], np.sum(wi * wo, axis=1)
     s = EL - NE * NL
-    Lr = np.where(s >= 0,
-                  NL * (1 - 1 / (2 + 0.65 * shi)) + 1 / (2.22222 + 0.1 * shi) * s * np.minimum(1, NL / NE),
-                  NL * (1 - 1 / (2 + 0.65 * shi)) + 1 / (2.22222 + 0.1 * shi) * s * NL) / math.pi
+    Lr = (
+        np.where(
+            s >= 0,
+            NL * (1 - 1 / (2 + 0.65 * shi)) + 1 / (2.22222 + 0.1 * shi) * s * np.minimum(1, NL / NE),
+            NL * (1 - 1 / (2 + 0.65 * shi)) + 1 / (2.22222 + 0.1 * shi) * s * NL,
+        )
+        / math.pi
+    )
     f = gt.improved(wi, wo, sig)[:, 0]
     assert np.abs(f * NL - Lr).max() < 1e-5
 
 
 def test_eq24_goes_negative_for_backward_light():
-    wi = np.array([-0.99, 0.0, math.sqrt(1 - 0.99 ** 2)])
-    wo = np.array([0.99, 0.0, math.sqrt(1 - 0.99 ** 2)])
+    wi = np.array([-0.99, 0.0, math.sqrt(1 - 0.99**2)])
+    wo = np.array([0.99, 0.0, math.sqrt(1 - 0.99**2)])
     assert gt.improved_unsigned(wi, wo, 1.0)[0] < 0.0
     assert gt.improved(wi, wo, 1.0)[0] > 0.0
 
 
-@pytest.mark.parametrize("rid, fn", [("gotanda_eq20_vs_fullon", gt.simplified_qon),
-                                     ("gotanda_eq24_vs_fullon", gt.improved_unsigned),
-                                     ("gotanda_eq25_vs_fullon", gt.improved)])
+@pytest.mark.parametrize(
+    "rid, fn",
+    [
+        ("gotanda_eq20_vs_fullon", gt.simplified_qon),
+        ("gotanda_eq24_vs_fullon", gt.improved_unsigned),
+        ("gotanda_eq25_vs_fullon", gt.improved),
+    ],
+)
 def test_brdf_rows_recomputed_at_their_worst_point(rid, fn):
     row = shipped_rows()[rid]
     p = at(row)
-    wi = np.array([math.sqrt(1 - p["mu_i"] ** 2) * math.cos(p["phi"]),
-                   math.sqrt(1 - p["mu_i"] ** 2) * math.sin(p["phi"]), p["mu_i"]])
+    wi = np.array(
+        [
+            math.sqrt(1 - p["mu_i"] ** 2) * math.cos(p["phi"]),
+            math.sqrt(1 - p["mu_i"] ** 2) * math.sin(p["phi"]),
+            p["mu_i"],
+        ]
+    )
     wo = wo_of(p["mu_o"])
     wi /= np.linalg.norm(wi)
     full = od.evaluate("full_on", wi, wo, p["sigma"], 0.9)[0] / 0.9
@@ -152,15 +167,18 @@ def test_shininess_map():
     assert np.allclose(gt.shininess_from_sigma(gt.sigma_from_shininess([0.9, 8.0, 100.0])), [0.9, 8.0, 100.0])
 
 
-@pytest.mark.parametrize("call, name", [
-    (lambda: gt.simplified_qon([0, 0, 1.0], [0, 0, 1.0], 2.0), "sigma"),
-    (lambda: gt.simplified_qon([0, 0, 2.0], [0, 0, 1.0], 1.0), "wi"),
-    (lambda: gt.improved_unsigned([0, 0, 1.0], [0, 0, 1.0], 1.0, rho=1.5), "rho"),
-    (lambda: gt.dc_scale_eq27(1.5, 1.0), "mu_o"),
-    (lambda: gt.linear_scale_eq29(0.5, -0.1), "sigma"),
-    (lambda: gt.sigma_from_shininess(0.0), "shininess"),
-    (lambda: gt.dc_scale_eq28(float("nan"), 1.0), "mu_o"),
-])
+@pytest.mark.parametrize(
+    "call, name",
+    [
+        (lambda: gt.simplified_qon([0, 0, 1.0], [0, 0, 1.0], 2.0), "sigma"),
+        (lambda: gt.simplified_qon([0, 0, 2.0], [0, 0, 1.0], 1.0), "wi"),
+        (lambda: gt.improved_unsigned([0, 0, 1.0], [0, 0, 1.0], 1.0, rho=1.5), "rho"),
+        (lambda: gt.dc_scale_eq27(1.5, 1.0), "mu_o"),
+        (lambda: gt.linear_scale_eq29(0.5, -0.1), "sigma"),
+        (lambda: gt.sigma_from_shininess(0.0), "shininess"),
+        (lambda: gt.dc_scale_eq28(float("nan"), 1.0), "mu_o"),
+    ],
+)
 def test_bad_input_names_the_argument(call, name):
     with pytest.raises(ValueError, match=name):
         call()
@@ -183,14 +201,14 @@ def test_seed_errata_eq11_eq17_eq18(dirs):
     NL, NE, EL = wi[:, 2], wo[:, 2], np.sum(wi * wo, axis=1)
     pi_, po = wi[:, :2], wo[:, :2]
     cos_dphi = np.sum(pi_ * po, 1) / np.linalg.norm(pi_, axis=1) / np.linalg.norm(po, axis=1)
-    root = np.sqrt((1 - NE ** 2) * (1 - NL ** 2))
-    assert np.allclose((EL - NE * NL) / root, cos_dphi, atol=1e-9)                  # corrected Eq. 18
-    assert np.abs((EL + NE * NL) / root - cos_dphi).max() > 0.5                     # as printed
+    root = np.sqrt((1 - NE**2) * (1 - NL**2))
+    assert np.allclose((EL - NE * NL) / root, cos_dphi, atol=1e-9)  # corrected Eq. 18
+    assert np.abs((EL + NE * NL) / root - cos_dphi).max() > 0.5  # as printed
     th_r, th_i = np.arccos(NE), np.arccos(NL)
     lhs17 = NE * NL + np.sin(th_r) * np.sin(th_i) * cos_dphi
-    assert np.allclose(lhs17, EL, atol=1e-12)                                        # law of cosines
-    assert np.abs(lhs17 - np.cos(th_r - th_i)).max() > 0.5                           # Eq. 17 as printed
+    assert np.allclose(lhs17, EL, atol=1e-12)  # law of cosines
+    assert np.abs(lhs17 - np.cos(th_r - th_i)).max() > 0.5  # Eq. 17 as printed
     mx, mn = np.maximum(NL, NE), np.minimum(NL, NE)
     sin_a_tan_b = np.sin(np.maximum(th_r, th_i)) * np.tan(np.minimum(th_r, th_i))
-    assert np.allclose(np.sqrt((1 - mx ** 2) * (1 - mn ** 2)) / mx, sin_a_tan_b, rtol=1e-9)
-    assert np.abs(np.sqrt((1 - mx) ** 2 * (1 - mn ** 2)) / mx - sin_a_tan_b).max() > 0.1
+    assert np.allclose(np.sqrt((1 - mx**2) * (1 - mn**2)) / mx, sin_a_tan_b, rtol=1e-9)
+    assert np.abs(np.sqrt((1 - mx) ** 2 * (1 - mn**2)) / mx - sin_a_tan_b).max() > 0.1

@@ -2,21 +2,24 @@
 integration (test-side quadrature), QON's closed-form albedo (independent of the tables),
 EON (the analytic compensation), and the shipped table's numbers at their worst points.
 """
+
 import math
 
 import numpy as np
 import pytest
+from _approx_table import at, shipped_rows
+from _quad import hemisphere_grid, wo_of
+from conftest import random_directions
 
 import openpbr_diffuse as od
 from openpbr_diffuse.approximations import kulla_conty as kc
 from openpbr_diffuse.approximations import sh
 
-from _approx_table import at, shipped_rows
-from _quad import hemisphere_grid, wo_of
-from conftest import random_directions
-
-Y = (lambda m: 0.5 / math.sqrt(math.pi) + 0 * m, lambda m: math.sqrt(3 / (4 * math.pi)) * m,
-     lambda m: math.sqrt(5 / (16 * math.pi)) * (3 * m * m - 1))
+Y = (
+    lambda m: 0.5 / math.sqrt(math.pi) + 0 * m,
+    lambda m: math.sqrt(3 / (4 * math.pi)) * m,
+    lambda m: math.sqrt(5 / (16 * math.pi)) * (3 * m * m - 1),
+)
 
 
 def quad_albedo_of(brdf, mu_o, n=48):
@@ -36,7 +39,7 @@ def zh_closed_form(sigma, n=200):
     x, w = np.polynomial.legendre.leggauss(n)
     mu, w = 0.5 * (x + 1), 0.5 * w
     sigma = np.asarray(sigma, dtype=float)
-    E = od.directional_albedo("qon", mu.reshape((n,) + (1,) * sigma.ndim), sigma)[..., 0]   # (n, ...)
+    E = od.directional_albedo("qon", mu.reshape((n,) + (1,) * sigma.ndim), sigma)[..., 0]  # (n, ...)
     return np.stack([2 * math.pi * np.einsum("n,n...->...", w * Y[l](mu) * mu, 1 - E) for l in range(3)], -1)
 
 
@@ -71,7 +74,7 @@ def test_kc_on_fon_with_eon_factor_is_eon(rng):
     wi, wo = random_directions(rng, 2000), random_directions(rng, 2000)
     r = rng.uniform(0, 1, 2000)
     rho = [0.9, 0.5, 0.2]
-    f = kc.compensated("fon", wi, wo, r, rho, factor="exact", guard=math.pi * 1e-7)   # EON's eps
+    f = kc.compensated("fon", wi, wo, r, rho, factor="exact", guard=math.pi * 1e-7)  # EON's eps
     g = od.evaluate("eon", wi, wo, r, rho)
     assert np.abs((f - g) * wi[:, 2:3]).max() < 3e-6
 
@@ -86,7 +89,7 @@ def test_table_rows_white_furnace_and_eon():
 def test_tau_factor_row_recomputed():
     row = shipped_rows()["kc_tau_factor_albedo"]
     p = at(row)
-    avg = od.average_albedo("qon", p["sigma"])[0]                         # closed form Eq. 9
+    avg = od.average_albedo("qon", p["sigma"])[0]  # closed form Eq. 9
     E = od.directional_albedo("qon", p["mu_o"], p["sigma"])[0]
     rho = p["rho"]
     F_tau = kc.A1 * (kc.TAU * rho) ** 2 / (1 - kc.TAU * rho)
@@ -155,9 +158,10 @@ def test_sh_response_fit_row_recomputed():
     zh = kc.zh_fit_oren_nayar(p["alpha"])
     mu_o = p["mu_o"]
     wo = wo_of(max(mu_o, 1e-7))
-    brute = full_circle(max(mu_o, 1e-7),
-                        lambda d: (sh.basis(d) @ env[:, 0]) * kc.ms_lobe("qon", d, wo, sigma, 1.0)[..., 0])
-    lam = env[0, 0] * sh.C0 + 2 / 3 * sh.C1 * env[2, 0] + 0.25 * 2 * sh.C3 * env[6, 0]   # white Lambert, n = z
+    brute = full_circle(
+        max(mu_o, 1e-7), lambda d: (sh.basis(d) @ env[:, 0]) * kc.ms_lobe("qon", d, wo, sigma, 1.0)[..., 0]
+    )
+    lam = env[0, 0] * sh.C0 + 2 / 3 * sh.C1 * env[2, 0] + 0.25 * 2 * sh.C3 * env[6, 0]  # white Lambert, n = z
     est = kc.sh_response("qon", env, [0, 0, 1.0], mu_o, sigma, zh=zh)[0]
     assert abs(est - brute) / lam == pytest.approx(float(row["max_error"]), rel=1e-4)
 
@@ -166,7 +170,7 @@ def test_ltc_distribution_normalised_and_polygon_formula():
     x, w = np.polynomial.legendre.leggauss(400)
     mu = 0.5 * (x + 1)
     for m in (0.6, 0.88, 1.3):
-        d = kc.ltc_distribution(np.stack([np.sqrt(1 - mu ** 2), 0 * mu, mu], -1), m)
+        d = kc.ltc_distribution(np.stack([np.sqrt(1 - mu**2), 0 * mu, mu], -1), m)
         assert 2 * math.pi * np.sum(0.5 * w * d) == pytest.approx(1.0, abs=1e-10)
     # Lambert's polygon formula against brute force (E = 0 in the exact integral is mu/pi)
     q = np.array([[-0.5, -0.2, 1.0], [0.7, -0.2, 1.0], [0.7, 0.4, 0.6], [-0.5, 0.4, 0.6]])
@@ -175,7 +179,7 @@ def test_ltc_distribution_normalised_and_polygon_formula():
     p = q[0] + u[:, None, None] * (q[1] - q[0]) + u[None, :, None] * (q[3] - q[0])
     nrm = np.cross(q[1] - q[0], q[3] - q[0])
     d = np.linalg.norm(p, axis=-1)
-    dw = np.outer(0.5 * w, 0.5 * w) * np.abs((p / d[..., None]) @ nrm) / d ** 2
+    dw = np.outer(0.5 * w, 0.5 * w) * np.abs((p / d[..., None]) @ nrm) / d**2
     assert kc.polygon_irradiance(q) == pytest.approx(np.sum(dw * p[..., 2] / d) / math.pi, rel=1e-9)
 
 
@@ -209,21 +213,24 @@ def test_colour_shift_of_both():
     res = {name: ratio for name, _, ratio in colour_shift()}
     for name in ("EON, r = 1", "K-C on QON, tau factor, sigma = pi/2", "K-C on QON, exact factor, sigma = pi/2"):
         r = res[name]
-        assert r[0] > r[1] > r[2]          # E/rho falls with rho
+        assert r[0] > r[1] > r[2]  # E/rho falls with rho
     assert np.allclose(res["EON white tint, r = 1"], res["EON white tint, r = 1"][0], atol=1e-6)
 
 
-@pytest.mark.parametrize("call, name", [
-    (lambda: kc.zh_fit_oren_nayar(1.5), "alpha"),
-    (lambda: kc.zh_fit_oren_nayar(0.5, form="latex"), "form"),
-    (lambda: kc.ms_lobe("qon", [0, 0, 1.0], [0, 0, 1.0], 2.0), "roughness"),
-    (lambda: kc.ms_lobe("qon", [0, 0, 1.0], [0, 0, 1.0], 1.0, factor="kulla"), "factor"),
-    (lambda: kc.rho_factor(1.2), "rho"),
-    (lambda: kc.exact_rho_factor(0.5, 0.0), "average_albedo"),
-    (lambda: kc.ltc_polygon_integral([[0, 0, 1.0], [1, 0, -0.1], [0, 1, 1.0]], 0.8), "corners"),
-    (lambda: kc.ltc_distribution([0, 0, 1.0], 0.0), "m33"),
-    (lambda: kc.sh_response("qon", np.zeros((4, 1)), [0, 0, 1.0], 0.5, 1.0), "env"),
-])
+@pytest.mark.parametrize(
+    "call, name",
+    [
+        (lambda: kc.zh_fit_oren_nayar(1.5), "alpha"),
+        (lambda: kc.zh_fit_oren_nayar(0.5, form="latex"), "form"),
+        (lambda: kc.ms_lobe("qon", [0, 0, 1.0], [0, 0, 1.0], 2.0), "roughness"),
+        (lambda: kc.ms_lobe("qon", [0, 0, 1.0], [0, 0, 1.0], 1.0, factor="kulla"), "factor"),
+        (lambda: kc.rho_factor(1.2), "rho"),
+        (lambda: kc.exact_rho_factor(0.5, 0.0), "average_albedo"),
+        (lambda: kc.ltc_polygon_integral([[0, 0, 1.0], [1, 0, -0.1], [0, 1, 1.0]], 0.8), "corners"),
+        (lambda: kc.ltc_distribution([0, 0, 1.0], 0.0), "m33"),
+        (lambda: kc.sh_response("qon", np.zeros((4, 1)), [0, 0, 1.0], 0.5, 1.0), "env"),
+    ],
+)
 def test_bad_input_names_the_argument(call, name):
     with pytest.raises(ValueError, match=name):
         call()
@@ -232,7 +239,7 @@ def test_bad_input_names_the_argument(call, name):
 def test_ms_lobe_negative_where_qon_albedo_exceeds_one():
     """QON's E(0) = A + B/2 > 1 for small sigma, so 1 - E < 0: f_ms < 0 for one grazing and
     one steep direction (positive again when both are grazing)."""
-    g = np.array([math.sqrt(1 - 0.01 ** 2), 0.0, 0.01])
+    g = np.array([math.sqrt(1 - 0.01**2), 0.0, 0.01])
     n = np.array([0.0, 0.0, 1.0])
     assert od.directional_albedo("qon", 0.01, 0.2)[0] > 1.0
     assert kc.ms_lobe("qon", g, n, 0.2)[0] < 0.0
@@ -259,5 +266,5 @@ def test_ggx_zh_rows():
     a = at(rows["kc_ggx_zh_E0"])["alpha"]
     err = abs(kc.zh_fit_ggx(a)[0] - _ggx_zh_direct(a)[0])
     assert err == pytest.approx(float(rows["kc_ggx_zh_E0"]["max_error"]), abs=1e-3)
-    for l in range(3):   # the coded reading fits better than the printed one
+    for l in range(3):  # the coded reading fits better than the printed one
         assert float(rows[f"kc_ggx_zh_E{l}"]["max_error"]) < 0.5 * float(rows[f"kc_ggx_zh_E{l}_text"]["max_error"])

@@ -4,6 +4,7 @@ Issue 13, finding 3: outer-product inputs were copied to full size first (direct
 on (n, 1) x (1, n) peaked at 3x its output, evaluate on (n, 1, 3) x (1, n, 3) at 7x, full_on
 at 3e4 x 3e4 used 21 GB).  Measured with tracemalloc (NumPy reports its allocations to it).
 """
+
 import tracemalloc
 
 import numpy as np
@@ -17,7 +18,7 @@ EXTRA = 12 << 20
 
 
 def peak(f):
-    f()                                   # compile / load tables outside the measurement
+    f()  # compile / load tables outside the measurement
     tracemalloc.start()
     try:
         base = tracemalloc.get_traced_memory()[0]
@@ -59,8 +60,7 @@ def test_directional_albedo_outer_product(model):
     assert out.shape == (n, n, 1)
     assert extra <= EXTRA, f"{extra / out.nbytes:.2f} x the output"
     i, j = rng.integers(0, n, 20), rng.integers(0, n, 20)
-    np.testing.assert_allclose(out[i, j, 0], od.directional_albedo(model, mu[i, 0], r[0, j], 0.7)[:, 0],
-                               rtol=1e-14)
+    np.testing.assert_allclose(out[i, j, 0], od.directional_albedo(model, mu[i, 0], r[0, j], 0.7)[:, 0], rtol=1e-14)
 
 
 def test_sample_and_pdf_outer_product():

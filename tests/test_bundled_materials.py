@@ -1,5 +1,6 @@
 """The bundled material library: what it holds, that every file loads and evaluates, and
 that it is found after a plain non-editable install run from another directory."""
+
 import os
 import shutil
 import subprocess
@@ -29,15 +30,23 @@ def test_library_has_the_required_range():
     mats = _all()
     assert len(mats) >= 12 and all(m.supported for m in mats)
     ids = {m.shader_id for m in mats}
-    assert {"ND_open_pbr_surface_surfaceshader", "ND_standard_surface_surfaceshader", "UsdPreviewSurface",
-            "ND_oren_nayar_diffuse_bsdf"} <= ids
-    rough = sorted({round(float(m.node_inputs.get("base_diffuse_roughness", m.node_inputs.get("roughness")).value), 2)
-                    for m in mats})
+    assert {
+        "ND_open_pbr_surface_surfaceshader",
+        "ND_standard_surface_surfaceshader",
+        "UsdPreviewSurface",
+        "ND_oren_nayar_diffuse_bsdf",
+    } <= ids
+    rough = sorted(
+        {
+            round(float(m.node_inputs.get("base_diffuse_roughness", m.node_inputs.get("roughness")).value), 2)
+            for m in mats
+        }
+    )
     assert rough[0] == 0.0 and rough[-1] >= 0.9 and len(rough) >= 6
     assert any(m.node_inputs.get("coat_weight") and m.node_inputs["coat_weight"].value > 0 for m in mats)
     assert any(p.kind == "texture" for m in mats for p in m.parameters.values())
     colours = np.array([m.node_inputs.get("base_color", m.node_inputs.get("color")).value for m in mats])
-    assert np.ptp(colours, axis=0).min() > 0.3        # a range of colours in every channel
+    assert np.ptp(colours, axis=0).min() > 0.3  # a range of colours in every channel
 
 
 def test_time_sampled_variant_and_bound_materials():
@@ -45,13 +54,16 @@ def test_time_sampled_variant_and_bound_materials():
     r = [load_materials(f, time=t)[0].parameters["base_diffuse_roughness"].value for t in (1, 12.5, 24)]
     assert r == pytest.approx([0.0, 0.5, 1.0])
     f = BUNDLED_MATERIALS / "paint_variants.usda"
-    r = {v: load_materials(f, variants=[f"finish={v}"])[0].parameters["base_diffuse_roughness"].value
-         for v in ("matte", "eggshell", "gloss")}
+    r = {
+        v: load_materials(f, variants=[f"finish={v}"])[0].parameters["base_diffuse_roughness"].value
+        for v in ("matte", "eggshell", "gloss")
+    }
     assert r == pytest.approx({"matte": 0.9, "eggshell": 0.45, "gloss": 0.1})
     f = BUNDLED_MATERIALS / "terracotta_bound.usda"
     assert [m.path for m in load_materials(f, material="/World/Ball")] == ["/World/Looks/terracotta"]
-    assert [m.path for m in load_materials(f, material="/World/Ball", purpose="preview")] == \
-        ["/World/Looks/terracotta_preview"]
+    assert [m.path for m in load_materials(f, material="/World/Ball", purpose="preview")] == [
+        "/World/Looks/terracotta_preview"
+    ]
 
 
 def test_bare_oren_nayar_material_evaluates_as_the_model():
@@ -77,8 +89,8 @@ def test_standard_surface_diffuse_is_qon_with_sigma_diffuse_roughness():
 
 def test_white_preview_surface_is_a_white_furnace():
     """UsdPreviewSurface -> Lambert diffuse under the specular layer: white preserves energy."""
-    from openpbr_diffuse.readers.material import Material, Parameter
     from openpbr_diffuse.readers import mapping
+    from openpbr_diffuse.readers.material import Material, Parameter
 
     (m,) = load_materials(BUNDLED_MATERIALS / "plaster_preview.usda")
     m.node_inputs["base_color"] = Parameter((1.0, 1.0, 1.0), "test", "authored")
@@ -100,23 +112,37 @@ def test_evaluate_many_equals_one_by_one():
 @pytest.mark.slow
 def test_found_after_non_editable_install_from_another_directory(tmp_path):
     src = tmp_path / "src"
-    shutil.copytree(REPO, src, symlinks=True,
-                    ignore=shutil.ignore_patterns(".git", "__pycache__", "build", "*.egg-info", ".pytest_cache"))
+    shutil.copytree(
+        REPO,
+        src,
+        symlinks=True,
+        ignore=shutil.ignore_patterns(".git", "__pycache__", "build", "*.egg-info", ".pytest_cache"),
+    )
     target = tmp_path / "target"
-    proc = subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--target", str(target), str(src)],
-                          capture_output=True, text=True, cwd=tmp_path, timeout=600)
-    if proc.returncode != 0 and ("Could not find a version" in proc.stderr or "No matching distribution" in proc.stderr):
+    proc = subprocess.run(
+        [sys.executable, "-m", "pip", "install", "--no-deps", "--target", str(target), str(src)],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        timeout=600,
+    )
+    if proc.returncode != 0 and (
+        "Could not find a version" in proc.stderr or "No matching distribution" in proc.stderr
+    ):
         pytest.skip("pip cannot fetch the build backend (offline)")
     assert proc.returncode == 0, proc.stderr[-2000:]
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
-    code = ("import openpbr_diffuse.readers as r, sys; "
-            "fs = r.find_material_files([r.BUNDLED_MATERIALS]); "
-            "ms = [m for f in fs for m in r.load_materials(f)]; "
-            "print(r.__file__); print(r.BUNDLED_MATERIALS); print(len(fs), len(ms), all(m.supported for m in ms))")
+    code = (
+        "import openpbr_diffuse.readers as r, sys; "
+        "fs = r.find_material_files([r.BUNDLED_MATERIALS]); "
+        "ms = [m for f in fs for m in r.load_materials(f)]; "
+        "print(r.__file__); print(r.BUNDLED_MATERIALS); print(len(fs), len(ms), all(m.supported for m in ms))"
+    )
     env = dict(os.environ, PYTHONPATH=str(target))
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=elsewhere, env=env,
-                         timeout=600)
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=elsewhere, env=env, timeout=600
+    )
     assert out.returncode == 0, out.stderr[-2000:]
     module, folder, counts = out.stdout.strip().splitlines()[-3:]
     assert module.startswith(str(target)) and folder.startswith(str(target))

@@ -1,4 +1,5 @@
 """``openpbr-diffuse albedo``: query output, errors, and the EXR lookup-texture export."""
+
 import json
 import math
 import os
@@ -33,19 +34,21 @@ class TestQuery:
         assert rows[1][1] == pytest.approx(0.817888, abs=1e-6)
 
     def test_json_rgb(self, capsys):
-        code, out, _ = run(capsys, "albedo", "eon", "--roughness", "1", "--mu", "0.3", "0.8",
-                           "--rho", "0.5", "0.5", "1", "--json")
+        code, out, _ = run(
+            capsys, "albedo", "eon", "--roughness", "1", "--mu", "0.3", "0.8", "--rho", "0.5", "0.5", "1", "--json"
+        )
         assert code == 0
         data = json.loads(out)
         assert data["model"] == "eon" and data["mu"] == [0.3, 0.8]
         E = np.array(data["albedo"])
         assert E.shape == (2, 3)
-        assert E[0, 0] == pytest.approx(0.4780, abs=1e-4)     # models.md: Blender's 0.4689 is wrong
+        assert E[0, 0] == pytest.approx(0.4780, abs=1e-4)  # models.md: Blender's 0.4689 is wrong
         assert E[:, 2] == pytest.approx([1.0, 1.0], abs=1e-6)  # white furnace
 
     def test_reference_column(self, capsys):
-        code, out, _ = run(capsys, "albedo", "qon", "--roughness", str(math.pi / 4), "--mu", "0.5",
-                           "--reference", "--json")
+        code, out, _ = run(
+            capsys, "albedo", "qon", "--roughness", str(math.pi / 4), "--mu", "0.5", "--reference", "--json"
+        )
         data = json.loads(out)
         assert code == 0
         assert data["albedo"][0][0] == pytest.approx(0.791338, abs=1e-6)
@@ -75,19 +78,22 @@ class TestQuery:
 
 
 class TestErrors:
-    @pytest.mark.parametrize("argv,needle", [
-        (["albedo", "oren", "--roughness", "0.5", "--mu", "0.5"], "unknown model"),
-        (["albedo", "qon", "--roughness", "2", "--mu", "0.5"], "roughness"),
-        (["albedo", "eon", "--roughness", "-0.1", "--mu", "0.5"], "roughness"),
-        (["albedo", "qon", "--roughness", "0.5", "--mu", "1.2"], "mu"),
-        (["albedo", "qon", "--roughness", "0.5", "--mu", "nan"], "mu"),
-        (["albedo", "qon", "--roughness", "0.5", "--mu", "abc"], "mu"),
-        (["albedo", "qon", "--roughness", "0.5", "--mu", "0.5", "--rho", "1.5"], "rho"),
-        (["albedo", "qon", "--mu", "0.5"], "--roughness"),
-        (["albedo", "qon", "--roughness", "0.5"], "--mu"),
-        (["albedo", "qon", "--roughness", "0.5", "--mu", "0.5", "--size", "8"], "--size"),
-        (["albedo", "qon", "--export", "/tmp/x", "--size", "2"], "size"),
-    ])
+    @pytest.mark.parametrize(
+        "argv,needle",
+        [
+            (["albedo", "oren", "--roughness", "0.5", "--mu", "0.5"], "unknown model"),
+            (["albedo", "qon", "--roughness", "2", "--mu", "0.5"], "roughness"),
+            (["albedo", "eon", "--roughness", "-0.1", "--mu", "0.5"], "roughness"),
+            (["albedo", "qon", "--roughness", "0.5", "--mu", "1.2"], "mu"),
+            (["albedo", "qon", "--roughness", "0.5", "--mu", "nan"], "mu"),
+            (["albedo", "qon", "--roughness", "0.5", "--mu", "abc"], "mu"),
+            (["albedo", "qon", "--roughness", "0.5", "--mu", "0.5", "--rho", "1.5"], "rho"),
+            (["albedo", "qon", "--mu", "0.5"], "--roughness"),
+            (["albedo", "qon", "--roughness", "0.5"], "--mu"),
+            (["albedo", "qon", "--roughness", "0.5", "--mu", "0.5", "--size", "8"], "--size"),
+            (["albedo", "qon", "--export", "/tmp/x", "--size", "2"], "size"),
+        ],
+    )
     def test_one_line_exit_2(self, capsys, argv, needle):
         code, out, err = run(capsys, *argv)
         assert code == 2
@@ -117,12 +123,12 @@ class TestExport:
         from openpbr_diffuse.albedo.tables import mix_weight
 
         E = rho * img[..., 1] + mix_weight(model, rho, rough[:, None]) * img[..., 2]
-        np.testing.assert_allclose(E, reference_albedo(model, mu[None, :], rough[:, None], rho)[..., 0],
-                                   atol=1e-6)
+        np.testing.assert_allclose(E, reference_albedo(model, mu[None, :], rough[:, None], rho)[..., 0], atol=1e-6)
         avg, meta1 = read_exr(p1)
         assert avg.shape == (1, size, 3)
-        np.testing.assert_allclose(avg[0, :, 0], reference_average_albedo(model, rough, 1.0)[:, 0],
-                                   rtol=1e-7, atol=1e-7)
+        np.testing.assert_allclose(
+            avg[0, :, 0], reference_average_albedo(model, rough, 1.0)[:, 0], rtol=1e-7, atol=1e-7
+        )
         assert meta1["openpbr_diffuse:y_axis"] == "single row"
 
     def test_export_function_and_accuracy(self, tmp_path):

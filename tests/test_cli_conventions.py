@@ -1,5 +1,6 @@
 """Command-line conventions (issue 13, finding 5): one-line errors naming the program once,
 negative numbers as values, no silently ignored options, quiet broken pipes and Ctrl-C."""
+
 import json
 import os
 import signal
@@ -23,8 +24,9 @@ def run(capsys, *argv):
 
 def cli(*argv, **kw):
     env = dict(os.environ, PYTHONPATH=str(ROOT))
-    return subprocess.run([sys.executable, "-m", "openpbr_diffuse", *argv], capture_output=True, text=True,
-                          env=env, **kw)
+    return subprocess.run(
+        [sys.executable, "-m", "openpbr_diffuse", *argv], capture_output=True, text=True, env=env, **kw
+    )
 
 
 def test_program_name_appears_once(capsys):
@@ -40,8 +42,17 @@ def test_negative_numbers_are_values(capsys, value):
     assert code == 2 and "roughness must" in err and "expected one argument" not in err
 
 
-@pytest.mark.parametrize("extra", [["--roughness", "1"], ["--mu", "0.5"], ["--average"], ["--reference"],
-                                   ["--rho", "0.5"], ["--color-mode", "white_tint"]])
+@pytest.mark.parametrize(
+    "extra",
+    [
+        ["--roughness", "1"],
+        ["--mu", "0.5"],
+        ["--average"],
+        ["--reference"],
+        ["--rho", "0.5"],
+        ["--color-mode", "white_tint"],
+    ],
+)
 def test_export_refuses_query_options(capsys, tmp_path, extra):
     code, out, err = run(capsys, "albedo", "eon", "--export", str(tmp_path), *extra)
     assert code == 2 and extra[0] in err and not list(tmp_path.iterdir())
@@ -52,8 +63,20 @@ def test_white_tint_is_for_eon_models_only(capsys, model):
     rough = [] if model == "lambert" else ["--roughness", "0.5"]
     code, _, err = run(capsys, "albedo", model, *rough, "--mu", "0.5", "--color-mode", "white_tint")
     assert code == 2 and "EON" in err
-    code, out, _ = run(capsys, "albedo", "eon_approx", "--roughness", "0.5", "--mu", "0.5", "--rho", "0.5",
-                       "--color-mode", "white_tint", "--json")
+    code, out, _ = run(
+        capsys,
+        "albedo",
+        "eon_approx",
+        "--roughness",
+        "0.5",
+        "--mu",
+        "0.5",
+        "--rho",
+        "0.5",
+        "--color-mode",
+        "white_tint",
+        "--json",
+    )
     assert code == 0 and json.loads(out)["color_mode"] == "white_tint"
 
 
@@ -85,10 +108,14 @@ def test_python_dash_m_runs():
 def test_broken_pipe_exits_141_quietly():
     mus = [str(i / 20000) for i in range(20001)]
     env = dict(os.environ, PYTHONPATH=str(ROOT))
-    p = subprocess.Popen([sys.executable, "-m", "openpbr_diffuse", "albedo", "eon", "--roughness", "1", "--mu",
-                          *mus], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+    p = subprocess.Popen(
+        [sys.executable, "-m", "openpbr_diffuse", "albedo", "eon", "--roughness", "1", "--mu", *mus],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        env=env,
+    )
     p.stdout.readline()
-    p.stdout.close()                      # what `| head -1` does
+    p.stdout.close()  # what `| head -1` does
     err = p.stderr.read().decode()
     assert p.wait(timeout=120) == 141
     assert err == ""
@@ -96,10 +123,24 @@ def test_broken_pipe_exits_141_quietly():
 
 def test_ctrl_c_is_one_line_exit_130(tmp_path):
     env = dict(os.environ, PYTHONPATH=str(ROOT))
-    p = subprocess.Popen([sys.executable, "-m", "openpbr_diffuse", "albedo", "full_on", "--export", str(tmp_path),
-                          "--size", "4096", "--no-progress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                         env=env)
-    target = tmp_path / "full_on_albedo.exr"   # created when writing starts: inside the command
+    p = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "openpbr_diffuse",
+            "albedo",
+            "full_on",
+            "--export",
+            str(tmp_path),
+            "--size",
+            "4096",
+            "--no-progress",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        env=env,
+    )
+    target = tmp_path / "full_on_albedo.exr"  # created when writing starts: inside the command
     deadline = time.monotonic() + 120
     while not target.exists() and p.poll() is None and time.monotonic() < deadline:
         time.sleep(0.05)

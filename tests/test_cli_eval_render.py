@@ -1,5 +1,6 @@
 """``openpbr-diffuse eval`` (text and the JSON schema) and ``render`` (EXR linear ACEScg, PNG
 sRGB-encoded), checked against the library's node and an independent colour conversion."""
+
 import json
 import math
 
@@ -18,14 +19,41 @@ def _json(capsys, *argv):
 
 
 def test_eval_json_schema(capsys):
-    doc = _json(capsys, str(BUNDLED_MATERIALS / "terracotta_bound.usda"), "--material", "/World/Ball",
-                "--theta-i", "0", "45", "--theta-o", "30", "--phi", "180", "--uv", "0.2", "0.3")
+    doc = _json(
+        capsys,
+        str(BUNDLED_MATERIALS / "terracotta_bound.usda"),
+        "--material",
+        "/World/Ball",
+        "--theta-i",
+        "0",
+        "45",
+        "--theta-o",
+        "30",
+        "--phi",
+        "180",
+        "--uv",
+        "0.2",
+        "0.3",
+    )
     assert set(doc) >= {"file", "working_space", "time", "variants", "uv", "directions", "materials"}
     assert doc["working_space"] == "acescg" and doc["uv"] == [0.2, 0.3]
     assert doc["directions"]["theta_i"] == [0.0, 45.0] and doc["directions"]["theta_o"] == [30.0, 30.0]
     (m,) = doc["materials"]
-    assert set(m) >= {"name", "path", "file", "shader_id", "supported", "node", "diffuse_model", "parameters",
-                      "node_inputs", "unsupported", "approximations", "warnings", "evaluation"}
+    assert set(m) >= {
+        "name",
+        "path",
+        "file",
+        "shader_id",
+        "supported",
+        "node",
+        "diffuse_model",
+        "parameters",
+        "node_inputs",
+        "unsupported",
+        "approximations",
+        "warnings",
+        "evaluation",
+    }
     assert m["path"] == "/World/Looks/terracotta" and m["node"] == "OpenPBRSurface" and m["diffuse_model"] == "eon"
     p = m["parameters"]["base_color"]
     assert set(p) >= {"value", "provenance", "kind"} and "terracotta.inputs:colour" in p["provenance"]
@@ -48,7 +76,8 @@ def test_eval_values_are_the_nodes(capsys):
     assert np.allclose(ev["albedo"][0], node.albedo(wo), rtol=1e-12)
     (d,) = [lb for lb in node.lobes(wo) if lb.name == "diffuse"]
     assert np.allclose(ev["diffuse"]["weight"][0], d.weight) and ev["diffuse"]["probability"][0] == pytest.approx(
-        float(d.probability))
+        float(d.probability)
+    )
 
 
 def test_eval_time_variant_uv_options(capsys):
@@ -59,7 +88,9 @@ def test_eval_time_variant_uv_options(capsys):
     assert doc["materials"][0]["parameters"]["base_diffuse_roughness"]["value"] == pytest.approx(0.1)
     a = _json(capsys, str(BUNDLED_MATERIALS / "brick_textured.mtlx"), "--uv", "0.1", "0.1")
     b = _json(capsys, str(BUNDLED_MATERIALS / "brick_textured.mtlx"), "--uv", "0.3", "0.4")
-    assert a["materials"][0]["parameters"]["base_color"]["value"] != b["materials"][0]["parameters"]["base_color"]["value"]
+    assert (
+        a["materials"][0]["parameters"]["base_color"]["value"] != b["materials"][0]["parameters"]["base_color"]["value"]
+    )
 
 
 def test_eval_text_output(capsys):

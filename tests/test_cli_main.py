@@ -1,4 +1,5 @@
 """The console entry point: version, dispatch, and the one-line / exit-2 error contract."""
+
 import subprocess
 import sys
 
@@ -23,14 +24,18 @@ def test_usage_errors_are_one_line_exit_2(argv, capsys):
 
 
 def test_console_script_runs_as_module():
-    out = subprocess.run([sys.executable, "-m", "openpbr_diffuse.cli.main", "--version"],
-                         capture_output=True, text=True, check=True)
+    out = subprocess.run(
+        [sys.executable, "-m", "openpbr_diffuse.cli.main", "--version"], capture_output=True, text=True, check=True
+    )
     assert __version__ in out.stdout
 
 
 def test_usage_error_of_a_subcommand_is_one_line_under_python_m():
     """A sub-command's UsageError (albedo: --export with a query option) under `python -m`."""
-    run = subprocess.run([sys.executable, "-m", "openpbr_diffuse.cli.main", "albedo", "eon", "--export", "x",
-                          "--mu", "0.5"], capture_output=True, text=True)
+    run = subprocess.run(
+        [sys.executable, "-m", "openpbr_diffuse.cli.main", "albedo", "eon", "--export", "x", "--mu", "0.5"],
+        capture_output=True,
+        text=True,
+    )
     assert run.returncode == 2, run.stderr
     assert run.stderr.count("\n") == 1 and "Traceback" not in run.stderr

@@ -6,6 +6,7 @@ tables of EON's albedo (``reference_albedo``, data/albedo_eon.csv) in place of t
 form; OpenImageIO's OCIO colour conversion (Bradford) between working spaces; Lambert
 (E = rho) where EON must reduce to it.
 """
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -42,8 +43,9 @@ def test_checker_XYZ_equals_colour_sd_to_XYZ(cm):
     res = sp.colour_shift(sp.checker(cm), [0.0], [0.5], cm)
     sds = colour.SDS_COLOURCHECKERS["BabelColor Average"]
     XYZ = res.XYZ["spectral"][:, 0, 0]
-    integration = np.array([colour.sd_to_XYZ(sds[n], cm.cmfs, cm.illuminant_sd, method="Integration")
-                            for n in res.colours.names])
+    integration = np.array(
+        [colour.sd_to_XYZ(sds[n], cm.cmfs, cm.illuminant_sd, method="Integration") for n in res.colours.names]
+    )
     np.testing.assert_allclose(XYZ, integration, rtol=0, atol=1e-9)
     # the default (ASTM E308 weighting tables on the measured 10 nm data): a different
     # integration rule, so close but not identical
@@ -52,8 +54,11 @@ def test_checker_XYZ_equals_colour_sd_to_XYZ(cm):
     assert float(cm.delta_E(cm.XYZ_to_Lab(XYZ), cm.XYZ_to_Lab(astm)).max()) < 0.01
     # perfect reflector at Y = 100 and the illuminant's white as Lab reference white
     np.testing.assert_allclose(cm.XYZ_to_Lab(cm.white_XYZ), [100.0, 0.0, 0.0], atol=1e-9)
-    np.testing.assert_allclose(cm.white_XYZ, colour.sd_to_XYZ(colour.sd_ones(cm.colour_shape), cm.cmfs,
-                                                              cm.illuminant_sd, method="Integration"), atol=1e-9)
+    np.testing.assert_allclose(
+        cm.white_XYZ,
+        colour.sd_to_XYZ(colour.sd_ones(cm.colour_shape), cm.cmfs, cm.illuminant_sd, method="Integration"),
+        atol=1e-9,
+    )
 
 
 def test_no_difference_at_zero_roughness(checker_result):
@@ -61,8 +66,12 @@ def test_no_difference_at_zero_roughness(checker_result):
     res = checker_result
     inside = ~res.rho_rgb_clipped
     for name in ("albedo_spectral", "albedo_rgb", "albedo_white_tint"):
-        np.testing.assert_allclose(getattr(res, name)[inside, 0], np.broadcast_to(
-            res.rho_rgb[inside, None, :], (inside.sum(), len(MU), 3)), rtol=0, atol=1e-6)
+        np.testing.assert_allclose(
+            getattr(res, name)[inside, 0],
+            np.broadcast_to(res.rho_rgb[inside, None, :], (inside.sum(), len(MU), 3)),
+            rtol=0,
+            atol=1e-6,
+        )
     assert res.delta_e_rgb_vs_spectral[inside, 0].max() < 1e-5
     assert res.delta_e_shift[:, 0].max() < 1e-5
     assert abs(res.rel_luminance_diff_shift[:, 0]).max() < 1e-6
@@ -80,7 +89,7 @@ def test_flat_spectrum_rgb_equals_spectral(cm, value):
     quadrature-table albedo of the grey (independent of EON's closed form)."""
     S = np.full((1, cm.wavelengths.size), value)
     cs = sp.ColourSet(["flat"], S, cm.XYZ_to_RGB(cm.spectra_to_XYZ(S)), ["flat"], np.array([np.nan]))
-    np.testing.assert_allclose(cs.rho_rgb, value, atol=1e-9)     # grey stays grey through Bradford
+    np.testing.assert_allclose(cs.rho_rgb, value, atol=1e-9)  # grey stays grey through Bradford
     r = np.array([0.0, 0.3, 0.7, 1.0])
     res = sp.colour_shift(cs, r, MU, cm)
     np.testing.assert_allclose(res.albedo_rgb, res.albedo_spectral, rtol=0, atol=1e-9)
@@ -94,8 +103,9 @@ def test_white_tint_keeps_chromaticity_of_rho(checker_result):
     res = checker_result
     sds = colour.SDS_COLOURCHECKERS["BabelColor Average"]
     cm = res.colorimetry
-    ref = xy(np.array([colour.sd_to_XYZ(sds[n], cm.cmfs, cm.illuminant_sd, method="Integration")
-                       for n in res.colours.names]))
+    ref = xy(
+        np.array([colour.sd_to_XYZ(sds[n], cm.cmfs, cm.illuminant_sd, method="Integration") for n in res.colours.names])
+    )
     got = xy(res.XYZ["white_tint"])
     np.testing.assert_allclose(got, np.broadcast_to(ref[:, None, None], got.shape), rtol=0, atol=1e-12)
     # ... while the reference colour mode moves away from it once r > 0
@@ -107,8 +117,9 @@ def test_white_tint_equals_library_white_tint_mode(cm):
     cs = sp.checker(cm)
     r, mu = np.array([0.3, 1.0]), np.array([0.2, 1.0])
     res = sp.colour_shift(cs, r, mu, cm)
-    E = od.directional_albedo("eon", mu[None, None, :], r[None, :, None], cs.spectra[:, None, None, :],
-                              color_mode="white_tint")
+    E = od.directional_albedo(
+        "eon", mu[None, None, :], r[None, :, None], cs.spectra[:, None, None, :], color_mode="white_tint"
+    )
     np.testing.assert_allclose(res.albedo_white_tint, cm.XYZ_to_RGB(cm.spectra_to_XYZ(E)), rtol=0, atol=1e-12)
 
 
@@ -119,7 +130,7 @@ def test_shift_saturates_monotonically_with_roughness(checker_result):
     Lab = res.Lab["spectral"]
     C = np.hypot(Lab[..., 1], Lab[..., 2])
     chromatic = C[:, 0, 0] > 2.0
-    assert chromatic.sum() == 19                           # the 5 neutrals excluded
+    assert chromatic.sum() == 19  # the 5 neutrals excluded
     sat = (C / Lab[..., 0])[chromatic]
     assert (np.diff(sat, axis=1) > 0).all()
     dist = np.linalg.norm(xy(res.XYZ["spectral"]) - res.colorimetry.white_xy, axis=-1)[chromatic]
@@ -130,14 +141,16 @@ def test_shift_saturates_monotonically_with_roughness(checker_result):
 
 
 @settings(max_examples=60, deadline=None)
-@given(st.lists(st.floats(0.01, 1.0), min_size=3, max_size=3).filter(lambda c: max(c) - min(c) > 0.05),
-       st.floats(0.01, 1.0))
+@given(
+    st.lists(st.floats(0.01, 1.0), min_size=3, max_size=3).filter(lambda c: max(c) - min(c) > 0.05),
+    st.floats(0.01, 1.0),
+)
 def test_per_channel_saturation_grows_with_roughness(rgb, mu):
     """Per channel, E(rho)/rho = E_F + (rho_ms/rho)(1 - E_F) grows with rho (Eq. 18, 20), so the
     channels spread apart as r grows: HSV saturation of the RGB-evaluated albedo increases.
     Checked on the quadrature tables (reference_albedo), not the closed form."""
     r = np.linspace(0.0, 1.0, 11)
-    E = od.reference_albedo("eon", mu, r, np.asarray(rgb))          # (11, 3)
+    E = od.reference_albedo("eon", mu, r, np.asarray(rgb))  # (11, 3)
     sat = (E.max(-1) - E.min(-1)) / E.max(-1)
     assert (np.diff(sat) > -1e-9).all() and sat[-1] > sat[0]
 
@@ -201,8 +214,9 @@ def test_bradford_adaptation_matches_openimageio():
 def test_other_illuminant_uses_its_own_white():
     """Under illuminant A the perfect reflector is Lab (100, 0, 0) and RGB (1, 1, 1)."""
     cm = sp.colorimetry("A", "lin_rec709")
-    xyA = colour.XYZ_to_xy(colour.sd_to_XYZ(colour.sd_ones(cm.colour_shape), cm.cmfs, cm.illuminant_sd,
-                                            method="Integration") / 100)
+    xyA = colour.XYZ_to_xy(
+        colour.sd_to_XYZ(colour.sd_ones(cm.colour_shape), cm.cmfs, cm.illuminant_sd, method="Integration") / 100
+    )
     np.testing.assert_allclose(cm.white_xy, xyA, atol=1e-12)
     np.testing.assert_allclose(cm.XYZ_to_RGB(cm.white_XYZ), 1.0, atol=1e-9)
     assert cm.describe()["illuminant"] == "A"
@@ -215,13 +229,16 @@ def test_other_illuminant_uses_its_own_white():
 HEADLINE = {
     ("lin_rec709", 1.0): {
         "delta_e_rgb_vs_spectral": (2.8468, "cyan", 1.4845, "orange yellow", 0.1081, "purplish blue / purple"),
-        "delta_e_shift": (4.4218, "neutral 5 (.70 D)", 4.4218, "neutral 5 (.70 D)", 3.3723, "dark skin / orange")},
+        "delta_e_shift": (4.4218, "neutral 5 (.70 D)", 4.4218, "neutral 5 (.70 D)", 3.3723, "dark skin / orange"),
+    },
     ("lin_rec709", 0.5): {
         "delta_e_rgb_vs_spectral": (2.5150, "cyan", 0.8630, "orange yellow", 0.0611, "purplish blue / purple"),
-        "delta_e_shift": (2.6052, "neutral 5 (.70 D)", 2.6052, "neutral 5 (.70 D)", 1.9812, "dark skin / orange")},
+        "delta_e_shift": (2.6052, "neutral 5 (.70 D)", 2.6052, "neutral 5 (.70 D)", 1.9812, "dark skin / orange"),
+    },
     ("acescg", 1.0): {
         "delta_e_rgb_vs_spectral": (0.7167, "red", 0.7167, "red", 0.1261, "blue flower / purple"),
-        "delta_e_shift": (4.4218, "neutral 5 (.70 D)", 4.4218, "neutral 5 (.70 D)", 3.3723, "dark skin / orange")},
+        "delta_e_shift": (4.4218, "neutral 5 (.70 D)", 4.4218, "neutral 5 (.70 D)", 3.3723, "dark skin / orange"),
+    },
 }
 
 
@@ -271,8 +288,14 @@ def test_recovery_roundtrip(method, tol):
     assert spectra.min() >= 0 and spectra.max() <= 1
     # the reported round trip is the dE2000 of the spectrum's colour, recomputed here with
     # colour-science's own sd_to_XYZ
-    XYZ = np.array([colour.sd_to_XYZ(colour.SpectralDistribution(s, cm.colour_shape), cm.cmfs,
-                                     cm.illuminant_sd, method="Integration") for s in spectra])
+    XYZ = np.array(
+        [
+            colour.sd_to_XYZ(
+                colour.SpectralDistribution(s, cm.colour_shape), cm.cmfs, cm.illuminant_sd, method="Integration"
+            )
+            for s in spectra
+        ]
+    )
     np.testing.assert_allclose(de, cm.delta_E(cm.XYZ_to_Lab(cm.RGB_to_XYZ(rgb)), cm.XYZ_to_Lab(XYZ)), atol=1e-9)
     assert de.max() < tol
 
@@ -304,18 +327,21 @@ def test_user_rgb_at_zero_roughness_differs_only_by_roundtrip():
     assert (res.delta_e_shift[:, 1] > 0.5).all()
 
 
-@pytest.mark.parametrize("call,match", [
-    (lambda: sp.colorimetry("D66"), "illuminant"),
-    (lambda: sp.colorimetry("D65", "srgb"), "working_space"),
-    (lambda: sp.colorimetry(65), "illuminant"),
-    (lambda: sp.rgb_to_spectra([[0.5, 1.2, 0.1]], sp.colorimetry()), "rgb"),
-    (lambda: sp.rgb_to_spectra([[0.5, 0.2]], sp.colorimetry()), "rgb"),
-    (lambda: sp.rgb_to_spectra([[0.5, 0.2, 0.1]], sp.colorimetry(), "Smits"), "method"),
-    (lambda: sp.rgb_to_spectra([[0.8, 0.1, 0.05]], sp.colorimetry("D65", "acescg"), "Mallett 2019"), "gamut"),
-    (lambda: sp.colour_shift(sp.checker(sp.colorimetry()), [1.5], [1.0]), "roughness"),
-    (lambda: sp.colour_shift(sp.checker(sp.colorimetry()), [0.5], [-0.1]), "mu"),
-    (lambda: sp.colour_shift(sp.checker(sp.colorimetry()), [0.5], [float("nan")]), "mu"),
-])
+@pytest.mark.parametrize(
+    "call,match",
+    [
+        (lambda: sp.colorimetry("D66"), "illuminant"),
+        (lambda: sp.colorimetry("D65", "srgb"), "working_space"),
+        (lambda: sp.colorimetry(65), "illuminant"),
+        (lambda: sp.rgb_to_spectra([[0.5, 1.2, 0.1]], sp.colorimetry()), "rgb"),
+        (lambda: sp.rgb_to_spectra([[0.5, 0.2]], sp.colorimetry()), "rgb"),
+        (lambda: sp.rgb_to_spectra([[0.5, 0.2, 0.1]], sp.colorimetry(), "Smits"), "method"),
+        (lambda: sp.rgb_to_spectra([[0.8, 0.1, 0.05]], sp.colorimetry("D65", "acescg"), "Mallett 2019"), "gamut"),
+        (lambda: sp.colour_shift(sp.checker(sp.colorimetry()), [1.5], [1.0]), "roughness"),
+        (lambda: sp.colour_shift(sp.checker(sp.colorimetry()), [0.5], [-0.1]), "mu"),
+        (lambda: sp.colour_shift(sp.checker(sp.colorimetry()), [0.5], [float("nan")]), "mu"),
+    ],
+)
 def test_bad_input_raises(call, match):
     with pytest.raises((ValueError, TypeError), match=match):
         call()

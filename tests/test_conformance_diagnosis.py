@@ -4,6 +4,7 @@ formulas typed from the EON paper in plain NumPy) is diagnosed by name through t
 match no known deviation say so, with no "closest".  (The same bugs written as GLSL and C++
 code: tests/test_subjects_deviations.py.)
 """
+
 import json
 import math
 

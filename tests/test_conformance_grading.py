@@ -4,6 +4,7 @@ fails with the right diagnosis, unusable files exit 2.
 The "implementations" are ``tests/_hand_impl.py`` (formulas typed from the paper in plain
 NumPy, independent of the library and of ``conformance.deviations``).
 """
+
 import json
 import math
 
@@ -42,11 +43,11 @@ def test_vector_set_covers_the_edges(vectors):
     ldotv = np.einsum("ij,ij->i", wi, wo)
     s = ldotv - wi[:, 2] * wo[:, 2]
     assert (np.minimum(wi[:, 2], wo[:, 2]) < 0.002).any() and (wi[:, 2] < 0).any() and (wo[:, 2] < 0).any()
-    assert (np.abs(wi - wo).max(axis=1) < 1e-12).sum() >= 4                  # backscatter
-    assert (np.abs(s) < 1e-12).any() and (ldotv < -0.4).any()               # s = 0, L.V < 0
-    assert {0.0, 1.0} <= set(vectors.roughness[vectors.model == "eon"])      # r = 0 and 1
+    assert (np.abs(wi - wo).max(axis=1) < 1e-12).sum() >= 4  # backscatter
+    assert (np.abs(s) < 1e-12).any() and (ldotv < -0.4).any()  # s = 0, L.V < 0
+    assert {0.0, 1.0} <= set(vectors.roughness[vectors.model == "eon"])  # r = 0 and 1
     mus = set(vectors.mu[vectors.kind == "albedo"])
-    assert 0.001 in mus and 0.0 not in mus        # grazing, but not the mu = 0 convention
+    assert 0.001 in mus and 0.0 not in mus  # grazing, but not the mu = 0 convention
     assert set(vectors.model) >= {"eon", "qon", "fon", "lambert", "eon_approx"}
     assert len(set(vectors.id)) == len(vectors) and vectors.version
 
@@ -159,8 +160,9 @@ def _edit_csv(path, fn):
     path.write_text("\n".join(fn(body)) + "\n")
 
 
-@pytest.mark.parametrize("case", ["missing_column", "non_numeric", "wrong_input", "unknown_id", "duplicate",
-                                  "blank_out", "empty"])
+@pytest.mark.parametrize(
+    "case", ["missing_column", "non_numeric", "wrong_input", "unknown_id", "duplicate", "blank_out", "empty"]
+)
 def test_unusable_file_exits_2(tmp_path, capsys, case, vectors):
     path = tmp_path / "r.csv"
     write_vectors(vectors, path, out=reference(vectors))

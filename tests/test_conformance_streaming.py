@@ -1,6 +1,7 @@
 """`check FILE` streams: the same grade streamed as in one piece, memory independent of the
 file's length (peak RSS of a child process on a 10^6-row file), and every malformed input
 one line naming the row and the column."""
+
 import json
 import math
 import os
@@ -31,8 +32,9 @@ def _fields(g):
     return d
 
 
-@pytest.mark.parametrize("switches", [dict(), dict(ms_scale="rho"), dict(scale=math.pi), dict(c1=0.3),
-                                      dict(mu_floor=0.02)])
+@pytest.mark.parametrize(
+    "switches", [dict(), dict(ms_scale="rho"), dict(scale=math.pi), dict(c1=0.3), dict(mu_floor=0.02)]
+)
 def test_streamed_grade_equals_one_piece(tmp_path, switches):
     out = hand.answer(V, np.float64, **switches)
     out[17, 1] = math.nan
@@ -93,8 +95,9 @@ print(json.dumps({"passed": g.passed, "n": g.n_rows, "rss_mb": hwm / 1024}))
 
 def _peak(path, warm):
     env = dict(os.environ, PYTHONPATH=ROOT + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    r = subprocess.run([sys.executable, "-c", _CHILD, str(path), str(warm)], capture_output=True, text=True,
-                       env=env, timeout=900)
+    r = subprocess.run(
+        [sys.executable, "-c", _CHILD, str(path), str(warm)], capture_output=True, text=True, env=env, timeout=900
+    )
     assert r.returncode == 0, r.stderr
     return json.loads(r.stdout)
 
@@ -140,8 +143,10 @@ CSV_CASES = {
     "short_row": (lambda b: b[:3] + [b[3].rsplit(",", 1)[0]] + b[4:], ["row 3", "cells"]),
     "long_row": (lambda b: b[:3] + [b[3] + ",7"] + b[4:], ["row 3", "cells"]),
     "partial_blank_out": (lambda b: _cell(b, 6, "out_b", ""), ["row 6", "out_b"]),
-    "own_row_not_unit": (lambda b: b + ["mine-1,brdf,eon,0.5,0,0.5,0,0,1,,0.5,0.5,0.5,0.5,0.1,0.1,0.1"],
-                         ["mine-1", "wi_x"]),
+    "own_row_not_unit": (
+        lambda b: b + ["mine-1,brdf,eon,0.5,0,0.5,0,0,1,,0.5,0.5,0.5,0.5,0.1,0.1,0.1"],
+        ["mine-1", "wi_x"],
+    ),
 }
 
 
@@ -162,8 +167,14 @@ def _json_doc():
     ref = hand.answer(V, np.float64)
     cols = V.columns()
     for i in range(len(V)):
-        row = {c: (str(cols[c][i]) if c in ("id", "kind", "model") else
-                   (None if math.isnan(float(cols[c][i])) else float(cols[c][i]))) for c in COLUMNS}
+        row = {
+            c: (
+                str(cols[c][i])
+                if c in ("id", "kind", "model")
+                else (None if math.isnan(float(cols[c][i])) else float(cols[c][i]))
+            )
+            for c in COLUMNS
+        }
         row["out"] = [float(x) for x in ref[i]]
         path_rows.append(row)
     return {"columns": list(COLUMNS), "rows": path_rows}

@@ -1,5 +1,6 @@
 """`template glsl|cpp|csv` writes starting files that run as they are and are never written
 over without --force; blank rows are skipped; JSON rows take `out` without a columns list."""
+
 import json
 import shutil
 import subprocess
@@ -30,13 +31,29 @@ def test_template_is_never_written_over(tmp_path, capsys, kind):
     assert path.read_text() != "mine\n"
 
 
-@pytest.mark.parametrize("kind,sig", [
-    ("glsl", ["vec3 f(vec3 wi, vec3 wo, float roughness, vec3 rho)", "vec3 albedo(float mu, float roughness, vec3 rho)",
-              "vec3 sample_wi(vec3 wo, vec2 u, float roughness)", "float pdf(vec3 wo, vec3 wi, float roughness)"]),
-    ("cpp", ["glm::vec3 f(glm::vec3 wi, glm::vec3 wo, float roughness, glm::vec3 rho)",
-             "glm::vec3 albedo(float mu, float roughness, glm::vec3 rho)",
-             "glm::vec3 sample_wi(glm::vec3 wo, glm::vec2 u, float roughness)",
-             "float pdf(glm::vec3 wo, glm::vec3 wi, float roughness)"])])
+@pytest.mark.parametrize(
+    "kind,sig",
+    [
+        (
+            "glsl",
+            [
+                "vec3 f(vec3 wi, vec3 wo, float roughness, vec3 rho)",
+                "vec3 albedo(float mu, float roughness, vec3 rho)",
+                "vec3 sample_wi(vec3 wo, vec2 u, float roughness)",
+                "float pdf(vec3 wo, vec3 wi, float roughness)",
+            ],
+        ),
+        (
+            "cpp",
+            [
+                "glm::vec3 f(glm::vec3 wi, glm::vec3 wo, float roughness, glm::vec3 rho)",
+                "glm::vec3 albedo(float mu, float roughness, glm::vec3 rho)",
+                "glm::vec3 sample_wi(glm::vec3 wo, glm::vec2 u, float roughness)",
+                "float pdf(glm::vec3 wo, glm::vec3 wi, float roughness)",
+            ],
+        ),
+    ],
+)
 def test_template_signatures_and_placeholder(tmp_path, kind, sig):
     path = tmp_path / f"t.{kind}"
     assert main(["template", kind, "--out", str(path)]) == 0
@@ -49,11 +66,13 @@ def test_cpp_template_compiles_and_is_lambert(tmp_path):
     """Compiled with a main of its own: f = rho/pi, E = rho, the sample's pdf is mu/pi."""
     path = tmp_path / "t.cpp"
     assert main(["template", "cpp", "--out", str(path)]) == 0
-    (tmp_path / "main.cpp").write_text(f'#include "{path}"\n#include <cstdio>\nint main() {{\n'
-                                       '  glm::vec3 wi = sample_wi(glm::vec3(0, 0, 1), glm::vec2(0.3f, 0.7f), 0.5f);\n'
-                                       '  glm::vec3 v = f(wi, glm::vec3(0.6f, 0, 0.8f), 0.5f, glm::vec3(0.5f));\n'
-                                       '  glm::vec3 e = albedo(0.4f, 0.5f, glm::vec3(0.25f));\n'
-                                       '  std::printf("%.7g %.7g %.7g %.7g\\n", v.x, e.x, pdf(glm::vec3(0, 0, 1), wi, 0.5f), wi.z);\n}\n')
+    (tmp_path / "main.cpp").write_text(
+        f'#include "{path}"\n#include <cstdio>\nint main() {{\n'
+        '  glm::vec3 wi = sample_wi(glm::vec3(0, 0, 1), glm::vec2(0.3f, 0.7f), 0.5f);\n'
+        '  glm::vec3 v = f(wi, glm::vec3(0.6f, 0, 0.8f), 0.5f, glm::vec3(0.5f));\n'
+        '  glm::vec3 e = albedo(0.4f, 0.5f, glm::vec3(0.25f));\n'
+        '  std::printf("%.7g %.7g %.7g %.7g\\n", v.x, e.x, pdf(glm::vec3(0, 0, 1), wi, 0.5f), wi.z);\n}\n'
+    )
     exe = tmp_path / "a.out"
     subprocess.run(["g++", "-std=c++17", "-O1", str(tmp_path / "main.cpp"), "-o", str(exe)], check=True, timeout=120)
     v, e, p, z = map(float, subprocess.run([str(exe)], capture_output=True, text=True, timeout=30).stdout.split())

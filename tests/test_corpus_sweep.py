@@ -14,6 +14,7 @@ and checked against MaterialX's and usd-core's own reading, done here.
   here;
 - the totals in docs/guide/materials.md are the totals of this sweep.
 """
+
 import functools
 import importlib.util
 import json
@@ -47,7 +48,7 @@ def _rel(p):
     return str(Path(p).relative_to(REALWORLD))
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _record(path):
     return _bench().sweep_file(path)
 
@@ -104,8 +105,9 @@ def _check_file(path):
     rec = _record(path)
     assert rec["traceback"] is None, rec["traceback"]
     if rec["rejected"] is not None:
-        assert _refused_by_owner(path), f"refused, but {'MaterialX' if path.suffix == '.mtlx' else 'usd-core'} " \
-                                        f"reads it: {rec['rejected']}"
+        assert _refused_by_owner(path), (
+            f"refused, but {'MaterialX' if path.suffix == '.mtlx' else 'usd-core'} reads it: {rec['rejected']}"
+        )
         return
     listed = {m[0] for m in rec["materials"]}
     missed = sorted(set(_expected_paths(path)) - listed)
@@ -141,23 +143,31 @@ def test_docs_totals_are_the_sweeps_totals():
     assert t["files"] == len(FILES) and not t["tracebacks"] and not t["rejected"]
     text = (ROOT / "docs" / "guide" / "materials.md").read_text()
     i, j = text.index(b.BEGIN), text.index(b.END) + len(b.END)
-    assert text[i:j] == b.totals_markdown(t), "regenerate: python tools/bench_readers.py --corpus-totals " \
-                                              "--write docs/guide/materials.md"
+    assert text[i:j] == b.totals_markdown(t), (
+        "regenerate: python tools/bench_readers.py --corpus-totals --write docs/guide/materials.md"
+    )
 
 
-EVAL_SAMPLE = ("MaterialX/resources/Materials/TestSuite/pbrlib/multioutput/multioutput.mtlx",
-               "usd-wg-assets/full_assets/StandardShaderBall/layers/environment.usda",
-               "usd-wg-assets/test_assets/RoughnessTest/RoughnessTest.usdz",
-               "usd-wg-assets/test_assets/MaterialXTest/standard_surface_brass_tiled.mtlx",
-               "MaterialX/resources/Materials/TestSuite/stdlib/color_management/color_management.mtlx")
+EVAL_SAMPLE = (
+    "MaterialX/resources/Materials/TestSuite/pbrlib/multioutput/multioutput.mtlx",
+    "usd-wg-assets/full_assets/StandardShaderBall/layers/environment.usda",
+    "usd-wg-assets/test_assets/RoughnessTest/RoughnessTest.usdz",
+    "usd-wg-assets/test_assets/MaterialXTest/standard_surface_brass_tiled.mtlx",
+    "MaterialX/resources/Materials/TestSuite/stdlib/color_management/color_management.mtlx",
+)
 
 
 @pytest.mark.corpus
 @pytest.mark.skipif(not HAS_CORPUS, reason="../shared/corpus/realworld is absent")
 @pytest.mark.parametrize("rel", EVAL_SAMPLE)
 def test_cli_eval_exits_0_or_1_with_json(rel):
-    proc = subprocess.run([sys.executable, "-m", "openpbr_diffuse", "eval", str(REALWORLD / rel), "--json"],
-                          capture_output=True, text=True, timeout=120, cwd=ROOT)
+    proc = subprocess.run(
+        [sys.executable, "-m", "openpbr_diffuse", "eval", str(REALWORLD / rel), "--json"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=ROOT,
+    )
     assert proc.returncode in (0, 1), proc.stderr
     assert "Traceback" not in proc.stderr
     doc = json.loads(proc.stdout)
@@ -222,11 +232,23 @@ def test_a_multi_output_node_lists_each_output(tmp_path):
 
 # ----------------------------------------------------------------------------- independent reading
 # colour-space names (MaterialX's, USD's tokens, UsdUVTexture's) -> pxr Gf.ColorSpace names
-_GF = {"lin_rec709": "LinearRec709", "srgb_texture": "SRGBRec709", "acescg": "LinearAP1",
-       "g22_rec709": "G22Rec709", "g18_rec709": "G18Rec709", "g24_rec709": "G24Rec709",
-       "aces2065-1": "LinearAP0", "lin_adobergb": "LinearAdobeRGB", "adobergb": "G22AdobeRGB",
-       "lin_displayp3": "LinearDisplayP3", "srgb_displayp3": "SRGBP3D65", "lin_rec2020": "LinearRec2020",
-       "g22_ap1": "G22AP1", "srgb_ap1": "SRGBAP1", "sRGB": "SRGBRec709"}
+_GF = {
+    "lin_rec709": "LinearRec709",
+    "srgb_texture": "SRGBRec709",
+    "acescg": "LinearAP1",
+    "g22_rec709": "G22Rec709",
+    "g18_rec709": "G18Rec709",
+    "g24_rec709": "G24Rec709",
+    "aces2065-1": "LinearAP0",
+    "lin_adobergb": "LinearAdobeRGB",
+    "adobergb": "G22AdobeRGB",
+    "lin_displayp3": "LinearDisplayP3",
+    "srgb_displayp3": "SRGBP3D65",
+    "lin_rec2020": "LinearRec2020",
+    "g22_ap1": "G22AP1",
+    "srgb_ap1": "SRGBAP1",
+    "sRGB": "SRGBRec709",
+}
 #: The colour space of colours whose document says none (the readers' documented convention:
 #: OpenPBR's own default, ACEScg; the other shaders', linear Rec.709).
 _UNMARKED = {"open_pbr": "acescg"}
@@ -266,12 +288,12 @@ def _local(file):
 
     asset = Ar.GetResolver().OpenAsset(Ar.ResolvedPath(text))
     assert asset is not None, text
-    out = _scratch() / f"{abs(hash(text))}_{Path(text[text.rindex('[') + 1:-1]).name}"
+    out = _scratch() / f"{abs(hash(text))}_{Path(text[text.rindex('[') + 1 : -1]).name}"
     out.write_bytes(asset.GetBuffer())
     return str(out)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _pixels(file):
     import OpenImageIO as oiio
 
@@ -293,8 +315,12 @@ def _bilinear(file, u, v):
     def at(i, j):
         return px[j % h, i % w]
 
-    return ((1 - fx) * (1 - fy) * at(x0, y0) + fx * (1 - fy) * at(x0 + 1, y0)
-            + (1 - fx) * fy * at(x0, y0 + 1) + fx * fy * at(x0 + 1, y0 + 1))
+    return (
+        (1 - fx) * (1 - fy) * at(x0, y0)
+        + fx * (1 - fy) * at(x0 + 1, y0)
+        + (1 - fx) * fy * at(x0, y0 + 1)
+        + fx * fy * at(x0 + 1, y0 + 1)
+    )
 
 
 def _uv_points(file):
@@ -343,6 +369,7 @@ def _mx_input(node, name, unmarked, folder):
         t = _bilinear(file, u, v)
         vals = tuple(t[:n]) if t.size >= n else tuple(t[:1]) * n
         return vals
+
     return _Texture(file, fn), space
 
 
@@ -391,8 +418,9 @@ def _usd_expected(path, mpath, names):
             if tc:  # only the default uv set (an ND_texcoord_vector2 of index 0)
                 src = UsdShade.Shader(tc.GetConnectedSources()[0][0].source.GetPrim())
                 index = src.GetInput("index")
-                assert str(src.GetIdAttr().Get()) == "ND_texcoord_vector2" and (not index or index.Get() in (None, 0)), \
-                    f"sample: {a.GetPath()}"
+                assert str(src.GetIdAttr().Get()) == "ND_texcoord_vector2" and (
+                    not index or index.Get() in (None, 0)
+                ), f"sample: {a.GetPath()}"
             fin = tex.GetInput("file")
             fattrs = fin.GetValueProducingAttributes() if fin else []
             if not fattrs or not fattrs[0].Get() or not fattrs[0].Get().path:  # no file: the node's default
@@ -400,10 +428,12 @@ def _usd_expected(path, mpath, names):
                 out[name] = (d.Get() if d and d.Get() is not None else _sdr_default(tid, "default"), unmarked)
                 continue
             fattr = fattrs[0]
-            n = {"float": 1, "color3": 3, "vector3": 3, "color4": 4}[tid[len("ND_image_"):]]
+            n = {"float": 1, "color3": 3, "vector3": 3, "color4": 4}[tid[len("ND_image_") :]]
             file = fattr.Get().resolvedPath
-            out[name] = (_Texture(file, lambda u, v, file=file, n=n: tuple(_bilinear(file, u, v)[:n])),
-                         fattr.GetColorSpace() or unmarked)
+            out[name] = (
+                _Texture(file, lambda u, v, file=file, n=n: tuple(_bilinear(file, u, v)[:n])),
+                fattr.GetColorSpace() or unmarked,
+            )
             continue
         assert tid == "UsdUVTexture", f"sample: {a.GetPath()}"
         out[name] = _usd_texture(tex, a.GetBaseName())
@@ -436,56 +466,107 @@ def _usd_texture(tex, channel):
         rgba = np.array(rgba, float) * scale + bias
         pick = {"rgb": rgba[:3], "r": rgba[:1], "g": rgba[1:2], "b": rgba[2:3], "a": rgba[3:4]}[channel]
         return tuple(pick)
+
     return _Texture(file, fn), "lin_rec709" if channel == "rgb" else "raw"
 
 
 # ----------------------------------------------------------------------------- the fixed sample
-_NAMES = {"ND_open_pbr_surface_surfaceshader": ("base_color", "base_diffuse_roughness", "base_weight"),
-          "ND_standard_surface_surfaceshader": ("base_color", "diffuse_roughness", "base"),
-          "UsdPreviewSurface": ("diffuseColor", "roughness", "metallic"),
-          "ND_UsdPreviewSurface_surfaceshader": ("diffuseColor", "roughness", "metallic"),
-          "ND_gltf_pbr_surfaceshader": ("base_color", "roughness", "metallic"),
-          "ND_oren_nayar_diffuse_bsdf": ("color", "roughness", "weight")}
+_NAMES = {
+    "ND_open_pbr_surface_surfaceshader": ("base_color", "base_diffuse_roughness", "base_weight"),
+    "ND_standard_surface_surfaceshader": ("base_color", "diffuse_roughness", "base"),
+    "UsdPreviewSurface": ("diffuseColor", "roughness", "metallic"),
+    "ND_UsdPreviewSurface_surfaceshader": ("diffuseColor", "roughness", "metallic"),
+    "ND_gltf_pbr_surfaceshader": ("base_color", "roughness", "metallic"),
+    "ND_oren_nayar_diffuse_bsdf": ("color", "roughness", "weight"),
+}
 _MX, _WG, _MU = "MaterialX/resources/Materials/", "usd-wg-assets/", "materialxusd/tests/"
 SAMPLE = [
     # (file relative to the corpus, material path, reason of a known failure or None)
-    *[(_MX + f"Examples/StandardSurface/standard_surface_{n}.mtlx", m, None) for n, m in
-      [("chrome", "Chrome"), ("copper", "Copper"), ("gold", "Gold"), ("jade", "Jade"), ("plastic", "Plastic"),
-       ("velvet", "Velvet"), ("default", "Default"), ("glass", "Glass"), ("carpaint", "Car_Paint"),
-       ("greysphere", "Greysphere"), ("metal_brushed", "Metal_Brushed")]],
-    *[(_MX + f"Examples/UsdPreviewSurface/usd_preview_surface_{n}.mtlx", m, None) for n, m in
-      [("gold", "USD_Gold"), ("plastic", "USD_Plastic"), ("default", "USD_Default"), ("glass", "USD_Glass")]],
-    *[(_MX + f"Examples/GltfPbr/gltf_pbr_{n}.mtlx", m, None) for n, m in
-      [("gold", "PBR_Gold"), ("plastic", "PBR_Plastic"), ("default", "Default")]],
+    *[
+        (_MX + f"Examples/StandardSurface/standard_surface_{n}.mtlx", m, None)
+        for n, m in [
+            ("chrome", "Chrome"),
+            ("copper", "Copper"),
+            ("gold", "Gold"),
+            ("jade", "Jade"),
+            ("plastic", "Plastic"),
+            ("velvet", "Velvet"),
+            ("default", "Default"),
+            ("glass", "Glass"),
+            ("carpaint", "Car_Paint"),
+            ("greysphere", "Greysphere"),
+            ("metal_brushed", "Metal_Brushed"),
+        ]
+    ],
+    *[
+        (_MX + f"Examples/UsdPreviewSurface/usd_preview_surface_{n}.mtlx", m, None)
+        for n, m in [
+            ("gold", "USD_Gold"),
+            ("plastic", "USD_Plastic"),
+            ("default", "USD_Default"),
+            ("glass", "USD_Glass"),
+        ]
+    ],
+    *[
+        (_MX + f"Examples/GltfPbr/gltf_pbr_{n}.mtlx", m, None)
+        for n, m in [("gold", "PBR_Gold"), ("plastic", "PBR_Plastic"), ("default", "Default")]
+    ],
     *[(_MX + "TestSuite/pbrlib/bsdf/oren_nayar_diffuse.mtlx", f"oren_nayar_diffuse/out{i}", None) for i in (1, 2, 5)],
     (_MX + "TestSuite/pbrlib/surfaceshader/transparency_hints.mtlx", "geom_hint", None),
-    *[(_WG + "test_assets/TextureCoordinateTest/TextureCoordinateTest.mtlx", m, None)
-      for m in ("BottomLeftMat", "TopRightMat", "BackPlaneMat")],
-    *[(_WG + "test_assets/TextureCoordinateTest/TextureCoordinateTest.usda",
-       f"/Asset/Materials/UsdPreviewSurface/Materials/{m}", None) for m in ("BottomLeftMat", "TopRightMat")],
-    *[(_WG + f"test_assets/TextureFileFormatTests/{n}.usda", "/Scene/Looks/MainMaterial", None) for n in
-      ("png_rgb_8-bit", "png_rgb_16-bit", "png_grayscale_8-bit", "png_grayscale_16-bit", "jpeg_rgb_8-bit")],
-    (_WG + "test_assets/AlphaBlendModeTest/AlphaBlendModeTest.usd", "/AlphaBlendModeTest/Materials/Mat_Opaque__165642",
-     None),
+    *[
+        (_WG + "test_assets/TextureCoordinateTest/TextureCoordinateTest.mtlx", m, None)
+        for m in ("BottomLeftMat", "TopRightMat", "BackPlaneMat")
+    ],
+    *[
+        (
+            _WG + "test_assets/TextureCoordinateTest/TextureCoordinateTest.usda",
+            f"/Asset/Materials/UsdPreviewSurface/Materials/{m}",
+            None,
+        )
+        for m in ("BottomLeftMat", "TopRightMat")
+    ],
+    *[
+        (_WG + f"test_assets/TextureFileFormatTests/{n}.usda", "/Scene/Looks/MainMaterial", None)
+        for n in ("png_rgb_8-bit", "png_rgb_16-bit", "png_grayscale_8-bit", "png_grayscale_16-bit", "jpeg_rgb_8-bit")
+    ],
+    (
+        _WG + "test_assets/AlphaBlendModeTest/AlphaBlendModeTest.usd",
+        "/AlphaBlendModeTest/Materials/Mat_Opaque__165642",
+        None,
+    ),
     (_WG + "full_assets/McUsd/McUsd.usda", "/McUsd/Looks/fern", None),
-    (_WG + "full_assets/StandardShaderBall/layers/environment.usda",
-     "/standard_shader_ball_scene/materials/box_base", None),
+    (
+        _WG + "full_assets/StandardShaderBall/layers/environment.usda",
+        "/standard_shader_ball_scene/materials/box_base",
+        None,
+    ),
     (_WG + "test_assets/USDZ/AnimatedCube/AnimatedCube.usdz", None, None),
     (_WG + "test_assets/USDZ/CesiumMan/CesiumMan.usdz", "/CesiumMan/Materials/Cesium_Man_effect", None),
     (_WG + "test_assets/RoughnessTest/RoughnessTest.usdz", "/Roughness/Materials/Tex033", None),
     (_WG + "test_assets/RoughnessTest/RoughnessTest.usdz", "/Roughness/Materials/Const066", None),
-    (_WG + "test_assets/USDZ/InterpolationTest/InterpolationTest.usdz", "/InterpolationTest/Materials/Material_001",
-     None),
+    (
+        _WG + "test_assets/USDZ/InterpolationTest/InterpolationTest.usdz",
+        "/InterpolationTest/Materials/Material_001",
+        None,
+    ),
     (_WG + "test_assets/USDZ/BoxAnimated/BoxAnimated.usdz", "/BoxAnimated/Materials/outer", None),
-    *[(_MU + f"resources/Materials/Examples/OpenPbr/{n}.usda", f"/MaterialX/Materials/{n}", None)
-      for n in ("Aluminum_Brushed", "Car_Paint", "Default", "Honey", "Pearl", "Velvet")],
-    *[(_MU + f"resources/Materials/Examples/StandardSurface/{n}.usda", f"/MaterialX/Materials/{n}", None)
-      for n in ("Chrome", "Copper", "Jade", "Plastic")],
+    *[
+        (_MU + f"resources/Materials/Examples/OpenPbr/{n}.usda", f"/MaterialX/Materials/{n}", None)
+        for n in ("Aluminum_Brushed", "Car_Paint", "Default", "Honey", "Pearl", "Velvet")
+    ],
+    *[
+        (_MU + f"resources/Materials/Examples/StandardSurface/{n}.usda", f"/MaterialX/Materials/{n}", None)
+        for n in ("Chrome", "Copper", "Jade", "Plastic")
+    ],
     (_MU + "resources/Materials/Examples/UsdPreviewSurface/USD_Default.usda", "/MaterialX/Materials/USD_Default", None),
-    *[(_MU + f"resources/Materials/Examples/GltfPbr/{n}.usda", f"/MaterialX/Materials/{n}", None)
-      for n in ("PBR_Gold", "PBR_Plastic")],
-    *[(_MU + "physically_based/Brick_OPBR_MAT_PBM.usda", f"/MaterialX/Materials/{n}_OPBR_MAT_PBM", None)
-      for n in ("Aluminum", "Banana", "Brick", "Charcoal")],
+    *[
+        (_MU + f"resources/Materials/Examples/GltfPbr/{n}.usda", f"/MaterialX/Materials/{n}", None)
+        for n in ("PBR_Gold", "PBR_Plastic")
+    ],
+    *[
+        (_MU + "physically_based/Brick_OPBR_MAT_PBM.usda", f"/MaterialX/Materials/{n}_OPBR_MAT_PBM", None)
+        for n in ("Aluminum", "Banana", "Brick", "Charcoal")
+    ],
 ]
 
 

@@ -5,6 +5,7 @@ by walking the package, so a new module's examples run without being listed here
 modules named in ``MUST_HAVE_EXAMPLES`` must also keep at least one example.
 Other helpers may add modules of their own in ``tests/test_doctests_<topic>.py``.
 """
+
 import doctest
 import importlib
 import pkgutil
@@ -24,9 +25,13 @@ def public_modules():
 
 
 MODULES = public_modules()
-MUST_HAVE_EXAMPLES = ["openpbr_diffuse.models.api", "openpbr_diffuse.sampling.api",
-                      "openpbr_diffuse.albedo.tables", "openpbr_diffuse.nodes.oren_nayar",
-                      "openpbr_diffuse.nodes.openpbr_surface"]
+MUST_HAVE_EXAMPLES = [
+    "openpbr_diffuse.models.api",
+    "openpbr_diffuse.sampling.api",
+    "openpbr_diffuse.albedo.tables",
+    "openpbr_diffuse.nodes.oren_nayar",
+    "openpbr_diffuse.nodes.openpbr_surface",
+]
 
 
 @pytest.mark.parametrize("name", MODULES)

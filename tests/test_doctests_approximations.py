@@ -1,11 +1,15 @@
 """The Examples sections of the approximation modules run as written."""
+
 import doctest
 import importlib
 
 import pytest
 
-MODULES = ["openpbr_diffuse.approximations.sh", "openpbr_diffuse.approximations.gotanda2012",
-           "openpbr_diffuse.approximations.kulla_conty"]
+MODULES = [
+    "openpbr_diffuse.approximations.sh",
+    "openpbr_diffuse.approximations.gotanda2012",
+    "openpbr_diffuse.approximations.kulla_conty",
+]
 
 
 @pytest.mark.parametrize("name", MODULES)

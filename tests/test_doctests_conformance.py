@@ -1,12 +1,18 @@
 """The Examples sections of the conformance and report modules run as written."""
+
 import doctest
 import importlib
 
 import pytest
 
-MODULES = ["openpbr_diffuse.conformance.vectors", "openpbr_diffuse.conformance.deviations",
-           "openpbr_diffuse.sampling.quality", "openpbr_diffuse.report.render",
-           "openpbr_diffuse.conformance.grade", "openpbr_diffuse.conformance.templates"]
+MODULES = [
+    "openpbr_diffuse.conformance.vectors",
+    "openpbr_diffuse.conformance.deviations",
+    "openpbr_diffuse.sampling.quality",
+    "openpbr_diffuse.report.render",
+    "openpbr_diffuse.conformance.grade",
+    "openpbr_diffuse.conformance.templates",
+]
 
 
 @pytest.mark.parametrize("name", MODULES)

@@ -1,11 +1,11 @@
 """The Examples sections of the grader modules run as written."""
+
 import doctest
 import importlib
 
 import pytest
 
-MODULES = ["openpbr_diffuse.graders.chi2", "openpbr_diffuse.graders._arrays",
-           "openpbr_diffuse.graders.materialx"]
+MODULES = ["openpbr_diffuse.graders.chi2", "openpbr_diffuse.graders._arrays", "openpbr_diffuse.graders.materialx"]
 
 
 @pytest.mark.parametrize("name", MODULES)

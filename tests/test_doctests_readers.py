@@ -1,5 +1,6 @@
 """The readers' public modules keep runnable Examples (the generic doctest runner of
 tests/test_doctests.py runs them; here: that they exist and pass)."""
+
 import doctest
 import importlib
 

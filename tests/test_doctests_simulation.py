@@ -1,4 +1,5 @@
 """The Examples of the simulation API run as written."""
+
 import doctest
 import importlib
 

@@ -1,4 +1,5 @@
 """The Examples sections of the spectral package's docstrings run as written."""
+
 import doctest
 import importlib
 
@@ -6,9 +7,13 @@ import pytest
 
 pytest.importorskip("colour")
 
-MODULES = ["openpbr_diffuse.spectral.colorimetry", "openpbr_diffuse.spectral.recovery",
-           "openpbr_diffuse.spectral.colorsets", "openpbr_diffuse.spectral.validation",
-           "openpbr_diffuse.spectral.reference"]
+MODULES = [
+    "openpbr_diffuse.spectral.colorimetry",
+    "openpbr_diffuse.spectral.recovery",
+    "openpbr_diffuse.spectral.colorsets",
+    "openpbr_diffuse.spectral.validation",
+    "openpbr_diffuse.spectral.reference",
+]
 
 
 @pytest.mark.filterwarnings("ignore::colour.utilities.ColourRuntimeWarning")
@@ -23,8 +28,10 @@ def test_import_is_lazy():
     import subprocess
     import sys
 
-    code = ("import sys, openpbr_diffuse.spectral, openpbr_diffuse.cli.main as m; m.build_parser(); "
-            "print('colour' in sys.modules, 'OpenImageIO' in sys.modules)")
+    code = (
+        "import sys, openpbr_diffuse.spectral, openpbr_diffuse.cli.main as m; m.build_parser(); "
+        "print('colour' in sys.modules, 'OpenImageIO' in sys.modules)"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.split() == ["False", "False"]
 
@@ -33,8 +40,10 @@ def test_colour_plotting_still_importable_after_lazy_import():
     import subprocess
     import sys
 
-    code = ("from openpbr_diffuse.spectral.colorimetry import _colour; c = _colour(); "
-            "import colour.plotting; print(hasattr(colour.plotting, 'plot_single_sd'))")
+    code = (
+        "from openpbr_diffuse.spectral.colorimetry import _colour; c = _colour(); "
+        "import colour.plotting; print(hasattr(colour.plotting, 'plot_single_sd'))"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "True"
 
@@ -44,9 +53,11 @@ def test_missing_colour_science_is_one_clear_line():
     import subprocess
     import sys
 
-    code = ("import sys; sys.modules['colour'] = None\n"
-            "from openpbr_diffuse.cli.main import main\n"
-            "sys.exit(main(['colorshift', '--roughness', '1', '--mu', '1']))")
+    code = (
+        "import sys; sys.modules['colour'] = None\n"
+        "from openpbr_diffuse.cli.main import main\n"
+        "sys.exit(main(['colorshift', '--roughness', '1', '--mu', '1']))"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.returncode == 2 and out.stderr.count("\n") == 1
     assert "pip install 'colour-science" in out.stderr

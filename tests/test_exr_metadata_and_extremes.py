@@ -1,6 +1,6 @@
 """Metadata and text match the data (issue 13, finding 6)."""
+
 import json
-import math
 
 import numpy as np
 import pytest
@@ -46,13 +46,14 @@ def test_header_error_is_the_json_error(capsys):
 
 def test_full_on_reference_is_independent_of_the_table(capsys):
     """full_on's value is the table's; --reference integrates evaluate instead."""
-    code, out, _ = run(capsys, "albedo", "full_on", "--roughness", "0.5", "--mu", "0.05", "0.5",
-                       "--reference", "--json")
+    code, out, _ = run(
+        capsys, "albedo", "full_on", "--roughness", "0.5", "--mu", "0.05", "0.5", "--reference", "--json"
+    )
     data = json.loads(out)
     assert code == 0 and data["reference_source"] == "quadrature of evaluate"
     diff = np.abs(np.array(data["difference"]))
-    assert (diff > 0).all()                                          # not the table against itself
-    assert diff.max() <= load_table("full_on").interpolation_error   # and the table is that close
+    assert (diff > 0).all()  # not the table against itself
+    assert diff.max() <= load_table("full_on").interpolation_error  # and the table is that close
 
 
 def test_full_on_largest_albedo():
@@ -64,7 +65,7 @@ def test_full_on_largest_albedo():
     from openpbr_diffuse.albedo.quadrature import hemisphere_albedo
 
     table = load_table("full_on")
-    E = table.e_g + table.e_h                       # rho = 1: E = e_g + rho^2 e_h
+    E = table.e_g + table.e_h  # rho = 1: E = e_g + rho^2 e_h
     j, k = np.unravel_index(np.argmax(E), E.shape)
     assert table.mu[j] == 0.0 and E.max() == pytest.approx(1.0510, abs=5e-5)
     sig = np.linspace(0.2, 0.45, 251)

@@ -13,6 +13,7 @@ Promises checked (the README states them):
 Rows: 40k per model and dtype for ``evaluate`` (0.8 M), 40k per strategy and dtype for
 ``sample``/``pdf`` (0.5 M), 1 M for the broadcast check -- about 2.5 M in all.
 """
+
 import math
 import tracemalloc
 
@@ -24,8 +25,9 @@ from openpbr_diffuse import _arrays as ar
 from openpbr_diffuse.models.registry import INFO
 
 N = 40_000
-Z_EDGES = np.array([0.0, -0.0, 1.0, 1e-300, 5e-324, 1e-310, 2.2250738585072014e-308, 1e-320,
-                    1.0 - 1e-16, 1e-7, 1e-38, 1.4e-45, 0.5])
+Z_EDGES = np.array(
+    [0.0, -0.0, 1.0, 1e-300, 5e-324, 1e-310, 2.2250738585072014e-308, 1e-320, 1.0 - 1e-16, 1e-7, 1e-38, 1.4e-45, 0.5]
+)
 PHI_EDGES = np.array([0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi])
 
 
@@ -42,14 +44,14 @@ def pairs(rng, n):
     wo = directions(rng, n)
     wi = directions(rng, n)
     kind = rng.integers(0, 7, n)
-    wi[kind == 1] = wo[kind == 1]                                    # wi = wo
-    wi[kind == 2] = -wo[kind == 2]                                   # wi = -wo (below)
-    wi[kind == 3] = wo[kind == 3] * [-1.0, -1.0, 1.0]                # opposite azimuth
-    wi[kind == 4] = wo[kind == 4] * [1.0, -1.0, 1.0]                 # mirrored in the xz-plane
-    wi[kind == 5] = wo[kind == 5] * [1.0, 1.0, -1.0]                 # reflected in the surface
+    wi[kind == 1] = wo[kind == 1]  # wi = wo
+    wi[kind == 2] = -wo[kind == 2]  # wi = -wo (below)
+    wi[kind == 3] = wo[kind == 3] * [-1.0, -1.0, 1.0]  # opposite azimuth
+    wi[kind == 4] = wo[kind == 4] * [1.0, -1.0, 1.0]  # mirrored in the xz-plane
+    wi[kind == 5] = wo[kind == 5] * [1.0, 1.0, -1.0]  # reflected in the surface
     noisy = kind == 6
     wi[noisy] = wo[noisy] + rng.normal(0.0, 1e-9, (noisy.sum(), 3))
-    scale = 1.0 + ar.UNIT_TOL * rng.uniform(-0.99, 0.99, (n, 2))     # accepted lengths
+    scale = 1.0 + ar.UNIT_TOL * rng.uniform(-0.99, 0.99, (n, 2))  # accepted lengths
     scale[rng.random(n) < 0.5] = 1.0
     return wi * scale[:, :1], wo * scale[:, 1:]
 
@@ -68,8 +70,7 @@ def test_evaluate_edges(model, dtype):
     r = roughness(rng, N, top)
     rho = np.where(rng.random((N, 3)) < 0.5, rng.choice([0.0, 1.0], (N, 3)), rng.random((N, 3)))
     for mode in ("reference", "white_tint"):
-        f = od.evaluate(model, wi.astype(dtype), wo.astype(dtype), r.astype(dtype), rho.astype(dtype),
-                        color_mode=mode)
+        f = od.evaluate(model, wi.astype(dtype), wo.astype(dtype), r.astype(dtype), rho.astype(dtype), color_mode=mode)
         assert f.dtype == dtype and np.isfinite(f).all()
         if model != "full_on":
             assert f.min() >= 0.0, f"{model} {mode}: min f = {f.min()!r}"
@@ -79,8 +80,9 @@ def test_evaluate_edges(model, dtype):
 
 def u_edges(rng, n, dtype):
     top = float(np.nextafter(dtype(1), dtype(0)))
-    edges = np.array([0.0, float(np.finfo(dtype).smallest_subnormal), 1e-300, 1e-38, top,
-                      1.0 - 1e-16, 1.0 - 1e-7, 0.25, 0.5, 0.75])
+    edges = np.array(
+        [0.0, float(np.finfo(dtype).smallest_subnormal), 1e-300, 1e-38, top, 1.0 - 1e-16, 1.0 - 1e-7, 0.25, 0.5, 0.75]
+    )
     u = np.where(rng.random((n, 2)) < 0.6, rng.choice(edges, (n, 2)), rng.random((n, 2)))
     return np.minimum(u.astype(dtype), dtype(top))
 
@@ -104,7 +106,7 @@ def test_sample_edges(strategy, dtype):
     assert (p[~up] == 0).all()
     if strategy != "ltc":
         assert (wi[:, 2] > 0).all(), f"{strategy}: wi.z <= 0 at u = {u[wi[:, 2] <= 0][:3].tolist()}"
-    if strategy == "eon":     # r = 0 rows are cosine sampling, for every u
+    if strategy == "eon":  # r = 0 rows are cosine sampling, for every u
         zero = r == 0
         wc, pc = od.sample("cosine", wo[zero], r[zero], u[zero])
         np.testing.assert_allclose(wi[zero], wc, rtol=0, atol=4e-7 if dtype == np.float32 else 1e-12)

@@ -6,15 +6,15 @@ F82-tint model, and an independent hemisphere quadrature of the BRDF
 (``openpbr_diffuse.albedo.quadrature``, spherical coordinates of wi) against which the
 half-vector quadrature that generated the tables and the tables themselves are graded.
 """
+
 import math
 
 import numpy as np
 import pytest
-
 from _quad import gauss_legendre
+
 from openpbr_diffuse.albedo.quadrature import hemisphere_albedo
-from openpbr_diffuse.microfacet import fresnel, ggx, quadrature
-from openpbr_diffuse.microfacet import tables
+from openpbr_diffuse.microfacet import fresnel, ggx, quadrature, tables
 
 
 def _wo(mu):
@@ -23,9 +23,11 @@ def _wo(mu):
 
 def _quad_albedo(alpha, mu, fresnel, n=48):
     """E(mu) by quadrature of the BRDF in wi (spherical coordinates, panels at theta_o)."""
+
     def brdf(wi, wo):
         m, c = ggx.microfacet_terms(wi, wo, alpha)
         return m * fresnel(c)
+
     return float(hemisphere_albedo(brdf, mu, n=n))
 
 
@@ -47,8 +49,10 @@ class TestMicrofacet:
         assert _quad_albedo(1.0, 1.0, lambda c: 1.0) == pytest.approx(1.0 - math.log(2.0), abs=1e-9)
 
     def test_reciprocity(self, rng):
-        wi = rng.normal(size=(1000, 3)); wi[:, 2] = np.abs(wi[:, 2])
-        wo = rng.normal(size=(1000, 3)); wo[:, 2] = np.abs(wo[:, 2])
+        wi = rng.normal(size=(1000, 3))
+        wi[:, 2] = np.abs(wi[:, 2])
+        wo = rng.normal(size=(1000, 3))
+        wo[:, 2] = np.abs(wo[:, 2])
         wi /= np.linalg.norm(wi, axis=1, keepdims=True)
         wo /= np.linalg.norm(wo, axis=1, keepdims=True)
         a, _ = ggx.microfacet_terms(wi, wo, 0.3)
@@ -65,7 +69,7 @@ class TestFresnel:
     @pytest.mark.parametrize("eta", [1.33, 1.5, 2.4])
     def test_dielectric_against_snell(self, eta):
         c = np.linspace(0.01, 1.0, 50)
-        s = np.sqrt(1.0 - c * c) / eta                         # Snell: sin t = sin i / eta
+        s = np.sqrt(1.0 - c * c) / eta  # Snell: sin t = sin i / eta
         ct = np.sqrt(1.0 - s * s)
         rs = (c - eta * ct) / (c + eta * ct)
         rp = (eta * c - ct) / (eta * c + ct)
@@ -80,9 +84,11 @@ class TestFresnel:
         # OpenPBR: eta' is the index whose F0 is specular_weight * F0(eta)
         for w, ior in [(0.5, 1.5), (1.0, 2.0), (0.1, 1.33), (2.0, 1.5)]:
             x = fresnel.modulated_ior_parameter(w, ior)
-            assert fresnel.f0_of_eta(fresnel.eta_of_parameter(x)) == pytest.approx(w * fresnel.f0_of_eta(ior), rel=1e-12)
+            assert fresnel.f0_of_eta(fresnel.eta_of_parameter(x)) == pytest.approx(
+                w * fresnel.f0_of_eta(ior), rel=1e-12
+            )
         assert fresnel.modulated_ior_parameter(0.0, 1.5) == 0.0
-        assert fresnel.modulated_ior_parameter(1.0, 1.0 / 1.5) < 0.0   # eta < 1 keeps its side
+        assert fresnel.modulated_ior_parameter(1.0, 1.0 / 1.5) < 0.0  # eta < 1 keeps its side
 
     def test_f82_tint_defining_properties(self):
         F0 = np.array([[0.9, 0.6, 0.3]])
@@ -121,12 +127,13 @@ class TestSampling:
 
 # ----------------------------------------------------------------------------- albedo quadrature and tables
 class TestHalfVectorQuadrature:
-    @pytest.mark.parametrize("alpha, mu, eta", [(0.09, 0.3, 1.5), (0.25, 0.05, 1.5), (0.6, 0.8, 2.0),
-                                                (0.0025, 0.5, 1.33), (1.0, 0.02, 1.5)])
+    @pytest.mark.parametrize(
+        "alpha, mu, eta", [(0.09, 0.3, 1.5), (0.25, 0.05, 1.5), (0.6, 0.8, 2.0), (0.0025, 0.5, 1.33), (1.0, 0.02, 1.5)]
+    )
     def test_agrees_with_hemisphere_quadrature(self, alpha, mu, eta):
         f = lambda c: fresnel.fresnel_dielectric(c, eta)
         half = quadrature.albedo_quadrature(mu, alpha, lambda c: f(c)[None], 48, 48)[0]
-        if alpha < 0.01:   # too peaked for the wi-space grid: compare with a finer half-vector rule
+        if alpha < 0.01:  # too peaked for the wi-space grid: compare with a finer half-vector rule
             ref = quadrature.albedo_quadrature(mu, alpha, lambda c: f(c)[None], 128, 128)[0]
         else:
             ref = _quad_albedo(alpha, mu, f, n=64)
@@ -144,8 +151,9 @@ class TestTables:
         assert np.all(tables.dielectric_albedo(np.linspace(0, 1, 7), 0.3, 0.0) == 0.0)
 
     # Documented accuracy (specular_albedo docstring / README): independent quadrature vs table.
-    @pytest.mark.parametrize("r_lo, r_hi, mu_lo, tol", [(0.2, 1.0, 0.05, 2e-4), (0.2, 1.0, 0.0, 6e-4),
-                                                        (0.0, 0.2, 0.05, 3e-3)])
+    @pytest.mark.parametrize(
+        "r_lo, r_hi, mu_lo, tol", [(0.2, 1.0, 0.05, 2e-4), (0.2, 1.0, 0.0, 6e-4), (0.0, 0.2, 0.05, 3e-3)]
+    )
     def test_interpolation_error(self, rng, r_lo, r_hi, mu_lo, tol):
         worst_d = worst_c = 0.0
         for _ in range(12):
@@ -155,8 +163,9 @@ class TestTables:
             x = float(fresnel.modulated_ior_parameter(weight, ior))
             alpha = float(ggx.alpha_of(r))
             eta = float(fresnel.eta_of_parameter(x))
-            fres = lambda c: np.stack([fresnel.fresnel_dielectric(c, eta), np.ones_like(c),
-                                       (1 - c) ** 5, c * (1 - c) ** 6])
+            fres = lambda c: np.stack(
+                [fresnel.fresnel_dielectric(c, eta), np.ones_like(c), (1 - c) ** 5, c * (1 - c) ** 6]
+            )
             ref = quadrature.albedo_quadrature(max(mu, tables.MU0), alpha, fres, 48, 48)
             worst_d = max(worst_d, abs(float(tables.dielectric_albedo(mu, r, x)) - ref[0]))
             worst_c = max(worst_c, float(np.max(np.abs(np.array(tables.conductor_basis(mu, r)) - ref[1:]))))
@@ -167,6 +176,7 @@ class TestTables:
         tint = np.array([0.9, 0.7, 0.5])
         for r, mu in [(0.3, 0.4), (0.7, 0.9)]:
             alpha = float(ggx.alpha_of(r))
-            ref = [_quad_albedo(alpha, mu, lambda c, k=k: fresnel.fresnel_f82_tint(c, F0, tint)[..., k])
-                   for k in range(3)]
+            ref = [
+                _quad_albedo(alpha, mu, lambda c, k=k: fresnel.fresnel_f82_tint(c, F0, tint)[..., k]) for k in range(3)
+            ]
             assert np.allclose(tables.f82_albedo(mu, r, F0, tint), ref, atol=3e-4)

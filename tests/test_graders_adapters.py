@@ -6,6 +6,7 @@ in C++, with one preprocessor switch per known deviation; the adapters compile a
 name, and pass the right one.  Nothing here calls the library's models: the expected diagnosis
 is the deviation that was written in.
 """
+
 import json
 import re
 import shutil
@@ -127,9 +128,15 @@ vec3 E_test(float mu, float r, vec3 rho) {
 """
 
 # The same function in C++17 + GLM: the GLSL text with GLM names and float literals.
-CPP = re.sub(r"(?<![\w.])(\d+\.\d*(?:e[-+]?\d+)?|\d+e[-+]?\d+)(?![\w.])", r"\1f",
-             GLSL.replace("vec3", "glm::vec3").replace("const float", "constexpr float")
-             .replace("clamp(", "glm::clamp(").replace("max(", "glm::max(").replace("dot(", "glm::dot("))
+CPP = re.sub(
+    r"(?<![\w.])(\d+\.\d*(?:e[-+]?\d+)?|\d+e[-+]?\d+)(?![\w.])",
+    r"\1f",
+    GLSL.replace("vec3", "glm::vec3")
+    .replace("const float", "constexpr float")
+    .replace("clamp(", "glm::clamp(")
+    .replace("max(", "glm::max(")
+    .replace("dot(", "glm::dot("),
+)
 
 
 def check(capsys, *args):
@@ -182,8 +189,9 @@ def test_glsl_adapter_passes_the_right_function(glsl_file, capsys):
 @pytest.mark.parametrize("switch", DEVIATIONS)
 def test_glsl_adapter_names_the_deviation(glsl_file, capsys, switch):
     name, changes_albedo = DEVIATIONS[switch]
-    status, result = check(capsys, "--glsl", str(glsl_file), "--function", "f_test", "--albedo-function", "E_test",
-                           "--define", switch)
+    status, result = check(
+        capsys, "--glsl", str(glsl_file), "--function", "f_test", "--albedo-function", "E_test", "--define", switch
+    )
     q = by_quantity(result)
     assert status == 1
     assert not q["brdf"]["passed"] and q["brdf"]["diagnosis"] == name, q["brdf"]["detail"]
@@ -213,8 +221,9 @@ def test_cpp_adapter_names_the_deviation(cpp_file, capsys, switch):
 @pytest.mark.parametrize("switch", DEVIATIONS)
 def test_cpp_adapter_names_every_deviation(cpp_file, capsys, switch):
     name, changes_albedo = DEVIATIONS[switch]
-    status, result = check(capsys, "--cpp", str(cpp_file), "--function", "f_test", "--albedo-function", "E_test",
-                           "--define", switch)
+    status, result = check(
+        capsys, "--cpp", str(cpp_file), "--function", "f_test", "--albedo-function", "E_test", "--define", switch
+    )
     q = by_quantity(result)
     assert status == 1 and q["brdf"]["diagnosis"] == name, q["brdf"]["detail"]
     if changes_albedo:

@@ -5,6 +5,7 @@ independent reading of the code: a prediction built from the library's own model
 (``evaluate``, ``eon_terms``) for what the code's light setup feeds the lobe, never from
 Babylon's shader text; the Lambert limit at roughness 0 is computed by hand.
 """
+
 import math
 
 import numpy as np
@@ -105,8 +106,11 @@ def test_shaders_are_read_from_the_package_not_the_project(folder):
     import openpbr_diffuse
 
     root = Path(openpbr_diffuse.__file__).parents[1]
-    assert not any("diffuseBRDF_EON(" in p.read_text(errors="ignore")
-                   for p in root.rglob("*") if p.suffix in (".glsl", ".wgsl", ".fx", ".js") and p.is_file())
+    assert not any(
+        "diffuseBRDF_EON(" in p.read_text(errors="ignore")
+        for p in root.rglob("*")
+        if p.suffix in (".glsl", ".wgsl", ".fx", ".js") and p.is_file()
+    )
 
 
 @pytest.mark.slow
@@ -135,7 +139,7 @@ def test_point_and_spot_lights_pass_ldotv_zero(graded):
     pred = _predict_ldotv_zero(rows.wi, rows.wo, rows.roughness, rows.rho)
     for label in ("point light", "spot light", "WGSL point light", "WGSL spot light"):
         g = q["brdf " + label]
-        assert not g.passed and g.diagnosis is None and g.max_abs_error > 1.0   # 247 vs 0.25 at retro-reflection
+        assert not g.passed and g.diagnosis is None and g.max_abs_error > 1.0  # 247 vs 0.25 at retro-reflection
         out = dict(s.paths)[label].brdf(rows.wi, rows.wo, rows.roughness, rows.rho)
         assert _within(out, pred) <= 1.0
         # the directional light's prediction does not explain it
@@ -175,7 +179,7 @@ def test_rect_cosine_solid_angle_against_quadrature():
         p = wi[k] + a[..., None] * t1 + b[..., None] * t2
         d = np.linalg.norm(p, axis=-1)
         # dω = dA cos(light normal) / d², cos = (p/d)·wi; integrand cos θ = p_z / d
-        val = np.sum((p[..., 2] / d) * (1.0 / d) / d ** 2) * (2 * half / 400) ** 2
+        val = np.sum((p[..., 2] / d) * (1.0 / d) / d**2) * (2 * half / 400) ** 2
         assert abs(got[k] - val) < 1e-5 * val
 
 
@@ -183,7 +187,7 @@ def test_rect_cosine_solid_angle_against_quadrature():
 def test_hemispheric_light_is_rho(graded):
     s, q = graded
     g = q["albedo hemispheric light"]
-    assert not g.passed and g.diagnosis == "white_tint"     # E(rho = 1) = 1, so rho * 1 = rho
+    assert not g.passed and g.diagnosis == "white_tint"  # E(rho = 1) = 1, so rho * 1 = rho
     rows = _albedo_rows()
     out = dict(s.paths)["hemispheric light"].albedo(rows.mu, rows.roughness, rows.rho)
     assert np.allclose(out, rows.rho, rtol=1e-6, atol=0)
@@ -212,7 +216,7 @@ def test_filtered_environment(graded):
     assert np.max(np.abs(out - pred)[far]) < 3e-4
     assert np.max(np.abs(out - pred)[rows.mu <= 0.01]) > 1e-3
     ref = directional_albedo("eon", rows.mu, rows.roughness, rows.rho)
-    assert np.max(np.abs(pred - ref)) > ABS                   # the clamped lobe is not EON either
+    assert np.max(np.abs(pred - ref)) > ABS  # the clamped lobe is not EON either
 
 
 @pytest.mark.slow

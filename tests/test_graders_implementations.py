@@ -12,6 +12,7 @@ page "Graded implementations"), each backed by a reason in the code under test:
 Code that no package installs is graded with --glsl / --cpp (tests/test_graders_adapters.py,
 tests/test_subjects_deviations.py).
 """
+
 import numpy as np
 import pytest
 
@@ -55,7 +56,7 @@ def test_materialx_glsl_clamps_ldotv(graded):
     assert r.version["materialx"] and len(r.version["sha256"]) == 64
     assert "pbrlib/genglsl/mx_oren_nayar_diffuse_bsdf.glsl" in r.version["files"]
     assert not q["brdf"].passed and q["brdf"].diagnosis == "ldotv_clamped"
-    assert q["brdf"].max_abs_error > 0.1          # the s <= 0 branch: L.V < 0 rows
+    assert q["brdf"].max_abs_error > 0.1  # the s <= 0 branch: L.V < 0 rows
     assert q["albedo"].passed and q["albedo"].max_abs_error < 5e-5
     assert not r.passed
 
@@ -71,8 +72,9 @@ def _bpy_available():
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(not _bpy_available(), reason="bpy not installed (pip install bpy, or set "
-                                                 "OPENPBR_DIFFUSE_BPY_PYTHON)")
+@pytest.mark.skipif(
+    not _bpy_available(), reason="bpy not installed (pip install bpy, or set OPENPBR_DIFFUSE_BPY_PYTHON)"
+)
 def test_cycles_has_an_extra_rho_on_f_ms():
     from openpbr_diffuse.conformance.deviations import DEVIATIONS, reference
     from openpbr_diffuse.conformance.vectors import default_vectors

@@ -1,4 +1,5 @@
 """User code (--cpp/--glsl) runs in a child process under a wall-time and memory limit."""
+
 from __future__ import annotations
 
 import os
@@ -14,8 +15,9 @@ from openpbr_diffuse.graders import limits
 from openpbr_diffuse.graders.errors import GraderUnavailable
 
 ROOT = Path(__file__).resolve().parents[1]
-needs_gxx = pytest.mark.skipif(shutil.which("g++") is None or not Path("/usr/include/glm/glm.hpp").is_file(),
-                               reason="g++ and libglm-dev needed")
+needs_gxx = pytest.mark.skipif(
+    shutil.which("g++") is None or not Path("/usr/include/glm/glm.hpp").is_file(), reason="g++ and libglm-dev needed"
+)
 
 
 def _processes_with(marker: str) -> list[str]:
@@ -34,16 +36,24 @@ def _processes_with(marker: str) -> list[str]:
 
 def _check(args: list[str], tmp_path: Path) -> subprocess.CompletedProcess:
     env = dict(os.environ, PYTHONPATH=str(ROOT), OPENPBR_DIFFUSE_CACHE=str(tmp_path / "cache"))
-    return subprocess.run([sys.executable, "-m", "openpbr_diffuse", "check", *args], capture_output=True,
-                          text=True, env=env, timeout=120, check=False)
+    return subprocess.run(
+        [sys.executable, "-m", "openpbr_diffuse", "check", *args],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+        check=False,
+    )
 
 
 @needs_gxx
 def test_cpp_infinite_loop_is_killed_within_timeout(tmp_path: Path) -> None:
     src = tmp_path / "spin_subject.cpp"
-    src.write_text("#include <glm/glm.hpp>\n"
-                   "glm::vec3 f(glm::vec3 wi, glm::vec3 wo, float r, glm::vec3 rho) {\n"
-                   "  volatile int x = 0; while (true) { x = x + 1; } return rho; }\n")
+    src.write_text(
+        "#include <glm/glm.hpp>\n"
+        "glm::vec3 f(glm::vec3 wi, glm::vec3 wo, float r, glm::vec3 rho) {\n"
+        "  volatile int x = 0; while (true) { x = x + 1; } return rho; }\n"
+    )
     start = time.monotonic()
     run = _check(["--cpp", str(src), "--function", "f", "--timeout", "3"], tmp_path)
     elapsed = time.monotonic() - start
@@ -92,8 +102,7 @@ def test_glsl_runs_in_a_killable_child(tmp_path: Path) -> None:
         pytest.skip(str(exc))
     import numpy as np
 
-    k = glsl.Kernel(code="float twice(float x) { return 2.0 * x; }", n_in=1, n_out=1,
-                    body="OUT(0) = twice(IN(0));")
+    k = glsl.Kernel(code="float twice(float x) { return 2.0 * x; }", n_in=1, n_out=1, body="OUT(0) = twice(IN(0));")
     assert np.allclose(k.run(np.arange(5, dtype=np.float32)).ravel(), 2 * np.arange(5))
     old = limits.TIMEOUT
     try:

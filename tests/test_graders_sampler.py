@@ -11,6 +11,7 @@ The grading must accept both correct samplers (cosine as a valid sampler whose p
 "eon"'s, with the variance warning at grazing view the paper's Fig. 10-12 predicts), reject the
 two wrong ones with the diagnosis named, and count NaN / below-horizon samples.
 """
+
 import json
 import shutil
 from xml.etree import ElementTree as ET
@@ -219,7 +220,7 @@ def _assert_eon_accepted(q_pdf, q_chi):
     assert q_pdf.passed and q_chi.passed, (q_pdf.sentence, q_chi.sentence)
     ref = _check(q_pdf, "sampler_pdf.reference")
     assert ref["status"] == "pass" and ref["by_strategy"]["eon"] <= 2e-3
-    assert ref["by_strategy"]["cosine"] > 0.1          # and it is not the cosine pdf
+    assert ref["by_strategy"]["cosine"] > 0.1  # and it is not the cosine pdf
     assert _check(q_pdf, "sampler_pdf.normalisation")["measured"] < 1e-3
     # the reference sampler's variance, within Monte Carlo noise of the same estimator
     assert 0.8 < _check(q_chi, "sampler_chi2.variance")["measured"] < 1.25
@@ -237,8 +238,8 @@ def _assert_grazing_rejected(q_pdf, q_chi):
 
 
 def _assert_uniform_pdf_rejected(q_pdf, q_chi):
-    assert q_pdf.passed                                  # 1 / (2 pi) is a normalised pdf ...
-    assert not q_chi.passed and q_chi.diagnosis == "samples_do_not_follow_pdf"   # ... not theirs
+    assert q_pdf.passed  # 1 / (2 pi) is a normalised pdf ...
+    assert not q_chi.passed and q_chi.diagnosis == "samples_do_not_follow_pdf"  # ... not theirs
     assert _check(q_chi, "sampler_chi2.chi2")["measured"] < 1e-12
     assert q_chi.sentence.startswith("samples do not follow the pdf (chi² p = ")
 
@@ -253,13 +254,30 @@ def test_glsl_pdf_10_percent_off_at_grazing_view_fails_the_report(files, tmp_pat
     """Through ``report``: the first line names it, the sub-checks carry their ids in the JSON, the
     HTML and the JUnit file, and the histograms are drawn."""
     out = tmp_path / "report"
-    status = main(["report", "--glsl", str(files / "samplers.glsl"), "--sample-function", "eon_sample",
-                   "--pdf-function", "eon_pdf_grazing_off", "--sampler-model", "eon", "--out", str(out),
-                   "--evidence", "none", "--no-progress", "--junit", str(tmp_path / "junit.xml")])
+    status = main(
+        [
+            "report",
+            "--glsl",
+            str(files / "samplers.glsl"),
+            "--sample-function",
+            "eon_sample",
+            "--pdf-function",
+            "eon_pdf_grazing_off",
+            "--sampler-model",
+            "eon",
+            "--out",
+            str(out),
+            "--evidence",
+            "none",
+            "--no-progress",
+            "--junit",
+            str(tmp_path / "junit.xml"),
+        ]
+    )
     first = capsys.readouterr().out.splitlines()[0]
     assert status == 1
     assert first.startswith("glsl:samplers.glsl:eon_sample does not conform: pdf integrates to 1.1 at grazing mu_o")
-    assert "cases off by more than 0.005, at mu_o 0.02 to 0.15)" in first      # exactly the mu_o < 0.2 ones
+    assert "cases off by more than 0.005, at mu_o 0.02 to 0.15)" in first  # exactly the mu_o < 0.2 ones
     doc = json.loads((out / "report.json").read_text())
     v = {x["id"]: x for x in doc["implementation"]["verdicts"]}
     pdf, chi = v["implementation.sampler_pdf"], v["implementation.sampler_chi2"]
@@ -267,7 +285,7 @@ def test_glsl_pdf_10_percent_off_at_grazing_view_fails_the_report(files, tmp_pat
     checks = {c["id"]: c for c in pdf["checks"] + chi["checks"]}
     norm = checks["implementation.sampler_pdf.normalisation"]
     assert norm["status"] == "fail" and abs(norm["measured"] - 0.1) < 2e-3
-    assert checks["implementation.sampler_pdf.reference"]["status"] == "fail"          # claimed eon
+    assert checks["implementation.sampler_pdf.reference"]["status"] == "fail"  # claimed eon
     assert checks["implementation.sampler_chi2.chi2"]["status"] == "fail"
     assert checks["implementation.sampler_chi2.valid"]["status"] == "pass"
     assert "integrates to 1.1" in chi["sentence"] and "p = " in chi["sentence"]
@@ -324,17 +342,41 @@ def test_cpp_cosine_sampler_is_valid_with_a_pdf_other_than_eon(files):
 
 @needs_cxx
 def test_check_cli_grades_a_cpp_sampler_with_stable_ids(files, capsys):
-    status = main(["check", "--cpp", str(files / "samplers.cpp"), "--sample-function", "cos_sample",
-                   "--pdf-function", "uniform_pdf", "--quick", "--json"])
+    status = main(
+        [
+            "check",
+            "--cpp",
+            str(files / "samplers.cpp"),
+            "--sample-function",
+            "cos_sample",
+            "--pdf-function",
+            "uniform_pdf",
+            "--quick",
+            "--json",
+        ]
+    )
     doc = json.loads(capsys.readouterr().out)
     assert status == 1 and not doc["passed"]
     q = {x["quantity"]: x for x in doc["quantities"]}
     assert [c["id"] for c in q["sampler pdf"]["checks"]] == ["sampler_pdf.normalisation", "sampler_pdf.reference"]
-    assert [c["id"] for c in q["sampler chi2"]["checks"]] == ["sampler_chi2.chi2", "sampler_chi2.valid",
-                                                              "sampler_chi2.variance"]
+    assert [c["id"] for c in q["sampler chi2"]["checks"]] == [
+        "sampler_chi2.chi2",
+        "sampler_chi2.valid",
+        "sampler_chi2.variance",
+    ]
     assert q["sampler chi2"]["diagnosis"] == "samples_do_not_follow_pdf" and "plot" not in q["sampler chi2"]
-    status = main(["check", "--cpp", str(files / "samplers.cpp"), "--sample-function", "cos_sample",
-                   "--pdf-function", "cos_pdf", "--quick"])
+    status = main(
+        [
+            "check",
+            "--cpp",
+            str(files / "samplers.cpp"),
+            "--sample-function",
+            "cos_sample",
+            "--pdf-function",
+            "cos_pdf",
+            "--quick",
+        ]
+    )
     out = capsys.readouterr().out
     assert status == 0 and "[warn] sampler_chi2.variance" in out and "[pass] sampler_pdf.normalisation" in out
 
@@ -346,8 +388,22 @@ def test_sampler_options_go_together_and_name_the_option(files, capsys):
         generic.cpp_subject(files / "samplers.cpp", sample_function="eon_sample", pdf_function="x y")
     assert main(["check", "--sample-function", "eon_sample", "--pdf-function", "eon_pdf"]) == 2
     assert "needs --implementation, --glsl or --cpp" in capsys.readouterr().err
-    assert main(["check", "--cpp", str(files / "samplers.cpp"), "--sample-function", "s", "--pdf-function", "p",
-                 "--sampler-model", "nope"]) == 2
+    assert (
+        main(
+            [
+                "check",
+                "--cpp",
+                str(files / "samplers.cpp"),
+                "--sample-function",
+                "s",
+                "--pdf-function",
+                "p",
+                "--sampler-model",
+                "nope",
+            ]
+        )
+        == 2
+    )
 
 
 def test_normalisation_tolerance_separates_float32_from_a_10_percent_error():
@@ -355,6 +411,7 @@ def test_normalisation_tolerance_separates_float32_from_a_10_percent_error():
 
 
 # --- the rest of the matrix: slow (llvmpipe runs and g++ compiles) -------------------------------
+
 
 @pytest.mark.slow
 @needs_cxx

@@ -5,6 +5,7 @@ Checked by parsing every module's source (``ast``), independent of what happens 
 imported at run time: every ``import`` / ``from ... import`` statement (also those inside
 functions, the lazy ones) is resolved to a module of the package.
 """
+
 import ast
 from pathlib import Path
 
@@ -35,7 +36,7 @@ def _resolve(base, level, name, is_package):
     parts = base.split(".")
     if not is_package:
         parts = parts[:-1]
-    parts = parts[:len(parts) - (level - 1)]
+    parts = parts[: len(parts) - (level - 1)]
     return ".".join(parts + ([name] if name else []))
 
 
@@ -81,7 +82,7 @@ def _cycle(graph):
         stack.append(n)
         for m in sorted(graph.get(n, ())):
             if colour.get(m, BLACK) == GREY:
-                return stack[stack.index(m):] + [m]
+                return stack[stack.index(m) :] + [m]
             if colour.get(m) == WHITE:
                 c = visit(m)
                 if c:
@@ -116,7 +117,8 @@ def test_no_import_circle_between_subpackages():
         if name == "openpbr_diffuse":  # the top-level __init__ re-exports everything
             continue
         pkgs.setdefault(_package(name), set()).update(
-            _package(d) for d in deps if _package(d) != _package(name) and d != "openpbr_diffuse")
+            _package(d) for d in deps if _package(d) != _package(name) and d != "openpbr_diffuse"
+        )
     cycle = _cycle(pkgs)
     assert cycle is None, " -> ".join(cycle)
 
@@ -132,5 +134,5 @@ def test_no_private_module_of_a_sibling_package(name):
         parts = dep.split(".")
         for k, part in enumerate(parts):
             if part.startswith("_") and k > 0:
-                owner = parts[:k]          # the package that holds the private module
-                assert own[:len(owner)] == owner, f"{name} imports {dep}, private to {'.'.join(owner)}"
+                owner = parts[:k]  # the package that holds the private module
+                assert own[: len(owner)] == owner, f"{name} imports {dep}, private to {'.'.join(owner)}"

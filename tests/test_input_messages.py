@@ -1,4 +1,5 @@
 """Input checks do what their messages say (issue 13, finding 4)."""
+
 import math
 
 import numpy as np
@@ -10,7 +11,7 @@ from openpbr_diffuse import _arrays as ar
 
 def test_unit_tolerance_is_on_the_length():
     """|w| = 1 +- UNIT_TOL is accepted, as the message states; beyond it is refused."""
-    for length in (1.0 + 0.9 * ar.UNIT_TOL, 1.0 - 0.9 * ar.UNIT_TOL):   # |w|^2 - 1 ~ 1.8e-4
+    for length in (1.0 + 0.9 * ar.UNIT_TOL, 1.0 - 0.9 * ar.UNIT_TOL):  # |w|^2 - 1 ~ 1.8e-4
         assert od.evaluate("eon", [0.0, 0.0, length], [0.0, 0.0, 1.0], 0.5).shape == (1,)
     for length in (1.0 + 1.1 * ar.UNIT_TOL, 1.0 - 1.1 * ar.UNIT_TOL):
         with pytest.raises(ValueError, match=r"\|w\| = 1 within 0\.0001"):
@@ -33,10 +34,13 @@ def test_float16_unit_vectors_are_accepted_and_bad_ones_named_with_their_dtype()
         od.evaluate("eon", np.array([0.6, 0.0, 0.9], np.float16), [0.0, 0.0, 1.0], 0.5)
 
 
-@pytest.mark.parametrize("value,dtype,shown", [
-    (1.0000001, np.float32, "1.0000001"),
-    (1.0 + 2.0 ** -52, np.float64, "1.0000000000000002"),
-])
+@pytest.mark.parametrize(
+    "value,dtype,shown",
+    [
+        (1.0000001, np.float32, "1.0000001"),
+        (1.0 + 2.0**-52, np.float64, "1.0000000000000002"),
+    ],
+)
 def test_out_of_range_values_are_printed_in_full(value, dtype, shown):
     with pytest.raises(ValueError) as info:
         od.evaluate("eon", [0.0, 0.0, 1.0], [0.0, 0.0, 1.0], np.array(value, dtype))
@@ -68,18 +72,22 @@ def test_masked_values_are_refused_not_dropped():
         od.directional_albedo("eon", 0.5, 0.5, rho)
     # an empty mask is just the data
     clean = np.ma.masked_array([[0.0, 0.0, 1.0]])
-    np.testing.assert_array_equal(od.evaluate("eon", clean, [0.0, 0.0, 1.0], 0.5),
-                                  od.evaluate("eon", [[0.0, 0.0, 1.0]], [0.0, 0.0, 1.0], 0.5))
+    np.testing.assert_array_equal(
+        od.evaluate("eon", clean, [0.0, 0.0, 1.0], 0.5), od.evaluate("eon", [[0.0, 0.0, 1.0]], [0.0, 0.0, 1.0], 0.5)
+    )
 
 
-@pytest.mark.parametrize("kwargs,exc,needle", [
-    ({"rng": "seed"}, TypeError, "rng"),
-    ({"rng": -1}, ValueError, "rng"),
-    ({"rng": 1.5}, TypeError, "rng"),
-    ({"rng": 0, "shape": (-3,)}, ValueError, "shape"),
-    ({"rng": 0, "shape": (2.5,)}, ValueError, "shape"),
-    ({"rng": 0, "shape": "ab"}, ValueError, "shape"),
-])
+@pytest.mark.parametrize(
+    "kwargs,exc,needle",
+    [
+        ({"rng": "seed"}, TypeError, "rng"),
+        ({"rng": -1}, ValueError, "rng"),
+        ({"rng": 1.5}, TypeError, "rng"),
+        ({"rng": 0, "shape": (-3,)}, ValueError, "shape"),
+        ({"rng": 0, "shape": (2.5,)}, ValueError, "shape"),
+        ({"rng": 0, "shape": "ab"}, ValueError, "shape"),
+    ],
+)
 def test_sample_rng_arguments_are_checked_before_numpy(kwargs, exc, needle):
     with pytest.raises(exc, match=needle):
         od.sample_rng("eon", [0.0, 0.0, 1.0], 0.5, **kwargs)

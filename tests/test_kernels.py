@@ -1,14 +1,15 @@
 """The batch machinery under the public verbs: the vectorisable arccos, the specialised
 drivers (every input layout and channel count gives the row-by-row result), the fast input
 checks (same verdicts and messages as the NumPy ones), float32 accuracy and memory use."""
+
 import math
 import tracemalloc
 
 import numpy as np
 import pytest
+from conftest import random_directions, roughness_max
 
 import openpbr_diffuse as od
-from conftest import random_directions, roughness_max
 from openpbr_diffuse import _arrays as ar
 from openpbr_diffuse import _launch
 from openpbr_diffuse._jit import acos
@@ -17,8 +18,14 @@ from openpbr_diffuse._jit import acos
 # --- arccos ---------------------------------------------------------------------------------
 @pytest.mark.cpu_portable
 def test_acos_matches_libm_to_two_ulp():
-    x = np.concatenate([np.linspace(-1.0, 1.0, 200_001), [0.5, -0.5, np.nextafter(0.5, 1.0), 1e-300, -0.0],
-                        1.0 - np.logspace(-16, -1, 200), -1.0 + np.logspace(-16, -1, 200)])
+    x = np.concatenate(
+        [
+            np.linspace(-1.0, 1.0, 200_001),
+            [0.5, -0.5, np.nextafter(0.5, 1.0), 1e-300, -0.0],
+            1.0 - np.logspace(-16, -1, 200),
+            -1.0 + np.logspace(-16, -1, 200),
+        ]
+    )
     got = np.array([acos(v) for v in x[::7]] + [acos(v) for v in x[-410:]])
     xs = np.concatenate([x[::7], x[-410:]])
     ref = np.array([math.acos(v) for v in xs])
@@ -52,14 +59,19 @@ def test_layouts_give_the_rowwise_result(model, rng):
     rho = rng.uniform(0.0, 1.0, (n, 3))
     ref = od.evaluate(model, wi, wo, r, rho)
     cases = [
-        (np.asfortranarray(wi), wo[::-1][::-1], r, rho),                 # Fortran order, reversed view
+        (np.asfortranarray(wi), wo[::-1][::-1], r, rho),  # Fortran order, reversed view
         (np.repeat(wi, 2, axis=0)[::2], wo, r, np.asfortranarray(rho)),  # strided rows
     ]
     for args in cases:
         np.testing.assert_allclose(od.evaluate(model, *args), ref, rtol=1e-14, atol=0)
     # tiled: one wo, one roughness, one rho for every row; outer products
-    for args in [(wi, wo[7], r, rho), (wi, wo, r[3], rho), (wi, wo, r, rho[5]), (wi, wo[7], r[3], rho[5]),
-                 (wi[:20, None], wo[None, :30], r[None, :30], rho[:20, None])]:
+    for args in [
+        (wi, wo[7], r, rho),
+        (wi, wo, r[3], rho),
+        (wi, wo, r, rho[5]),
+        (wi, wo[7], r[3], rho[5]),
+        (wi[:20, None], wo[None, :30], r[None, :30], rho[:20, None]),
+    ]:
         args = tuple(np.asarray(a) for a in args)
         np.testing.assert_allclose(od.evaluate(model, *args), _rowwise(model, *args), rtol=1e-14, atol=0)
 
@@ -74,11 +86,13 @@ def test_tiled_inputs_across_chunks(rng):
     got = od.evaluate("eon", wi, wo, 0.4, rho)
     # rows may land in the vector body in one call and in the scalar remainder in the
     # other (different FMA contraction): equal to rounding, not bit for bit
-    np.testing.assert_allclose(got, od.evaluate("eon", wi, wo, np.full(n, 0.4), np.tile(rho, (n, 1))),
-                               rtol=1e-14, atol=0)
+    np.testing.assert_allclose(
+        got, od.evaluate("eon", wi, wo, np.full(n, 0.4), np.tile(rho, (n, 1))), rtol=1e-14, atol=0
+    )
     E = od.directional_albedo("eon_approx", wo[:, 2], 0.4, rho)
-    np.testing.assert_allclose(E, od.directional_albedo("eon_approx", wo[:, 2], np.full(n, 0.4),
-                                                        np.tile(rho, (n, 1))), rtol=1e-14, atol=0)
+    np.testing.assert_allclose(
+        E, od.directional_albedo("eon_approx", wo[:, 2], np.full(n, 0.4), np.tile(rho, (n, 1))), rtol=1e-14, atol=0
+    )
 
 
 @pytest.mark.cpu_portable
@@ -94,13 +108,16 @@ def test_each_channel_count_matches_single_channels(C, rng):
         E = od.directional_albedo("eon", wo[:, 2], r, rho, color_mode=tint)
         A = od.average_albedo("qon_fujii", r, rho, color_mode=tint)
         for k in range(C):
-            one = rho[:, k:k + 1]
-            np.testing.assert_allclose(f[:, k], od.evaluate("eon", wi, wo, r, one, color_mode=tint)[:, 0],
-                                       rtol=1e-14, atol=0)
-            np.testing.assert_allclose(E[:, k], od.directional_albedo("eon", wo[:, 2], r, one,
-                                                                      color_mode=tint)[:, 0], rtol=1e-14, atol=0)
-            np.testing.assert_allclose(A[:, k], od.average_albedo("qon_fujii", r, one, color_mode=tint)[:, 0],
-                                       rtol=1e-14, atol=0)
+            one = rho[:, k : k + 1]
+            np.testing.assert_allclose(
+                f[:, k], od.evaluate("eon", wi, wo, r, one, color_mode=tint)[:, 0], rtol=1e-14, atol=0
+            )
+            np.testing.assert_allclose(
+                E[:, k], od.directional_albedo("eon", wo[:, 2], r, one, color_mode=tint)[:, 0], rtol=1e-14, atol=0
+            )
+            np.testing.assert_allclose(
+                A[:, k], od.average_albedo("qon_fujii", r, one, color_mode=tint)[:, 0], rtol=1e-14, atol=0
+            )
 
 
 def test_empty_batches():
@@ -129,13 +146,11 @@ def test_float32_is_the_float64_result_rounded(model, rng):
     r = rng.uniform(0.0, roughness_max(model), n).astype(np.float32)
     rho = rng.uniform(0.0, 1.0, (n, 3)).astype(np.float32)
     f32 = od.evaluate(model, wi, wo, r, rho)
-    f64 = od.evaluate(model, wi.astype(np.float64), wo.astype(np.float64), r.astype(np.float64),
-                      rho.astype(np.float64))
+    f64 = od.evaluate(model, wi.astype(np.float64), wo.astype(np.float64), r.astype(np.float64), rho.astype(np.float64))
     np.testing.assert_allclose(f32, f64, rtol=1e-6, atol=1e-12)
     if od.models.model_info(model).closed_form_albedo:
         E32 = od.directional_albedo(model, wo[:, 2], r, rho)
-        E64 = od.directional_albedo(model, wo[:, 2].astype(np.float64), r.astype(np.float64),
-                                    rho.astype(np.float64))
+        E64 = od.directional_albedo(model, wo[:, 2].astype(np.float64), r.astype(np.float64), rho.astype(np.float64))
         np.testing.assert_allclose(E32, E64, rtol=1e-6, atol=1e-12)
 
 
@@ -237,9 +252,8 @@ def _full_on_libm(wi, wo, sigma, rho):
     s2 = sigma * sigma
     C1 = 1.0 - 0.5 * s2 / (s2 + 0.33)
     k = s2 / (s2 + 0.09)
-    C2 = np.where(cos_dphi >= 0.0, 0.45 * k * np.sin(alpha),
-                  0.45 * k * (np.sin(alpha) - (2.0 * beta / np.pi) ** 3))
-    C3 = 0.125 * k * (4.0 * alpha * beta / np.pi ** 2) ** 2
+    C2 = np.where(cos_dphi >= 0.0, 0.45 * k * np.sin(alpha), 0.45 * k * (np.sin(alpha) - (2.0 * beta / np.pi) ** 3))
+    C3 = 0.125 * k * (4.0 * alpha * beta / np.pi**2) ** 2
     g = (C1 + cos_dphi * C2 * np.tan(beta) + (1.0 - np.abs(cos_dphi)) * C3 * np.tan(0.5 * (alpha + beta))) / np.pi
     h = 0.17 * s2 / (s2 + 0.13) * (1.0 - cos_dphi * (2.0 * beta / np.pi) ** 2) / np.pi
     return rho * g[:, None] + rho * rho * h[:, None]
@@ -257,5 +271,6 @@ def test_full_on_matches_the_libm_formula(rng):
         w[:] = np.where(w[:, 2:] < 1e-3, [[0.6, 0.0, 0.8]], w)
     sigma = rng.uniform(0.0, np.pi / 2, n)
     rho = rng.uniform(0.0, 1.0, (n, 3))
-    np.testing.assert_allclose(od.evaluate("full_on", wi, wo, sigma, rho), _full_on_libm(wi, wo, sigma, rho),
-                               rtol=1e-10, atol=1e-14)
+    np.testing.assert_allclose(
+        od.evaluate("full_on", wi, wo, sigma, rho), _full_on_libm(wi, wo, sigma, rho), rtol=1e-10, atol=1e-14
+    )

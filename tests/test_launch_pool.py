@@ -1,5 +1,6 @@
 """The one thread pool of ``_launch``: a large call runs on it, and a call made from one of its
 threads runs its rows itself instead of waiting on the pool (which would deadlock it)."""
+
 import numba
 import numpy as np
 import pytest
@@ -30,7 +31,7 @@ def test_a_call_from_a_pool_thread_runs_and_matches():
     wi, wo, r, rho = _inputs(n)
     direct = od.evaluate("eon", wi, wo, r, rho)
     job = _launch.executor(numba.get_num_threads()).submit(od.evaluate, "eon", wi, wo, r, rho)
-    nested = job.result(timeout=120)   # a deadlock would time out here
+    nested = job.result(timeout=120)  # a deadlock would time out here
     np.testing.assert_allclose(nested, direct, rtol=1e-14, atol=0)
 
 

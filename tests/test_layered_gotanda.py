@@ -1,4 +1,5 @@
 """Gotanda 2012 Eq. 1-9: the printed statements checked by quadrature and limits."""
+
 # ruff: noqa: B023  (quadrature integrands use the loop value at once)
 import math
 
@@ -14,8 +15,11 @@ def test_eq1_constant_is_the_blinn_phong_ndf_normalisation():
     (which integrates to 1 over projected half vectors, checked here) with the 1/(4 max(n.l,
     n.v)) of the Neumann visibility."""
     for s in (1.0, 10.0, 100.0):
-        ndf = integrate.quad(lambda t: (s + 2) / (2 * math.pi) * math.cos(t) ** s * math.cos(t) * math.sin(t)
-                             * 2 * math.pi, 0, math.pi / 2)[0]
+        ndf = integrate.quad(
+            lambda t: (s + 2) / (2 * math.pi) * math.cos(t) ** s * math.cos(t) * math.sin(t) * 2 * math.pi,
+            0,
+            math.pi / 2,
+        )[0]
         assert ndf == pytest.approx(1.0, abs=1e-10)
     s = np.array([1.0, 3.0, 10.0, 30.0, 100.0, 1000.0, 1e4])
     rel = g.normalisation(s) / ((s + 2) / (8 * math.pi)) - 1
@@ -29,8 +33,9 @@ def test_eq1_specular_albedo_at_normal_incidence_below_one():
     s = np.array([1.0, 10.0, 100.0, 1000.0])
     albedo = []
     for si in s:
-        inv = integrate.quad(lambda t: math.cos(t / 2) ** si * math.cos(t) * math.sin(t) * 2 * math.pi, 0, math.pi / 2,
-                             limit=200)[0]
+        inv = integrate.quad(
+            lambda t: math.cos(t / 2) ** si * math.cos(t) * math.sin(t) * 2 * math.pi, 0, math.pi / 2, limit=200
+        )[0]
         albedo.append(g.normalisation(si) * inv)
     albedo = np.array(albedo)
     np.testing.assert_allclose(albedo, g.normalisation(s) / g.exact_normalisation(s), rtol=1e-8)
@@ -38,7 +43,8 @@ def test_eq1_specular_albedo_at_normal_incidence_below_one():
 
 
 def test_eq1_brdf_parts():
-    wi = np.array([0.6, 0.0, 0.8]); wo = np.array([-0.6, 0.0, 0.8])   # mirror pair: n.h = 1
+    wi = np.array([0.6, 0.0, 0.8])
+    wo = np.array([-0.6, 0.0, 0.8])  # mirror pair: n.h = 1
     f = g.blinn_phong(wi, wo, 50.0, 0.04, [0.5])
     spec = g.normalisation(50.0) * (0.04 + 0.96 * (1 - 0.8) ** 5) / 0.8
     assert f[0] == pytest.approx(0.5 / math.pi * 0.96 + spec, rel=1e-12)
@@ -55,17 +61,18 @@ def test_eq2_and_eq3():
         lin = float(g.linear_absorption(ad, mu_l, mu_e))
         ex = float(g.beer_lambert(1.0, ad, mu_l, mu_e, 1.0))
         assert abs(lin - ex) < ad * ad * 10
-    assert float(g.linear_absorption(0.6, 0.5, 0.5)) == 0.0   # clamped
+    assert float(g.linear_absorption(0.6, 0.5, 0.5)) == 0.0  # clamped
 
 
 def test_eq4_limits_and_symmetry():
     mu = np.linspace(0.05, 1.0, 20)
-    assert np.all(g.bottom_fresnel(mu, 1.4, 1.4) == 0.0)           # no bottom interface
+    assert np.all(g.bottom_fresnel(mu, 1.4, 1.4) == 0.0)  # no bottom interface
     mt = g.refracted_cos(mu, 1.33333)
     np.testing.assert_allclose(1 - g.fresnel(mt, 1 / 1.33333), 1 - g.fresnel(mu, 1.33333), atol=1e-12)
     # at normal incidence Eq. 4 is Eq. 5's transmittance times its constant
     assert float(g.bottom_fresnel(1.0, 1.33333, 1.5)) == pytest.approx(
-        float(g.transmittance(1.0, 1.33333) * g.bottom_fresnel_constant(1.33333, 1.5)), rel=1e-12)
+        float(g.transmittance(1.0, 1.33333) * g.bottom_fresnel_constant(1.33333, 1.5)), rel=1e-12
+    )
 
 
 def test_figure1_bottom_fresnel_is_almost_flat():
@@ -87,8 +94,13 @@ def test_figure1_bottom_fresnel_is_almost_flat():
 
 def test_eq8_by_quadrature():
     for mu_r in (1.0, 0.5, 0.2):
-        val = integrate.dblquad(lambda t, p: (1 / mu_r + 1 / math.cos(t)) * math.cos(t) / math.pi * math.sin(t),
-                                -math.pi, math.pi, 0, math.pi / 2)[0]
+        val = integrate.dblquad(
+            lambda t, p: (1 / mu_r + 1 / math.cos(t)) * math.cos(t) / math.pi * math.sin(t),
+            -math.pi,
+            math.pi,
+            0,
+            math.pi / 2,
+        )[0]
         assert val == pytest.approx(float(g.hemispherical_path_factor(mu_r)), rel=1e-8)
 
 
@@ -96,8 +108,10 @@ def test_eq9_is_the_integral_of_eq3_only_without_the_clamp():
     """Eq. 9 integrates Eq. 3 before clamping: the clamp inside the integral (the actual
     cosine-weighted average of Eq. 3) differs, since 1/N.L is unbounded at grazing light."""
     ap, mu_e = 0.05, 0.8
-    clamped = integrate.quad(lambda m: 2 * m * max(0.0, 1 - ap * (1 / m + 1 / mu_e)), 0, 1, points=[ap / (1 - ap / mu_e)])[0]
-    eq9 = float(g.ibl_diffuse_factor(ap, mu_e, 1.5, 1.5))   # F_bottom = 0
+    clamped = integrate.quad(
+        lambda m: 2 * m * max(0.0, 1 - ap * (1 / m + 1 / mu_e)), 0, 1, points=[ap / (1 - ap / mu_e)]
+    )[0]
+    eq9 = float(g.ibl_diffuse_factor(ap, mu_e, 1.5, 1.5))  # F_bottom = 0
     unclamped = 1 - ap * (2 + 1 / mu_e)
     assert eq9 == pytest.approx(unclamped, rel=1e-12)
     assert clamped > eq9 and clamped - eq9 == pytest.approx(ap * ap / (1 - ap / mu_e) ** 1 * 1.0, rel=0.2)

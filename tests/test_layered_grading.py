@@ -1,4 +1,5 @@
 """The layering rules as the project computes them, the shipped tables and the report section."""
+
 import math
 
 import numpy as np
@@ -13,25 +14,40 @@ def test_openpbr_rules_are_what_openpbr_surface_computes():
     from openpbr_diffuse.nodes.openpbr_surface import OpenPBRSurface
 
     mu = np.array([1.0, 0.6, 0.2])
-    wo = np.stack([np.sqrt(1 - mu ** 2), 0 * mu, mu], -1)
-    s = OpenPBRSurface(base_color=[0.8, 0.5, 0.2], specular_ior=1.7, specular_roughness=0.4, base_diffuse_roughness=0.0,
-                       diffuse_model="lambert")
+    wo = np.stack([np.sqrt(1 - mu**2), 0 * mu, mu], -1)
+    s = OpenPBRSurface(
+        base_color=[0.8, 0.5, 0.2],
+        specular_ior=1.7,
+        specular_roughness=0.4,
+        base_diffuse_roughness=0.0,
+        diffuse_model="lambert",
+    )
     d = next(l for l in s.lobes(wo) if l.name == "diffuse")
-    np.testing.assert_allclose(d.weight * d.albedo, lg.diffuse_albedo("openpbr", mu[:, None], 1.7, [0.8, 0.5, 0.2], 0.4),
-                               rtol=1e-6)
+    np.testing.assert_allclose(
+        d.weight * d.albedo, lg.diffuse_albedo("openpbr", mu[:, None], 1.7, [0.8, 0.5, 0.2], 0.4), rtol=1e-6
+    )
     cc = math.exp(-0.3)
-    s = OpenPBRSurface(base_color=[0.8, 0.5, 0.2], specular_weight=0.0, coat_weight=1.0, coat_ior=1.6,
-                       coat_roughness=0.5, coat_color=[cc] * 3, base_diffuse_roughness=0.0, diffuse_model="lambert")
+    s = OpenPBRSurface(
+        base_color=[0.8, 0.5, 0.2],
+        specular_weight=0.0,
+        coat_weight=1.0,
+        coat_ior=1.6,
+        coat_roughness=0.5,
+        coat_color=[cc] * 3,
+        base_diffuse_roughness=0.0,
+        diffuse_model="lambert",
+    )
     d = next(l for l in s.lobes(wo) if l.name == "diffuse")
-    np.testing.assert_allclose(d.weight * d.albedo,
-                               lg.diffuse_albedo("openpbr_coat", mu[:, None], 1.6, [0.8, 0.5, 0.2], 0.5, 0.3), rtol=1e-6)
+    np.testing.assert_allclose(
+        d.weight * d.albedo, lg.diffuse_albedo("openpbr_coat", mu[:, None], 1.6, [0.8, 0.5, 0.2], 0.5, 0.3), rtol=1e-6
+    )
 
 
 def test_eon_base_rules_are_what_openpbr_surface_computes():
     from openpbr_diffuse.nodes.openpbr_surface import OpenPBRSurface
 
     mu = np.array([0.9, 0.3])
-    wo = np.stack([np.sqrt(1 - mu ** 2), 0 * mu, mu], -1)
+    wo = np.stack([np.sqrt(1 - mu**2), 0 * mu, mu], -1)
     s = OpenPBRSurface(base_color=[0.8, 0.5, 0.2], specular_ior=1.5, specular_roughness=0.5, base_diffuse_roughness=0.7)
     d = next(l for l in s.lobes(wo) if l.name == "diffuse")
     ref = lg.eon_base_albedo("openpbr", mu[:, None], 1.5, np.array([0.8, 0.5, 0.2])[None], 0.7, 0.5)
@@ -51,7 +67,7 @@ def test_shipped_eon_rows():
         coat.append(abs(float(r[col["openpbr_coat"]]) / phys - 1))
         scal.append(abs(float(r[col["openpbr"]]) / phys - 1))
         if float(r[col["rho"]]) < 1:
-            assert float(r[col["openpbr"]]) > phys      # albedo scaling misses the internal reflection
+            assert float(r[col["openpbr"]]) > phys  # albedo scaling misses the internal reflection
     # the coat rule (with its internal-reflection darkening) is far closer than albedo scaling
     assert max(coat) < 0.3 and np.mean(coat) < np.mean(scal) / 4
 
@@ -71,7 +87,7 @@ def test_shipped_rough_rows_are_physical():
     rough = [r for r in rows if r["interface_alpha"] > 0]
     for r in rough:
         assert 0 <= r["physics"] <= 1 and 0 < r["physics_se"] < 2e-3
-        if r["rho"] == 1.0 and r["tau"] == 0.0:     # furnace: every path leaves
+        if r["rho"] == 1.0 and r["tau"] == 0.0:  # furnace: every path leaves
             assert r["physics"] + r["physics_specular"] == pytest.approx(1.0, abs=1e-9)
 
 

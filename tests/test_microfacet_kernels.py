@@ -4,14 +4,15 @@ References: the NumPy GGX forms (``microfacet.ggx``, graded against quadrature i
 ``test_ggx.py``), Gauss-Legendre quadrature of the densities, chi-square of the samplers
 against their densities (``_chi2``), and the NumPy table interpolation.
 """
+
 import math
 from decimal import Decimal, getcontext
 
 import numpy as np
 import pytest
-
 from _chi2 import chi2_test
 from _quad import sphere_rule
+
 from openpbr_diffuse.microfacet import ggx, kernels, sheen
 from openpbr_diffuse.microfacet import tables as T
 
@@ -47,7 +48,7 @@ def test_reflection_pdf_near_the_mirror_direction_at_small_alpha(alpha):
     mu = 0.7
     wo = np.array([math.sqrt(1 - mu * mu), 0.0, mu])
     for off in (1e-7, 1e-6, 1e-5, 1e-4, 1e-3):
-        t = math.acos(mu) + off                      # wi: the mirror direction turned by `off`
+        t = math.acos(mu) + off  # wi: the mirror direction turned by `off`
         wi = np.array([-math.sin(t), 0.0, math.cos(t)])
         h = [Decimal(float(a)) + Decimal(float(b)) for a, b in zip(wi, wo)]
         mu_h = h[2] / (h[0] ** 2 + h[1] ** 2 + h[2] ** 2).sqrt()
@@ -68,12 +69,18 @@ def test_ggx_sampler_follows_its_pdf(rng, mu, alpha, vndf):
     def sample(n):
         u = rng.random((n, 2))
         out = np.array([kernels.sample_reflection(*wo, alpha, a, b, vndf) for a, b in u])
-        return out[:, :3], out[:, 3]     # pdf column: ok (1) or failed (0)
+        return out[:, :3], out[:, 3]  # pdf column: ok (1) or failed (0)
 
     z_edges = np.unique(np.concatenate([np.linspace(-1, 1, 21), [0.0]]))
     phi_edges = np.linspace(-math.pi, math.pi, 33)
-    p, chi2, dof, mass = chi2_test(sample, lambda wi: ggx.reflection_pdf(wo, wi, alpha, "vndf" if vndf else "ndf"),
-                                   40_000, z_edges, phi_edges, nq=8)
+    p, chi2, dof, mass = chi2_test(
+        sample,
+        lambda wi: ggx.reflection_pdf(wo, wi, alpha, "vndf" if vndf else "ndf"),
+        40_000,
+        z_edges,
+        phi_edges,
+        nq=8,
+    )
     assert p > 1e-3, (chi2, dof)
 
 
@@ -95,8 +102,9 @@ def test_sheen_sampler_follows_its_density(rng, mu, r):
     z_edges = np.linspace(0.0, 1.0, 17)
     phi_edges = np.linspace(-math.pi, math.pi, 33)
     dens = np.vectorize(sheen.sheen_density)
-    p, chi2, dof, mass = chi2_test(sample, lambda wi: dens(wi[..., 0], wi[..., 1], wi[..., 2], mu, r),
-                                   40_000, z_edges, phi_edges, nq=8)
+    p, chi2, dof, mass = chi2_test(
+        sample, lambda wi: dens(wi[..., 0], wi[..., 1], wi[..., 2], mu, r), 40_000, z_edges, phi_edges, nq=8
+    )
     assert mass == pytest.approx(1.0, abs=1e-4)
     assert p > 1e-3, (chi2, dof)
 

@@ -1,13 +1,14 @@
 """Albedos of the lobe models against quadrature of their own ``evaluate`` and the
 values stated in the EON paper (spec/models.md, "Values checked here")."""
+
 import math
 
 import numpy as np
 import pytest
+from _quad import gauss_legendre, quad_albedo, quad_average
+from conftest import roughness_max
 
 import openpbr_diffuse as od
-from conftest import roughness_max
-from _quad import gauss_legendre, quad_albedo, quad_average
 
 MUS = (0.01, 0.05, 0.2, 0.5, 0.8, 1.0)
 CLOSED_FORM = [m for m in od.MODELS if m != "full_on"]
@@ -19,15 +20,17 @@ def test_directional_albedo_matches_quadrature(model):
     for r in (0.0, 0.3 * rmax, 0.7 * rmax, rmax):
         got = od.directional_albedo(model, np.array(MUS), r, [1.0, 0.4])
         for mu, e in zip(MUS, got):
-            np.testing.assert_allclose(e, quad_albedo(model, mu, r, [1.0, 0.4]), atol=1e-6,
-                                       err_msg=f"{model} mu={mu} roughness={r}")
+            np.testing.assert_allclose(
+                e, quad_albedo(model, mu, r, [1.0, 0.4]), atol=1e-6, err_msg=f"{model} mu={mu} roughness={r}"
+            )
 
 
 @pytest.mark.parametrize("model", CLOSED_FORM)
 def test_average_albedo_matches_quadrature(model):
     r = 0.8 * roughness_max(model)
-    np.testing.assert_allclose(od.average_albedo(model, r, [1.0, 0.3]),
-                               quad_average(model, r, [1.0, 0.3], n=32, n_mu=32), atol=1e-6)
+    np.testing.assert_allclose(
+        od.average_albedo(model, r, [1.0, 0.3]), quad_average(model, r, [1.0, 0.3], n=32, n_mu=32), atol=1e-6
+    )
 
 
 def test_average_is_cosine_weighted_mean_of_directional():
@@ -38,8 +41,7 @@ def test_average_is_cosine_weighted_mean_of_directional():
     for model in CLOSED_FORM:
         r = 0.6 * roughness_max(model)
         E = od.directional_albedo(model, mu, r, [0.9, 0.2])
-        np.testing.assert_allclose(weight @ E, od.average_albedo(model, r, [0.9, 0.2]), atol=1e-9,
-                                   err_msg=model)
+        np.testing.assert_allclose(weight @ E, od.average_albedo(model, r, [0.9, 0.2]), atol=1e-9, err_msg=model)
 
 
 # --- the paper's stated values -------------------------------------------------------------
@@ -113,8 +115,8 @@ def test_eon_colour_shift_and_white_tint():
     tint = od.directional_albedo("eon", 0.5, 1.0, rho, color_mode="white_tint")
     np.testing.assert_allclose(tint, rho, atol=1e-6)
     ratio = ref / np.array(rho)
-    assert ratio[0] > ratio[1] > ratio[2]          # darker channels lose relatively more
-    assert np.all(ref <= np.array(rho) + 1e-12)     # and none gains
+    assert ratio[0] > ratio[1] > ratio[2]  # darker channels lose relatively more
+    assert np.all(ref <= np.array(rho) + 1e-12)  # and none gains
     # the same by quadrature of evaluate in each mode
     np.testing.assert_allclose(quad_albedo("eon", 0.5, 1.0, rho), ref, atol=1e-6)
     np.testing.assert_allclose(quad_albedo("eon", 0.5, 1.0, rho, color_mode="white_tint"), tint, atol=1e-6)

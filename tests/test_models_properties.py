@@ -1,14 +1,15 @@
 """Properties every lobe model must have: reciprocity, the Lambert limit, finiteness and
 non-negativity at the edges, dtype and shape conventions, and clear errors."""
+
 import math
 
 import numpy as np
 import pytest
+from conftest import random_directions, roughness_max
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import openpbr_diffuse as od
-from conftest import random_directions, roughness_max
 
 NONNEGATIVE = [m for m in od.MODELS if m != "full_on"]
 
@@ -18,8 +19,9 @@ def test_reciprocity(model, rng):
     wo = random_directions(rng, 4000)
     r = rng.uniform(0.0, roughness_max(model), 4000)
     rho = rng.uniform(0.0, 1.0, (4000, 3))
-    np.testing.assert_allclose(od.evaluate(model, wi, wo, r, rho), od.evaluate(model, wo, wi, r, rho),
-                               rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(
+        od.evaluate(model, wi, wo, r, rho), od.evaluate(model, wo, wi, r, rho), rtol=1e-12, atol=1e-15
+    )
 
 
 def test_lambert_limit_at_zero_roughness(model, rng):
@@ -35,8 +37,9 @@ def test_van_ouwerkerk_equals_qon(rng):
     wi = random_directions(rng, 20000)
     wo = random_directions(rng, 20000)
     sigma = rng.uniform(0.0, math.pi / 2, 20000)
-    np.testing.assert_allclose(od.evaluate("qon_van_ouwerkerk", wi, wo, sigma),
-                               od.evaluate("qon", wi, wo, sigma), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(
+        od.evaluate("qon_van_ouwerkerk", wi, wo, sigma), od.evaluate("qon", wi, wo, sigma), rtol=0, atol=1e-12
+    )
 
 
 def test_fujii_qon_is_qon_plus_tint_and_fon_sign(rng):
@@ -45,8 +48,11 @@ def test_fujii_qon_is_qon_plus_tint_and_fon_sign(rng):
     wi = np.array([0.0, 0.0, 1.0])
     wo = random_directions(rng, 100)
     for sigma in (0.2, 0.9):
-        np.testing.assert_allclose(od.evaluate("qon_fujii", wi, wo, sigma, [0.3, 0.9]),
-                                   od.evaluate("full_on", wi, wo, sigma, [0.3, 0.9]), rtol=1e-12)
+        np.testing.assert_allclose(
+            od.evaluate("qon_fujii", wi, wo, sigma, [0.3, 0.9]),
+            od.evaluate("full_on", wi, wo, sigma, [0.3, 0.9]),
+            rtol=1e-12,
+        )
 
 
 def test_full_on_matches_qon_in_the_plane_at_normal_light():
@@ -54,9 +60,12 @@ def test_full_on_matches_qon_in_the_plane_at_normal_light():
     wi = np.array([0.0, 0.0, 1.0])
     wo = np.array([0.6, 0.0, 0.8])
     sigma = 0.7
-    k = sigma ** 2 / (sigma ** 2 + 0.13)
-    np.testing.assert_allclose(od.evaluate("full_on", wi, wo, sigma, 0.5)[0],
-                               od.evaluate("qon", wi, wo, sigma, 0.5)[0] + 0.17 * 0.25 / np.pi * k, rtol=1e-12)
+    k = sigma**2 / (sigma**2 + 0.13)
+    np.testing.assert_allclose(
+        od.evaluate("full_on", wi, wo, sigma, 0.5)[0],
+        od.evaluate("qon", wi, wo, sigma, 0.5)[0] + 0.17 * 0.25 / np.pi * k,
+        rtol=1e-12,
+    )
 
 
 def test_full_on_goes_negative_forward_grazing():
@@ -75,17 +84,20 @@ def test_edge_directions_are_finite(model, dtype):
     c = math.sqrt(0.5)
     z_eps = 1e-7
     s_eps = math.sqrt(1 - z_eps * z_eps)
-    dirs = np.array([
-        [0.0, 0.0, 1.0],            # mu = 1
-        [s_eps, 0.0, z_eps],        # grazing
-        [1.0, 0.0, 0.0],            # mu = 0 exactly
-        [c, 0.0, c],
-        [-c, 0.0, c],               # mirrored
-        [0.0, c, c],                # s = 0 against the others
-        [0.0, 0.0, -1.0],           # below the horizon
-        [c, 0.0, -c],
-        [1.0, 0.0, float(eps)],
-    ], dtype=dtype)
+    dirs = np.array(
+        [
+            [0.0, 0.0, 1.0],  # mu = 1
+            [s_eps, 0.0, z_eps],  # grazing
+            [1.0, 0.0, 0.0],  # mu = 0 exactly
+            [c, 0.0, c],
+            [-c, 0.0, c],  # mirrored
+            [0.0, c, c],  # s = 0 against the others
+            [0.0, 0.0, -1.0],  # below the horizon
+            [c, 0.0, -c],
+            [1.0, 0.0, float(eps)],
+        ],
+        dtype=dtype,
+    )
     wi = dirs[:, None, :]
     wo = dirs[None, :, :]
     for r in (0.0, roughness_max(model)):
@@ -126,8 +138,7 @@ def test_float32_agrees_with_float64(model, rng):
     r = rng.uniform(0.0, roughness_max(model), 5000)
     rho = rng.uniform(0.0, 1.0, (5000, 3))
     f64 = od.evaluate(model, wi, wo, r, rho)
-    f32 = od.evaluate(model, wi.astype(np.float32), wo.astype(np.float32), r.astype(np.float32),
-                      rho.astype(np.float32))
+    f32 = od.evaluate(model, wi.astype(np.float32), wo.astype(np.float32), r.astype(np.float32), rho.astype(np.float32))
     assert f32.dtype == np.float32
     np.testing.assert_allclose(f32, f64, rtol=2e-4, atol=2e-6)
 
@@ -142,8 +153,15 @@ def _dir(z, phi):
 
 
 @settings(max_examples=300, deadline=None)
-@given(model=st.sampled_from(od.MODELS), zi=unit, zo=unit, pi_=st.floats(0, 2 * math.pi),
-       po=st.floats(0, 2 * math.pi), rough=unit, rho=st.lists(unit, min_size=1, max_size=5))
+@given(
+    model=st.sampled_from(od.MODELS),
+    zi=unit,
+    zo=unit,
+    pi_=st.floats(0, 2 * math.pi),
+    po=st.floats(0, 2 * math.pi),
+    rough=unit,
+    rho=st.lists(unit, min_size=1, max_size=5),
+)
 def test_property_finite_nonnegative(model, zi, zo, pi_, po, rough, rho):
     r = rough * roughness_max(model)
     f = od.evaluate(model, _dir(zi, pi_), _dir(zo, po), r, rho)
@@ -161,14 +179,14 @@ def test_property_finite_nonnegative(model, zi, zo, pi_, po, rough, rho):
 # --- shapes and dtypes ----------------------------------------------------------------------
 def test_broadcasting_shapes(rng):
     wi = random_directions(rng, 6).reshape(2, 3, 3)
-    wo = random_directions(rng, 3)                      # (3, 3) -> broadcasts with (2, 3)
+    wo = random_directions(rng, 3)  # (3, 3) -> broadcasts with (2, 3)
     r = np.array([0.2, 0.5, 0.9])
-    spectral = np.linspace(0.1, 0.9, 16)                # N spectral channels
+    spectral = np.linspace(0.1, 0.9, 16)  # N spectral channels
     f = od.evaluate("eon", wi, wo, r, spectral)
     assert f.shape == (2, 3, 16)
     g = od.evaluate("eon", wi[1, 2], wo[2], r[2], spectral)
     np.testing.assert_allclose(f[1, 2], g, rtol=1e-15)
-    assert od.evaluate("eon", wi, wo, 0.5).shape == (2, 3, 1)      # grey
+    assert od.evaluate("eon", wi, wo, 0.5).shape == (2, 3, 1)  # grey
     assert od.directional_albedo("eon", np.ones((4, 1)), r, [0.5, 0.5, 0.5]).shape == (4, 3, 3)
     assert od.average_albedo("qon", r[:, None], np.full((2, 3), 0.5)).shape == (3, 2, 3)
 
@@ -176,9 +194,9 @@ def test_broadcasting_shapes(rng):
 def test_dtype_rules():
     wi32 = np.array([0.0, 0.0, 1.0], np.float32)
     wo64 = np.array([0.0, 0.0, 1.0])
-    assert od.evaluate("eon", wi32, wi32, 0.5, 0.5).dtype == np.float32      # scalars do not promote
+    assert od.evaluate("eon", wi32, wi32, 0.5, 0.5).dtype == np.float32  # scalars do not promote
     assert od.evaluate("eon", wi32, wi32, 0.5, [0.5, 0.5]).dtype == np.float32
-    assert od.evaluate("eon", wi32, wo64, 0.5).dtype == np.float64           # mixed -> float64
+    assert od.evaluate("eon", wi32, wo64, 0.5).dtype == np.float64  # mixed -> float64
     assert od.evaluate("eon", [0, 0, 1], [0, 0, 1], 0.5).dtype == np.float64
     assert od.directional_albedo("eon", np.float32(0.5), 0.5).dtype == np.float32
 
@@ -194,24 +212,27 @@ def test_evaluate_does_not_modify_inputs(rng):
 Z = [0.0, 0.0, 1.0]
 
 
-@pytest.mark.parametrize("call, exc, words", [
-    (lambda: od.evaluate("oren", Z, Z, 0.5), ValueError, ["model", "eon"]),
-    (lambda: od.evaluate(3, Z, Z, 0.5), TypeError, ["model"]),
-    (lambda: od.evaluate("eon", [0, 0, 2.0], Z, 0.5), ValueError, ["wi", "unit"]),
-    (lambda: od.evaluate("eon", Z, [0, np.nan, 1.0], 0.5), ValueError, ["wo", "finite"]),
-    (lambda: od.evaluate("eon", [0, 1.0], Z, 0.5), ValueError, ["wi", "(..., 3)"]),
-    (lambda: od.evaluate("eon", Z, Z, 1.5), ValueError, ["roughness", "[0, 1]"]),
-    (lambda: od.evaluate("qon", Z, Z, 2.0), ValueError, ["roughness", "1.5707963267948966", "sigma"]),
-    (lambda: od.evaluate("eon", Z, Z, -0.1), ValueError, ["roughness"]),
-    (lambda: od.evaluate("eon", Z, Z, np.inf), ValueError, ["roughness", "finite"]),
-    (lambda: od.evaluate("eon", Z, Z, 0.5, 1.2), ValueError, ["rho", "[0, 1]"]),
-    (lambda: od.evaluate("eon", Z, Z, 0.5, "red"), TypeError, ["rho"]),
-    (lambda: od.evaluate("eon", Z, Z, 0.5, color_mode="tint"), ValueError, ["color_mode"]),
-    (lambda: od.evaluate("eon", np.tile(Z, (2, 1)), np.tile(Z, (3, 1)), 0.5), ValueError, ["wi", "wo"]),
-    (lambda: od.directional_albedo("eon", 1.5, 0.5), ValueError, ["mu", "[0, 1]"]),
-    (lambda: od.directional_albedo("eon", -0.1, 0.5), ValueError, ["mu"]),
-    (lambda: od.average_albedo("fon", 2.0), ValueError, ["roughness"]),
-])
+@pytest.mark.parametrize(
+    "call, exc, words",
+    [
+        (lambda: od.evaluate("oren", Z, Z, 0.5), ValueError, ["model", "eon"]),
+        (lambda: od.evaluate(3, Z, Z, 0.5), TypeError, ["model"]),
+        (lambda: od.evaluate("eon", [0, 0, 2.0], Z, 0.5), ValueError, ["wi", "unit"]),
+        (lambda: od.evaluate("eon", Z, [0, np.nan, 1.0], 0.5), ValueError, ["wo", "finite"]),
+        (lambda: od.evaluate("eon", [0, 1.0], Z, 0.5), ValueError, ["wi", "(..., 3)"]),
+        (lambda: od.evaluate("eon", Z, Z, 1.5), ValueError, ["roughness", "[0, 1]"]),
+        (lambda: od.evaluate("qon", Z, Z, 2.0), ValueError, ["roughness", "1.5707963267948966", "sigma"]),
+        (lambda: od.evaluate("eon", Z, Z, -0.1), ValueError, ["roughness"]),
+        (lambda: od.evaluate("eon", Z, Z, np.inf), ValueError, ["roughness", "finite"]),
+        (lambda: od.evaluate("eon", Z, Z, 0.5, 1.2), ValueError, ["rho", "[0, 1]"]),
+        (lambda: od.evaluate("eon", Z, Z, 0.5, "red"), TypeError, ["rho"]),
+        (lambda: od.evaluate("eon", Z, Z, 0.5, color_mode="tint"), ValueError, ["color_mode"]),
+        (lambda: od.evaluate("eon", np.tile(Z, (2, 1)), np.tile(Z, (3, 1)), 0.5), ValueError, ["wi", "wo"]),
+        (lambda: od.directional_albedo("eon", 1.5, 0.5), ValueError, ["mu", "[0, 1]"]),
+        (lambda: od.directional_albedo("eon", -0.1, 0.5), ValueError, ["mu"]),
+        (lambda: od.average_albedo("fon", 2.0), ValueError, ["roughness"]),
+    ],
+)
 def test_bad_input_names_the_argument(call, exc, words):
     with pytest.raises(exc) as info:
         call()

@@ -4,6 +4,7 @@ The library is read here with the MaterialX Python API directly (not through
 ``openpbr_diffuse.nodes.materialx_defs``), so a mistake in the project's reader -- names,
 types, parsing of default strings, ordering -- shows up as a difference.
 """
+
 import inspect
 import json
 import sys
@@ -12,8 +13,7 @@ import warnings
 import numpy as np
 import pytest
 
-from openpbr_diffuse.nodes import IgnoredInputWarning, OpenPBRSurface, OrenNayarDiffuseBSDF
-from openpbr_diffuse.nodes import materialx_defs
+from openpbr_diffuse.nodes import IgnoredInputWarning, OpenPBRSurface, OrenNayarDiffuseBSDF, materialx_defs
 
 mx = pytest.importorskip("MaterialX")
 
@@ -43,7 +43,7 @@ def _same(a, b):
     if isinstance(a, tuple) or isinstance(b, tuple):
         return len(a) == len(b) and np.allclose(a, b, rtol=1e-6, atol=0.0)
     if isinstance(a, float) or isinstance(b, float):
-        return np.isclose(a, b, rtol=1e-6, atol=0.0)   # MaterialX stores float32
+        return np.isclose(a, b, rtol=1e-6, atol=0.0)  # MaterialX stores float32
     return a == b
 
 
@@ -97,7 +97,7 @@ class TestOpenPBRInterface:
     def test_defaults_method(self, library):
         d = OpenPBRSurface.defaults()
         lib = _mx_inputs(library, self.NODEDEF)
-        assert list(d) == list(lib)       # library order
+        assert list(d) == list(lib)  # library order
         assert all(_same(d[n], _mx_default(i)) for n, i in lib.items())
         # a few values stated in spec/ecosystem.md
         assert d["base_color"] == (0.8, 0.8, 0.8) and d["specular_roughness"] == 0.3
@@ -132,7 +132,7 @@ class TestSnapshot:
     def test_nodes_work_without_materialx(self, monkeypatch):
         auto = materialx_defs.nodedef_inputs("ND_open_pbr_surface_surfaceshader")
         materialx_defs._records.cache_clear()
-        monkeypatch.setitem(sys.modules, "MaterialX", None)    # import MaterialX -> ImportError
+        monkeypatch.setitem(sys.modules, "MaterialX", None)  # import MaterialX -> ImportError
         try:
             assert materialx_defs.nodedef_source().startswith("snapshot")
             assert materialx_defs.nodedef_inputs("ND_open_pbr_surface_surfaceshader") == auto
@@ -151,23 +151,26 @@ class TestBadInput:
         with pytest.raises(ValueError, match="colour"):
             OrenNayarDiffuseBSDF(colour=(1.0, 1.0, 1.0))
 
-    @pytest.mark.parametrize("kwargs, name", [
-        (dict(base_color=(1.2, 0.5, 0.5)), "base_color"),
-        (dict(base_metalness=-0.1), "base_metalness"),
-        (dict(specular_roughness=np.nan), "specular_roughness"),
-        (dict(base_color=(0.5, 0.5)), "base_color"),
-        (dict(specular_weight=-1.0), "specular_weight"),
-        (dict(geometry_normal=(0.0, 0.0, 2.0)), "geometry_normal"),
-    ])
+    @pytest.mark.parametrize(
+        "kwargs, name",
+        [
+            (dict(base_color=(1.2, 0.5, 0.5)), "base_color"),
+            (dict(base_metalness=-0.1), "base_metalness"),
+            (dict(specular_roughness=np.nan), "specular_roughness"),
+            (dict(base_color=(0.5, 0.5)), "base_color"),
+            (dict(specular_weight=-1.0), "specular_weight"),
+            (dict(geometry_normal=(0.0, 0.0, 2.0)), "geometry_normal"),
+        ],
+    )
     def test_surface_values(self, kwargs, name):
         with pytest.raises(ValueError, match=name):
             OpenPBRSurface(**kwargs)
 
     def test_node_values(self):
         with pytest.raises(ValueError, match="roughness"):
-            OrenNayarDiffuseBSDF(roughness=1.5, energy_compensation=True)     # EON r in [0, 1]
+            OrenNayarDiffuseBSDF(roughness=1.5, energy_compensation=True)  # EON r in [0, 1]
         with pytest.raises(ValueError, match="roughness"):
-            OrenNayarDiffuseBSDF(roughness=2.0)                               # QON sigma <= pi/2
+            OrenNayarDiffuseBSDF(roughness=2.0)  # QON sigma <= pi/2
         with pytest.raises(ValueError, match="weight"):
             OrenNayarDiffuseBSDF(weight=2.0)
         with pytest.raises(ValueError, match="color"):
@@ -197,16 +200,18 @@ class TestBadInput:
 class TestIgnoredInputs:
     def test_reported_and_warned(self):
         # coat, fuzz, transmission, subsurface are modelled (issue 9); thin film and emission are not
-        with pytest.warns(IgnoredInputWarning, match="thin_film_weight.*emission_color|emission_color.*thin_film_weight"):
-            s = OpenPBRSurface(thin_film_weight=0.5, emission_color=(1.0, 0.0, 0.0), base_metalness=0.2,
-                               coat_weight=0.5)
+        with pytest.warns(
+            IgnoredInputWarning, match="thin_film_weight.*emission_color|emission_color.*thin_film_weight"
+        ):
+            s = OpenPBRSurface(
+                thin_film_weight=0.5, emission_color=(1.0, 0.0, 0.0), base_metalness=0.2, coat_weight=0.5
+            )
         assert set(s.ignored_inputs) == {"thin_film_weight", "emission_color"}
 
     def test_defaults_given_explicitly_are_not_reported(self):
         with warnings.catch_warnings():
             warnings.simplefilter("error")
-            s = OpenPBRSurface(coat_weight=0.0, transmission_color=(1.0, 1.0, 1.0),
-                               geometry_normal=(0.0, 0.0, 1.0))
+            s = OpenPBRSurface(coat_weight=0.0, transmission_color=(1.0, 1.0, 1.0), geometry_normal=(0.0, 0.0, 1.0))
         assert s.ignored_inputs == {}
 
     def test_geomprops_count_when_given(self):

@@ -5,6 +5,7 @@ s = wi.wo - mu_i mu_o reached -(1 + 2 UNIT_TOL), and FON's 1 + r s/t (hence FON,
 "eon_approx") went negative.  Full Oren-Nayar is excepted: its published formula is negative
 at forward-grazing pairs (README, kept unclamped).
 """
+
 import math
 
 import numpy as np
@@ -39,7 +40,7 @@ def test_grazing_opposite_azimuth_with_lengths_at_the_tolerance(model, dtype):
     z[:100] = 0.0
     s = np.sqrt(1.0 - z * z)
     wi = np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=-1)
-    wo = wi * np.array([-1.0, -1.0, 1.0])                        # opposite azimuth, both grazing
+    wo = wi * np.array([-1.0, -1.0, 1.0])  # opposite azimuth, both grazing
     scale = 1.0 + ar.UNIT_TOL * rng.uniform(0.5, 0.999, (n, 1))  # accepted: |w| - 1 < UNIT_TOL
     wi, wo = (wi * scale).astype(dtype), (wo * scale).astype(dtype)
     wi[:, 2] = np.abs(wi[:, 2])
@@ -61,5 +62,5 @@ def test_full_on_keeps_its_published_negative_values():
     """The clamp is on s, not on f: full Oren-Nayar still goes negative where its formula does."""
     t = 1.55
     wi = np.array([np.sin(t), 0.0, np.cos(t)])
-    wo = np.array([-np.sin(t), 0.0, np.cos(t)])          # grazing, opposite azimuth (s ~ -1)
+    wo = np.array([-np.sin(t), 0.0, np.cos(t)])  # grazing, opposite azimuth (s ~ -1)
     assert od.evaluate("full_on", wi, wo, math.pi / 2, 0.2)[0] < 0.0

@@ -5,25 +5,39 @@ Grouped by property.  Independent references: sphere/hemisphere quadrature of ``
 Monte Carlo through ``sample``, a chi-square test of the sampled directions against the
 pdf integrated over bins, and the MaterialX Oren-Nayar node for the pure-diffuse case.
 """
+
 import math
 
 import numpy as np
 import pytest
-
 from _chi2 import chi2_test
 from _quad import gauss_legendre
+
 from openpbr_diffuse.albedo.quadrature import hemisphere_albedo
 from openpbr_diffuse.nodes import OpenPBRSurface, OrenNayarDiffuseBSDF
 
 PARAMS = {
     "default": dict(),
     "rough_colored": dict(base_color=(0.9, 0.5, 0.2), base_diffuse_roughness=1.0, specular_roughness=0.5),
-    "copper": dict(base_metalness=1.0, base_color=(0.95, 0.64, 0.54), specular_color=(0.9, 0.8, 0.7),
-                   specular_roughness=0.4),
-    "mixed": dict(base_metalness=0.5, base_color=(0.3, 0.6, 0.9), specular_weight=0.6, specular_ior=1.8,
-                  specular_roughness=0.6, base_diffuse_roughness=0.4, specular_color=(1.0, 0.9, 0.8)),
-    "dim_glossy": dict(base_weight=0.7, base_color=(0.2, 0.2, 0.25), specular_roughness=0.25,
-                       specular_ior=2.2, base_diffuse_roughness=0.8),
+    "copper": dict(
+        base_metalness=1.0, base_color=(0.95, 0.64, 0.54), specular_color=(0.9, 0.8, 0.7), specular_roughness=0.4
+    ),
+    "mixed": dict(
+        base_metalness=0.5,
+        base_color=(0.3, 0.6, 0.9),
+        specular_weight=0.6,
+        specular_ior=1.8,
+        specular_roughness=0.6,
+        base_diffuse_roughness=0.4,
+        specular_color=(1.0, 0.9, 0.8),
+    ),
+    "dim_glossy": dict(
+        base_weight=0.7,
+        base_color=(0.2, 0.2, 0.25),
+        specular_roughness=0.25,
+        specular_ior=2.2,
+        base_diffuse_roughness=0.8,
+    ),
 }
 MUS = (0.15, 0.5, 0.95)
 
@@ -39,10 +53,19 @@ def sphere_integral(fun, mu, n=64):
     and pi - theta_o (the half vector reaches the horizon: the GGX pdf stops).
     """
     th_o = math.acos(mu)
-    T, WT = zip(*(gauss_legendre(a, b, n) for a, b in zip([0, th_o, 0.5 * math.pi, math.pi - th_o],
-                                                 [th_o, 0.5 * math.pi, math.pi - th_o, math.pi]) if b > a))
-    P, WP = zip(*(gauss_legendre(a, b, n) for a, b in [(0, 0.5 * math.pi), (0.5 * math.pi, 0.9 * math.pi),
-                                              (0.9 * math.pi, math.pi)]))
+    T, WT = zip(
+        *(
+            gauss_legendre(a, b, n)
+            for a, b in zip([0, th_o, 0.5 * math.pi, math.pi - th_o], [th_o, 0.5 * math.pi, math.pi - th_o, math.pi])
+            if b > a
+        )
+    )
+    P, WP = zip(
+        *(
+            gauss_legendre(a, b, n)
+            for a, b in [(0, 0.5 * math.pi), (0.5 * math.pi, 0.9 * math.pi), (0.9 * math.pi, math.pi)]
+        )
+    )
     T, WT, P, WP = map(np.concatenate, (T, WT, P, WP))
     t, p = np.meshgrid(T, P, indexing="ij")
     wi = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1)
@@ -110,8 +133,9 @@ class TestChiSquare:
         n = 200_000
         z_edges = np.unique(np.concatenate([np.linspace(-1, 1, 25), [-mu, 0.0]]))
         phi_edges = np.linspace(-math.pi, math.pi, 49)
-        pval, chi2, dof, mass = chi2_test(lambda m: s.sample(wo, rng.random((m, 2))), lambda wi: s.pdf(wo, wi),
-                                          n, z_edges, phi_edges, nq=8)
+        pval, chi2, dof, mass = chi2_test(
+            lambda m: s.sample(wo, rng.random((m, 2))), lambda wi: s.pdf(wo, wi), n, z_edges, phi_edges, nq=8
+        )
         assert mass == pytest.approx(1.0, rel=1e-4)
         assert pval > 1e-3, (chi2, dof)
 
@@ -152,10 +176,16 @@ class TestAlbedo:
     def test_energy_is_bounded(self, rng):
         mus = np.linspace(0.02, 1, 30)
         for _ in range(20):
-            s = OpenPBRSurface(base_color=rng.uniform(0.2, 1, 3), base_metalness=rng.uniform(0, 1),
-                               specular_color=rng.uniform(0, 1, 3), specular_weight=rng.uniform(0, 1),
-                               specular_roughness=rng.uniform(0.1, 1), specular_ior=rng.uniform(1, 3),
-                               base_diffuse_roughness=rng.uniform(0, 1), base_weight=rng.uniform(0.5, 1))
+            s = OpenPBRSurface(
+                base_color=rng.uniform(0.2, 1, 3),
+                base_metalness=rng.uniform(0, 1),
+                specular_color=rng.uniform(0, 1, 3),
+                specular_weight=rng.uniform(0, 1),
+                specular_roughness=rng.uniform(0.1, 1),
+                specular_ior=rng.uniform(1, 3),
+                base_diffuse_roughness=rng.uniform(0, 1),
+                base_weight=rng.uniform(0.5, 1),
+            )
             E = s.albedo(np.stack([_wo(m) for m in mus]))
             assert np.all(E >= 0) and np.all(E <= 1 + 1e-6)
 
@@ -169,19 +199,26 @@ class TestAlbedo:
 class TestWhiteFurnace:
     """base_color = specular_color = 1: the layered base preserves energy (to table accuracy)."""
 
-    @pytest.mark.parametrize("metalness, r_spec, r_diff, ior", [
-        (0.0, 0.3, 0.0, 1.5), (0.0, 0.6, 1.0, 2.5), (1.0, 0.9, 0.0, 1.5), (0.4, 0.2, 0.7, 1.33)])
+    @pytest.mark.parametrize(
+        "metalness, r_spec, r_diff, ior",
+        [(0.0, 0.3, 0.0, 1.5), (0.0, 0.6, 1.0, 2.5), (1.0, 0.9, 0.0, 1.5), (0.4, 0.2, 0.7, 1.33)],
+    )
     def test_quadrature_of_eval_is_one(self, metalness, r_spec, r_diff, ior):
-        s = OpenPBRSurface(base_color=(1, 1, 1), specular_color=(1, 1, 1), base_metalness=metalness,
-                           specular_roughness=r_spec, base_diffuse_roughness=r_diff, specular_ior=ior)
+        s = OpenPBRSurface(
+            base_color=(1, 1, 1),
+            specular_color=(1, 1, 1),
+            base_metalness=metalness,
+            specular_roughness=r_spec,
+            base_diffuse_roughness=r_diff,
+            specular_ior=ior,
+        )
         for mu in (0.1, 0.5, 1.0):
             assert np.allclose(quad_albedo(s, mu), 1.0, atol=2e-4)
             assert np.allclose(s.albedo(_wo(mu)), 1.0, atol=1e-9)
 
     def test_single_scattering_metal_loses_energy(self):
         # without the compensation the GGX lobe keeps E1 < 1: the factor is what restores it
-        s = OpenPBRSurface(base_color=(1, 1, 1), base_metalness=1.0, specular_roughness=0.9,
-                           multiscatter=False)
+        s = OpenPBRSurface(base_color=(1, 1, 1), base_metalness=1.0, specular_roughness=0.9, multiscatter=False)
         E = quad_albedo(s, 0.5)
         assert np.all(E < 0.9)
         assert np.allclose(s.albedo(_wo(0.5)), E, atol=5e-5)
@@ -209,8 +246,7 @@ class TestSelection:
         s = OpenPBRSurface(**PARAMS["mixed"])
         mu = 0.45
         lobes = s.lobes(_wo(mu))
-        q = [lobe.weight * hemisphere_albedo(lambda wi, w, k=lobe.name: s.lobe_eval(k, wi, w), mu)
-             for lobe in lobes]
+        q = [lobe.weight * hemisphere_albedo(lambda wi, w, k=lobe.name: s.lobe_eval(k, wi, w), mu) for lobe in lobes]
         norms = np.array([np.linalg.norm(v) for v in q])
         assert np.allclose([lobe.probability for lobe in lobes], norms / norms.sum(), atol=1e-4)
 
@@ -218,8 +254,11 @@ class TestSelection:
         assert [lb.name for lb in OpenPBRSurface().lobes(_wo(0.5))] == ["diffuse", "specular"]
         assert [lb.name for lb in OpenPBRSurface(base_metalness=1.0).lobes(_wo(0.5))] == ["metal"]
         assert [lb.name for lb in OpenPBRSurface(specular_weight=0.0).lobes(_wo(0.5))] == ["diffuse"]
-        assert [lb.name for lb in OpenPBRSurface(base_metalness=0.3).lobes(_wo(0.5))] == \
-            ["diffuse", "specular", "metal"]
+        assert [lb.name for lb in OpenPBRSurface(base_metalness=0.3).lobes(_wo(0.5))] == [
+            "diffuse",
+            "specular",
+            "metal",
+        ]
         black = OpenPBRSurface(base_weight=0.0, specular_weight=0.0)
         assert [lb.name for lb in black.lobes(_wo(0.5))] == ["diffuse"]
         assert np.all(black.albedo(_wo(0.5)) == 0)
@@ -231,8 +270,9 @@ class TestSelection:
         n = 100_000
         for mu, min_ratio in ((0.5, 5.0), (0.9, 10.0)):
             u = rng.random((n, 3))
-            var = [throughput(OpenPBRSurface(**p, selection=sel), _wo(mu), u)[:, 1].var()
-                   for sel in ("length", "uniform")]
+            var = [
+                throughput(OpenPBRSurface(**p, selection=sel), _wo(mu), u)[:, 1].var() for sel in ("length", "uniform")
+            ]
             assert var[1] / var[0] > min_ratio, var
 
 
@@ -243,15 +283,21 @@ class TestReducesToEON:
         # the same compiled formulas, inlined in another loop: equal to rounding
         color, rough, weight = (0.7, 0.4, 0.2), 0.8, 0.9
         kw = {} if normal is None else {"geometry_normal": normal}
-        s = OpenPBRSurface(base_color=color, base_diffuse_roughness=rough, base_weight=weight,
-                           base_metalness=0.0, specular_weight=0.0, **kw)
+        s = OpenPBRSurface(
+            base_color=color,
+            base_diffuse_roughness=rough,
+            base_weight=weight,
+            base_metalness=0.0,
+            specular_weight=0.0,
+            **kw,
+        )
         node = OrenNayarDiffuseBSDF(weight, color, rough, True, **({} if normal is None else {"normal": normal}))
         n0 = np.array([0.0, 0.0, 1.0]) if normal is None else np.array(normal)
         wi, wo = rng.normal(size=(500, 3)), rng.normal(size=(500, 3))
         wi /= np.linalg.norm(wi, axis=1, keepdims=True)
         wo /= np.linalg.norm(wo, axis=1, keepdims=True)
         wo *= np.sign(wo @ n0)[:, None]
-        same = lambda a, b: np.allclose(a, b, rtol=1e-13, atol=1e-15)   # noqa: E731
+        same = lambda a, b: np.allclose(a, b, rtol=1e-13, atol=1e-15)  # noqa: E731
         assert same(s.eval(wi, wo), node.eval(wi, wo))
         assert same(s.albedo(wo), node.albedo(wo))
         assert same(s.pdf(wo, wi), node.pdf(wo, wi))
@@ -267,8 +313,10 @@ class TestFramesAndArrays:
         R = q * np.sign(np.linalg.det(q))
         local = OpenPBRSurface(**PARAMS["mixed"])
         world = OpenPBRSurface(**PARAMS["mixed"], geometry_normal=R[:, 2])
-        wi = rng.normal(size=(200, 3)); wi /= np.linalg.norm(wi, axis=1, keepdims=True)
-        wo = rng.normal(size=(200, 3)); wo /= np.linalg.norm(wo, axis=1, keepdims=True)
+        wi = rng.normal(size=(200, 3))
+        wi /= np.linalg.norm(wi, axis=1, keepdims=True)
+        wo = rng.normal(size=(200, 3))
+        wo /= np.linalg.norm(wo, axis=1, keepdims=True)
         wo[:, 2] = np.abs(wo[:, 2])
         assert np.allclose(world.eval(wi @ R.T, wo @ R.T), local.eval(wi, wo), rtol=1e-8, atol=1e-12)
         assert np.allclose(world.pdf(wo @ R.T, wi @ R.T), local.pdf(wo, wi), rtol=1e-8, atol=1e-12)
@@ -279,9 +327,13 @@ class TestFramesAndArrays:
 
     def test_array_parameters(self, rng):
         n = 5
-        p = dict(base_color=rng.uniform(0, 1, (n, 3)), base_metalness=rng.uniform(0, 1, n),
-                 specular_roughness=rng.uniform(0.2, 1, n), specular_ior=rng.uniform(1.2, 2.5, n),
-                 base_diffuse_roughness=rng.uniform(0, 1, n))
+        p = dict(
+            base_color=rng.uniform(0, 1, (n, 3)),
+            base_metalness=rng.uniform(0, 1, n),
+            specular_roughness=rng.uniform(0.2, 1, n),
+            specular_ior=rng.uniform(1.2, 2.5, n),
+            base_diffuse_roughness=rng.uniform(0, 1, n),
+        )
         s = OpenPBRSurface(**p)
         wo = np.stack([_wo(m) for m in rng.uniform(0.1, 1, n)])
         wi = np.stack([_wo(m) for m in rng.uniform(0.1, 1, n)]) * np.array([-1.0, 1.0, 1.0])

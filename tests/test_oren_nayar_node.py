@@ -4,6 +4,7 @@ References: the classic angle form of qualitative Oren-Nayar as MaterialX's shad
 writes it (a second formulation of QON, with sigma = roughness), the EON paper's checked
 values, a hemisphere quadrature of ``eval``, and rotation invariance.
 """
+
 import math
 
 import numpy as np
@@ -59,7 +60,7 @@ class TestValues:
         node = OrenNayarDiffuseBSDF(1.0, (1.0, 0.5, 0.25), math.pi / 4, False)
         mu = 0.5
         wo = np.array([math.sqrt(1 - mu * mu), 0.0, mu])
-        assert node.albedo(wo)[0] == pytest.approx(0.791338, abs=1e-6)      # spec/models.md table
+        assert node.albedo(wo)[0] == pytest.approx(0.791338, abs=1e-6)  # spec/models.md table
         assert np.allclose(node.albedo(wo), hemisphere_albedo(lambda wi, w: node.eval(wi, w), mu), atol=1e-6)
 
     def test_below_horizon(self):
@@ -117,7 +118,7 @@ class TestSampling:
         wo = _dirs(rng, 50)
         wi = _dirs(rng, 50)
         qon = OrenNayarDiffuseBSDF(roughness=1.2)
-        assert np.allclose(qon.pdf(wo, wi), wi[:, 2] / math.pi)       # cosine sampling
+        assert np.allclose(qon.pdf(wo, wi), wi[:, 2] / math.pi)  # cosine sampling
         assert OrenNayarDiffuseBSDF(energy_compensation=True).strategy == "eon"
 
     @pytest.mark.parametrize("ec, roughness", [(True, 1.0), (False, 1.0)])

@@ -1,8 +1,7 @@
 """Bad input to the readers and the eval/render commands: one clear line on stderr and exit
 status 2 (or a warning and a defined result), never a traceback; files never modified."""
-import json
 
-import numpy as np
+import json
 import re
 
 import pytest
@@ -66,30 +65,39 @@ def _one_error_line(err):
 
 
 def _files(tmp_path):
-    f = {"cycle.mtlx": CYCLE, "wrong.usda": WRONG_TYPE, "range.mtlx": OUT_OF_RANGE, "tex.mtlx": MISSING_TEXTURE,
-         "bad.mtlx": "<materialx version='1.39'><open_pbr_surface name='S' </materialx>",
-         "bad.usda": "#usda 1.0\ndef Material \"M\" {{{ nonsense\n", "empty.usda": "",
-         "notes.txt": "not a material"}
+    f = {
+        "cycle.mtlx": CYCLE,
+        "wrong.usda": WRONG_TYPE,
+        "range.mtlx": OUT_OF_RANGE,
+        "tex.mtlx": MISSING_TEXTURE,
+        "bad.mtlx": "<materialx version='1.39'><open_pbr_surface name='S' </materialx>",
+        "bad.usda": "#usda 1.0\ndef Material \"M\" {{{ nonsense\n",
+        "empty.usda": "",
+        "notes.txt": "not a material",
+    }
     for name, text in f.items():
         (tmp_path / name).write_text(text)
     return tmp_path
 
 
-@pytest.mark.parametrize("args, needle", [
-    (["missing.usda"], "no such file"),
-    (["missing.mtlx"], "no such file"),
-    (["."], "directory"),
-    (["notes.txt"], "unknown file type"),
-    (["bad.mtlx"], "not a readable MaterialX document"),
-    (["bad.usda"], "not a readable USD stage"),
-    (["range.mtlx", "--material", "Nope"], "no material or prim 'Nope'"),
-    (["wrong.usda", "--variant", "finish=matte"], "variant set 'finish'"),
-    (["range.mtlx", "--variant", "a=b"], "variants apply to USD"),
-    (["range.mtlx", "--variant", "nonsense"], "SET=VALUE"),
-    (["range.mtlx", "--theta-i", "120"], "theta_i"),
-    (["range.mtlx", "--theta-i", "10", "20", "--theta-o", "1", "2", "3"], "same number"),
-    (["range.mtlx", "--uv", "nan", "0"], "uv must be finite"),
-])
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["missing.usda"], "no such file"),
+        (["missing.mtlx"], "no such file"),
+        (["."], "directory"),
+        (["notes.txt"], "unknown file type"),
+        (["bad.mtlx"], "not a readable MaterialX document"),
+        (["bad.usda"], "not a readable USD stage"),
+        (["range.mtlx", "--material", "Nope"], "no material or prim 'Nope'"),
+        (["wrong.usda", "--variant", "finish=matte"], "variant set 'finish'"),
+        (["range.mtlx", "--variant", "a=b"], "variants apply to USD"),
+        (["range.mtlx", "--variant", "nonsense"], "SET=VALUE"),
+        (["range.mtlx", "--theta-i", "120"], "theta_i"),
+        (["range.mtlx", "--theta-i", "10", "20", "--theta-o", "1", "2", "3"], "same number"),
+        (["range.mtlx", "--uv", "nan", "0"], "uv must be finite"),
+    ],
+)
 def test_eval_bad_input_one_line_exit_2(tmp_path, monkeypatch, capfd, args, needle):
     monkeypatch.chdir(_files(tmp_path))
     rc, out, err = _run(capfd, "eval", *args)
@@ -97,8 +105,7 @@ def test_eval_bad_input_one_line_exit_2(tmp_path, monkeypatch, capfd, args, need
     assert needle in _one_error_line(err)
 
 
-@pytest.mark.parametrize("name, needle", [("cycle.mtlx", "connection cycle"),
-                                           ("wrong.usda", "base_diffuse_roughness")])
+@pytest.mark.parametrize("name, needle", [("cycle.mtlx", "connection cycle"), ("wrong.usda", "base_diffuse_roughness")])
 def test_eval_material_that_cannot_be_evaluated_exit_1(tmp_path, monkeypatch, capfd, name, needle):
     """The material is listed with its path and reason; exit 1; no traceback."""
     monkeypatch.chdir(_files(tmp_path))
@@ -168,8 +175,21 @@ def test_files_are_never_modified(tmp_path, capfd):
             for m in load_materials(p, variants=["finish=gloss"] if p.name == "paint_variants.usda" else None):
                 m.node()
             assert main(["eval", str(p), "--json"]) == 0
-    assert main(["render", str(BUNDLED_MATERIALS / "paint_variants.usda"), "--variant", "finish=gloss",
-                 "--out", str(tmp_path / "p.png"), "--size", "16"]) == 0
+    assert (
+        main(
+            [
+                "render",
+                str(BUNDLED_MATERIALS / "paint_variants.usda"),
+                "--variant",
+                "finish=gloss",
+                "--out",
+                str(tmp_path / "p.png"),
+                "--size",
+                "16",
+            ]
+        )
+        == 0
+    )
     capfd.readouterr()
     assert {p: p.read_bytes() for p in files} == before
     assert not any(p.name.endswith((".usda~", ".bak")) for p in BUNDLED_MATERIALS.rglob("*"))

@@ -1,5 +1,6 @@
 """Bounded work on hostile graphs: shared nodes evaluated once, long chains evaluated or
 failed per material (never a RecursionError), FIFOs refused by type before opening."""
+
 import os
 
 import pytest
@@ -19,10 +20,12 @@ TAIL = """  <open_pbr_surface name="S" type="surfaceshader">
 
 def _doubling(tmp_path, n):
     """n add nodes, each reading the previous one twice: n_k = 2 n_(k-1), n_0 = 2^-n."""
-    lines = [f'  <constant name="n0" type="float"><input name="value" type="float" value="{2.0 ** -n!r}" /></constant>\n']
+    lines = [f'  <constant name="n0" type="float"><input name="value" type="float" value="{2.0**-n!r}" /></constant>\n']
     for k in range(1, n + 1):
-        lines.append(f'  <add name="n{k}" type="float"><input name="in1" type="float" nodename="n{k - 1}" />'
-                     f'<input name="in2" type="float" nodename="n{k - 1}" /></add>\n')
+        lines.append(
+            f'  <add name="n{k}" type="float"><input name="in1" type="float" nodename="n{k - 1}" />'
+            f'<input name="in2" type="float" nodename="n{k - 1}" /></add>\n'
+        )
     f = tmp_path / f"doubling{n}.mtlx"
     f.write_text(HEAD + "".join(lines) + TAIL.format(last=n))
     return f
@@ -32,8 +35,10 @@ def _chain(tmp_path, n, step=0.001):
     """n add nodes in a chain, each adding ``step``: the end is n * step."""
     lines = ['  <constant name="n0" type="float"><input name="value" type="float" value="0" /></constant>\n']
     for k in range(1, n + 1):
-        lines.append(f'  <add name="n{k}" type="float"><input name="in1" type="float" nodename="n{k - 1}" />'
-                     f'<input name="in2" type="float" value="{step!r}" /></add>\n')
+        lines.append(
+            f'  <add name="n{k}" type="float"><input name="in1" type="float" nodename="n{k - 1}" />'
+            f'<input name="in2" type="float" value="{step!r}" /></add>\n'
+        )
     f = tmp_path / f"chain{n}.mtlx"
     f.write_text(HEAD + "".join(lines) + TAIL.format(last=n))
     return f
@@ -95,7 +100,7 @@ def test_usd_shared_shaders_are_evaluated_once(tmp_path, monkeypatch):
     n = 24
     prev = UsdShade.Shader.Define(st, "/M/n0")
     prev.CreateIdAttr("ND_constant_float")
-    prev.CreateInput("value", Sdf.ValueTypeNames.Float).Set(2.0 ** -n)
+    prev.CreateInput("value", Sdf.ValueTypeNames.Float).Set(2.0**-n)
     for k in range(1, n + 1):
         s = UsdShade.Shader.Define(st, f"/M/n{k}")
         s.CreateIdAttr("ND_add_float")
@@ -104,7 +109,8 @@ def test_usd_shared_shaders_are_evaluated_once(tmp_path, monkeypatch):
         s.CreateInput("in2", Sdf.ValueTypeNames.Float).ConnectToSource(out)
         prev = s
     sh.CreateInput("base_diffuse_roughness", Sdf.ValueTypeNames.Float).ConnectToSource(
-        prev.CreateOutput("out", Sdf.ValueTypeNames.Float))
+        prev.CreateOutput("out", Sdf.ValueTypeNames.Float)
+    )
     st.GetRootLayer().Save()
     calls = []
     real = ops.apply
@@ -125,7 +131,12 @@ def test_pathologically_nested_usd_layer_is_refused_before_usd_core(tmp_path):
     f = tmp_path / "nested.usda"
     f.write_text(text)
     root = Path(__file__).resolve().parents[1]
-    p = subprocess.run([sys.executable, "-m", "openpbr_diffuse", "eval", str(f)], capture_output=True, text=True,
-                       env={"PYTHONPATH": str(root), "PATH": "/usr/bin:/bin"}, timeout=120)
+    p = subprocess.run(
+        [sys.executable, "-m", "openpbr_diffuse", "eval", str(f)],
+        capture_output=True,
+        text=True,
+        env={"PYTHONPATH": str(root), "PATH": "/usr/bin:/bin"},
+        timeout=120,
+    )
     assert p.returncode == 2, (p.returncode, p.stderr[-500:])
     assert "nested 100000 levels deep" in p.stderr and len(p.stderr.strip().splitlines()) == 1

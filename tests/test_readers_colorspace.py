@@ -3,8 +3,6 @@ system's remapped names, the OpenColorIO ACES configuration's scene-referred spa
 aliases) converts to ACEScg as independent references convert it: OpenColorIO (through
 OpenImageIO), USD's Gf.ColorSpace, colour-science's RGB_to_RGB, and closed forms (gamma 2.2 of
 0.5 is 0.5 ** 2.2).  The stored table is what colour-science computes today."""
-import os
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,8 +10,17 @@ import pytest
 from openpbr_diffuse.readers import colorspace, load_materials
 
 MX_LIB = None
-VALUES = np.array([[0.5, 0.5, 0.5], [0.2, 0.4, 0.6], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0],
-                   [0.03, 0.7, 0.95], [1.0, 1.0, 1.0]])
+VALUES = np.array(
+    [
+        [0.5, 0.5, 0.5],
+        [0.2, 0.4, 0.6],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [0.03, 0.7, 0.95],
+        [1.0, 1.0, 1.0],
+    ]
+)
 
 
 def _colour():
@@ -45,8 +52,11 @@ def _cmlib_names():
 
     lib = mx.createDocument()
     mx.loadLibraries(mx.getDefaultDataLibraryFolders(), mx.getDefaultDataSearchPath(), lib)
-    names = {nd.getName()[3:-len("_to_lin_rec709_color3")] for nd in lib.getNodeDefs()
-             if nd.getName().endswith("_to_lin_rec709_color3")}
+    names = {
+        nd.getName()[3 : -len("_to_lin_rec709_color3")]
+        for nd in lib.getNodeDefs()
+        if nd.getName().endswith("_to_lin_rec709_color3")
+    }
     return sorted(names)
 
 
@@ -63,8 +73,18 @@ def test_the_stored_table_is_colour_sciences():
 
 def test_every_cmlib_space_and_remapped_name_is_known():
     names = _cmlib_names()
-    assert {"srgb_texture", "g22_rec709", "g18_rec709", "rec709_display", "acescg", "g22_ap1", "adobergb",
-            "lin_adobergb", "lin_displayp3", "srgb_displayp3"} <= set(names)
+    assert {
+        "srgb_texture",
+        "g22_rec709",
+        "g18_rec709",
+        "rec709_display",
+        "acescg",
+        "g22_ap1",
+        "adobergb",
+        "lin_adobergb",
+        "lin_displayp3",
+        "srgb_displayp3",
+    } <= set(names)
     for n in names + ["lin_rec709", "gamma18", "gamma22", "gamma24", "lin_ap1"]:
         colorspace.canonical(n)  # no ValueError
     # MaterialX's DefaultColorManagementSystem remap
@@ -74,17 +94,41 @@ def test_every_cmlib_space_and_remapped_name_is_known():
     assert colorspace.canonical("lin_ap1") == "acescg"
 
 
-@pytest.mark.parametrize("name, want", [
-    ("lin_rec709", "lin_rec709"), ("Linear Rec.709 (sRGB)", "lin_rec709"), ("Utility - Linear - sRGB", "lin_rec709"),
-    ("lin_srgb", "lin_rec709"), ("lin_rec709_scene", "lin_rec709"), ("srgb_texture", "srgb_texture"),
-    ("sRGB - Texture", "srgb_texture"), ("Utility - sRGB - Texture", "srgb_texture"), ("sRGB", "srgb_texture"),
-    ("ACEScg", "acescg"), ("lin_ap1", "acescg"), ("lin_ap1_scene", "acescg"), ("ACES - ACEScg", "acescg"),
-    ("ACES2065-1", "aces2065-1"), ("lin_ap0", "aces2065-1"), ("lin_ap0_scene", "aces2065-1"),
-    ("CIE XYZ-D65 - Scene-referred", "lin_ciexyzd65"), ("lin_ciexyzd65_scene", "lin_ciexyzd65"),
-    ("lin_displayp3", "lin_displayp3"), ("srgb_displayp3", "srgb_displayp3"), ("adobergb", "adobergb"),
-    ("lin_adobergb", "lin_adobergb"), ("rec709_display", "g24_rec709"), ("g18_rec709", "g18_rec709"),
-    ("g22_rec709", "g22_rec709"), ("g22_ap1", "g22_ap1"), ("Raw", "raw"), ("raw", "raw"), ("Utility - Raw", "raw"),
-    ("  GAMMA22 ", "g22_rec709")])
+@pytest.mark.parametrize(
+    "name, want",
+    [
+        ("lin_rec709", "lin_rec709"),
+        ("Linear Rec.709 (sRGB)", "lin_rec709"),
+        ("Utility - Linear - sRGB", "lin_rec709"),
+        ("lin_srgb", "lin_rec709"),
+        ("lin_rec709_scene", "lin_rec709"),
+        ("srgb_texture", "srgb_texture"),
+        ("sRGB - Texture", "srgb_texture"),
+        ("Utility - sRGB - Texture", "srgb_texture"),
+        ("sRGB", "srgb_texture"),
+        ("ACEScg", "acescg"),
+        ("lin_ap1", "acescg"),
+        ("lin_ap1_scene", "acescg"),
+        ("ACES - ACEScg", "acescg"),
+        ("ACES2065-1", "aces2065-1"),
+        ("lin_ap0", "aces2065-1"),
+        ("lin_ap0_scene", "aces2065-1"),
+        ("CIE XYZ-D65 - Scene-referred", "lin_ciexyzd65"),
+        ("lin_ciexyzd65_scene", "lin_ciexyzd65"),
+        ("lin_displayp3", "lin_displayp3"),
+        ("srgb_displayp3", "srgb_displayp3"),
+        ("adobergb", "adobergb"),
+        ("lin_adobergb", "lin_adobergb"),
+        ("rec709_display", "g24_rec709"),
+        ("g18_rec709", "g18_rec709"),
+        ("g22_rec709", "g22_rec709"),
+        ("g22_ap1", "g22_ap1"),
+        ("Raw", "raw"),
+        ("raw", "raw"),
+        ("Utility - Raw", "raw"),
+        ("  GAMMA22 ", "g22_rec709"),
+    ],
+)
 def test_names(name, want):
     assert colorspace.canonical(name) == want
 
@@ -100,11 +144,12 @@ def test_display_referred_is_said():
         colorspace.canonical("sRGB - Display")
 
 
-@pytest.mark.parametrize("name, gamma", [("gamma18", 1.8), ("gamma22", 2.2), ("gamma24", 2.4),
-                                         ("g22_ap1", 2.2), ("adobergb", 563 / 256)])
+@pytest.mark.parametrize(
+    "name, gamma", [("gamma18", 1.8), ("gamma22", 2.2), ("gamma24", 2.4), ("g22_ap1", 2.2), ("adobergb", 563 / 256)]
+)
 def test_gamma_decoding_is_the_power(name, gamma):
     v = np.array([0.0, 0.1, 0.5, 0.8, 1.0])
-    assert np.allclose(colorspace.decode(v, name), v ** gamma, rtol=1e-15, atol=0)
+    assert np.allclose(colorspace.decode(v, name), v**gamma, rtol=1e-15, atol=0)
     assert colorspace.decode([-0.5], name)[0] == 0.0  # MaterialX's cmlib clamps at 0
 
 
@@ -134,11 +179,20 @@ def test_each_space_agrees_with_colour_science(space):
         d65 = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
         want = colour.XYZ_to_RGB(VALUES, derived["ACEScg"], d65, "Bradford")
     elif spec[2]:  # a decoding named apart from the primaries (Gamma 2.4 on Rec.709)
-        want = colour.RGB_to_RGB(colour.cctf_decoding(VALUES, function=spec[2]), derived[spec[1]], derived["ACEScg"],
-                                 chromatic_adaptation_transform="Bradford")
+        want = colour.RGB_to_RGB(
+            colour.cctf_decoding(VALUES, function=spec[2]),
+            derived[spec[1]],
+            derived["ACEScg"],
+            chromatic_adaptation_transform="Bradford",
+        )
     else:
-        want = colour.RGB_to_RGB(VALUES, derived[spec[1]], derived["ACEScg"], chromatic_adaptation_transform="Bradford",
-                                 apply_cctf_decoding=True)
+        want = colour.RGB_to_RGB(
+            VALUES,
+            derived[spec[1]],
+            derived["ACEScg"],
+            chromatic_adaptation_transform="Bradford",
+            apply_cctf_decoding=True,
+        )
     assert np.allclose(got, want, rtol=0, atol=1e-12), space
 
 
@@ -155,11 +209,22 @@ def test_each_space_agrees_with_opencolorio(space):
     assert np.allclose(got, want, rtol=rtol, atol=2e-5), (space, got, want)
 
 
-_GF = {"lin_rec709": "LinearRec709", "srgb_texture": "SRGBRec709", "g18_rec709": "G18Rec709",
-       "g22_rec709": "G22Rec709", "g24_rec709": "G24Rec709", "aces2065-1": "LinearAP0", "g22_ap1": "G22AP1",
-       "srgb_ap1": "SRGBAP1", "lin_adobergb": "LinearAdobeRGB", "adobergb": "G22AdobeRGB",
-       "lin_displayp3": "LinearP3D65", "srgb_displayp3": "SRGBP3D65", "lin_rec2020": "LinearRec2020",
-       "lin_ciexyzd65": "LinearCIEXYZD65"}
+_GF = {
+    "lin_rec709": "LinearRec709",
+    "srgb_texture": "SRGBRec709",
+    "g18_rec709": "G18Rec709",
+    "g22_rec709": "G22Rec709",
+    "g24_rec709": "G24Rec709",
+    "aces2065-1": "LinearAP0",
+    "g22_ap1": "G22AP1",
+    "srgb_ap1": "SRGBAP1",
+    "lin_adobergb": "LinearAdobeRGB",
+    "adobergb": "G22AdobeRGB",
+    "lin_displayp3": "LinearP3D65",
+    "srgb_displayp3": "SRGBP3D65",
+    "lin_rec2020": "LinearRec2020",
+    "lin_ciexyzd65": "LinearCIEXYZD65",
+}
 
 
 @pytest.mark.parametrize("space", sorted(_GF))
@@ -173,7 +238,7 @@ def test_each_space_agrees_with_usd(space):
 def test_gamma22_value_is_decoded_then_converted():
     """0.5 in gamma 2.2 Rec.709: 0.5 ** 2.2 in linear Rec.709, white-preserving to ACEScg."""
     got = colorspace.to_working([0.5, 0.5, 0.5], "gamma22")
-    assert np.allclose(got, [0.5 ** 2.2] * 3, rtol=1e-12)
+    assert np.allclose(got, [0.5**2.2] * 3, rtol=1e-12)
 
 
 def test_matrix_only_for_linear_spaces():

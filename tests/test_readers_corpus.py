@@ -1,8 +1,9 @@
 """Real material files written elsewhere (../shared/corpus): every OpenPBR example loads with
 the values the document holds (read here with MaterialX directly, not through the reader), and
 the USD working group's shader-ball layer gives its seven materials in three variant settings."""
-import os
+
 import functools
+import os
 from pathlib import Path
 
 import numpy as np
@@ -14,8 +15,10 @@ SHARED = Path(os.environ.get("OPENPBR_DIFFUSE_SHARED") or Path(__file__).resolve
 EXAMPLES = SHARED / "corpus" / "openpbr" / "examples"
 SHADERBALL = SHARED / "corpus" / "usd-wg-shaderball" / "layers" / "example_materials.usda"
 
-pytestmark = [pytest.mark.corpus,
-              pytest.mark.skipif(not (SHARED / "corpus").is_dir(), reason="../shared/corpus is absent")]
+pytestmark = [
+    pytest.mark.corpus,
+    pytest.mark.skipif(not (SHARED / "corpus").is_dir(), reason="../shared/corpus is absent"),
+]
 
 MODELLED_BASE = ("base_color", "base_diffuse_roughness", "base_weight")
 
@@ -33,7 +36,7 @@ def _mx_values(path):
     return out, doc.getColorSpace()
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _nodedef_default(name):
     import MaterialX as mx
 
@@ -74,9 +77,14 @@ def test_openpbr_examples_list_unsupported_features_per_material():
     lobe's weight is 0); modelled inputs never are."""
     from openpbr_diffuse.nodes.openpbr_surface import MODELLED
 
-    gates = {"coat_": "coat_weight", "fuzz_": "fuzz_weight", "subsurface_": "subsurface_weight",
-             "transmission_": "transmission_weight", "thin_film_": "thin_film_weight",
-             "emission_": "emission_luminance"}
+    gates = {
+        "coat_": "coat_weight",
+        "fuzz_": "fuzz_weight",
+        "subsurface_": "subsurface_weight",
+        "transmission_": "transmission_weight",
+        "thin_film_": "thin_film_weight",
+        "emission_": "emission_luminance",
+    }
     listed_somewhere = 0
     for path in sorted(EXAMPLES.glob("*.mtlx")):
         values, _ = _mx_values(path)
@@ -116,13 +124,25 @@ def test_shaderball_gives_seven_materials(variant):
     mats = load_materials(SHADERBALL, variants=[variant] if variant else None)
     assert SHADERBALL.read_bytes() == before
     by = _by_path(mats)
-    assert sorted(by) == sorted(["mtlx/plastic", "mtlx/gold", "mtlx/glass", "mtlx/bubblegum",
-                                 "usdpreview/plastic", "usdpreview/copper", "usdpreview/glass"])
+    assert sorted(by) == sorted(
+        [
+            "mtlx/plastic",
+            "mtlx/gold",
+            "mtlx/glass",
+            "mtlx/bubblegum",
+            "usdpreview/plastic",
+            "usdpreview/copper",
+            "usdpreview/glass",
+        ]
+    )
     preview = [m for m in mats if m.shader_id == "UsdPreviewSurface"]
     assert len(preview) == 3 and all(m.diffuse_model == "lambert" for m in preview)
     assert all(m.supported and m.node() is not None for m in mats)
-    mtlx_id = "ND_standard_surface_surfaceshader" if variant == "material_model=standard_surface" \
+    mtlx_id = (
+        "ND_standard_surface_surfaceshader"
+        if variant == "material_model=standard_surface"
         else "ND_open_pbr_surface_surfaceshader"
+    )
     assert [m.shader_id for m in mats if m.path.split("/")[-2] == "mtlx"] == [mtlx_id] * 4
     # plastic: base_color authored in lin_rec709 in both .mtlx files (Gf.ColorSpace: an independent conversion)
     plastic = by["mtlx/plastic"].parameters["base_color"].value
@@ -146,6 +166,7 @@ def test_shaderball_gives_seven_materials(variant):
 
 @pytest.mark.skipif(not SHADERBALL.is_file(), reason="usd-wg shader ball layer absent")
 def test_shaderball_binding_to_mtlx_material_resolves():
-    mats = load_materials(SHADERBALL, variants=["example_material=mtlx_gold"],
-                          material="/standard_shader_ball_scene/shader_ball")
+    mats = load_materials(
+        SHADERBALL, variants=["example_material=mtlx_gold"], material="/standard_shader_ball_scene/shader_ball"
+    )
     assert [m.name for m in mats] == ["gold"]

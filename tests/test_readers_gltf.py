@@ -2,8 +2,9 @@
 Expected values: the glTF 2.0 closed form of the diffuse, f = (1 - metallic) base_color / pi
 when the specular layer is off (KHR_materials_specular ``specular`` = 0), the inputs renamed as
 MaterialX's gltf_pbr graph uses them, and the colour converted by USD's Gf.ColorSpace."""
-import os
+
 import math
+import os
 import textwrap
 from pathlib import Path
 
@@ -37,8 +38,9 @@ DOC = """
 
 def _load(tmp_path, metallic=0.0, specular=1.0, alpha_mode=0, extra=""):
     p = tmp_path / "g.mtlx"
-    p.write_text(textwrap.dedent(DOC).lstrip().format(metallic=metallic, specular=specular, alpha_mode=alpha_mode,
-                                                      extra=extra))
+    p.write_text(
+        textwrap.dedent(DOC).lstrip().format(metallic=metallic, specular=specular, alpha_mode=alpha_mode, extra=extra)
+    )
     (m,) = load_materials(p)
     return m
 
@@ -70,15 +72,20 @@ def test_gltf_diffuse_is_lambertian(tmp_path, metallic):
 
 
 def test_gltf_inputs_are_renamed(tmp_path):
-    m = _load(tmp_path, metallic=0.3, alpha_mode=2, extra='<input name="clearcoat" type="float" value="0.5" />'
-              '<input name="emissive" type="color3" value="1, 0, 0" />')
+    m = _load(
+        tmp_path,
+        metallic=0.3,
+        alpha_mode=2,
+        extra='<input name="clearcoat" type="float" value="0.5" />'
+        '<input name="emissive" type="color3" value="1, 0, 0" />',
+    )
     ni = m.node_inputs
     np.testing.assert_allclose(ni["base_color"].value, _acescg((0.8, 0.4, 0.2)), atol=3e-6)
     assert ni["base_metalness"].value == pytest.approx(0.3)
     assert ni["specular_roughness"].value == pytest.approx(0.6)
     assert ni["specular_ior"].value == pytest.approx(1.45)
     assert ni["coat_weight"].value == pytest.approx(0.5) and ni["coat_ior"].value == 1.5
-    assert ni["geometry_opacity"].value == pytest.approx(0.7)          # BLEND: alpha
+    assert ni["geometry_opacity"].value == pytest.approx(0.7)  # BLEND: alpha
     assert any(u.startswith("emissive") for u in m.unsupported), m.unsupported
 
 
@@ -112,7 +119,8 @@ def test_gltf_examples_are_evaluated():
 
 def test_surface_over_other_bsdf_names_the_bsdf(tmp_path):
     p = tmp_path / "s.mtlx"
-    p.write_text(textwrap.dedent("""
+    p.write_text(
+        textwrap.dedent("""
         <?xml version="1.0"?>
         <materialx version="1.39">
           <dielectric_bsdf name="d" type="BSDF" />
@@ -123,7 +131,8 @@ def test_surface_over_other_bsdf_names_the_bsdf(tmp_path):
             <input name="surfaceshader" type="surfaceshader" nodename="S" />
           </surfacematerial>
         </materialx>
-        """).lstrip())
+        """).lstrip()
+    )
     (m,) = load_materials(p)
     assert not m.supported and m.error == ""
     assert "d (ND_dielectric_bsdf)" in m.unsupported[0] and "oren_nayar_diffuse_bsdf" in m.unsupported[0]

@@ -3,6 +3,7 @@ holds them (after MaterialX's ``fileprefix``, applied once per element scope), n
 the working directory or the including document.  Expected values: MaterialX's own
 ``flattenFilenames`` on a copy of the document (which file), and the texel read with
 OpenImageIO directly (which value)."""
+
 import os
 import textwrap
 from pathlib import Path
@@ -72,8 +73,11 @@ def _flattened(doc_path):
     mx.readFromXmlFile(doc, str(doc_path))
     flat = doc.copy()
     mx.flattenFilenames(flat)
-    return {e.getNamePath(): e.getValueString() for e in flat.traverseTree()
-            if e.isA(mx.Input) and e.getType() == "filename"}
+    return {
+        e.getNamePath(): e.getValueString()
+        for e in flat.traverseTree()
+        if e.isA(mx.Input) and e.getType() == "filename"
+    }
 
 
 def _layout(tmp_path):
@@ -81,10 +85,10 @@ def _layout(tmp_path):
     (looks / "parts").mkdir(parents=True)
     (looks / "main.mtlx").write_text(textwrap.dedent(MAIN).lstrip())
     (looks / "parts" / "inc.mtlx").write_text(textwrap.dedent(INC).lstrip())
-    _png(looks / "parts" / "img" / "tex.png", (200, 100, 50))     # the included document's
+    _png(looks / "parts" / "img" / "tex.png", (200, 100, 50))  # the included document's
     _png(looks / "parts" / "rough" / "tex.png", (64, 64, 64))
-    _png(looks / "img" / "tex.png", (1, 2, 3))                   # decoys: the including document's
-    _png(tmp_path / "cwd" / "img" / "tex.png", (9, 9, 9))         # and the working directory's
+    _png(looks / "img" / "tex.png", (1, 2, 3))  # decoys: the including document's
+    _png(tmp_path / "cwd" / "img" / "tex.png", (9, 9, 9))  # and the working directory's
     _png(looks / "rough" / "tex.png", (250, 250, 250))
     return looks / "main.mtlx"
 
@@ -93,13 +97,14 @@ def test_included_texture_resolves_against_its_own_document(tmp_path, monkeypatc
     main = _layout(tmp_path)
     monkeypatch.chdir(tmp_path / "cwd")
     flat = _flattened(main)
-    assert flat == {"colour/file": "img/tex.png", "G/r/file": "rough/tex.png"}   # MaterialX: prefix per scope
+    assert flat == {"colour/file": "img/tex.png", "G/r/file": "rough/tex.png"}  # MaterialX: prefix per scope
     folder = main.parent / "parts"
     (m,) = load_materials(main)
     assert m.error == "" and not [w for w in m.warnings if "does not exist" in w], m.warnings
     np.testing.assert_allclose(m.parameters["base_color"].value, _texel(folder / flat["colour/file"]), atol=1e-12)
-    np.testing.assert_allclose(m.parameters["specular_roughness"].value,
-                               _texel(folder / flat["G/r/file"])[0], atol=1e-12)
+    np.testing.assert_allclose(
+        m.parameters["specular_roughness"].value, _texel(folder / flat["G/r/file"])[0], atol=1e-12
+    )
     assert str(folder / "img" / "tex.png") in m.parameters["base_color"].provenance
 
 
@@ -111,8 +116,9 @@ def test_nested_include_follows_materialx_source_uri(tmp_path, monkeypatch):
     inner = main.parent / "parts" / "deeper" / "inner.mtlx"
     inner.parent.mkdir()
     inner.write_text(textwrap.dedent(INC).lstrip())
-    (main.parent / "parts" / "inc.mtlx").write_text(textwrap.dedent(MAIN).replace("parts/inc.mtlx",
-                                                                                  "deeper/inner.mtlx").lstrip())
+    (main.parent / "parts" / "inc.mtlx").write_text(
+        textwrap.dedent(MAIN).replace("parts/inc.mtlx", "deeper/inner.mtlx").lstrip()
+    )
     _png(inner.parent / "img" / "tex.png", (30, 60, 90))
     monkeypatch.chdir(tmp_path / "cwd")
     # MaterialX (1.39) gives a nested include's elements the source URI of the outermost included

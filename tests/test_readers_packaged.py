@@ -2,6 +2,7 @@
 gets the texel, no "does not exist" warning, and nothing is written next to the package.
 Expected values: the texel written into the package, decoded from sRGB by the closed form of
 IEC 61966-2-1 and converted to ACEScg by USD's own Gf.ColorSpace."""
+
 import os
 import textwrap
 import zipfile
@@ -13,8 +14,9 @@ import pytest
 from openpbr_diffuse.readers import load_materials
 
 SHARED = Path(os.environ.get("OPENPBR_DIFFUSE_SHARED") or Path(__file__).resolve().parents[1].parent / "shared")
-ANIMATED_CUBE = SHARED / "corpus" / "realworld" / "usd-wg-assets" / "test_assets" / "USDZ" / "AnimatedCube" \
-    / "AnimatedCube.usdz"
+ANIMATED_CUBE = (
+    SHARED / "corpus" / "realworld" / "usd-wg-assets" / "test_assets" / "USDZ" / "AnimatedCube" / "AnimatedCube.usdz"
+)
 
 LAYER = """
 #usda 1.0
@@ -74,7 +76,7 @@ def _package(tmp_path):
     pkg = tmp_path / "pkg"
     pkg.mkdir()
     usdz = pkg / "scene.usdz"
-    writer = Sdf.ZipFileWriter.CreateNew(str(usdz))   # the layer first, members 64-byte aligned
+    writer = Sdf.ZipFileWriter.CreateNew(str(usdz))  # the layer first, members 64-byte aligned
     writer.AddFile(str(src / "scene.usda"), "scene.usda")
     writer.AddFile(str(src / "textures" / "a.png"), "textures/a.png")
     writer.Save()
@@ -124,7 +126,7 @@ def test_animated_cube_base_colour(tmp_path):
         png = tmp_path / "base.png"
         png.write_bytes(z.read(member))
     buf = oiio.ImageBuf(str(png))
-    texel = np.array(buf.interppixel_NDC(0.5, 0.5))[:3]   # uv (0.5, 0.5): s = 0.5, t = 1 - 0.5
+    texel = np.array(buf.interppixel_NDC(0.5, 0.5))[:3]  # uv (0.5, 0.5): s = 0.5, t = 1 - 0.5
     want = _rec709_to_acescg(_srgb_decode(texel))
     got = np.asarray(m.parameters["diffuseColor"].value)
     np.testing.assert_allclose(got, want, rtol=1e-4)

@@ -3,6 +3,7 @@ a document's own nodedefs, explicit texcoord nodes, float3 colours, space-separa
 and one bad value failing only its own material.  Each file is small and written here; the
 expected values come from a second, plain spelling of the same material (read by the same
 public API), so a wrong reading of either spelling fails."""
+
 import textwrap
 
 import numpy as np
@@ -65,8 +66,7 @@ LOCAL_NODEDEF = """
 
 
 def test_document_local_nodedef_is_evaluated(tmp_path):
-    local = _openpbr(tmp_path, "local.mtlx", '<input name="base_color" type="color3" nodename="h" />',
-                     LOCAL_NODEDEF)
+    local = _openpbr(tmp_path, "local.mtlx", '<input name="base_color" type="color3" nodename="h" />', LOCAL_NODEDEF)
     plain = _openpbr(tmp_path, "plain.mtlx", '<input name="base_color" type="color3" value="0.4, 0.2, 0.1" />')
     np.testing.assert_allclose(_base_color(local), _base_color(plain), rtol=1e-12)
 
@@ -95,13 +95,20 @@ def _texture(tmp_path):
 
 def test_mtlx_image_with_explicit_texcoord_node(tmp_path):
     tex = _texture(tmp_path)
-    img = ('<image name="img" type="color3"><input name="file" type="filename" value="{f}" colorspace="lin_rec709" />'
-           '{tc}</image>')
-    explicit = _openpbr(tmp_path, "explicit.mtlx", '<input name="base_color" type="color3" nodename="img" />',
-                        '<texcoord name="tc" type="vector2" />'
-                        + img.format(f=tex, tc='<input name="texcoord" type="vector2" nodename="tc" />'))
-    implicit = _openpbr(tmp_path, "implicit.mtlx", '<input name="base_color" type="color3" nodename="img" />',
-                        img.format(f=tex, tc=""))
+    img = (
+        '<image name="img" type="color3"><input name="file" type="filename" value="{f}" colorspace="lin_rec709" />'
+        '{tc}</image>'
+    )
+    explicit = _openpbr(
+        tmp_path,
+        "explicit.mtlx",
+        '<input name="base_color" type="color3" nodename="img" />',
+        '<texcoord name="tc" type="vector2" />'
+        + img.format(f=tex, tc='<input name="texcoord" type="vector2" nodename="tc" />'),
+    )
+    implicit = _openpbr(
+        tmp_path, "implicit.mtlx", '<input name="base_color" type="color3" nodename="img" />', img.format(f=tex, tc="")
+    )
     for uv in ((0.25, 0.25), (0.75, 0.75)):
         a, b = _base_color(explicit, uv=uv), _base_color(implicit, uv=uv)
         np.testing.assert_allclose(a, b, rtol=1e-12)
@@ -137,8 +144,11 @@ def Material "M"
 
 def test_usd_image_with_explicit_texcoord_node(tmp_path):
     tex = _texture(tmp_path)
-    explicit = _write(tmp_path, "explicit.usda",
-                      USD_IMAGE.format(tex=tex, texcoord="float2 inputs:texcoord.connect = </M/tc.outputs:out>"))
+    explicit = _write(
+        tmp_path,
+        "explicit.usda",
+        USD_IMAGE.format(tex=tex, texcoord="float2 inputs:texcoord.connect = </M/tc.outputs:out>"),
+    )
     implicit = _write(tmp_path, "implicit.usda", USD_IMAGE.format(tex=tex, texcoord=""))
     for uv in ((0.25, 0.25), (0.75, 0.75)):
         np.testing.assert_allclose(_base_color(explicit, uv=uv), _base_color(implicit, uv=uv), rtol=1e-12)
@@ -177,8 +187,9 @@ def test_usd_float3_colour_is_a_colour(tmp_path):
     a, b = _by_name(load_materials(f3)), _by_name(load_materials(c3))
     assert set(a) == {"M", "Other"}
     assert a["M"].error == "" and a["M"].supported
-    np.testing.assert_allclose(a["M"].parameters["diffuseColor"].value, b["M"].parameters["diffuseColor"].value,
-                               rtol=1e-12)
+    np.testing.assert_allclose(
+        a["M"].parameters["diffuseColor"].value, b["M"].parameters["diffuseColor"].value, rtol=1e-12
+    )
 
 
 # --------------------------------------------------------------- values separated by spaces
@@ -189,9 +200,11 @@ def test_space_separated_values_parse_as_materialx_does(tmp_path):
 
 
 def test_space_separated_vector2_in_a_graph(tmp_path):
-    graph = ('<constant name="k" type="vector2"><input name="value" type="vector2" value="{v}" /></constant>'
-             '<extract name="x" type="float"><input name="in" type="vector2" nodename="k" />'
-             '<input name="index" type="integer" value="1" /></extract>')
+    graph = (
+        '<constant name="k" type="vector2"><input name="value" type="vector2" value="{v}" /></constant>'
+        '<extract name="x" type="float"><input name="in" type="vector2" nodename="k" />'
+        '<input name="index" type="integer" value="1" /></extract>'
+    )
     inputs = '<input name="base_diffuse_roughness" type="float" nodename="x" />'
     spaced = _openpbr(tmp_path, "spaced.mtlx", inputs, graph.format(v="0.25 0.75"))
     (m,) = load_materials(spaced)
@@ -219,10 +232,13 @@ TWO = """
 """
 
 
-@pytest.mark.parametrize("bad, words", [
-    ('<input name="base_color" type="color3" value="0.5, 0.5, 0.5" colorspace="gamma99" />', "gamma99"),
-    ('<input name="base_diffuse_roughness" type="float" value="rough" />', "rough"),
-])
+@pytest.mark.parametrize(
+    "bad, words",
+    [
+        ('<input name="base_color" type="color3" value="0.5, 0.5, 0.5" colorspace="gamma99" />', "gamma99"),
+        ('<input name="base_diffuse_roughness" type="float" value="rough" />', "rough"),
+    ],
+)
 def test_one_bad_value_fails_only_its_material(tmp_path, bad, words):
     f = _write(tmp_path, "two.mtlx", TWO.format(bad=bad))
     mats = _by_name(load_materials(f))
@@ -233,8 +249,9 @@ def test_one_bad_value_fails_only_its_material(tmp_path, bad, words):
 
 
 def test_usd_unknown_colour_space_fails_only_its_material(tmp_path):
-    text = PREVIEW.format(decl="color3f").replace("inputs:diffuseColor = (0.2, 0.4, 0.6)",
-                                                   'inputs:diffuseColor = (0.2, 0.4, 0.6) ( colorSpace = "gamma99" )')
+    text = PREVIEW.format(decl="color3f").replace(
+        "inputs:diffuseColor = (0.2, 0.4, 0.6)", 'inputs:diffuseColor = (0.2, 0.4, 0.6) ( colorSpace = "gamma99" )'
+    )
     mats = _by_name(load_materials(_write(tmp_path, "cs.usda", text)))
     assert "gamma99" in mats["M"].error and not mats["M"].supported
     assert mats["Other"].error == "" and mats["Other"].supported
@@ -277,9 +294,15 @@ def test_surface_shaders_inside_nodegraphs_are_listed(tmp_path):
     # material; without one, the nodegraph's surface-shader outputs
     with_material = _write(tmp_path, "m.mtlx", GRAPH_SHADERS)
     assert set(_by_name(load_materials(with_material))) == renderable(with_material) == {"M"}
-    f = _write(tmp_path, "g.mtlx", GRAPH_SHADERS.replace(
-        '<surfacematerial name="M" type="material"><input name="surfaceshader" type="surfaceshader" '
-        'nodename="S" /></surfacematerial>', ""))
+    f = _write(
+        tmp_path,
+        "g.mtlx",
+        GRAPH_SHADERS.replace(
+            '<surfacematerial name="M" type="material"><input name="surfaceshader" type="surfaceshader" '
+            'nodename="S" /></surfacematerial>',
+            "",
+        ),
+    )
     mats = _by_name(load_materials(f))
     assert renderable(f) >= {"G/out1", "G/out2"}
     assert {"G/out1", "G/out2"} <= set(mats) and set(mats) <= renderable(f) | {"S"}
@@ -317,8 +340,17 @@ def Material "M"
 """
 
 
-@pytest.mark.parametrize("channels, cs, decoded", [(1, "auto", False), (2, "auto", False), (3, "auto", True),
-                                                   (4, "auto", True), (1, "sRGB", True), (3, "raw", False)])
+@pytest.mark.parametrize(
+    "channels, cs, decoded",
+    [
+        (1, "auto", False),
+        (2, "auto", False),
+        (3, "auto", True),
+        (4, "auto", True),
+        (1, "sRGB", True),
+        (3, "raw", False),
+    ],
+)
 def test_auto_source_colour_space_decodes_only_colour_textures(tmp_path, channels, cs, decoded):
     import OpenImageIO as oiio
 

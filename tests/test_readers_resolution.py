@@ -3,8 +3,9 @@ dir): interface connections, NodeGraphs, constant nodes, time samples, variants,
 purposes, textures (wrap modes, scale/bias, fallback, sRGB), colour spaces.  Expected values
 are computed by hand in each test (colour conversions with USD's own Gf.ColorSpace, an
 implementation independent of the colour-science path the readers use)."""
-import re
+
 import itertools
+import re
 
 import numpy as np
 import pytest
@@ -83,6 +84,7 @@ def test_interface_connection_and_nodegraph_output(tmp_path):
     st.Save()
     colour = "lin_ap1_scene"
     from pxr import Usd
+
     Usd.ColorSpaceAPI.Apply(st.GetPrimAtPath("/M")).CreateColorSpaceNameAttr(colour)
     st.Save()
     (m,) = load_materials(tmp_path / "s.usda")
@@ -105,7 +107,8 @@ def test_stdlib_math_nodes_in_usd(tmp_path):
     mul.CreateInput("in1", Sdf.ValueTypeNames.Color3f).Set((0.5, 0.8, 1.0))
     mul.CreateInput("in2", Sdf.ValueTypeNames.Float).Set(0.5)
     sh.CreateInput("base_color", Sdf.ValueTypeNames.Color3f).ConnectToSource(
-        mul.CreateOutput("out", Sdf.ValueTypeNames.Color3f))
+        mul.CreateOutput("out", Sdf.ValueTypeNames.Color3f)
+    )
     Usd = __import__("pxr.Usd", fromlist=["Usd"])
     Usd.ColorSpaceAPI.Apply(st.GetPrimAtPath("/M")).CreateColorSpaceNameAttr("lin_ap1_scene")
     st.Save()
@@ -149,7 +152,9 @@ def test_variants_in_session_layer_file_untouched(tmp_path):
     before = f.read_bytes()
     assert load_materials(f)[0].parameters["base_diffuse_roughness"].value == pytest.approx(0.9)
     assert load_materials(f, variants=["look=hard"])[0].parameters["base_diffuse_roughness"].value == pytest.approx(0.1)
-    assert load_materials(f, variants={"look": "soft"})[0].parameters["base_diffuse_roughness"].value == pytest.approx(0.9)
+    assert load_materials(f, variants={"look": "soft"})[0].parameters["base_diffuse_roughness"].value == pytest.approx(
+        0.9
+    )
     with pytest.raises(ValueError, match="look=glossy"):
         load_materials(f, variants=["look=glossy"])
     with pytest.raises(ValueError, match="not on any prim"):
@@ -188,7 +193,7 @@ def test_bindings_and_purposes(tmp_path):
 def _texture_stage(tmp_path, file, wrap="repeat", scale=None, bias=None, fallback=None, source="raw", st_value=None):
     from pxr import Sdf, UsdShade
 
-    name = f"t{next(_COUNTER)}.usda"    # a new layer each time (USD's registry keeps open ones)
+    name = f"t{next(_COUNTER)}.usda"  # a new layer each time (USD's registry keeps open ones)
     st = _stage(tmp_path, name)
     _, sh = _material(st, "/M", "UsdPreviewSurface", "surface", context=None)
     tex = UsdShade.Shader.Define(st, "/M/Tex")
@@ -208,12 +213,14 @@ def _texture_stage(tmp_path, file, wrap="repeat", scale=None, bias=None, fallbac
         reader.CreateIdAttr("UsdPrimvarReader_float2")
         reader.CreateInput("varname", Sdf.ValueTypeNames.String).Set("st")
         tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(
-            reader.CreateOutput("result", Sdf.ValueTypeNames.Float2))
+            reader.CreateOutput("result", Sdf.ValueTypeNames.Float2)
+        )
     rgb = tex.CreateOutput("rgb", Sdf.ValueTypeNames.Float3)
     r = tex.CreateOutput("r", Sdf.ValueTypeNames.Float)
     sh.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(rgb)
     sh.CreateInput("roughness", Sdf.ValueTypeNames.Float).ConnectToSource(r)
     from pxr import Usd
+
     Usd.ColorSpaceAPI.Apply(st.GetPrimAtPath("/M")).CreateColorSpaceNameAttr("lin_ap1_scene")
     st.Save()
     return tmp_path / name
@@ -245,7 +252,7 @@ def test_uv_texture_wrap_modes(tmp_path, wrap, col):
     a = _texels()
     _write_exr(tmp_path / "tex.exr", a)
     f = _texture_stage(tmp_path, "tex.exr", wrap=wrap)
-    u = 1.0 + 0.125 if wrap != "clamp" else 1.7   # column 0 repeated / column 3 mirrored or clamped
+    u = 1.0 + 0.125 if wrap != "clamp" else 1.7  # column 0 repeated / column 3 mirrored or clamped
     v = _centre(0, 1)[1]
     (m,) = load_materials(f, uv=(u, v))
     want = np.zeros(3) if col is None else a[1, col]
@@ -276,6 +283,7 @@ def test_uv_texture_srgb_png(tmp_path):
     # colour space (here lin_rec709 via ColorSpaceAPI) -> ACEScg
     f = _texture_stage(tmp_path, "c.png", source="auto")
     from pxr import Usd
+
     st = Usd.Stage.Open(str(f))
     Usd.ColorSpaceAPI(st.GetPrimAtPath("/M")).GetColorSpaceNameAttr().Set("lin_rec709_scene")
     st.Save()
@@ -353,8 +361,8 @@ def test_out_of_range_clamped_with_warning(tmp_path):
     sh.CreateInput("base_diffuse_roughness", Sdf.ValueTypeNames.Float).Set(2.0)
     st.Save()
     (m,) = load_materials(tmp_path / "s.usda")
-    assert m.parameters["base_color"].value == (1.5, -0.25, 0.5)      # as authored
-    assert m.node_inputs["base_color"].value == (1.0, 0.0, 0.5)       # clamped to the nodedef range
+    assert m.parameters["base_color"].value == (1.5, -0.25, 0.5)  # as authored
+    assert m.node_inputs["base_color"].value == (1.0, 0.0, 0.5)  # clamped to the nodedef range
     assert m.node_inputs["base_diffuse_roughness"].value == 1.0
     assert any("base_color" in w and "clamped" in w for w in m.warnings)
     assert any("base_diffuse_roughness" in w for w in m.warnings)
@@ -440,7 +448,7 @@ def test_materialx_nodegraph_interface_constant_image_tiledimage(tmp_path):
     # tiledimage: texcoord * (2, 1) -> u = 2 * 0.375 = 0.75, half-way between the centres of
     # columns 2 (0.625) and 3 (0.875): the bilinear mean of the two texels
     assert m.parameters["specular_roughness"].value == pytest.approx((a[2, 2, 0] + a[2, 3, 0]) / 2, abs=1e-6)
-    (m,) = load_materials(f, uv=(0.4375 + 1.0, uv[1]))   # u' = 2.875: column 3 (periodic)
+    (m,) = load_materials(f, uv=(0.4375 + 1.0, uv[1]))  # u' = 2.875: column 3 (periodic)
     assert m.parameters["specular_roughness"].value == pytest.approx(a[2, 3, 0], abs=1e-6)
 
 
@@ -471,8 +479,9 @@ def test_materialx_cycle_and_wrong_type(tmp_path):
     (tmp_path / "c.mtlx").write_text(cyc)
     (m,) = load_materials(tmp_path / "c.mtlx")  # the material fails, not the file
     assert not m.supported and re.search("connection cycle", m.error), m.error
-    bad = cyc.replace('<input name="base_weight" type="float" nodename="a" />',
-                      '<input name="base_color" type="float" value="0.5" />')
+    bad = cyc.replace(
+        '<input name="base_weight" type="float" nodename="a" />', '<input name="base_color" type="float" value="0.5" />'
+    )
     (tmp_path / "t.mtlx").write_text(bad)
     (m,) = load_materials(tmp_path / "t.mtlx")  # the material fails, not the file
     assert not m.supported and re.search("base_color.*color3", m.error), m.error
@@ -513,7 +522,7 @@ def test_materialx_bare_oren_nayar_and_standard_surface(tmp_path):
     assert ni["specular_ior"] == 1.4
     # MaterialX's translation graph: metalness > 0 -> specular_weight 1 (OpenPBR's weight also scales metal)
     assert ni["specular_weight"] == 1.0
-    assert np.allclose(ni["base_color"], (0.2, 0.4, 0.6))   # coat 0: no coat attenuation
+    assert np.allclose(ni["base_color"], (0.2, 0.4, 0.6))  # coat 0: no coat attenuation
     assert m.approximations
 
 
@@ -527,8 +536,12 @@ def test_pruned_standard_surface_translation_equals_the_full_graph():
     for out, value in full.items():
         got = m.node_inputs[out[:-4]].value
         want = value
-        if m.node_inputs[out[:-4]].kind != "default" and out[:-4] in ("base_color", "base_weight",
-                                                                       "base_diffuse_roughness", "specular_weight"):
+        if m.node_inputs[out[:-4]].kind != "default" and out[:-4] in (
+            "base_color",
+            "base_weight",
+            "base_diffuse_roughness",
+            "specular_weight",
+        ):
             assert np.allclose(got, want), out
         if isinstance(want, (tuple, float)):
             assert np.allclose(np.asarray(got, dtype=float), np.asarray(want, dtype=float), atol=0), out

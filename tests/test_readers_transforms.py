@@ -4,6 +4,7 @@ Expected values are computed here: the transformed uv by hand from the attribute
 pxr, as the UsdPreviewSurface specification defines it (st' = R(rotation, counter-clockwise,
 degrees) . (scale * st) + translation), and the texel sampled with OpenImageIO's
 TextureSystem directly at that uv (bilinear, t = 1 - v)."""
+
 import os
 import textwrap
 from pathlib import Path
@@ -136,7 +137,8 @@ def test_materialx_place2d_is_evaluated(tmp_path):
     subtract offset, add pivot) -- by hand with rotate2d's own formula (c x + s y, -s x + c y)."""
     _write(tmp_path)
     doc = tmp_path / "place.mtlx"
-    doc.write_text(textwrap.dedent("""
+    doc.write_text(
+        textwrap.dedent("""
         <?xml version="1.0"?>
         <materialx version="1.39">
           <texcoord name="tc" type="vector2" />
@@ -158,7 +160,8 @@ def test_materialx_place2d_is_evaluated(tmp_path):
             <input name="surfaceshader" type="surfaceshader" nodename="S" />
           </surfacematerial>
         </materialx>
-        """).lstrip())
+        """).lstrip()
+    )
     import OpenImageIO as oiio
 
     uv = np.array([0.3, 0.6])
@@ -191,7 +194,7 @@ def test_texture_transform_test_asset(uv):
         file = tex.GetAttribute("inputs:file").Get().resolvedPath
         wrap = {"clamp": oiio.Wrap.Clamp, "repeat": oiio.Wrap.Periodic}[tex.GetAttribute("inputs:wrapS").Get()]
         texel = _oiio_sample(file, _by_hand(stage, prim.GetPath(), uv), wrap)
-        lin = np.where(texel <= 0.04045, texel / 12.92, ((texel + 0.055) / 1.055) ** 2.4)   # 8-bit RGB: sRGB
+        lin = np.where(texel <= 0.04045, texel / 12.92, ((texel + 0.055) / 1.055) ** 2.4)  # 8-bit RGB: sRGB
         want = np.array(dst.Convert(src, Gf.Vec3f(*map(float, lin))).GetRGB())
         m = mats[mat]
         assert m.error == "", m.error
@@ -212,11 +215,18 @@ def test_white_srgb_texel_is_not_out_of_range(tmp_path):
     assert out.write_image(np.full((2, 2, 3), 255, dtype=np.uint8))
     out.close()
     p = tmp_path / "white.usda"
-    p.write_text(textwrap.dedent(LAYER).lstrip().replace("ramp.exr", "white.png")
-                 .replace('"raw"', '"auto"').replace("float inputs:roughness.connect = </M/T.outputs:r>",
-                                                     "color3f inputs:diffuseColor.connect = </M/T.outputs:rgb>")
-                 .replace("color3f inputs:diffuseColor.connect = </M/P3.outputs:result>", "")
-                 .replace("float outputs:r", "float3 outputs:rgb"))
+    p.write_text(
+        textwrap.dedent(LAYER)
+        .lstrip()
+        .replace("ramp.exr", "white.png")
+        .replace('"raw"', '"auto"')
+        .replace(
+            "float inputs:roughness.connect = </M/T.outputs:r>",
+            "color3f inputs:diffuseColor.connect = </M/T.outputs:rgb>",
+        )
+        .replace("color3f inputs:diffuseColor.connect = </M/P3.outputs:result>", "")
+        .replace("float outputs:r", "float3 outputs:rgb")
+    )
     (m,) = load_materials(p)
     np.testing.assert_allclose(m.parameters["diffuseColor"].value, (1.0, 1.0, 1.0), atol=1e-7)
     assert not [w for w in m.warnings if "outside" in w], m.warnings

@@ -2,8 +2,9 @@
 (the nodedef input's unit, else the unit type's unit of scale 1: meter, degree) before it is
 used.  Expected values: closed forms with the scales of the data library's own ``unitdef``
 (read here from the library document) -- 75 centimeter = 75 x 0.01 / 1 meter."""
-import os
+
 import math
+import os
 import textwrap
 from pathlib import Path
 
@@ -75,8 +76,7 @@ def test_distance_and_angle_units_are_converted(tmp_path):
     assert p["specular_ior"].value == pytest.approx(150 * s["centimeter"] / s["meter"], rel=1e-6)
     assert p["specular_roughness"].value == pytest.approx(250 * s["millimeter"] / s["meter"], rel=1e-6)
     # pi/4 radian = 45 degree (the angle unit of scale 1); / 180 -> 0.25
-    assert p["base_diffuse_roughness"].value == pytest.approx(math.pi / 4 * s["radian"] / s["degree"] / 180,
-                                                              rel=1e-6)
+    assert p["base_diffuse_roughness"].value == pytest.approx(math.pi / 4 * s["radian"] / s["degree"] / 180, rel=1e-6)
     assert p["base_diffuse_roughness"].value == pytest.approx(0.25, rel=1e-6)
     assert "150 centimeter -> 1.5 meter" in p["specular_ior"].provenance
     assert p["specular_ior"].authored == 150.0

@@ -7,6 +7,7 @@ Grouped by property:
 - regenerating rows with the same code path reproduces the shipped files;
 - checked values of the spec / EON paper; provenance; API conventions.
 """
+
 import doctest
 import importlib
 import math
@@ -18,10 +19,15 @@ import numpy as np
 import pytest
 
 import openpbr_diffuse as od
+from openpbr_diffuse.albedo import (
+    hemisphere_albedo,
+    hemisphere_average_albedo,
+    load_table,
+    reference_albedo,
+    reference_average_albedo,
+)
 from openpbr_diffuse.albedo import quadrature as Q
 from openpbr_diffuse.albedo import tables as T
-from openpbr_diffuse.albedo import (hemisphere_albedo, hemisphere_average_albedo, load_table,
-                                    reference_albedo, reference_average_albedo)
 from openpbr_diffuse.models.registry import INFO, MIX_RHO_MS
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -79,6 +85,7 @@ class TestQuadratureExactness:
 
     def test_sign_of_s_kink(self):
         """f = max(0, s)/pi: E = 2 sin(theta_o) / (3 pi) (kink at phi = pi/2)."""
+
         def f(wi, wo):
             s = np.sum(wi * wo, axis=-1) - wi[..., 2] * wo[..., 2]
             return np.maximum(0.0, s) / np.pi
@@ -96,8 +103,7 @@ class TestQuadratureExactness:
         """
         f = lambda wi, wo: 1.0 / (np.pi * (wi[..., 2] + wo[..., 2]))  # noqa: E731
         mu = np.array([1e-3, 0.1, 0.7])
-        np.testing.assert_allclose(hemisphere_albedo(f, mu), 2.0 * (1.0 - mu * np.log((1.0 + mu) / mu)),
-                                   atol=1e-12)
+        np.testing.assert_allclose(hemisphere_albedo(f, mu), 2.0 * (1.0 - mu * np.log((1.0 + mu) / mu)), atol=1e-12)
         E0, err = hemisphere_albedo(f, 0.0, error=True)
         assert abs(float(E0) - 2.0) < 1e-9
         assert abs(float(E0) - 2.0) <= 10 * float(err)
@@ -112,8 +118,7 @@ class TestQuadratureExactness:
         with pytest.raises(ValueError, match="mu_o"):
             hemisphere_albedo(lambda wi, wo: wi[..., 2], 1.5)
 
-    @pytest.mark.parametrize("model,r", [("full_on", 0.5), ("full_on", math.pi / 2), ("qon", 1.0),
-                                         ("eon_approx", 1.0)])
+    @pytest.mark.parametrize("model,r", [("full_on", 0.5), ("full_on", math.pi / 2), ("qon", 1.0), ("eon_approx", 1.0)])
     def test_error_estimate_bounds_actual_error(self, model, r):
         """|Q_n - Q_2n| bounds the error of Q_2n: compare with a much finer rule (order 48)."""
         mu = np.array([1.0, 0.5, 0.05, 1e-3, 0.0])
@@ -153,8 +158,12 @@ class TestClosedFormsAgreeWithTables:
         got = od.average_albedo(model, table.roughness, self.RHO)
         m = T.mix_weight(model, self.RHO[None, :], table.roughness[:, None])
         ref = self.RHO * table.avg_g[:, None] + m * table.avg_h[:, None]
-        tol = (table.avg_err[:, None] + 2 * T.ROUNDING + _guard(table)[0][:, None]
-               + (EON_APPROX_CLAMP if model == "eon_approx" else 0.0))
+        tol = (
+            table.avg_err[:, None]
+            + 2 * T.ROUNDING
+            + _guard(table)[0][:, None]
+            + (EON_APPROX_CLAMP if model == "eon_approx" else 0.0)
+        )
         assert np.all(np.abs(got - ref) <= tol), f"{model}: max diff {np.abs(got - ref).max():.2e}"
 
     @pytest.mark.parametrize("model", CLOSED_FORM)
@@ -174,10 +183,12 @@ class TestClosedFormsAgreeWithTables:
         approx = np.array([E_F_approx(m, 1.0) for m in mu])
         ref = reference_albedo("fon", mu, 1.0)[:, 0]
         err = np.abs(approx - ref)
-        print(f"\nEq. 14 fit: max |E_F approx - table| at r = 1: {err.max():.3e} at mu = {mu[err.argmax()]:.3f}; "
-              f"max relative {np.max(err / ref):.3e}")
-        assert err.max() == pytest.approx(4.7e-4, abs=0.2e-4)      # spec/models.md
-        assert np.max(err / ref) < 1e-3                               # the paper's 0.1 %
+        print(
+            f"\nEq. 14 fit: max |E_F approx - table| at r = 1: {err.max():.3e} at mu = {mu[err.argmax()]:.3f}; "
+            f"max relative {np.max(err / ref):.3e}"
+        )
+        assert err.max() == pytest.approx(4.7e-4, abs=0.2e-4)  # spec/models.md
+        assert np.max(err / ref) < 1e-3  # the paper's 0.1 %
         # on the nodes as well (no interpolation involved)
         table = load_table("fon")
         nodes = np.array([E_F_approx(m, 1.0) for m in table.mu])
@@ -194,9 +205,10 @@ def test_eon_approx_clamp_effect():
     """The table resolves the clamp kink; the closed form misses it by < 1e-9 (but > 1e-10)."""
     table = load_table("eon_approx")
     rho = np.array([1.0, 0.5])
-    r = table.roughness[1:]                       # r = 0: the eps guard (EPS_GUARD), not the clamp
-    diff = np.abs(od.directional_albedo("eon_approx", table.mu[:-1, None], r[None, :], rho)
-                  - _node_values(table, rho)[:-1, 1:])
+    r = table.roughness[1:]  # r = 0: the eps guard (EPS_GUARD), not the clamp
+    diff = np.abs(
+        od.directional_albedo("eon_approx", table.mu[:-1, None], r[None, :], rho) - _node_values(table, rho)[:-1, 1:]
+    )
     avg = np.abs(od.average_albedo("eon_approx", r, 1.0)[:, 0] - table.avg_g[1:] - table.avg_h[1:])
     print(f"\neon_approx closed form vs table: directional {diff.max():.2e}, average {avg.max():.2e}")
     assert 1e-10 < max(diff.max(), avg.max()) < EON_APPROX_CLAMP
@@ -214,12 +226,13 @@ class TestInterpolationHeldOut:
         mu = np.concatenate([rng.uniform(0.0, 1.0, 5), [0.0, 1.0, 0.999, 2e-3]])
         rough = rng.uniform(0.0, _rmax(model), 3) if model != "lambert" else np.array([0.3])
         rho = np.array([0.9, 0.5, 0.15])
-        E, err = _quad(model, mu, rough, rho)                    # (mu, R, C)
+        E, err = _quad(model, mu, rough, rho)  # (mu, R, C)
         ref = reference_albedo(model, mu[:, None], rough[None, :], rho)
         diff = np.abs(ref - E)
         assert np.all(diff <= 1e-5), f"{model}: {diff.max():.2e}"
-        assert np.all(diff <= 1.5 * table.interpolation_error + err + 1e-12), \
+        assert np.all(diff <= 1.5 * table.interpolation_error + err + 1e-12), (
             f"{model}: {diff.max():.2e} vs stated {table.interpolation_error:.1e}"
+        )
 
     @pytest.mark.parametrize("model", ["qon", "full_on", "eon"])
     def test_average(self, model, rng):
@@ -241,13 +254,16 @@ class TestInterpolationHeldOut:
 class TestRegeneration:
     """The shipped files are what the generator's code path produces."""
 
-    @pytest.mark.parametrize("model,rows,cols", [
-        ("qon", [0, 31, 64], [0, 17, 48]),
-        ("full_on", [5, 58, 64], [3, 40]),
-        ("eon_approx", [0, 57, 58, 64], [1, 48]),
-        ("qon_fujii", [12, 63], [24]),
-        ("lambert", [0, 64], [0]),
-    ])
+    @pytest.mark.parametrize(
+        "model,rows,cols",
+        [
+            ("qon", [0, 31, 64], [0, 17, 48]),
+            ("full_on", [5, 58, 64], [3, 40]),
+            ("eon_approx", [0, 57, 58, 64], [1, 48]),
+            ("qon_fujii", [12, 63], [24]),
+            ("lambert", [0, 64], [0]),
+        ],
+    )
     def test_subset_matches_shipped(self, model, rows, cols):
         res = T.compute_table(model, rows, cols)
         table = load_table(model)
@@ -265,16 +281,22 @@ class TestRegeneration:
         """format_table / parse_table: the CSV text is a faithful, diffable encoding."""
         table = load_table("eon")
         text = T.table_path("eon").read_text(encoding="utf-8")
-        res = {k: getattr(table, k) for k in ("t", "theta", "mu", "u", "roughness", "e_g", "e_h", "err",
-                                              "avg_g", "avg_h", "avg_err")}
+        res = {
+            k: getattr(table, k)
+            for k in ("t", "theta", "mu", "u", "roughness", "e_g", "e_h", "err", "avg_g", "avg_h", "avg_err")
+        }
         again = T.format_table("eon", res, table.meta)
         assert again == text
 
     @pytest.mark.slow
     def test_full_regeneration(self):
         """tools/make_tables.py --check recomputes every table and compares (minutes)."""
-        proc = subprocess.run([sys.executable, os.path.join(ROOT, "tools", "make_tables.py"), "--check"],
-                              capture_output=True, text=True, timeout=3600)
+        proc = subprocess.run(
+            [sys.executable, os.path.join(ROOT, "tools", "make_tables.py"), "--check"],
+            capture_output=True,
+            text=True,
+            timeout=3600,
+        )
         assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
@@ -292,21 +314,27 @@ class TestCheckedValues:
         # directional_albedo of full_on is the table (no closed form)
         assert float(od.directional_albedo("full_on", 0.05, 0.5)[0]) == pytest.approx(float(E[0, 0, 0]), abs=1e-5)
 
-    @pytest.mark.parametrize("model,mu,r,value", [
-        ("fon", 1.0, 1.0, 0.776522), ("fon", 0.7, 1.0, 0.817888), ("fon", 0.3, 0.5, 0.954690),
-        ("qon", 0.5, math.pi / 4, 0.791338),
-    ])
+    @pytest.mark.parametrize(
+        "model,mu,r,value",
+        [
+            ("fon", 1.0, 1.0, 0.776522),
+            ("fon", 0.7, 1.0, 0.817888),
+            ("fon", 0.3, 0.5, 0.954690),
+            ("qon", 0.5, math.pi / 4, 0.791338),
+        ],
+    )
     def test_directional(self, model, mu, r, value):
         assert float(reference_albedo(model, mu, r)[0]) == pytest.approx(value, abs=1e-6)
 
-    @pytest.mark.parametrize("model,r,value", [("fon", 0.5, 0.905890), ("fon", 1.0, 0.832811),
-                                               ("qon", math.pi / 4, 0.758285)])
+    @pytest.mark.parametrize(
+        "model,r,value", [("fon", 0.5, 0.905890), ("fon", 1.0, 0.832811), ("qon", math.pi / 4, 0.758285)]
+    )
     def test_average(self, model, r, value):
         assert float(reference_average_albedo(model, r)[0]) == pytest.approx(value, abs=1e-6)
 
     def test_eon_white_furnace(self):
         table = load_table("eon")
-        np.testing.assert_allclose(table.e_g + table.e_h, 1.0, atol=1e-6)   # rho = 1: rho_ms = 1
+        np.testing.assert_allclose(table.e_g + table.e_h, 1.0, atol=1e-6)  # rho = 1: rho_ms = 1
         np.testing.assert_allclose(table.avg_g + table.avg_h, 1.0, atol=1e-6)
 
     def test_eon_coloured_albedo(self):
@@ -314,16 +342,16 @@ class TestCheckedValues:
         assert float(reference_albedo("eon", 0.3, 1.0, 0.5)[0]) == pytest.approx(0.4780, abs=1e-4)
 
     def test_lambert(self):
-        np.testing.assert_allclose(reference_albedo("lambert", [0.0, 0.5, 1.0], 7.0, [0.2, 0.9]),
-                                   [[0.2, 0.9]] * 3, atol=1e-10)
+        np.testing.assert_allclose(
+            reference_albedo("lambert", [0.0, 0.5, 1.0], 7.0, [0.2, 0.9]), [[0.2, 0.9]] * 3, atol=1e-10
+        )
 
 
 # --------------------------------------------------------------------------- files
 
 
 class TestProvenance:
-    KEYS = ("method", "rows", "columns", "error", "interpolation", "interpolation_error", "library",
-            "regenerate")
+    KEYS = ("method", "rows", "columns", "error", "interpolation", "interpolation_error", "library", "regenerate")
 
     @pytest.mark.parametrize("model", od.MODELS)
     def test_header(self, model):
@@ -332,7 +360,7 @@ class TestProvenance:
             assert meta.get(key), key
         assert meta["library"] == f"openpbr-diffuse {od.__version__}"
         assert "tools/make_tables.py" in meta["regenerate"]
-        assert "closed-form" in meta["method"]          # states it does not use one
+        assert "closed-form" in meta["method"]  # states it does not use one
 
     def test_sizes(self):
         total = sum(T.table_path(m).stat().st_size for m in od.MODELS)
@@ -364,20 +392,29 @@ class TestQueryAPI:
 
     def test_full_on_is_served_by_table_albedo(self):
         rho = [0.7, 0.2]
-        np.testing.assert_allclose(od.directional_albedo("full_on", [0.1, 0.9], 1.2, rho),
-                                   reference_albedo("full_on", [0.1, 0.9], 1.2, rho), rtol=0, atol=0)
-        np.testing.assert_allclose(od.average_albedo("full_on", 1.2, rho, color_mode="white_tint"),
-                                   reference_average_albedo("full_on", 1.2, rho, color_mode="white_tint"))
+        np.testing.assert_allclose(
+            od.directional_albedo("full_on", [0.1, 0.9], 1.2, rho),
+            reference_albedo("full_on", [0.1, 0.9], 1.2, rho),
+            rtol=0,
+            atol=0,
+        )
+        np.testing.assert_allclose(
+            od.average_albedo("full_on", 1.2, rho, color_mode="white_tint"),
+            reference_average_albedo("full_on", 1.2, rho, color_mode="white_tint"),
+        )
 
-    @pytest.mark.parametrize("kwargs,name", [
-        (dict(model="nope", mu=0.5, roughness=0.1), "model"),
-        (dict(model="qon", mu=1.5, roughness=0.1), "mu"),
-        (dict(model="qon", mu=np.nan, roughness=0.1), "mu"),
-        (dict(model="qon", mu=0.5, roughness=2.0), "roughness"),
-        (dict(model="eon", mu=0.5, roughness=1.5), "roughness"),
-        (dict(model="eon", mu=0.5, roughness=0.5, rho=[1.2]), "rho"),
-        (dict(model="eon", mu=[0.5, 0.2], roughness=[0.5, 0.1, 0.2]), "mu"),
-    ])
+    @pytest.mark.parametrize(
+        "kwargs,name",
+        [
+            (dict(model="nope", mu=0.5, roughness=0.1), "model"),
+            (dict(model="qon", mu=1.5, roughness=0.1), "mu"),
+            (dict(model="qon", mu=np.nan, roughness=0.1), "mu"),
+            (dict(model="qon", mu=0.5, roughness=2.0), "roughness"),
+            (dict(model="eon", mu=0.5, roughness=1.5), "roughness"),
+            (dict(model="eon", mu=0.5, roughness=0.5, rho=[1.2]), "rho"),
+            (dict(model="eon", mu=[0.5, 0.2], roughness=[0.5, 0.1, 0.2]), "mu"),
+        ],
+    )
     def test_bad_input(self, kwargs, name):
         with pytest.raises(ValueError, match=name):
             reference_albedo(**kwargs)

@@ -1,4 +1,5 @@
 """The report section "approximations": builds from the shipped table, its live checks pass."""
+
 import pytest
 
 from openpbr_diffuse.report.model import Context, SectionResult

@@ -1,4 +1,5 @@
 """Report section "colorshift": builds, its checks pass, images are written, data only."""
+
 import pytest
 
 pytest.importorskip("colour")
@@ -17,6 +18,6 @@ def test_colorshift_section_quick(tmp_path):
     for fig in res.figures:
         assert fig.file.startswith("colorshift_") and (tmp_path / fig.file).stat().st_size > 1000
     summary = res.tables[0]
-    assert any(row[3] == "cyan" for row in summary.rows)            # the r = 1 headline names patches
+    assert any(row[3] == "cyan" for row in summary.rows)  # the r = 1 headline names patches
     assert [row[0] for row in res.tables[2].rows] == ["Mallett 2019", "Otsu 2018"]
     assert not any("<" in str(cell) for t in res.tables for row in t.rows for cell in row)

@@ -1,7 +1,6 @@
 """The report section "materials": the contract of report/model.py, its images, its checks."""
-import shutil
 
-import pytest
+import shutil
 
 from openpbr_diffuse.readers import BUNDLED_MATERIALS
 from openpbr_diffuse.report.model import Context, SectionResult

@@ -1,5 +1,6 @@
 """The report: every section on the page (parsed, and opened in headless Chromium),
 report.json's schema, escaping, atomic replacement, exit codes."""
+
 import json
 import shutil
 import sys
@@ -14,9 +15,34 @@ from openpbr_diffuse.report import runner
 from openpbr_diffuse.report.model import Check, SectionResult, Table
 from openpbr_diffuse.report.sections import SECTIONS
 
-CHECK_KEYS = {"id", "status", "not_run", "section", "name", "measured", "threshold", "comparison", "expected", "unit", "reference",
-              "detail", "passed"}
-SECTION_KEYS = {"key", "title", "status", "not_run", "elapsed_s", "error", "notes", "warnings", "checks", "tables", "figures"}
+CHECK_KEYS = {
+    "id",
+    "status",
+    "not_run",
+    "section",
+    "name",
+    "measured",
+    "threshold",
+    "comparison",
+    "expected",
+    "unit",
+    "reference",
+    "detail",
+    "passed",
+}
+SECTION_KEYS = {
+    "key",
+    "title",
+    "status",
+    "not_run",
+    "elapsed_s",
+    "error",
+    "notes",
+    "warnings",
+    "checks",
+    "tables",
+    "figures",
+}
 
 
 class _Page(HTMLParser):
@@ -56,15 +82,15 @@ def test_quick_report_passes_and_shows_every_section(quick_report):
     out, status = quick_report
     assert status == 0
     page = parse(out / "index.html")
-    assert list(page.sections) == list(SECTIONS)           # every section, in order
+    assert list(page.sections) == list(SECTIONS)  # every section, in order
     mine = ("models", "albedo", "sampling", "implementations", "timings")
     assert all(page.sections[k] == "pass" for k in mine)
     assert all(page.sections[k] in ("pass", "not available", "findings", "not run") for k in SECTIONS)
-    assert page.sections["graders"] in ("findings", "not run")   # third-party verdicts are not checks
+    assert page.sections["graders"] in ("findings", "not run")  # third-party verdicts are not checks
     assert page.scripts == 0
     assert page.images and all((out / src).is_file() for src in page.images)
     assert {Path(s).name.split("_")[0] for s in page.images} >= set(mine) - {"implementations"}
-    assert not list(out.parent.glob(".report.*"))             # no temporary directory left
+    assert not list(out.parent.glob(".report.*"))  # no temporary directory left
 
 
 def test_report_json_schema(quick_report):
@@ -82,7 +108,7 @@ def test_report_json_schema(quick_report):
     ids = [c["id"] for c in doc["checks"]]
     assert len(set(ids)) == len(ids) and all(i.startswith(c["section"] + ".") for i, c in zip(ids, doc["checks"]))
     titles = [s["title"] for s in doc["sections"]]
-    assert len(set(titles)) == len(titles)                   # section names unique
+    assert len(set(titles)) == len(titles)  # section names unique
     assert doc["implementation"] is None
     names = {c["name"] for c in doc["checks"]}
     assert "eon: white furnace |E - 1| at rho = 1" in names
@@ -104,11 +130,16 @@ EVIL = "<script>alert(1)</script>"
 
 def test_strings_from_user_files_are_escaped(tmp_path, monkeypatch):
     """A material named <script>alert(1)</script> (and a path holding it) reach the page escaped."""
+
     def build(ctx):
-        return SectionResult("materials", f"Material {EVIL}",
-                             checks=[Check(f"{EVIL} albedo", 0.5, 1.0, reference=EVIL, detail=EVIL)],
-                             tables=[Table(EVIL, ["name", EVIL], [[EVIL, 1.0]])],
-                             notes=[f"material {EVIL} from {ctx.paths[0]}"], warnings=[EVIL])
+        return SectionResult(
+            "materials",
+            f"Material {EVIL}",
+            checks=[Check(f"{EVIL} albedo", 0.5, 1.0, reference=EVIL, detail=EVIL)],
+            tables=[Table(EVIL, ["name", EVIL], [[EVIL, 1.0]])],
+            notes=[f"material {EVIL} from {ctx.paths[0]}"],
+            warnings=[EVIL],
+        )
 
     _fake_section(monkeypatch, "materials", build)
     evil_dir = tmp_path / "<script>alert(1)<" / "script>"
@@ -121,7 +152,7 @@ def test_strings_from_user_files_are_escaped(tmp_path, monkeypatch):
     assert run.passed and EVIL not in html and "<script" not in html
     assert "&lt;script&gt;alert(1)&lt;/script&gt;" in html
     page = parse(out / "index.html")
-    assert page.scripts == 0 and EVIL in "".join(page.text)   # shown as text
+    assert page.scripts == 0 and EVIL in "".join(page.text)  # shown as text
     assert json.loads((out / "report.json").read_text())["sections"][0]["notes"][0].count(EVIL) == 2
 
 
@@ -188,8 +219,15 @@ def test_unusable_input_exits_2(tmp_path, capsys):
 
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
-FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-         "--disable-component-update", "--disable-sync", "--no-first-run"]
+FLAGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+]
 
 
 def test_page_opens_in_chromium_without_errors(quick_report):
@@ -210,7 +248,8 @@ def test_page_opens_in_chromium_without_errors(quick_report):
             page.on("requestfailed", lambda r: failed.append(r.url))
             page.goto(url, wait_until="load")
             images = page.eval_on_selector_all(
-                "img", "els => els.map(e => [e.getAttribute('src'), e.complete, e.naturalWidth])")
+                "img", "els => els.map(e => [e.getAttribute('src'), e.complete, e.naturalWidth])"
+            )
             keys = page.eval_on_selector_all("section[data-key]", "els => els.map(e => e.dataset.key)")
             page.screenshot(path=str(out / "screenshot.png"), full_page=True)
         finally:

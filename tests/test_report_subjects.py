@@ -3,6 +3,7 @@
 of them (tests/_subject_mutants.py).  A wrong function puts "does not conform: <diagnosis>" on
 the first screen, seen in headless Chromium, and exits 1; the conforming one conforms and exits 0.
 """
+
 import json
 import shutil
 
@@ -67,15 +68,24 @@ def test_wrong_glsl_first_screen_in_chromium(wrong_glsl):
     page = first_screen(out / "index.html")
     assert page["errors"] == [] and page["failed"] == []
     assert "does not conform: constant_factor" in page["text"]
-    assert page["bottom"] <= page["height"]                       # on the first screen
+    assert page["bottom"] <= page["height"]  # on the first screen
     assert page["body"].lstrip().startswith(page["text"].strip()[:40]) or page["text"] in page["body"][:600]
     assert page["images"] and all(done and width > 0 for _, done, width in page["images"])
 
 
 @needs_gl
 def test_conforming_glsl_exits_0_and_says_so(tmp_path, capsys):
-    status, first, doc = report(capsys, tmp_path / "r", "--glsl", str(sm.GLSL_FILE), "--function", "f",
-                                "--albedo-function", "albedo", *ONLY_IMPLEMENTATION)
+    status, first, doc = report(
+        capsys,
+        tmp_path / "r",
+        "--glsl",
+        str(sm.GLSL_FILE),
+        "--function",
+        "f",
+        "--albedo-function",
+        "albedo",
+        *ONLY_IMPLEMENTATION,
+    )
     ut = doc["implementation"]
     assert status == 0 and ut["status"] == "conforms", ut["verdicts"]
     assert [v["status"] for v in ut["verdicts"]] == ["conforms", "conforms"]
@@ -89,8 +99,17 @@ def test_conforming_glsl_exits_0_and_says_so(tmp_path, capsys):
 @pytest.mark.parametrize("name,diagnosis", [("ms_missing_inv_pi", "ms_missing_inv_pi"), ("sin_mu_i", None)])
 def test_wrong_cpp_exits_1_and_is_named(name, diagnosis, tmp_path, capsys):
     path = sm.write_mutant(name, "cpp", tmp_path)
-    status, first, doc = report(capsys, tmp_path / "r", "--cpp", str(path), "--function", "f",
-                                "--albedo-function", "albedo", *ONLY_IMPLEMENTATION)
+    status, first, doc = report(
+        capsys,
+        tmp_path / "r",
+        "--cpp",
+        str(path),
+        "--function",
+        "f",
+        "--albedo-function",
+        "albedo",
+        *ONLY_IMPLEMENTATION,
+    )
     ut = doc["implementation"]
     assert status == 1 and ut["status"] == "does not conform"
     verdicts = {v["quantity"]: v for v in ut["verdicts"]}
@@ -105,7 +124,16 @@ def test_wrong_cpp_exits_1_and_is_named(name, diagnosis, tmp_path, capsys):
 
 @needs_cxx
 def test_conforming_cpp_exits_0(tmp_path, capsys):
-    status, first, doc = report(capsys, tmp_path / "r", "--cpp", str(sm.CPP_FILE), "--function", "f",
-                                "--albedo-function", "albedo", *ONLY_IMPLEMENTATION)
+    status, first, doc = report(
+        capsys,
+        tmp_path / "r",
+        "--cpp",
+        str(sm.CPP_FILE),
+        "--function",
+        "f",
+        "--albedo-function",
+        "albedo",
+        *ONLY_IMPLEMENTATION,
+    )
     assert status == 0 and doc["implementation"]["status"] == "conforms"
     assert first == "cpp:eon_conforming.cpp:f conforms (BRDF, albedo)"

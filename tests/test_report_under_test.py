@@ -2,6 +2,7 @@
 equations (EON, Portsmouth-Kutz-Hill 2025, Eq. 10-20), a correct one and one that returns FON
 where EON is claimed; the first screen (in headless Chromium), exit codes, JUnit, --select,
 --list-checks and "not run" sections."""
+
 import json
 import shutil
 import sys
@@ -66,8 +67,20 @@ def glsl(tmp_path_factory):
 @pytest.fixture(scope="module")
 def wrong(glsl, tmp_path_factory):
     out = tmp_path_factory.mktemp("wrong") / "report"
-    status = main(["report", "--glsl", str(glsl), "--function", "fon_not_eon", "--out", str(out),
-                   "--junit", str(out.parent / "junit.xml"), *FAST])
+    status = main(
+        [
+            "report",
+            "--glsl",
+            str(glsl),
+            "--function",
+            "fon_not_eon",
+            "--out",
+            str(out),
+            "--junit",
+            str(out.parent / "junit.xml"),
+            *FAST,
+        ]
+    )
     return out, status
 
 
@@ -88,26 +101,47 @@ def test_wrong_glsl_does_not_conform_and_is_named(wrong):
     brdf = next(v for v in ut["verdicts"] if v["quantity"] == "brdf")
     assert brdf["max_abs_error"] > 1e-3 and "wi (" in brdf["where"] and brdf["worst"]
     assert doc["schema"] == "openpbr-diffuse-report/2"
-    assert [s["key"] for s in doc["sections"]] == ["implementations"]   # --select ran only that
+    assert [s["key"] for s in doc["sections"]] == ["implementations"]  # --select ran only that
 
 
 def test_correct_glsl_conforms(glsl, tmp_path):
     out = tmp_path / "report"
-    status = main(["report", "--glsl", str(glsl), "--function", "eon", "--albedo-function", "eon_albedo",
-                   "--out", str(out), *FAST])
+    status = main(
+        [
+            "report",
+            "--glsl",
+            str(glsl),
+            "--function",
+            "eon",
+            "--albedo-function",
+            "eon_albedo",
+            "--out",
+            str(out),
+            *FAST,
+        ]
+    )
     if _could_not_run(out):
         pytest.skip("no OpenGL 4.3 context here")
     doc = json.loads((out / "report.json").read_text())
-    assert [v["status"] for v in doc["implementation"]["verdicts"]] == ["conforms", "conforms"], \
-        doc["implementation"]["verdicts"]
+    assert [v["status"] for v in doc["implementation"]["verdicts"]] == ["conforms", "conforms"], doc["implementation"][
+        "verdicts"
+    ]
     assert status == 0
-    assert doc["implementation"]["figures"] and all((out / f["file"]).is_file()
-                                                    for f in doc["implementation"]["figures"])
+    assert doc["implementation"]["figures"] and all(
+        (out / f["file"]).is_file() for f in doc["implementation"]["figures"]
+    )
 
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
-FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-         "--disable-component-update", "--disable-sync", "--no-first-run"]
+FLAGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+]
 
 
 def test_first_screen_in_chromium_says_does_not_conform(wrong):
@@ -130,7 +164,7 @@ def test_first_screen_in_chromium_says_does_not_conform(wrong):
         finally:
             browser.close()
     assert errors == []
-    assert box < 800   # on the first screen
+    assert box < 800  # on the first screen
     assert "does not conform: no_energy_compensation_fon" in text and text in first
 
 
@@ -148,8 +182,9 @@ def test_junit_has_one_testcase_per_check(wrong):
 
 def test_no_implementation_says_so_and_select_filters(tmp_path, capsys):
     out = tmp_path / "r"
-    status = main(["report", "--out", str(out), "--select", "implementations.no_energy_compensation_fon*",
-                   "--no-progress"])
+    status = main(
+        ["report", "--out", str(out), "--select", "implementations.no_energy_compensation_fon*", "--no-progress"]
+    )
     assert status == 0
     first = capsys.readouterr().out.splitlines()[0]
     assert first.startswith("No implementation under test: this report shows the reference's own evidence.")
@@ -167,10 +202,14 @@ def _fake_section(monkeypatch, key, build):
 
 def test_a_section_that_ran_nothing_is_not_run(tmp_path, monkeypatch):
     _fake_section(monkeypatch, "simulation", lambda ctx: SectionResult("simulation", "s"))
-    _fake_section(monkeypatch, "colorshift", lambda ctx: SectionResult(
-        "colorshift", "c", checks=[Check("renders", 0.0, 1.0, reference="x", not_run="bpy absent")]))
-    run = runner.run_report(None, tmp_path / "r", quick=True, progress=False,
-                            sections=["simulation", "colorshift"])
+    _fake_section(
+        monkeypatch,
+        "colorshift",
+        lambda ctx: SectionResult(
+            "colorshift", "c", checks=[Check("renders", 0.0, 1.0, reference="x", not_run="bpy absent")]
+        ),
+    )
+    run = runner.run_report(None, tmp_path / "r", quick=True, progress=False, sections=["simulation", "colorshift"])
     doc = run.document
     assert [s["status"] for s in doc["sections"]] == ["not run", "not run"]
     assert doc["sections"][1]["not_run"] == "bpy absent" and doc["checks"][0]["status"] == "not run"
@@ -210,8 +249,21 @@ def test_code_that_does_not_compile_could_not_run(tmp_path, capsys):
     assert status == 3
     first = capsys.readouterr().out.splitlines()[0]
     assert " could not run: " in first and "undefined_thing" in first
-    assert main(["report", "--glsl", str(tmp_path / "missing.glsl"), "--function", "f",
-                 "--out", str(tmp_path / "r2"), *FAST]) == 2
+    assert (
+        main(
+            [
+                "report",
+                "--glsl",
+                str(tmp_path / "missing.glsl"),
+                "--function",
+                "f",
+                "--out",
+                str(tmp_path / "r2"),
+                *FAST,
+            ]
+        )
+        == 2
+    )
     assert not (tmp_path / "r2").exists()
 
 
@@ -233,8 +285,9 @@ glm::vec3 fon(glm::vec3 wi, glm::vec3 wo, float r, glm::vec3 rho) {
     out = tmp_path / "r"
     assert main(["report", "--cpp", str(src), "--function", "fon", "--out", str(out), *FAST]) == 1
     ut = json.loads((out / "report.json").read_text())["implementation"]
-    assert ut["headline"].endswith("does not conform: no_energy_compensation_fon: "
-                                   + ut["verdicts"][0]["sentence"].split(": ", 1)[1])
+    assert ut["headline"].endswith(
+        "does not conform: no_energy_compensation_fon: " + ut["verdicts"][0]["sentence"].split(": ", 1)[1]
+    )
     assert ut["verdicts"][0]["diagnosis"] == "no_energy_compensation_fon"
 
 

@@ -1,4 +1,5 @@
 """``report --out``: nothing deleted that the tool did not write; atomic, concurrent-safe replace."""
+
 import json
 import os
 import subprocess
@@ -40,15 +41,23 @@ CHILD = textwrap.dedent("""
 
 
 def _fake_run(out, paths=(MATERIAL,)):
-    return subprocess.run([sys.executable, "-c", CHILD, str(paths[0]), str(out), "0"],
-                          check=False, capture_output=True, text=True, timeout=120,
-                          env={**os.environ, "PYTHONPATH": str(ROOT)})
+    return subprocess.run(
+        [sys.executable, "-c", CHILD, str(paths[0]), str(out), "0"],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+    )
 
 
 def _is_complete_report(out: Path) -> bool:
     doc = json.loads((out / MARKER).read_text())
-    return (out / "report.json").is_file() and (out / "index.html").is_file() and \
-        set(doc["entries"]) == {p.relative_to(out).as_posix() for p in out.rglob("*")} - {MARKER}
+    return (
+        (out / "report.json").is_file()
+        and (out / "index.html").is_file()
+        and set(doc["entries"]) == {p.relative_to(out).as_posix() for p in out.rglob("*")} - {MARKER}
+    )
 
 
 def _no_leftovers(parent: Path) -> bool:
@@ -59,9 +68,14 @@ def test_user_files_left_in_place_cli(tmp_path):
     d = tmp_path / "d"
     d.mkdir()
     (d / "thesis.tex").write_text("x")
-    r = subprocess.run([sys.executable, "-m", "openpbr_diffuse", "report", str(MATERIAL), "--out", str(d),
-                        "--quick", "--no-progress"], check=False, capture_output=True, text=True, timeout=300,
-                       env={**os.environ, "PYTHONPATH": str(ROOT)})
+    r = subprocess.run(
+        [sys.executable, "-m", "openpbr_diffuse", "report", str(MATERIAL), "--out", str(d), "--quick", "--no-progress"],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+    )
     assert r.returncode == 2, r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and "thesis.tex" in r.stderr
     assert [p.name for p in d.iterdir()] == ["thesis.tex"] and (d / "thesis.tex").read_text() == "x"
@@ -80,8 +94,13 @@ def test_unsafe_targets_refused(tmp_path, monkeypatch, case):
     (home / ".bashrc").write_text("alias x=y")
     monkeypatch.setenv("HOME", str(home))
     monkeypatch.chdir(src)
-    out = {"dot_next_to_input": ".", "empty": "", "home": str(home), "input_parent": str(tmp_path),
-           "file": str(src / "renderer.cpp")}[case]
+    out = {
+        "dot_next_to_input": ".",
+        "empty": "",
+        "home": str(home),
+        "input_parent": str(tmp_path),
+        "file": str(src / "renderer.cpp"),
+    }[case]
     before = sorted(str(p) for p in tmp_path.rglob("*"))
     with pytest.raises(UnsafeOutputError):
         output.check_target(out, [inp])
@@ -136,9 +155,16 @@ def test_concurrent_runs_each_complete(tmp_path):
     out = tmp_path / "rep"
     assert _fake_run(out).returncode == 0
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    procs = [subprocess.Popen([sys.executable, "-c", CHILD, str(MATERIAL), str(out), "0.2"],
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
-             for _ in range(4)]
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-c", CHILD, str(MATERIAL), str(out), "0.2"],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=env,
+        )
+        for _ in range(4)
+    ]
     results = [(p.wait(timeout=120), p.stderr.read()) for p in procs]
     for p in procs:
         p.stdout.close()

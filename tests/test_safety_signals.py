@@ -1,4 +1,5 @@
 """SIGINT/SIGTERM/SIGHUP: exit 128+signum, one line, old report or new one, no temporary folder."""
+
 import os
 import signal
 import subprocess
@@ -24,8 +25,13 @@ def test_signal_during_report_leaves_old_or_new(tmp_path, signum, delay):
     out = tmp_path / "rep"
     assert _fake_run(out).returncode == 0
     old = (out / "report.json").read_bytes()
-    p = subprocess.Popen([sys.executable, "-c", CHILD, str(MATERIAL), str(out), "0.6"],
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV)
+    p = subprocess.Popen(
+        [sys.executable, "-c", CHILD, str(MATERIAL), str(out), "0.6"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=ENV,
+    )
     try:
         assert p.stdout.readline().strip() == "started"
         time.sleep(delay)
@@ -45,14 +51,17 @@ def test_signal_during_report_leaves_old_or_new(tmp_path, signum, delay):
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGHUP])
 def test_cli_signal_exit_status_one_line(tmp_path, signum):
     """Any command: a termination signal gives exit 128+signum and one line, no traceback."""
-    script = ("import sys, time\nfrom openpbr_diffuse.cli import main as m\n"
-              "def add_parser(sub):\n p = sub.add_parser('sleep'); p.set_defaults(run=run)\n"
-              "def run(args):\n print('started', flush=True); time.sleep(30); return 0\n"
-              "import types; mod = types.ModuleType('openpbr_diffuse.cli.sleep'); mod.add_parser = add_parser\n"
-              "sys.modules[mod.__name__] = mod; m.COMMANDS['sleep'] = 'sleep'\n"
-              "sys.exit(m.main(['sleep']))\n")
-    p = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                         text=True, env=ENV, cwd=tmp_path)
+    script = (
+        "import sys, time\nfrom openpbr_diffuse.cli import main as m\n"
+        "def add_parser(sub):\n p = sub.add_parser('sleep'); p.set_defaults(run=run)\n"
+        "def run(args):\n print('started', flush=True); time.sleep(30); return 0\n"
+        "import types; mod = types.ModuleType('openpbr_diffuse.cli.sleep'); mod.add_parser = add_parser\n"
+        "sys.modules[mod.__name__] = mod; m.COMMANDS['sleep'] = 'sleep'\n"
+        "sys.exit(m.main(['sleep']))\n"
+    )
+    p = subprocess.Popen(
+        [sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV, cwd=tmp_path
+    )
     try:
         assert p.stdout.readline().strip() == "started"
         p.send_signal(signum)

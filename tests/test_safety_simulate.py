@@ -1,4 +1,5 @@
 """``simulate``: scheduler timeout, work budget, honest mu range."""
+
 import socket
 import subprocess
 import sys
@@ -37,8 +38,21 @@ def test_scheduler_that_is_not_dask_gives_one_line(capsys, monkeypatch, mode):
     monkeypatch.setattr(api, "SCHEDULER_TIMEOUT_S", 2.0)
     s, held = _server(mode)
     try:
-        code = main(["simulate", "--geometry", "vcavity", "--roughness", "0.5", "--mu", "0.5",
-                     "--paths", "1000", "--scheduler", f"tcp://127.0.0.1:{s.getsockname()[1]}"])
+        code = main(
+            [
+                "simulate",
+                "--geometry",
+                "vcavity",
+                "--roughness",
+                "0.5",
+                "--mu",
+                "0.5",
+                "--paths",
+                "1000",
+                "--scheduler",
+                f"tcp://127.0.0.1:{s.getsockname()[1]}",
+            ]
+        )
     finally:
         s.close()
         for c in held:
@@ -48,9 +62,26 @@ def test_scheduler_that_is_not_dask_gives_one_line(capsys, monkeypatch, mode):
 
 
 def test_work_above_budget_refused_quickly():
-    r = subprocess.run([sys.executable, "-m", "openpbr_diffuse", "simulate", "--geometry", "vcavity",
-                        "--roughness", "0.5", "--mu", "0.5", "--paths", "1e12"],
-                       check=False, capture_output=True, text=True, timeout=60)
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "openpbr_diffuse",
+            "simulate",
+            "--geometry",
+            "vcavity",
+            "--roughness",
+            "0.5",
+            "--mu",
+            "0.5",
+            "--paths",
+            "1e12",
+        ],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert r.returncode == 2 and "--yes" in r.stderr and len(r.stderr.strip().splitlines()) == 1
 
 

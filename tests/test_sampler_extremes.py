@@ -6,6 +6,7 @@ where pdf() said 0; "cltc"/"eon" at u0 = 1 - 2^-53 returned wi.z < 0 with pdf > 
 "cltc" and "eon" at that u0 returned pdf 0 for wo above the horizon, and "eon" at r = 0
 differed from cosine sampling there.
 """
+
 import numpy as np
 import pytest
 
@@ -15,9 +16,20 @@ BELOW = {"ltc"}  # the general LTC lobe extends below the horizon (weight 0 ther
 
 
 def edge_u(dtype):
-    top = np.nextafter(dtype(1), dtype(0))               # largest value below 1 (1 - 2^-53, 1 - 2^-24)
-    ends = np.array([0.0, np.finfo(dtype).smallest_subnormal, 1e-300 if dtype == np.float64 else 1e-38,
-                     0.25, 0.5, 0.75, 1.0 - 1e-16 if dtype == np.float64 else 1.0 - 1e-7, top], dtype=dtype)
+    top = np.nextafter(dtype(1), dtype(0))  # largest value below 1 (1 - 2^-53, 1 - 2^-24)
+    ends = np.array(
+        [
+            0.0,
+            np.finfo(dtype).smallest_subnormal,
+            1e-300 if dtype == np.float64 else 1e-38,
+            0.25,
+            0.5,
+            0.75,
+            1.0 - 1e-16 if dtype == np.float64 else 1.0 - 1e-7,
+            top,
+        ],
+        dtype=dtype,
+    )
     ends = np.minimum(ends, top)
     a, b = np.meshgrid(ends, ends, indexing="ij")
     return np.stack([a.ravel(), b.ravel()], axis=-1)

@@ -8,12 +8,13 @@ hold < 5 samples are pooled (Mitsuba's rule); the p-value comes from scipy.stats
 the null hypothesis is rejected at the Sidak-corrected level 1 - (1 - ALPHA)^(1/M) for the
 M tests of this module.  Deliberately wrong pdfs must be rejected by the same test.
 """
+
 import numpy as np
 import pytest
-from scipy import stats
-
 from _chi2 import chi2_pvalue
 from _chi2 import chi2_test as chi2_goodness
+from scipy import stats
+
 from openpbr_diffuse.sampling import STRATEGIES, pdf, sample_rng
 
 ALPHA = 0.01
@@ -25,9 +26,9 @@ CASES = [(s, mu, r) for s in STRATEGIES for mu in MUS for r in RS]
 N_FAST, RES_FAST = 200_000, (16, 32)
 N_SLOW, RES_SLOW = 2_000_000, (40, 80)
 WRONG = [  # (strategy sampled, strategy / r of the pdf tested against), at mu_o = 0.02
-    ("eon", 1.0, "cltc", 1.0),        # the MIS pdf without its uniform share
-    ("eon", 1.0, "eon", 0.9),         # right strategy, roughness off by 10 %
-    ("cltc", 1.0, "ltc", 1.0),        # clipping ignored
+    ("eon", 1.0, "cltc", 1.0),  # the MIS pdf without its uniform share
+    ("eon", 1.0, "eon", 0.9),  # right strategy, roughness off by 10 %
+    ("cltc", 1.0, "ltc", 1.0),  # clipping ignored
     ("ltc_nonneg", 1.0, "ltc_nonneg", 0.9),
     ("cosine", 1.0, "uniform", 1.0),
 ]
@@ -48,8 +49,13 @@ def chi2_test(strategy, mu, r, n, res, seed, pdf_strategy=None, pdf_r=None):
     phi_edges = np.linspace(0.0, 2.0 * np.pi, res[1] + 1)
     pdf_r = r if pdf_r is None else pdf_r
     # every returned direction counts (sample_rng's pdf is > 0 for wo above the horizon)
-    return chi2_goodness(lambda m: sample_rng(strategy, wo, r, seed, shape=(m,)),
-                         lambda wi: pdf(pdf_strategy or strategy, wo, wi, pdf_r), n, z_edges, phi_edges)
+    return chi2_goodness(
+        lambda m: sample_rng(strategy, wo, r, seed, shape=(m,)),
+        lambda wi: pdf(pdf_strategy or strategy, wo, wi, pdf_r),
+        n,
+        z_edges,
+        phi_edges,
+    )
 
 
 def _case_id(case):
@@ -76,8 +82,7 @@ def test_chi2_samples_follow_pdf_fine(case):
 @pytest.mark.parametrize("wrong", WRONG, ids=lambda w: "{}-r{}-vs-{}-r{}".format(*w))
 def test_chi2_rejects_a_wrong_pdf(wrong):
     strategy, r, pdf_strategy, pdf_r = wrong
-    p, chi2, dof, _ = chi2_test(strategy, 0.02, r, N_FAST, RES_FAST, seed=11,
-                                pdf_strategy=pdf_strategy, pdf_r=pdf_r)
+    p, chi2, dof, _ = chi2_test(strategy, 0.02, r, N_FAST, RES_FAST, seed=11, pdf_strategy=pdf_strategy, pdf_r=pdf_r)
     assert p < SIDAK, f"wrong pdf accepted: chi2 = {chi2:.1f} for {dof} dof, p = {p:.3g}"
 
 

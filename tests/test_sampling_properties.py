@@ -6,6 +6,7 @@
 - the paper's variance claim (Fig. 10-12): EON sampling vs cosine sampling at r = 1;
 - reductions (r = 0 is cosine sampling), the C yardstick, edge inputs and errors.
 """
+
 import csv
 import math
 import shutil
@@ -14,9 +15,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _quad import gauss_legendre, hemisphere_grid, wo_of
 
 import openpbr_diffuse as od
-from _quad import gauss_legendre, hemisphere_grid, wo_of
 from openpbr_diffuse.sampling import INFO, STRATEGIES, pdf, sample, sample_rng
 from openpbr_diffuse.sampling.ltc import ltc_coeffs
 
@@ -41,8 +42,10 @@ def pdf_integral(strategy, mu, r, z_lo=0.0, z_hi=1.0, phi_o=0.7, n=96):
     a, _, _, d = ltc_coeffs(mu, r)
     if strategy == "ltc_nonneg":
         d = 0.0
-    pl, pw = (np.concatenate(v, axis=-1) for v in zip(gauss_legendre(-0.5 * np.pi, 0.5 * np.pi, n),
-                                                        gauss_legendre(0.5 * np.pi, 1.5 * np.pi, n)))
+    pl, pw = (
+        np.concatenate(v, axis=-1)
+        for v in zip(gauss_legendre(-0.5 * np.pi, 0.5 * np.pi, n), gauss_legendre(0.5 * np.pi, 1.5 * np.pi, n))
+    )
     pl, pw = pl.ravel(), pw.ravel()
     t = d / a * np.cos(pl)
     zb = np.clip(t / np.sqrt(1.0 + t * t), z_lo, z_hi)
@@ -64,6 +67,7 @@ def weights(strategy, mu, r, n, seed):
 
 
 # --- normalisation ---------------------------------------------------------------------------
+
 
 @pytest.mark.parametrize("strategy", NORMALISED_ON_HEMISPHERE)
 @pytest.mark.parametrize("mu, r", GRID)
@@ -91,6 +95,7 @@ def test_normalisation_quadrature_is_converged():
 
 
 # --- sample and pdf agree --------------------------------------------------------------------
+
 
 @pytest.mark.parametrize("strategy", STRATEGIES)
 def test_sample_reports_the_pdf_of_its_direction(strategy, rng):
@@ -131,6 +136,7 @@ def test_clipped_strategies_never_sample_below_the_horizon(strategy, rng):
 
 # --- white furnace ---------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("strategy", COVERING)
 @pytest.mark.parametrize("mu, r", [(0.02, 1.0), (0.3, 0.5), (1.0, 1.0), (0.6, 0.0)])
 def test_white_furnace_by_monte_carlo(strategy, mu, r):
@@ -158,6 +164,7 @@ def test_strategies_that_miss_a_lune_are_biased_low(strategy):
 
 
 # --- the paper's variance claim (Fig. 10-12) -------------------------------------------------
+
 
 @pytest.fixture(scope="module")
 def variance_r1():
@@ -215,6 +222,7 @@ def test_eon_weight_is_bounded_everywhere_at_r1():
 
 # --- reductions and cross-checks -------------------------------------------------------------
 
+
 def test_eon_at_zero_roughness_is_cosine_sampling(rng):
     n = 50_000
     wo = np.stack([np.zeros(n), np.zeros(n), np.ones(n)], axis=-1)
@@ -255,8 +263,13 @@ def test_tenth_power_matches_numpy(rng):
     """pow_tenth (the libm-free r^0.1 of P_u) vs numpy, over [0, 1] and down to subnormals."""
     from openpbr_diffuse.sampling.mis import pow_tenth
 
-    r = np.concatenate([rng.random(2000), 10.0 ** rng.uniform(-320.0, 0.0, 2000),
-                        [1.0, 0.5, 2.0 ** -0.125, np.nextafter(1.0, 0.0), 2.0 ** -1022, 5e-324]])
+    r = np.concatenate(
+        [
+            rng.random(2000),
+            10.0 ** rng.uniform(-320.0, 0.0, 2000),
+            [1.0, 0.5, 2.0**-0.125, np.nextafter(1.0, 0.0), 2.0**-1022, 5e-324],
+        ]
+    )
     got = np.array([pow_tenth(float(v)) for v in r])
     np.testing.assert_allclose(got, np.power(r, 0.1), rtol=1e-14, atol=0.0)
     assert pow_tenth(0.0) == 0.0 and pow_tenth(1.0) == 1.0
@@ -265,8 +278,7 @@ def test_tenth_power_matches_numpy(rng):
 YARDSTICK = Path(__file__).resolve().parents[2] / "shared" / "bench" / "eon_scalar.c"
 
 
-@pytest.mark.skipif(not YARDSTICK.exists() or shutil.which("gcc") is None,
-                    reason="C yardstick or gcc not available")
+@pytest.mark.skipif(not YARDSTICK.exists() or shutil.which("gcc") is None, reason="C yardstick or gcc not available")
 def test_eon_sampler_matches_the_c_yardstick(tmp_path, rng):
     """Listing 4 written independently in C (float32): same directions and pdf for the same u.
 
@@ -274,11 +286,13 @@ def test_eon_sampler_matches_the_c_yardstick(tmp_path, rng):
     clipped lune on the correct side (documented deviation, see sampling/ltc.py).
     """
     src = tmp_path / "drv.c"
-    src.write_text(f'#define main yardstick_main\n#include "{YARDSTICK}"\n#undef main\n'
-                   "int main(void){float wo[3],r,u1,u2,wi[3];\n"
-                   'while(scanf("%f %f %f %f %f %f",wo,wo+1,wo+2,&r,&u1,&u2)==6){\n'
-                   "float p=sample_EON(wo,r,u1,u2,wi);"
-                   'printf("%.9g %.9g %.9g %.9g\\n",wi[0],wi[1],wi[2],p);}return 0;}\n')
+    src.write_text(
+        f'#define main yardstick_main\n#include "{YARDSTICK}"\n#undef main\n'
+        "int main(void){float wo[3],r,u1,u2,wi[3];\n"
+        'while(scanf("%f %f %f %f %f %f",wo,wo+1,wo+2,&r,&u1,&u2)==6){\n'
+        "float p=sample_EON(wo,r,u1,u2,wi);"
+        'printf("%.9g %.9g %.9g %.9g\\n",wi[0],wi[1],wi[2],p);}return 0;}\n'
+    )
     exe = tmp_path / "drv"
     subprocess.run(["gcc", "-O2", "-o", str(exe), str(src), "-lm"], check=True, capture_output=True)
     n = 5000
@@ -289,14 +303,16 @@ def test_eon_sampler_matches_the_c_yardstick(tmp_path, rng):
     r = rng.random(n).astype(np.float32)
     u = rng.random((n, 2), dtype=np.float32)
     text = "\n".join(" ".join(f"{v:.9g}" for v in row) for row in np.column_stack([wo, r, u]))
-    out = np.loadtxt(subprocess.run([str(exe)], input=text, capture_output=True, text=True, check=True)
-                     .stdout.splitlines())
+    out = np.loadtxt(
+        subprocess.run([str(exe)], input=text, capture_output=True, text=True, check=True).stdout.splitlines()
+    )
     wi, p = sample("eon", wo, r, u)
     assert np.abs(wi - out[:, :3]).max() < 1e-4
     np.testing.assert_allclose(p, out[:, 3], rtol=1e-3)
 
 
 # --- shapes, dtypes, reproducibility ---------------------------------------------------------
+
 
 def test_shapes_broadcast_and_float32_stays_float32():
     wo = np.array([[0.0, 0.0, 1.0], [0.6, 0.0, 0.8]], dtype=np.float32)
@@ -325,8 +341,15 @@ def test_sample_rng_is_reproducible():
 # --- edge inputs and errors ------------------------------------------------------------------
 
 EDGE_WO = [np.array([0.0, 0.0, 1.0]), wo_at(1e-6), np.array([1.0, 0.0, 0.0]), np.array([0.6, 0.0, -0.8])]
-EDGE_U = np.array([[0.0, 0.0], [0.0, 0.999], [np.nextafter(1.0, 0.0), 0.0],
-                   [np.nextafter(1.0, 0.0), np.nextafter(1.0, 0.0)], [0.5, 0.25]])
+EDGE_U = np.array(
+    [
+        [0.0, 0.0],
+        [0.0, 0.999],
+        [np.nextafter(1.0, 0.0), 0.0],
+        [np.nextafter(1.0, 0.0), np.nextafter(1.0, 0.0)],
+        [0.5, 0.25],
+    ]
+)
 
 
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
@@ -366,15 +389,18 @@ def test_invalid_u_raises(bad_u):
         sample("eon", wo_at(0.5), 0.5, u)
 
 
-@pytest.mark.parametrize("call, match", [
-    (lambda: sample("eon", wo_at(0.5), 0.5, np.zeros(3)), r"\bu\b"),
-    (lambda: sample("eon", wo_at(0.5), 1.5, np.zeros(2)), "roughness"),
-    (lambda: sample("eon", [0.0, 0.0, 2.0], 0.5, np.zeros(2)), "wo"),
-    (lambda: sample("ggx", wo_at(0.5), 0.5, np.zeros(2)), "strategy"),
-    (lambda: pdf("eon", wo_at(0.5), [1.0, 1.0, 1.0], 0.5), "wi"),
-    (lambda: pdf("eon", wo_at(0.5), wo_at(0.5), -0.1), "roughness"),
-    (lambda: sample("eon", np.zeros((2, 3)) + [0, 0, 1], 0.5, np.zeros((3, 2))), "broadcast"),
-])
+@pytest.mark.parametrize(
+    "call, match",
+    [
+        (lambda: sample("eon", wo_at(0.5), 0.5, np.zeros(3)), r"\bu\b"),
+        (lambda: sample("eon", wo_at(0.5), 1.5, np.zeros(2)), "roughness"),
+        (lambda: sample("eon", [0.0, 0.0, 2.0], 0.5, np.zeros(2)), "wo"),
+        (lambda: sample("ggx", wo_at(0.5), 0.5, np.zeros(2)), "strategy"),
+        (lambda: pdf("eon", wo_at(0.5), [1.0, 1.0, 1.0], 0.5), "wi"),
+        (lambda: pdf("eon", wo_at(0.5), wo_at(0.5), -0.1), "roughness"),
+        (lambda: sample("eon", np.zeros((2, 3)) + [0, 0, 1], 0.5, np.zeros((3, 2))), "broadcast"),
+    ],
+)
 def test_bad_arguments_raise_value_error_naming_them(call, match):
     with pytest.raises(ValueError, match=match):
         call()
@@ -387,6 +413,7 @@ def test_strategy_must_be_a_string():
 
 # --- the Fig. 10-12 tool ---------------------------------------------------------------------
 
+
 def test_variance_curves_tool_writes_table_csv_and_png(tmp_path, capsys):
     import importlib.util
 
@@ -396,8 +423,7 @@ def test_variance_curves_tool_writes_table_csv_and_png(tmp_path, capsys):
     tool = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(tool)
     out = tmp_path / "vc.png"
-    assert tool.main(["--samples", "4000", "--theta", "0", "88.854", "--roughness", "1",
-                      "--out", str(out)]) == 0
+    assert tool.main(["--samples", "4000", "--theta", "0", "88.854", "--roughness", "1", "--out", str(out)]) == 0
     text = capsys.readouterr().out
     assert "variance of the throughput weight" in text and "regenerate:" in text
     assert out.stat().st_size > 10_000

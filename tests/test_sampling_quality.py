@@ -1,5 +1,6 @@
 """sampling.quality: exact weight moments against closed-form cases, Monte Carlo against exact,
 the pooled chi-square against scipy."""
+
 import math
 
 import numpy as np

@@ -1,5 +1,6 @@
 """The standard errors are honest: independent seeds scatter around a long run with the
 spread the standard errors claim (z-scores ~ N(0, 1)), and shrink as 1/sqrt(paths)."""
+
 import numpy as np
 import pytest
 from scipy import stats
@@ -48,6 +49,5 @@ def test_stderr_shrinks_as_inverse_sqrt_paths():
     b = simulate_albedo("vcavity", 0.5, [0.4], rho=0.6, paths=320_000, seed=2)
     assert b.stderr[0, 0] / a.stderr[0, 0] == pytest.approx(0.25, rel=0.1)
     # the spread over seeds matches the claimed error
-    vals = [simulate_albedo("vcavity", 0.5, [0.4], rho=0.6, paths=20_000, seed=s).albedo[0, 0]
-            for s in range(10, 30)]
+    vals = [simulate_albedo("vcavity", 0.5, [0.4], rho=0.6, paths=20_000, seed=s).albedo[0, 0] for s in range(10, 30)]
     assert 0.6 < np.std(vals, ddof=1) / a.stderr[0, 0] < 1.5

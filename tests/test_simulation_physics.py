@@ -1,12 +1,12 @@
 """Physical properties of the simulated microsurfaces: Lambert limit, white furnace,
 reciprocity, albedo = integral of the BRDF, and rejection of bad input."""
+
 import math
 
 import numpy as np
 import pytest
 
-from openpbr_diffuse.simulation import (GEOMETRIES, simulate_albedo, simulate_average_albedo,
-                                        simulate_brdf)
+from openpbr_diffuse.simulation import GEOMETRIES, simulate_albedo, simulate_average_albedo, simulate_brdf
 
 SMOOTH = {"vcavity": 1e-4, "smith-beckmann": 1e-4, "smith-ggx": 1e-4}
 
@@ -17,14 +17,24 @@ def test_smooth_limit_is_lambert(geometry):
     est = simulate_albedo(geometry, SMOOTH[geometry], [0.1, 0.6, 1.0], rho=rho, paths=20_000, seed=1)
     assert np.allclose(est.albedo, rho, atol=2e-4)
     assert np.all(est.albedo_by_order[:, 0] >= rho - 2e-4)  # one bounce
-    wi = np.array([[0.6, 0.0, 0.8], [0.0, 0.0, 1.0]]); wo = np.array([[-0.28, 0.96, 0.0], [0.8, 0.0, 0.6]])
+    wi = np.array([[0.6, 0.0, 0.8], [0.0, 0.0, 1.0]])
+    wo = np.array([[-0.28, 0.96, 0.0], [0.8, 0.0, 0.6]])
     wo[0] = [-0.28 * 0.6, 0.96 * 0.6, 0.8]
     f = simulate_brdf(geometry, SMOOTH[geometry], wi, wo, rho=rho, paths=20_000, seed=2)
     assert np.allclose(f.f, rho / math.pi, rtol=2e-3)
 
 
-@pytest.mark.parametrize("geometry,roughness", [("vcavity", 0.3), ("vcavity", 1.2), ("smith-beckmann", 0.5),
-                                                ("smith-beckmann", 1.5), ("smith-ggx", 0.4), ("smith-ggx", 1.5)])
+@pytest.mark.parametrize(
+    "geometry,roughness",
+    [
+        ("vcavity", 0.3),
+        ("vcavity", 1.2),
+        ("smith-beckmann", 0.5),
+        ("smith-beckmann", 1.5),
+        ("smith-ggx", 0.4),
+        ("smith-ggx", 1.5),
+    ],
+)
 def test_white_furnace_every_path_leaves(geometry, roughness):
     """At rho = 1 nothing is absorbed: albedo 1.  (Scored rho^k, so this checks that every
     path ends by leaving; paths cut at the bounce limit are counted and must be rare.)"""
@@ -38,7 +48,8 @@ def test_white_furnace_every_path_leaves(geometry, roughness):
 @pytest.mark.parametrize("geometry,roughness", [("vcavity", 0.6), ("smith-beckmann", 0.7), ("smith-ggx", 0.6)])
 def test_brdf_reciprocal(geometry, roughness):
     rng = np.random.default_rng(7)
-    z = rng.uniform(0.15, 1.0, (4, 2)); ph = rng.uniform(0, 2 * np.pi, (4, 2))
+    z = rng.uniform(0.15, 1.0, (4, 2))
+    ph = rng.uniform(0, 2 * np.pi, (4, 2))
     s = np.sqrt(1 - z * z)
     d = np.stack([s * np.cos(ph), s * np.sin(ph), z], axis=-1)
     a, b = d[:, 0], d[:, 1]
@@ -47,8 +58,9 @@ def test_brdf_reciprocal(geometry, roughness):
     z_score = (f_ab.f - f_ba.f) / np.hypot(f_ab.stderr, f_ba.stderr)
     assert np.all(np.abs(z_score) < 4.5), z_score
     # the order-1 term is reciprocal on its own
-    z1 = (f_ab.f_by_order[:, 0] - f_ba.f_by_order[:, 0]) / np.hypot(f_ab.stderr_by_order[:, 0],
-                                                                    f_ba.stderr_by_order[:, 0])
+    z1 = (f_ab.f_by_order[:, 0] - f_ba.f_by_order[:, 0]) / np.hypot(
+        f_ab.stderr_by_order[:, 0], f_ba.stderr_by_order[:, 0]
+    )
     assert np.all(np.abs(z1) < 4.5), z1
 
 
@@ -59,9 +71,10 @@ def test_albedo_is_the_integral_of_the_brdf(geometry, roughness):
     mu_i = 0.6
     wi = np.array([math.sqrt(1 - mu_i**2), 0.0, mu_i])
     x, w = np.polynomial.legendre.leggauss(10)
-    mu_o = 0.5 * (x + 1); wmu = 0.5 * w
+    mu_o = 0.5 * (x + 1)
+    wmu = 0.5 * w
     n_phi = 12
-    phi = (np.arange(n_phi) + 0.5) * np.pi / n_phi           # symmetric in phi -> [0, pi]
+    phi = (np.arange(n_phi) + 0.5) * np.pi / n_phi  # symmetric in phi -> [0, pi]
     M, P = np.meshgrid(mu_o, phi, indexing="ij")
     S = np.sqrt(1 - M * M)
     wo = np.stack([S * np.cos(P), S * np.sin(P), M], axis=-1).reshape(-1, 3)
@@ -82,11 +95,21 @@ def test_average_albedo_is_the_cosine_mean():
     assert abs(avg - est.albedo[0, 0]) < 4.5 * est.stderr[0, 0] + 1e-3
 
 
-@pytest.mark.parametrize("kwargs,match", [
-    (dict(geometry="cube"), "geometry"), (dict(roughness=-0.1), "roughness"),
-    (dict(roughness=2.0), "roughness"), (dict(mu=[0.0]), "mu"), (dict(mu=[1.5]), "mu"),
-    (dict(mu=[np.nan]), "mu"), (dict(rho=[1.2]), "rho"), (dict(paths=0), "paths"),
-    (dict(seed=-1), "seed"), (dict(workers=0), "workers")])
+@pytest.mark.parametrize(
+    "kwargs,match",
+    [
+        (dict(geometry="cube"), "geometry"),
+        (dict(roughness=-0.1), "roughness"),
+        (dict(roughness=2.0), "roughness"),
+        (dict(mu=[0.0]), "mu"),
+        (dict(mu=[1.5]), "mu"),
+        (dict(mu=[np.nan]), "mu"),
+        (dict(rho=[1.2]), "rho"),
+        (dict(paths=0), "paths"),
+        (dict(seed=-1), "seed"),
+        (dict(workers=0), "workers"),
+    ],
+)
 def test_bad_input_names_the_argument(kwargs, match):
     args = dict(geometry="vcavity", roughness=0.5, mu=[0.5], rho=1.0, paths=100, seed=0)
     args.update(kwargs)

@@ -1,5 +1,6 @@
 """Seeded and reproducible per (seed, query, chunk): independent of workers, of the other
 queries in the call, and of running on a Dask cluster."""
+
 import numpy as np
 import pytest
 
@@ -30,14 +31,15 @@ def test_dask_local_cluster_gives_the_local_result():
     distributed = pytest.importorskip("dask.distributed")
     kw = dict(rho=[0.8, 0.3], paths=2 * CHUNK_PATHS + 7, seed=3)
     local = simulate_albedo("smith-beckmann", 0.5, [0.2, 0.7], workers=2, **kw)
-    wi = np.array([[0.6, 0.0, 0.8]]); wo = np.array([[0.0, 0.6, 0.8]])
+    wi = np.array([[0.6, 0.0, 0.8]])
+    wo = np.array([[0.0, 0.6, 0.8]])
     flocal = simulate_brdf("vcavity", 0.5, wi, wo, rho=0.5, paths=CHUNK_PATHS + 5, seed=4)
-    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
-                                  dashboard_address=None) as cluster:
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
+    ) as cluster:
         with distributed.Client(cluster) as client:
             remote = simulate_albedo("smith-beckmann", 0.5, [0.2, 0.7], client=client, **kw)
-            fremote = simulate_brdf("vcavity", 0.5, wi, wo, rho=0.5, paths=CHUNK_PATHS + 5, seed=4,
-                                    client=client)
+            fremote = simulate_brdf("vcavity", 0.5, wi, wo, rho=0.5, paths=CHUNK_PATHS + 5, seed=4, client=client)
         by_address = simulate_albedo("smith-beckmann", 0.5, [0.2, 0.7], scheduler=cluster.scheduler_address, **kw)
     _same(local, remote)
     _same(local, by_address)

@@ -1,10 +1,10 @@
 """Smith random walk against the single-scattering microfacet BRDF by quadrature."""
+
 import numpy as np
 import pytest
+from _smith_quad import first_order_brdf
 
 from openpbr_diffuse.simulation import simulate_brdf
-
-from _smith_quad import first_order_brdf
 
 
 def _dir(theta, phi):
@@ -14,9 +14,9 @@ def _dir(theta, phi):
 @pytest.mark.parametrize("dist", ["beckmann", "ggx"])
 @pytest.mark.parametrize("alpha", [0.3, 0.8])
 def test_first_order_brdf_matches_quadrature(dist, alpha):
-    pairs = [(_dir(0.3, 0.0), _dir(0.9, 2.5)), (_dir(1.2, 0.0), _dir(1.1, 0.2)),
-             (_dir(1.3, 0.0), _dir(0.5, np.pi))]
-    wi = np.array([p[0] for p in pairs]); wo = np.array([p[1] for p in pairs])
+    pairs = [(_dir(0.3, 0.0), _dir(0.9, 2.5)), (_dir(1.2, 0.0), _dir(1.1, 0.2)), (_dir(1.3, 0.0), _dir(0.5, np.pi))]
+    wi = np.array([p[0] for p in pairs])
+    wo = np.array([p[1] for p in pairs])
     est = simulate_brdf(f"smith-{dist}", alpha, wi, wo, rho=1.0, paths=150_000, seed=5)
     for k, (a, b) in enumerate(pairs):
         expected, norm = first_order_brdf(dist, alpha, a, b)

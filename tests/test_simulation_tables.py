@@ -1,11 +1,11 @@
 """The shipped simulation tables: checked against the independent single-bounce quadrature,
 the white furnace, and a re-grading from the tables; the report section builds from them."""
+
 import numpy as np
 import pytest
+from _vgroove_quad import single_bounce_albedo
 
 from openpbr_diffuse.simulation import grading as gr
-
-from _vgroove_quad import single_bounce_albedo
 
 
 @pytest.fixture(scope="module")

@@ -1,12 +1,12 @@
 """V-cavity simulator against an independent quadrature of the same single-bounce geometry,
 and against Oren and Nayar's own single-scattering model."""
+
 import numpy as np
 import pytest
+from _vgroove_quad import single_bounce_albedo
 
 import openpbr_diffuse as od
 from openpbr_diffuse.simulation import simulate_albedo
-
-from _vgroove_quad import single_bounce_albedo
 
 
 @pytest.mark.parametrize("sigma", [0.15, 0.5, 1.0])

@@ -11,6 +11,7 @@ of a mutant whose albedo is unchanged must conform; where the tolerance cannot r
 deviation (the Eq. 14 fit of the albedo on llvmpipe) the expectation is decided by the
 independent NumPy implementation of ``_hand_impl`` at that tolerance.
 """
+
 import dataclasses
 import json
 import shutil
@@ -90,8 +91,12 @@ def assert_named(q, mutant, language):
         # furnace), so the albedo rows alone cannot tell the two apart: either name is right.
         v = default_vectors()
         rows = v.subset((v.kind == "albedo") & (v.model == "eon"))
-        np.testing.assert_allclose(hand.answer(rows, np.float64, energy="lambert"),
-                                   hand.answer(rows, np.float64, white_tint=True), rtol=1e-6, atol=1e-7)
+        np.testing.assert_allclose(
+            hand.answer(rows, np.float64, energy="lambert"),
+            hand.answer(rows, np.float64, white_tint=True),
+            rtol=1e-6,
+            atol=1e-7,
+        )
         assert not albedo["passed"] and albedo["diagnosis"] in (want, "white_tint"), albedo["detail"]
     else:
         assert not albedo["passed"] and albedo["diagnosis"] == want, albedo["detail"]
@@ -114,12 +119,19 @@ def test_conforming_subject_conforms(language, capsys):
 
 
 #: a handful in the default run, through the command line; the whole matrix is below (slow)
-DEFAULT = [("glsl", "pi_forgotten"), ("glsl", "eq14"), ("glsl", "sin_mu_i"),
-           ("cpp", "ms_missing_inv_pi"), ("cpp", "cos_of_wo"), ("cpp", "srgb_encoded")]
+DEFAULT = [
+    ("glsl", "pi_forgotten"),
+    ("glsl", "eq14"),
+    ("glsl", "sin_mu_i"),
+    ("cpp", "ms_missing_inv_pi"),
+    ("cpp", "cos_of_wo"),
+    ("cpp", "srgb_encoded"),
+]
 
 
-@pytest.mark.parametrize("language,name", [pytest.param(lang, n, marks=needs_gl if lang == "glsl" else needs_cxx)
-                                           for lang, n in DEFAULT])
+@pytest.mark.parametrize(
+    "language,name", [pytest.param(lang, n, marks=needs_gl if lang == "glsl" else needs_cxx) for lang, n in DEFAULT]
+)
 def test_mutant_is_named_by_check(language, name, tmp_path, capsys):
     mutant = sm.MUTANTS[name]
     path = sm.write_mutant(name, language, tmp_path)
@@ -132,8 +144,9 @@ def test_mutant_is_named_by_check(language, name, tmp_path, capsys):
 def test_eq14_mutant_conforms_as_eon_approx(tmp_path, capsys):
     """The suggestion of the eq14 diagnosis, followed: graded as eon_approx, it conforms."""
     path = sm.write_mutant("eq14", "glsl", tmp_path)
-    status, result = check(capsys, "--glsl", str(path), "--function", "f", "--albedo-function", "albedo",
-                           "--model", "eon_approx")
+    status, result = check(
+        capsys, "--glsl", str(path), "--function", "f", "--albedo-function", "albedo", "--model", "eon_approx"
+    )
     assert status == 0 and result["passed"] and result["model"] == "eon_approx", result
 
 

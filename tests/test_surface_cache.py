@@ -13,6 +13,7 @@ Two caching bugs this guards against:
 The surface now has one compiled block runner per verb and parameter stride, run on the
 calling thread for small calls and on a thread pool for large ones (``_surface_drivers``).
 """
+
 import os
 import subprocess
 import sys
@@ -30,7 +31,7 @@ def test_each_runner_has_its_own_cache_index_and_releases_the_gil():
     files = set()
     for builds in sd.BUILDS.values():
         for run in (builds.one, builds.each):
-            assert run.targetoptions.get("nogil")   # the pool's threads run it concurrently
+            assert run.targetoptions.get("nogil")  # the pool's threads run it concurrently
             assert not run.targetoptions.get("parallel")
             files.add(run._cache._cache_file._index_path)
     # closures of one factory share a file; their entries differ by the closure's value (the
@@ -43,8 +44,15 @@ def test_each_runner_has_its_own_cache_index_and_releases_the_gil():
 
 
 def _material():
-    return OpenPBRSurface(base_color=(0.8, 0.5, 0.3), base_metalness=0.3, coat_weight=0.5, fuzz_weight=0.4,
-                          subsurface_weight=0.3, transmission_weight=0.2, geometry_thin_walled=True)
+    return OpenPBRSurface(
+        base_color=(0.8, 0.5, 0.3),
+        base_metalness=0.3,
+        coat_weight=0.5,
+        fuzz_weight=0.4,
+        subsurface_weight=0.3,
+        transmission_weight=0.2,
+        geometry_thin_walled=True,
+    )
 
 
 @pytest.mark.cpu_portable
@@ -67,8 +75,15 @@ def test_the_thread_pool_gives_the_serial_result(rows):
     assert step < sd.SERIAL_ROWS
     small = range(0, rows, step)
     big = (s.eval(wi, wo), s.pdf(wo, wi), s.albedo(wo), *s.sample(wo, u))
-    parts = [(s.eval(wi[a:a + step], wo[a:a + step]), s.pdf(wo[a:a + step], wi[a:a + step]),
-              s.albedo(wo[a:a + step]), *s.sample(wo[a:a + step], u[a:a + step])) for a in small]
+    parts = [
+        (
+            s.eval(wi[a : a + step], wo[a : a + step]),
+            s.pdf(wo[a : a + step], wi[a : a + step]),
+            s.albedo(wo[a : a + step]),
+            *s.sample(wo[a : a + step], u[a : a + step]),
+        )
+        for a in small
+    ]
     for k, whole in enumerate(big):
         assert np.array_equal(whole, np.concatenate([p[k] for p in parts]))
 
@@ -86,15 +101,24 @@ def test_short_calls_give_the_rows_of_a_whole_block(per_row):
     wi = rng.normal(size=(n, 3))
     wi /= np.linalg.norm(wi, axis=1, keepdims=True)
     u = rng.random((n, 3))
-    rowwise = dict(base_color=rng.random((n, 3)), base_metalness=rng.random(n), fuzz_weight=rng.random(n) * 0.5,
-                   specular_roughness=rng.random(n))
+    rowwise = dict(
+        base_color=rng.random((n, 3)),
+        base_metalness=rng.random(n),
+        fuzz_weight=rng.random(n) * 0.5,
+        specular_roughness=rng.random(n),
+    )
     s = OpenPBRSurface(**rowwise, coat_weight=0.5) if per_row else _material()
 
     def verbs(sl):
         lobes = s.lobes(wo[sl]) if not per_row else []
         sub = OpenPBRSurface(**{k: v[sl] for k, v in rowwise.items()}, coat_weight=0.5) if per_row else s
-        return (sub.eval(wi[sl], wo[sl]), sub.pdf(wo[sl], wi[sl]), sub.albedo(wo[sl]), *sub.sample(wo[sl], u[sl]),
-                *(x for lobe in lobes for x in (lobe.weight, lobe.albedo, lobe.probability)))
+        return (
+            sub.eval(wi[sl], wo[sl]),
+            sub.pdf(wo[sl], wi[sl]),
+            sub.albedo(wo[sl]),
+            *sub.sample(wo[sl], u[sl]),
+            *(x for lobe in lobes for x in (lobe.weight, lobe.albedo, lobe.probability)),
+        )
 
     whole = verbs(slice(None))
     for m in (*range(1, 10), 61, 62, 63):
@@ -102,7 +126,7 @@ def test_short_calls_give_the_rows_of_a_whole_block(per_row):
             part = verbs(slice(start, start + m))
             for a, b in zip(part, whole):
                 assert np.all(np.isfinite(a))
-                np.testing.assert_allclose(a, b[start:start + m], rtol=1e-13, atol=1e-300)
+                np.testing.assert_allclose(a, b[start : start + m], rtol=1e-13, atol=1e-300)
 
 
 @pytest.mark.cpu_portable
@@ -155,9 +179,11 @@ def test_a_second_process_loads_the_drivers_from_the_cache(tmp_path):
         run = sd.ALBEDO.one
         print(sum(run.stats.cache_hits.values()), sum(run.stats.cache_misses.values()))
         """)
-    first = subprocess.run([sys.executable, "-c", script], env=env, check=True, timeout=900, capture_output=True,
-                           text=True).stdout.split()
-    second = subprocess.run([sys.executable, "-c", script], env=env, check=True, timeout=900, capture_output=True,
-                            text=True).stdout.split()
+    first = subprocess.run(
+        [sys.executable, "-c", script], env=env, check=True, timeout=900, capture_output=True, text=True
+    ).stdout.split()
+    second = subprocess.run(
+        [sys.executable, "-c", script], env=env, check=True, timeout=900, capture_output=True, text=True
+    ).stdout.split()
     assert list(map(int, first[-2:])) == [0, 1]
     assert list(map(int, second[-2:])) == [1, 0]

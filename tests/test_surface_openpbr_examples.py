@@ -9,6 +9,7 @@ from the surface's own lobes: E_coat, E_fuzz, and E_spec from the specular lobe,
 recovered from the diffuse/base weight ratio when that lobe is inactive); and materials
 that are pure metal or fully transmissive report a zero diffuse weight.
 """
+
 import json
 import math
 import os
@@ -82,11 +83,18 @@ def test_example_builds_and_reports_the_diffuse_lobe(path):
         E_c = lobes["coat"].albedo[0] if "coat" in lobes else 0.0
         E_f = lobes["fuzz"].albedo[0] if "fuzz" in lobes else 0.0
         E_s = lobes["specular"].albedo[0] if "specular" in lobes else 0.0
-        above = ((1 - F * E_f) * (1 - C * E_c) * (1 - g("base_metalness")) * (1 - E_s)
-                 * (1 - g("transmission_weight")) * (1 - g("subsurface_weight")) * g("base_weight"))
-        if C == 0.0:   # no coat: no attenuation or darkening either
+        above = (
+            (1 - F * E_f)
+            * (1 - C * E_c)
+            * (1 - g("base_metalness"))
+            * (1 - E_s)
+            * (1 - g("transmission_weight"))
+            * (1 - g("subsurface_weight"))
+            * g("base_weight")
+        )
+        if C == 0.0:  # no coat: no attenuation or darkening either
             assert np.allclose(w, above, rtol=1e-12, atol=1e-15), path.stem
-        else:          # the coat's colour and darkening factors, per channel, lie in (0, 1]
+        else:  # the coat's colour and darkening factors, per channel, lie in (0, 1]
             ratio = w / above
             assert np.all((ratio > 0.0) & (ratio <= 1.0 + 1e-12)), path.stem
         assert 0.0 <= P <= 1.0

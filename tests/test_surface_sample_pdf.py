@@ -10,15 +10,16 @@ returns a direction on the horizon, where its own pdf is 0 (the EON sampler's un
 gives z = u at u = 0).  Checked on seeded random materials mixing every lobe, at the edges of
 u (0 and the largest float64 below 1) as well as inside, with u of 3 and of 2 columns.
 """
+
 import warnings
 
 import numpy as np
 import pytest
-
-from openpbr_diffuse import OpenPBRSurface
 from test_surface_scores import directions, random_material
 
-U_TOP = 1.0 - 2.0 ** -53
+from openpbr_diffuse import OpenPBRSurface
+
+U_TOP = 1.0 - 2.0**-53
 #: Bound on |sample's pdf - pdf(wo, wi)|, in units in the last place of the larger.
 PDF_ULPS = 4
 
@@ -36,7 +37,7 @@ def _u(rng, n, cols):
     u = rng.random((n, cols))
     u[:50] = 0.0
     u[50:100] = U_TOP
-    u[100:150, 0] = U_TOP      # the top of the lobe CDF, the lobe's own u inside
+    u[100:150, 0] = U_TOP  # the top of the lobe CDF, the lobe's own u inside
     u[150:200, 1:] = 0.0
     return u
 
@@ -49,8 +50,9 @@ def test_sample_pdf_is_pdf_of_the_sample(seed, cols, sampling):
     rng = np.random.default_rng(300 + seed)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        s = OpenPBRSurface(**random_material(rng), specular_sampling=sampling,
-                           diffuse_model=("eon", "qon", "lambert")[seed % 3])
+        s = OpenPBRSurface(
+            **random_material(rng), specular_sampling=sampling, diffuse_model=("eon", "qon", "lambert")[seed % 3]
+        )
     wo = directions(rng, 3000, lower=True)
     wo[:1500, 2] = np.abs(wo[:1500, 2])
     wi, q = s.sample(wo, _u(rng, 3000, cols))

@@ -13,6 +13,7 @@ on seeded random materials mixing coat, fuzz, transmission, subsurface (thin-wal
 metal, and the three diffuse models.  The physics (quadrature, white furnace, the spec's
 products) is tested in ``test_surface_stack.py`` and ``test_openpbr_surface.py``.
 """
+
 import math
 import warnings
 
@@ -23,16 +24,33 @@ from openpbr_diffuse import OpenPBRSurface
 
 
 def random_material(rng, **extra):
-    c = lambda: tuple(float(v) for v in rng.uniform(0.05, 1.0, 3))   # noqa: E731
-    on = lambda p: float(rng.uniform(0.1, 1.0)) if rng.random() < p else 0.0   # noqa: E731
-    return dict(base_color=c(), base_diffuse_roughness=float(rng.uniform(0, 1)), base_weight=float(rng.uniform(0.3, 1)),
-                base_metalness=on(0.5), specular_weight=float(rng.uniform(0.2, 1)), specular_color=c(),
-                specular_roughness=float(rng.uniform(0.05, 1)), specular_ior=float(rng.uniform(1.2, 2.5)),
-                transmission_weight=on(0.4), transmission_color=c(), subsurface_weight=on(0.5), subsurface_color=c(),
-                subsurface_scatter_anisotropy=float(rng.uniform(-0.8, 0.8)), coat_weight=on(0.6), coat_color=c(),
-                coat_roughness=float(rng.uniform(0, 1)), coat_ior=float(rng.uniform(1.2, 2.2)),
-                coat_darkening=float(rng.uniform(0, 1)), fuzz_weight=on(0.6), fuzz_color=c(),
-                fuzz_roughness=float(rng.uniform(0.05, 1)), geometry_thin_walled=bool(rng.random() < 0.4), **extra)
+    c = lambda: tuple(float(v) for v in rng.uniform(0.05, 1.0, 3))  # noqa: E731
+    on = lambda p: float(rng.uniform(0.1, 1.0)) if rng.random() < p else 0.0  # noqa: E731
+    return dict(
+        base_color=c(),
+        base_diffuse_roughness=float(rng.uniform(0, 1)),
+        base_weight=float(rng.uniform(0.3, 1)),
+        base_metalness=on(0.5),
+        specular_weight=float(rng.uniform(0.2, 1)),
+        specular_color=c(),
+        specular_roughness=float(rng.uniform(0.05, 1)),
+        specular_ior=float(rng.uniform(1.2, 2.5)),
+        transmission_weight=on(0.4),
+        transmission_color=c(),
+        subsurface_weight=on(0.5),
+        subsurface_color=c(),
+        subsurface_scatter_anisotropy=float(rng.uniform(-0.8, 0.8)),
+        coat_weight=on(0.6),
+        coat_color=c(),
+        coat_roughness=float(rng.uniform(0, 1)),
+        coat_ior=float(rng.uniform(1.2, 2.2)),
+        coat_darkening=float(rng.uniform(0, 1)),
+        fuzz_weight=on(0.6),
+        fuzz_color=c(),
+        fuzz_roughness=float(rng.uniform(0.05, 1)),
+        geometry_thin_walled=bool(rng.random() < 0.4),
+        **extra,
+    )
 
 
 def directions(rng, n, lower=False):
@@ -44,15 +62,18 @@ def directions(rng, n, lower=False):
     return w
 
 
-CASES = [(seed, model, sel) for seed in range(6) for model, sel in
-         (("eon", "length"), ("eon", "max"), ("qon", "length"), ("lambert", "max"), ("eon", "uniform"))]
+CASES = [
+    (seed, model, sel)
+    for seed in range(6)
+    for model, sel in (("eon", "length"), ("eon", "max"), ("qon", "length"), ("lambert", "max"), ("eon", "uniform"))
+]
 
 
 @pytest.fixture(params=CASES, ids=lambda c: f"seed{c[0]}-{c[1]}-{c[2]}")
 def case(request):
     seed, model, sel = request.param
     rng = np.random.default_rng(1000 + seed)
-    with warnings.catch_warnings():   # F82 tint below zero, total internal reflection: not tested here
+    with warnings.catch_warnings():  # F82 tint below zero, total internal reflection: not tested here
         warnings.simplefilter("ignore")
         s = OpenPBRSurface(**random_material(rng), diffuse_model=model, selection=sel)
     return s, sel, rng

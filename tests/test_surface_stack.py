@@ -14,14 +14,15 @@ Grouped by property; each against something independent of the compiled surface:
   spec's factors, each computed here (layer albedos by quadrature of the layer's own BRDF
   written with ``microfacet.ggx``/``fresnel`` and ``microfacet.sheen``).
 """
+
 import math
 import warnings
 
 import numpy as np
 import pytest
-
 from _chi2 import chi2_test
-from _quad import gauss_legendre, sphere_rule
+from _quad import sphere_rule
+
 from openpbr_diffuse.albedo.quadrature import hemisphere_albedo
 from openpbr_diffuse.microfacet import fresnel, ggx, sheen
 from openpbr_diffuse.microfacet import tables as spec_tables
@@ -29,18 +30,53 @@ from openpbr_diffuse.nodes import OpenPBRSurface, OrenNayarDiffuseBSDF
 
 WHITE = dict(base_color=(1, 1, 1), specular_color=(1, 1, 1), coat_color=(1, 1, 1), fuzz_color=(1, 1, 1))
 STACKS = {
-    "coated": dict(base_color=(0.8, 0.3, 0.1), base_diffuse_roughness=0.6, specular_roughness=0.4,
-                   coat_weight=0.8, coat_roughness=0.3, coat_ior=1.6, coat_color=(0.9, 0.8, 0.7)),
-    "fuzzy": dict(base_color=(0.3, 0.5, 0.7), base_diffuse_roughness=1.0, specular_roughness=0.5,
-                  fuzz_weight=0.8, fuzz_color=(0.9, 0.9, 1.0), fuzz_roughness=0.5),
-    "transmissive": dict(base_color=(0.9, 0.9, 0.9), transmission_weight=0.7, transmission_color=(0.8, 0.9, 1.0),
-                         specular_roughness=0.35, base_diffuse_roughness=0.3),
-    "thin_subsurface": dict(subsurface_weight=0.6, subsurface_color=(0.9, 0.5, 0.4), geometry_thin_walled=True,
-                            subsurface_scatter_anisotropy=0.3, specular_roughness=0.5, base_diffuse_roughness=0.5),
-    "everything": dict(base_color=(0.7, 0.6, 0.5), base_metalness=0.3, base_diffuse_roughness=0.8,
-                       specular_roughness=0.45, subsurface_weight=0.3, subsurface_color=(0.8, 0.4, 0.3),
-                       transmission_weight=0.2, coat_weight=0.5, coat_roughness=0.35, coat_ior=1.4,
-                       coat_darkening=0.7, fuzz_weight=0.4, fuzz_roughness=0.6),
+    "coated": dict(
+        base_color=(0.8, 0.3, 0.1),
+        base_diffuse_roughness=0.6,
+        specular_roughness=0.4,
+        coat_weight=0.8,
+        coat_roughness=0.3,
+        coat_ior=1.6,
+        coat_color=(0.9, 0.8, 0.7),
+    ),
+    "fuzzy": dict(
+        base_color=(0.3, 0.5, 0.7),
+        base_diffuse_roughness=1.0,
+        specular_roughness=0.5,
+        fuzz_weight=0.8,
+        fuzz_color=(0.9, 0.9, 1.0),
+        fuzz_roughness=0.5,
+    ),
+    "transmissive": dict(
+        base_color=(0.9, 0.9, 0.9),
+        transmission_weight=0.7,
+        transmission_color=(0.8, 0.9, 1.0),
+        specular_roughness=0.35,
+        base_diffuse_roughness=0.3,
+    ),
+    "thin_subsurface": dict(
+        subsurface_weight=0.6,
+        subsurface_color=(0.9, 0.5, 0.4),
+        geometry_thin_walled=True,
+        subsurface_scatter_anisotropy=0.3,
+        specular_roughness=0.5,
+        base_diffuse_roughness=0.5,
+    ),
+    "everything": dict(
+        base_color=(0.7, 0.6, 0.5),
+        base_metalness=0.3,
+        base_diffuse_roughness=0.8,
+        specular_roughness=0.45,
+        subsurface_weight=0.3,
+        subsurface_color=(0.8, 0.4, 0.3),
+        transmission_weight=0.2,
+        coat_weight=0.5,
+        coat_roughness=0.35,
+        coat_ior=1.4,
+        coat_darkening=0.7,
+        fuzz_weight=0.4,
+        fuzz_roughness=0.6,
+    ),
 }
 
 
@@ -71,14 +107,26 @@ class TestWhiteFurnace:
     test allows 5e-5); ``albedo`` itself equals 1 to 1e-12.
     """
 
-    CASES = [dict(coat_weight=c, coat_roughness=rc, coat_ior=ior, fuzz_weight=fw, fuzz_roughness=fr,
-                  specular_roughness=rs, base_diffuse_roughness=rd, base_metalness=m, transmission_weight=t)
-             for c, rc, ior, fw, fr, rs, rd, m, t in [
-                 (1.0, 0.3, 1.5, 0.0, 0.5, 0.4, 0.5, 0.0, 0.0),
-                 (0.5, 0.6, 2.0, 0.5, 0.3, 0.6, 1.0, 0.0, 0.0),
-                 (1.0, 0.25, 1.3, 1.0, 0.8, 0.3, 0.0, 0.5, 0.0),
-                 (0.3, 0.8, 1.8, 0.7, 1.0, 0.8, 0.7, 0.0, 0.5),
-                 (0.0, 0.3, 1.5, 1.0, 0.2, 0.5, 0.3, 0.0, 0.0)]]
+    CASES = [
+        dict(
+            coat_weight=c,
+            coat_roughness=rc,
+            coat_ior=ior,
+            fuzz_weight=fw,
+            fuzz_roughness=fr,
+            specular_roughness=rs,
+            base_diffuse_roughness=rd,
+            base_metalness=m,
+            transmission_weight=t,
+        )
+        for c, rc, ior, fw, fr, rs, rd, m, t in [
+            (1.0, 0.3, 1.5, 0.0, 0.5, 0.4, 0.5, 0.0, 0.0),
+            (0.5, 0.6, 2.0, 0.5, 0.3, 0.6, 1.0, 0.0, 0.0),
+            (1.0, 0.25, 1.3, 1.0, 0.8, 0.3, 0.0, 0.5, 0.0),
+            (0.3, 0.8, 1.8, 0.7, 1.0, 0.8, 0.7, 0.0, 0.5),
+            (0.0, 0.3, 1.5, 1.0, 0.2, 0.5, 0.3, 0.0, 0.0),
+        ]
+    ]
 
     @pytest.mark.parametrize("case", range(len(CASES)))
     def test_quadrature_of_eval_is_one(self, case):
@@ -95,7 +143,7 @@ class TestPdf:
     def test_mixture_pdf_integrates_to_one_over_the_sphere(self, name, mu):
         s = OpenPBRSurface(**STACKS[name])
         wi, w = sphere_rule(mu, 64)
-        assert np.sum(s.pdf(_wo(mu), wi) * w) == pytest.approx(1.0, abs=5e-6)   # reached: 6.1e-7
+        assert np.sum(s.pdf(_wo(mu), wi) * w) == pytest.approx(1.0, abs=5e-6)  # reached: 6.1e-7
 
     @pytest.mark.parametrize("name", ["coated", "transmissive", "everything"])
     def test_sampler_matches_pdf_chi2(self, rng, name):
@@ -103,8 +151,9 @@ class TestPdf:
         wo = _wo(0.4)
         z_edges = np.unique(np.concatenate([np.linspace(-1, 1, 25), [-0.4, 0.0, 0.4]]))
         phi_edges = np.linspace(-math.pi, math.pi, 49)
-        pval, chi2, dof, mass = chi2_test(lambda m: s.sample(wo, rng.random((m, 3))), lambda wi: s.pdf(wo, wi),
-                                          200_000, z_edges, phi_edges, nq=8)
+        pval, chi2, dof, mass = chi2_test(
+            lambda m: s.sample(wo, rng.random((m, 3))), lambda wi: s.pdf(wo, wi), 200_000, z_edges, phi_edges, nq=8
+        )
         assert mass == pytest.approx(1.0, rel=1e-4)
         assert pval > 1e-3, (chi2, dof)
 
@@ -122,7 +171,7 @@ class TestAlbedo:
     @pytest.mark.parametrize("mu", (0.25, 0.8))
     def test_albedo_equals_quadrature_of_eval(self, name, mu):
         s = OpenPBRSurface(**STACKS[name])
-        assert np.allclose(s.albedo(_wo(mu)), sphere_albedo(s, mu), atol=1e-4)   # reached: 1.1e-5
+        assert np.allclose(s.albedo(_wo(mu)), sphere_albedo(s, mu), atol=1e-4)  # reached: 1.1e-5
 
     @pytest.mark.parametrize("name", list(STACKS))
     def test_lobe_albedos_equal_quadrature_of_their_bsdfs(self, name):
@@ -163,9 +212,9 @@ def base_substrate_numpy(p, wi, wo):
     ms_m = 1.0 + F0m * ((1.0 - E1) / E1)[..., None]
     m, c = ggx.microfacet_terms(wi, wo, alpha)
     node = OrenNayarDiffuseBSDF(1.0, bc, p["base_diffuse_roughness"], True)
-    f = (M * sw * fresnel.fresnel_f82_tint(c, F0m, sc) * ms_m * m[..., None]
-         + (1 - M) * (sc * (fresnel.fresnel_dielectric(c, eta) * ms_s * m)[..., None]
-                      + ((1 - Es) * bw)[..., None] * node.eval(wi, wo)))
+    f = M * sw * fresnel.fresnel_f82_tint(c, F0m, sc) * ms_m * m[..., None] + (1 - M) * (
+        sc * (fresnel.fresnel_dielectric(c, eta) * ms_s * m)[..., None] + ((1 - Es) * bw)[..., None] * node.eval(wi, wo)
+    )
     w_d = ((1 - M) * bw * (1 - Es))[..., None] * np.ones(3)
     E_d = node.albedo(wo)
     E_m = spec_tables.f82_albedo(mu_o, r, F0m, sc) * ms_m
@@ -174,23 +223,54 @@ def base_substrate_numpy(p, wi, wo):
 
 
 class TestReducesToTheBaseSubstrate:
-    @pytest.mark.parametrize("p", [
-        dict(base_color=(0.9, 0.5, 0.2), base_diffuse_roughness=1.0, specular_roughness=0.5, base_metalness=0.0,
-             base_weight=1.0, specular_weight=1.0, specular_color=(1, 1, 1), specular_ior=1.5),
-        dict(base_color=(0.3, 0.6, 0.9), base_diffuse_roughness=0.4, specular_roughness=0.6, base_metalness=0.5,
-             base_weight=0.8, specular_weight=0.6, specular_color=(1.0, 0.9, 0.8), specular_ior=1.8)])
+    @pytest.mark.parametrize(
+        "p",
+        [
+            dict(
+                base_color=(0.9, 0.5, 0.2),
+                base_diffuse_roughness=1.0,
+                specular_roughness=0.5,
+                base_metalness=0.0,
+                base_weight=1.0,
+                specular_weight=1.0,
+                specular_color=(1, 1, 1),
+                specular_ior=1.5,
+            ),
+            dict(
+                base_color=(0.3, 0.6, 0.9),
+                base_diffuse_roughness=0.4,
+                specular_roughness=0.6,
+                base_metalness=0.5,
+                base_weight=0.8,
+                specular_weight=0.6,
+                specular_color=(1.0, 0.9, 0.8),
+                specular_ior=1.8,
+            ),
+        ],
+    )
     def test_layers_at_zero_weight_give_the_base_substrate(self, rng, p):
-        s = OpenPBRSurface(**p, coat_weight=0.0, fuzz_weight=0.0, subsurface_weight=0.0, transmission_weight=0.0,
-                           coat_roughness=0.7, coat_ior=2.0, fuzz_roughness=0.2)
-        wi = rng.normal(size=(400, 3)); wi /= np.linalg.norm(wi, axis=1, keepdims=True)
-        wo = rng.normal(size=(400, 3)); wo /= np.linalg.norm(wo, axis=1, keepdims=True)
+        s = OpenPBRSurface(
+            **p,
+            coat_weight=0.0,
+            fuzz_weight=0.0,
+            subsurface_weight=0.0,
+            transmission_weight=0.0,
+            coat_roughness=0.7,
+            coat_ior=2.0,
+            fuzz_roughness=0.2,
+        )
+        wi = rng.normal(size=(400, 3))
+        wi /= np.linalg.norm(wi, axis=1, keepdims=True)
+        wo = rng.normal(size=(400, 3))
+        wo /= np.linalg.norm(wo, axis=1, keepdims=True)
         wo[:, 2] = np.abs(wo[:, 2]) + 0.02
         wo /= np.linalg.norm(wo, axis=1, keepdims=True)
         f, E = base_substrate_numpy(p, wi, wo)
         assert np.allclose(s.eval(wi, wo), f, rtol=1e-9, atol=1e-12)
         assert np.allclose(s.albedo(wo), E, rtol=1e-9, atol=1e-12)
-        assert [lb.name for lb in s.lobes(wo)] == (["diffuse", "specular", "metal"] if p["base_metalness"] else
-                                                    ["diffuse", "specular"])
+        assert [lb.name for lb in s.lobes(wo)] == (
+            ["diffuse", "specular", "metal"] if p["base_metalness"] else ["diffuse", "specular"]
+        )
 
 
 # ----------------------------------------------------------------------------- the diffuse weight
@@ -215,17 +295,30 @@ def coat_albedo_by_quadrature(mu, roughness, ior):
 
 def sheen_albedo_by_quadrature(mu, roughness):
     """E of the sheen lobe R D(wi)/mu_i by quadrature of its LTC density."""
+
     def brdf(wi, wo):
         d = np.vectorize(sheen.sheen_density)(wi[..., 0], wi[..., 1], wi[..., 2], mu, roughness)
         return sheen.sheen_albedo(mu, roughness) * d / np.maximum(wi[..., 2], 1e-300)
+
     return _gl_hemisphere_albedo(brdf, mu, n=48)
 
 
 class TestDiffuseWeight:
     def test_coated_fuzzy_diffuse_weight_is_the_product_of_the_spec_factors(self):
-        p = dict(base_color=np.array([0.7, 0.5, 0.3]), base_weight=0.9, base_diffuse_roughness=0.5,
-                 specular_roughness=0.4, specular_ior=1.5, coat_weight=0.7, coat_roughness=0.3, coat_ior=1.6,
-                 coat_color=np.array([0.9, 0.85, 0.8]), coat_darkening=0.6, fuzz_weight=0.5, fuzz_roughness=0.4)
+        p = dict(
+            base_color=np.array([0.7, 0.5, 0.3]),
+            base_weight=0.9,
+            base_diffuse_roughness=0.5,
+            specular_roughness=0.4,
+            specular_ior=1.5,
+            coat_weight=0.7,
+            coat_roughness=0.3,
+            coat_ior=1.6,
+            coat_color=np.array([0.9, 0.85, 0.8]),
+            coat_darkening=0.6,
+            fuzz_weight=0.5,
+            fuzz_roughness=0.4,
+        )
         s = OpenPBRSurface(**p)
         mu = 0.6
         (diffuse,) = [lb for lb in s.lobes(_wo(mu)) if lb.name == "diffuse"]
@@ -233,15 +326,16 @@ class TestDiffuseWeight:
         # the spec's terms (OpenPBR 1.1 "Coat", "Fuzz", "Glossy-diffuse"; graph node names)
         E_fuzz = sheen_albedo_by_quadrature(mu, p["fuzz_roughness"])
         E_coat = coat_albedo_by_quadrature(mu, p["coat_roughness"], p["coat_ior"])
-        r_eff = (1 - C) * p["specular_roughness"] + C * min(1.0, 2 * p["coat_roughness"] ** 4
-                                                              + p["specular_roughness"] ** 4) ** 0.25
-        eta_s = (1 - C) * p["specular_ior"] + C * p["coat_ior"] / p["specular_ior"]   # ior ratio < 1: inverted
+        r_eff = (1 - C) * p["specular_roughness"] + C * min(
+            1.0, 2 * p["coat_roughness"] ** 4 + p["specular_roughness"] ** 4
+        ) ** 0.25
+        eta_s = (1 - C) * p["specular_ior"] + C * p["coat_ior"] / p["specular_ior"]  # ior ratio < 1: inverted
         E_spec = coat_albedo_by_quadrature(mu, r_eff, eta_s)
         F0c = ((p["coat_ior"] - 1) / (p["coat_ior"] + 1)) ** 2
         K = 1 - (1 - F0c) / p["coat_ior"] ** 2
         darkening = 1 + C * p["coat_darkening"] * ((1 - K) / (1 - p["base_color"] * K) - 1)
         attenuation = 1 + C * (p["coat_color"] - 1)
-        want = ((1 - F * E_fuzz) * (1 - C * E_coat) * attenuation * darkening * (1 - E_spec) * p["base_weight"])
+        want = (1 - F * E_fuzz) * (1 - C * E_coat) * attenuation * darkening * (1 - E_spec) * p["base_weight"]
         assert np.allclose(diffuse.weight, want, rtol=5e-4)
         # the probability is its share of |w E| (lengths), E the EON albedo
         scores = {lb.name: np.linalg.norm(lb.weight * lb.albedo) for lb in s.lobes(_wo(mu))}
@@ -268,15 +362,24 @@ class TestInputs:
     def test_modelled_layers_are_not_reported(self):
         with warnings.catch_warnings():
             warnings.simplefilter("error")
-            s = OpenPBRSurface(coat_weight=0.5, fuzz_weight=0.3, transmission_weight=0.2, subsurface_weight=0.1,
-                               geometry_thin_walled=True)
+            s = OpenPBRSurface(
+                coat_weight=0.5,
+                fuzz_weight=0.3,
+                transmission_weight=0.2,
+                subsurface_weight=0.1,
+                geometry_thin_walled=True,
+            )
         assert s.ignored_inputs == {}
 
     def test_array_materials_match_single_ones(self, rng):
         n = 4
-        p = dict(coat_weight=rng.uniform(0, 1, n), fuzz_weight=rng.uniform(0, 1, n),
-                 transmission_weight=rng.uniform(0, 1, n), base_color=rng.uniform(0, 1, (n, 3)),
-                 coat_roughness=rng.uniform(0.2, 1, n))
+        p = dict(
+            coat_weight=rng.uniform(0, 1, n),
+            fuzz_weight=rng.uniform(0, 1, n),
+            transmission_weight=rng.uniform(0, 1, n),
+            base_color=rng.uniform(0, 1, (n, 3)),
+            coat_roughness=rng.uniform(0.2, 1, n),
+        )
         s = OpenPBRSurface(**p)
         wo = np.stack([_wo(m) for m in rng.uniform(0.1, 1, n)])
         wi = np.stack([_wo(m) for m in rng.uniform(-1, 1, n)]) * np.array([-1.0, 1.0, 1.0])

@@ -27,6 +27,7 @@ approx, eval exact, MIS sample + approx eval), the target, and the peak extra
 memory of the call (tracemalloc peak, which sees NumPy's allocations, minus the returned
 arrays) in multiples of the returned arrays' size.
 """
+
 import argparse
 import json
 import os
@@ -42,16 +43,15 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-C_SOURCE_CANDIDATES = (ROOT.parent / "shared" / "bench" / "eon_scalar.c",
-                       ROOT / "shared" / "bench" / "eon_scalar.c")
+C_SOURCE_CANDIDATES = (ROOT.parent / "shared" / "bench" / "eon_scalar.c", ROOT / "shared" / "bench" / "eon_scalar.c")
 
 #: Issue 6 targets.
-TARGET_EVAL_RATIO = 0.5        # evaluate("eon_approx"/"eon") <= 0.5 x C (approx/exact)
-TARGET_SAMPLE_RATIO = 0.5      # sample("eon") + eval <= 0.5 x C sample
-TARGET_ALBEDO_APPROX = 100e6   # directional_albedo("eon_approx") queries per second
-TARGET_ALBEDO_EXACT = 30e6     # other closed forms
-TARGET_F64_RATIO = 2.0         # float64 time <= 2 x float32 time
-TARGET_MEM = 3.0               # peak extra memory <= 3 x output size
+TARGET_EVAL_RATIO = 0.5  # evaluate("eon_approx"/"eon") <= 0.5 x C (approx/exact)
+TARGET_SAMPLE_RATIO = 0.5  # sample("eon") + eval <= 0.5 x C sample
+TARGET_ALBEDO_APPROX = 100e6  # directional_albedo("eon_approx") queries per second
+TARGET_ALBEDO_EXACT = 30e6  # other closed forms
+TARGET_F64_RATIO = 2.0  # float64 time <= 2 x float32 time
+TARGET_MEM = 3.0  # peak extra memory <= 3 x output size
 TARGET_IMPORT_S = 1.0
 TARGET_FIRST_CALL_S = 2.0
 #: Models whose evaluation must be no slower than "eon_approx" (timed in alternation with
@@ -61,6 +61,7 @@ TOLERANCE_AS_FAST = 1.05
 
 
 # --------------------------------------------------------------------------- C yardstick
+
 
 def c_source():
     for p in C_SOURCE_CANDIDATES:
@@ -86,8 +87,9 @@ def run_c(n, reps=20, runs=1):
             return {"skipped": f"C build failed: {proc.stderr.strip()[:200]}"}
         best = {}
         for _ in range(runs):
-            out = subprocess.run([str(exe), str(n), str(reps)], capture_output=True, text=True,
-                                 check=True).stdout.split()
+            out = subprocess.run(
+                [str(exe), str(n), str(reps)], capture_output=True, text=True, check=True
+            ).stdout.split()
             for k, v in zip(out[::2], out[1::2]):
                 if k.endswith("_ns"):
                     best[k] = min(best.get(k, np.inf), float(v))
@@ -105,6 +107,7 @@ def _merge_c(a, b):
 
 # --------------------------------------------------------------------------- inputs
 
+
 def inputs(n, dtype, seed=1):
     """Random inputs with the C program's distribution."""
     rng = np.random.default_rng(seed)
@@ -118,11 +121,12 @@ def inputs(n, dtype, seed=1):
     wi, wo = dirs(), dirs()
     rho = rng.random((n, 3)).astype(dtype)
     r = rng.random(n).astype(dtype)
-    u = np.minimum(rng.random((n, 2)), 1.0 - 2.0 ** -24).astype(dtype)
+    u = np.minimum(rng.random((n, 2)), 1.0 - 2.0**-24).astype(dtype)
     return {"wi": wi, "wo": wo, "rho": rho, "r": r, "u": u, "mu": wo[:, 2].copy()}
 
 
 # --------------------------------------------------------------------------- timing
+
 
 def best_time(fn, reps):
     """Best wall time of ``reps`` calls after one warm-up call."""
@@ -176,9 +180,19 @@ def peak_extra(fn):
 
 def _row(kind, name, dtype, n, seconds, mem, ref_name=None, ref_ns=None, target=None, ok=None, **extra):
     ns = seconds / n * 1e9
-    row = {"kind": kind, "name": name, "dtype": np.dtype(dtype).name, "n": n, "ns": ns,
-           "rate_per_s": n / seconds, "mem_extra_x": mem, "ref": ref_name,
-           "ratio": (ns / ref_ns) if ref_ns else None, "target": target, "ok": ok}
+    row = {
+        "kind": kind,
+        "name": name,
+        "dtype": np.dtype(dtype).name,
+        "n": n,
+        "ns": ns,
+        "rate_per_s": n / seconds,
+        "mem_extra_x": mem,
+        "ref": ref_name,
+        "ratio": (ns / ref_ns) if ref_ns else None,
+        "target": target,
+        "ok": ok,
+    }
     row.update(extra)
     return row
 
@@ -205,38 +219,49 @@ def python_rows(n, reps, c, dtypes=(np.float32, np.float64)):
         x = inputs(n, dtype)
         # evaluate, every model
         for model in od.MODELS:
+
             def call(model=model):
                 return od.evaluate(model, x["wi"], x["wo"], x["r"], x["rho"])
+
             t = best_time(call, reps)
             ref = {"eon_approx": ("C eval approx", c_approx), "eon": ("C eval exact", c_exact)}.get(
-                model, ("C eval approx", c_approx))
+                model, ("C eval approx", c_approx)
+            )
             target = ok = None
             if model in ("eon_approx", "eon") and ref[1]:
                 target = f"<= {TARGET_EVAL_RATIO} x {ref[0]}"
                 ok = t / n * 1e9 <= TARGET_EVAL_RATIO * ref[1]
             rows.append(_row("evaluate", model, dtype, n, t, peak_extra(call), *ref, target, ok))
+
         # "no slower than eon_approx": both are mostly memory-bound, so compare them in
         # alternation (same machine state), best of each
         def eon_approx():
             return od.evaluate("eon_approx", x["wi"], x["wo"], x["r"], x["rho"])
+
         for row in rows:
-            if row["kind"] == "evaluate" and row["dtype"] == np.dtype(dtype).name \
-                    and row["name"] in AS_FAST_AS_EON_APPROX:
+            if (
+                row["kind"] == "evaluate"
+                and row["dtype"] == np.dtype(dtype).name
+                and row["name"] in AS_FAST_AS_EON_APPROX
+            ):
+
                 def call(model=row["name"]):
                     return od.evaluate(model, x["wi"], x["wo"], x["r"], x["rho"])
+
                 t_model, t_eon = paired_best_time(call, eon_approx, reps)
                 row["target"] = f"<= {TOLERANCE_AS_FAST:g} x evaluate eon_approx"
                 row["vs_eon_approx"] = t_model / t_eon
                 row["ok"] = row["vs_eon_approx"] <= TOLERANCE_AS_FAST
         # directional albedo, every model
         for model in od.MODELS:
+
             def call(model=model):
                 return od.directional_albedo(model, x["mu"], x["r"], x["rho"])
+
             try:
                 t = best_time(call, reps)
             except (FileNotFoundError, ImportError) as exc:  # table-based albedo not available
-                rows.append({"kind": "albedo", "name": model, "dtype": np.dtype(dtype).name,
-                             "skipped": str(exc)[:120]})
+                rows.append({"kind": "albedo", "name": model, "dtype": np.dtype(dtype).name, "skipped": str(exc)[:120]})
                 continue
             target = ok = None
             if model == "eon_approx":
@@ -246,16 +271,17 @@ def python_rows(n, reps, c, dtypes=(np.float32, np.float64)):
             rows.append(_row("albedo", model, dtype, n, t, peak_extra(call), None, None, target, ok))
         # sampling + evaluation of EON (the C program's approx eval) in the sampled direction
         for strategy in strategies:
+
             def call(strategy=strategy):
                 wi, pdf = sample(strategy, x["wo"], x["r"], x["u"])
                 return wi, pdf, od.evaluate("eon_approx", wi, x["wo"], x["r"], x["rho"])
+
             t = best_time(call, reps)
             target = ok = None
             if strategy == "eon" and c_sample:
                 target = f"<= {TARGET_SAMPLE_RATIO} x C sample"
                 ok = t / n * 1e9 <= TARGET_SAMPLE_RATIO * c_sample
-            rows.append(_row("sample+eval", strategy, dtype, n, t, peak_extra(call),
-                             "C sample", c_sample, target, ok))
+            rows.append(_row("sample+eval", strategy, dtype, n, t, peak_extra(call), "C sample", c_sample, target, ok))
     # float64 vs float32, and the memory bound
     by = {(r["kind"], r["name"], r["dtype"]): r for r in rows if "ns" in r}
     for (kind, name, dt), r in by.items():
@@ -301,8 +327,8 @@ print(time.perf_counter() - t0)
 # --------------------------------------------------------------------------- the surface
 
 #: Issue 9 targets: time per row relative to OrenNayarDiffuseBSDF's of the same verb.
-TARGET_SURFACE_BASE = 5.0      # diffuse + specular + metal
-TARGET_SURFACE_STACK = 10.0    # + coat + fuzz
+TARGET_SURFACE_BASE = 5.0  # diffuse + specular + metal
+TARGET_SURFACE_STACK = 10.0  # + coat + fuzz
 TARGET_SURFACE_BUILD_S = 50e-6  # construct + lobes(wo) at one direction
 
 
@@ -312,38 +338,73 @@ def surface_rows(n, reps):
     from openpbr_diffuse import OpenPBRSurface, OrenNayarDiffuseBSDF
 
     x = inputs(n, np.float64, seed=9)
-    u3 = np.minimum(np.random.default_rng(9).random((n, 3)), 1.0 - 2.0 ** -53)
+    u3 = np.minimum(np.random.default_rng(9).random((n, 3)), 1.0 - 2.0**-53)
     node = OrenNayarDiffuseBSDF(1.0, (0.8, 0.5, 0.3), 0.7, True)
     base = dict(base_color=(0.8, 0.5, 0.3), base_diffuse_roughness=0.7, base_metalness=0.3, specular_roughness=0.4)
-    surfaces = {"base (diffuse+specular+metal)": (OpenPBRSurface(**base), TARGET_SURFACE_BASE),
-                "stack (+coat+fuzz)": (OpenPBRSurface(**base, coat_weight=0.6, coat_roughness=0.2,
-                                                      fuzz_weight=0.4, fuzz_roughness=0.5), TARGET_SURFACE_STACK)}
-    verbs = {"eval": (lambda o: o.eval(x["wi"], x["wo"])), "pdf": (lambda o: o.pdf(x["wo"], x["wi"])),
-             "sample": (lambda o: o.sample(x["wo"], x["u"])), "albedo": (lambda o: o.albedo(x["wo"]))}
+    surfaces = {
+        "base (diffuse+specular+metal)": (OpenPBRSurface(**base), TARGET_SURFACE_BASE),
+        "stack (+coat+fuzz)": (
+            OpenPBRSurface(**base, coat_weight=0.6, coat_roughness=0.2, fuzz_weight=0.4, fuzz_roughness=0.5),
+            TARGET_SURFACE_STACK,
+        ),
+    }
+    verbs = {
+        "eval": (lambda o: o.eval(x["wi"], x["wo"])),
+        "pdf": (lambda o: o.pdf(x["wo"], x["wi"])),
+        "sample": (lambda o: o.sample(x["wo"], x["u"])),
+        "albedo": (lambda o: o.albedo(x["wo"])),
+    }
     # construction first: after the 10^6-row calls the idle OpenMP threads spin for a while
     # and take the core the single-threaded construction runs on
     rows = []
     wo = np.array([0.6, 0.0, 0.8])
     for label, kw in (("base", base), ("stack", dict(base, coat_weight=0.6, fuzz_weight=0.4))):
+
         def build(kw=kw):
             OpenPBRSurface(**kw).lobes(wo)
+
         t = best_time(build, max(reps, 500))
-        rows.append({"kind": "surface.build+lobes", "name": label, "dtype": "float64", "n": 1, "ns": t * 1e9,
-                     "rate_per_s": 1.0 / t, "mem_extra_x": None, "ref": None, "ratio": None,
-                     "target": f"< {TARGET_SURFACE_BUILD_S * 1e6:g} us", "ok": t < TARGET_SURFACE_BUILD_S})
+        rows.append(
+            {
+                "kind": "surface.build+lobes",
+                "name": label,
+                "dtype": "float64",
+                "n": 1,
+                "ns": t * 1e9,
+                "rate_per_s": 1.0 / t,
+                "mem_extra_x": None,
+                "ref": None,
+                "ratio": None,
+                "target": f"< {TARGET_SURFACE_BUILD_S * 1e6:g} us",
+                "ok": t < TARGET_SURFACE_BUILD_S,
+            }
+        )
     for verb, call in verbs.items():
         # the node and both surfaces in turn within each repetition: the ratios compare
         # calls made under the same machine load (this VM's speed drifts by tens of percent)
-        calls = [lambda: call(node)] + [(lambda s=s: call(s) if verb != "sample" else s.sample(x["wo"], u3))
-                                        for s, _ in surfaces.values()]
+        calls = [lambda: call(node)] + [
+            (lambda s=s: call(s) if verb != "sample" else s.sample(x["wo"], u3)) for s, _ in surfaces.values()
+        ]
         times = interleaved_best_times(calls, reps)
         ref = times[0] / n * 1e9
         for (label, (s, bound)), t in zip(surfaces.items(), times[1:]):
             ns = t / n * 1e9
-            rows.append({"kind": f"surface.{verb}", "name": label, "dtype": "float64", "n": n, "ns": ns,
-                         "rate_per_s": n / t, "mem_extra_x": None, "ref": "OrenNayarDiffuseBSDF",
-                         "ref_ns": ref, "ratio": ns / ref, "target": f"<= {bound:g} x node",
-                         "ok": ns / ref <= bound})
+            rows.append(
+                {
+                    "kind": f"surface.{verb}",
+                    "name": label,
+                    "dtype": "float64",
+                    "n": n,
+                    "ns": ns,
+                    "rate_per_s": n / t,
+                    "mem_extra_x": None,
+                    "ref": "OrenNayarDiffuseBSDF",
+                    "ref_ns": ref,
+                    "ratio": ns / ref,
+                    "target": f"<= {bound:g} x node",
+                    "ok": ns / ref <= bound,
+                }
+            )
     return rows
 
 
@@ -365,12 +426,22 @@ def startup(cold=True):
         for label, e in runs:
             best_imp = best_first = np.inf
             for _ in range(1 if label == "cold" else 3):
-                out = subprocess.run([sys.executable, "-c", _STARTUP_SCRIPT], env=e, capture_output=True,
-                                     text=True, check=True).stdout.split()
+                out = subprocess.run(
+                    [sys.executable, "-c", _STARTUP_SCRIPT], env=e, capture_output=True, text=True, check=True
+                ).stdout.split()
                 best_imp, best_first = min(best_imp, float(out[0])), min(best_first, float(out[1]))
-            surface = min(float(subprocess.run([sys.executable, "-c", _SURFACE_STARTUP_SCRIPT], env=e,
-                                               capture_output=True, text=True, check=True).stdout.split()[-1])
-                          for _ in range(1 if label == "cold" else 2))
+            surface = min(
+                float(
+                    subprocess.run(
+                        [sys.executable, "-c", _SURFACE_STARTUP_SCRIPT],
+                        env=e,
+                        capture_output=True,
+                        text=True,
+                        check=True,
+                    ).stdout.split()[-1]
+                )
+                for _ in range(1 if label == "cold" else 2)
+            )
             res[label] = {"import_s": best_imp, "first_call_s": best_first, "surface_first_use_s": surface}
     finally:
         if tmp:
@@ -383,15 +454,23 @@ def startup(cold=True):
 
 # --------------------------------------------------------------------------- driver
 
+
 def environment():
     import numba
 
     import openpbr_diffuse as od
 
-    return {"python": platform.python_version(), "numpy": np.__version__, "numba": numba.__version__,
-            "openpbr_diffuse": od.__version__, "threads": numba.get_num_threads(),
-            "threading_layer": _threading_layer(), "cpu": _cpu_name(), "cores": os.cpu_count(),
-            "machine": platform.machine()}
+    return {
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "numba": numba.__version__,
+        "openpbr_diffuse": od.__version__,
+        "threads": numba.get_num_threads(),
+        "threading_layer": _threading_layer(),
+        "cpu": _cpu_name(),
+        "cores": os.cpu_count(),
+        "machine": platform.machine(),
+    }
 
 
 def _threading_layer():
@@ -413,8 +492,9 @@ def _cpu_name():
     return platform.processor()
 
 
-def run_bench(n=1_000_000, reps=15, c_reps=20, dtypes=(np.float32, np.float64), with_c=True,
-              with_startup=True, cold_start=True):
+def run_bench(
+    n=1_000_000, reps=15, c_reps=20, dtypes=(np.float32, np.float64), with_c=True, with_startup=True, cold_start=True
+):
     """Run everything; returns a JSON-serialisable dict (``rows``, ``c``, ``startup``, ``env``)."""
     c_before = run_c(n, c_reps) if with_c else {"skipped": "disabled"}
     rows = python_rows(n, reps, c_before if "skipped" not in c_before else None, dtypes)
@@ -424,8 +504,11 @@ def run_bench(n=1_000_000, reps=15, c_reps=20, dtypes=(np.float32, np.float64), 
         c = _merge_c(c_before, run_c(n, c_reps))
         # ratios against the best C time of both runs
         for r in rows:
-            ref = {"C eval approx": c.get("eval_approx_ns"), "C eval exact": c.get("eval_exact_ns"),
-                   "C sample": c.get("sample_mis_ns")}.get(r.get("ref"))
+            ref = {
+                "C eval approx": c.get("eval_approx_ns"),
+                "C eval exact": c.get("eval_exact_ns"),
+                "C sample": c.get("sample_mis_ns"),
+            }.get(r.get("ref"))
             if ref and "ns" in r:
                 r["ratio"] = r["ns"] / ref
                 if r["name"] in ("eon_approx", "eon") and r["kind"] == "evaluate":
@@ -452,33 +535,72 @@ def summary(result):
             value = f"{r['ratio']:.2f} x node" if r["ratio"] is not None else f"{r['ns'] / 1e3:.1f} us"
             out.append({"what": f"{r['kind']} {r['name']}", "value": value, "target": r["target"], "ok": bool(r["ok"])})
         elif r.get("ok") is not None:
-            value = f"{r['ratio']:.2f} x C" if r.get("ref") and "C" in (r["target"] or "") and r["ratio"] \
-                else (f"{r['rate_per_s'] / 1e6:.0f} M/s" if r["kind"] == "albedo"
-                      else f"{r.get('vs_eon_approx', 0):.2f} x eon_approx")
-            out.append({"what": f"{r['kind']} {r['name']} {r['dtype']}", "value": value,
-                        "target": r["target"], "ok": bool(r["ok"])})
+            value = (
+                f"{r['ratio']:.2f} x C"
+                if r.get("ref") and "C" in (r["target"] or "") and r["ratio"]
+                else (
+                    f"{r['rate_per_s'] / 1e6:.0f} M/s"
+                    if r["kind"] == "albedo"
+                    else f"{r.get('vs_eon_approx', 0):.2f} x eon_approx"
+                )
+            )
+            out.append(
+                {
+                    "what": f"{r['kind']} {r['name']} {r['dtype']}",
+                    "value": value,
+                    "target": r["target"],
+                    "ok": bool(r["ok"]),
+                }
+            )
     f64 = [r for r in result["rows"] if "f64_over_f32" in r]
     if f64:
         worst = max(f64, key=lambda r: r["f64_over_f32"])
-        out.append({"what": "float64 / float32 time (worst call)", "value":
-                    f"{worst['f64_over_f32']:.2f} ({worst['kind']} {worst['name']})",
-                    "target": f"<= {TARGET_F64_RATIO:g}", "ok": worst["f64_over_f32"] <= TARGET_F64_RATIO})
+        out.append(
+            {
+                "what": "float64 / float32 time (worst call)",
+                "value": f"{worst['f64_over_f32']:.2f} ({worst['kind']} {worst['name']})",
+                "target": f"<= {TARGET_F64_RATIO:g}",
+                "ok": worst["f64_over_f32"] <= TARGET_F64_RATIO,
+            }
+        )
     mem = [r for r in result["rows"] if r.get("mem_extra_x") is not None]
     if mem:
         worst = max(mem, key=lambda r: r["mem_extra_x"])
-        out.append({"what": "peak extra memory / output (worst call)", "value":
-                    f"{worst['mem_extra_x']:.2f} ({worst['kind']} {worst['name']} {worst['dtype']})",
-                    "target": f"<= {TARGET_MEM:g}", "ok": worst["mem_extra_x"] <= TARGET_MEM})
+        out.append(
+            {
+                "what": "peak extra memory / output (worst call)",
+                "value": f"{worst['mem_extra_x']:.2f} ({worst['kind']} {worst['name']} {worst['dtype']})",
+                "target": f"<= {TARGET_MEM:g}",
+                "ok": worst["mem_extra_x"] <= TARGET_MEM,
+            }
+        )
     s = result.get("startup")
     if s:
         w = s["warm"]
-        out.append({"what": "import openpbr_diffuse", "value": f"{w['import_s']:.2f} s",
-                    "target": f"< {TARGET_IMPORT_S:g} s", "ok": w["import_ok"]})
-        out.append({"what": "first evaluate() in a fresh process (warm cache)", "value": f"{w['first_call_s']:.2f} s",
-                    "target": f"< {TARGET_FIRST_CALL_S:g} s", "ok": w["first_call_ok"]})
-        out.append({"what": "first OpenPBRSurface use, every verb (warm cache)",
-                    "value": f"{w['surface_first_use_s']:.2f} s", "target": f"< {TARGET_FIRST_CALL_S:g} s",
-                    "ok": w["surface_first_use_s"] < TARGET_FIRST_CALL_S})
+        out.append(
+            {
+                "what": "import openpbr_diffuse",
+                "value": f"{w['import_s']:.2f} s",
+                "target": f"< {TARGET_IMPORT_S:g} s",
+                "ok": w["import_ok"],
+            }
+        )
+        out.append(
+            {
+                "what": "first evaluate() in a fresh process (warm cache)",
+                "value": f"{w['first_call_s']:.2f} s",
+                "target": f"< {TARGET_FIRST_CALL_S:g} s",
+                "ok": w["first_call_ok"],
+            }
+        )
+        out.append(
+            {
+                "what": "first OpenPBRSurface use, every verb (warm cache)",
+                "value": f"{w['surface_first_use_s']:.2f} s",
+                "target": f"< {TARGET_FIRST_CALL_S:g} s",
+                "ok": w["surface_first_use_s"] < TARGET_FIRST_CALL_S,
+            }
+        )
     return out
 
 
@@ -491,15 +613,20 @@ def format_table(result):
     c = result["c"]
     lines = []
     env = result["env"]
-    lines.append(f"openpbr-diffuse {env['openpbr_diffuse']}  numba {env['numba']}  numpy {env['numpy']}  "
-                 f"threads {env['threads']} ({env['threading_layer']})  cpu {env['cpu']}  n = {result['n']}")
+    lines.append(
+        f"openpbr-diffuse {env['openpbr_diffuse']}  numba {env['numba']}  numpy {env['numpy']}  "
+        f"threads {env['threads']} ({env['threading_layer']})  cpu {env['cpu']}  n = {result['n']}"
+    )
     if "skipped" in c:
         lines.append(f"C yardstick: skipped ({c['skipped']})")
     else:
-        lines.append(f"C yardstick ({c['command']}): eval approx {c['eval_approx_ns']:.2f} ns, "
-                     f"eval exact {c['eval_exact_ns']:.2f} ns, MIS sample + eval {c['sample_mis_ns']:.2f} ns")
-    head = f"{'call':<12} {'name':<18} {'dtype':<8} {'ns/call':>8} {'M/s':>8} {'xC':>6} {'f64/f32':>7} " \
-           f"{'mem':>5}  target"
+        lines.append(
+            f"C yardstick ({c['command']}): eval approx {c['eval_approx_ns']:.2f} ns, "
+            f"eval exact {c['eval_exact_ns']:.2f} ns, MIS sample + eval {c['sample_mis_ns']:.2f} ns"
+        )
+    head = (
+        f"{'call':<12} {'name':<18} {'dtype':<8} {'ns/call':>8} {'M/s':>8} {'xC':>6} {'f64/f32':>7} {'mem':>5}  target"
+    )
     lines += [head, "-" * len(head)]
     for r in result["rows"]:
         if "skipped" in r:
@@ -510,25 +637,33 @@ def format_table(result):
             verdict += "  f64/f32 > 2: MISSED"
         if r.get("mem_ok") is False:
             verdict += "  memory > 3x: MISSED"
-        lines.append(f"{r['kind']:<12} {r['name']:<18} {r['dtype']:<8} {r['ns']:>8.2f} "
-                     f"{r['rate_per_s'] / 1e6:>8.1f} {_fmt(r['ratio'], '6.2f'):>6} "
-                     f"{_fmt(r.get('f64_over_f32'), '7.2f'):>7} {_fmt(r['mem_extra_x'], '5.2f'):>5}  {verdict}")
+        lines.append(
+            f"{r['kind']:<12} {r['name']:<18} {r['dtype']:<8} {r['ns']:>8.2f} "
+            f"{r['rate_per_s'] / 1e6:>8.1f} {_fmt(r['ratio'], '6.2f'):>6} "
+            f"{_fmt(r.get('f64_over_f32'), '7.2f'):>7} {_fmt(r['mem_extra_x'], '5.2f'):>5}  {verdict}"
+        )
     s = result.get("startup")
     if s:
         w = s["warm"]
-        lines.append(f"import openpbr_diffuse: {w['import_s']:.3f} s (target < {TARGET_IMPORT_S:g} s: "
-                     f"{'ok' if w['import_ok'] else 'MISSED'}); first evaluate() in a fresh process, warm "
-                     f"cache: {w['first_call_s']:.3f} s (target < {TARGET_FIRST_CALL_S:g} s: "
-                     f"{'ok' if w['first_call_ok'] else 'MISSED'})")
+        lines.append(
+            f"import openpbr_diffuse: {w['import_s']:.3f} s (target < {TARGET_IMPORT_S:g} s: "
+            f"{'ok' if w['import_ok'] else 'MISSED'}); first evaluate() in a fresh process, warm "
+            f"cache: {w['first_call_s']:.3f} s (target < {TARGET_FIRST_CALL_S:g} s: "
+            f"{'ok' if w['first_call_ok'] else 'MISSED'})"
+        )
         lines.append(f"first OpenPBRSurface use, every verb, 10^4 rows, warm cache: {w['surface_first_use_s']:.2f} s")
         if "cold" in s:
-            lines.append(f"first evaluate() with an empty numba cache (compiles): {s['cold']['first_call_s']:.1f} s "
-                         f"(import {s['cold']['import_s']:.2f} s); first OpenPBRSurface use, every verb: "
-                         f"{s['cold']['surface_first_use_s']:.1f} s")
+            lines.append(
+                f"first evaluate() with an empty numba cache (compiles): {s['cold']['first_call_s']:.1f} s "
+                f"(import {s['cold']['import_s']:.2f} s); first OpenPBRSurface use, every verb: "
+                f"{s['cold']['surface_first_use_s']:.1f} s"
+            )
     targets = result.get("targets") or []
     missed = [t for t in targets if not t["ok"]]
-    lines.append(f"targets: {len(targets) - len(missed)} of {len(targets)} met"
-                 + "".join(f"\n  MISSED {t['what']}: {t['value']} (target {t['target']})" for t in missed))
+    lines.append(
+        f"targets: {len(targets) - len(missed)} of {len(targets)} met"
+        + "".join(f"\n  MISSED {t['what']}: {t['value']} (target {t['target']})" for t in missed)
+    )
     return "\n".join(lines)
 
 
@@ -559,7 +694,9 @@ def _child_cpu(cmd, env, cwd):
 
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t = time.perf_counter()
-    done = subprocess.run(cmd, env=env, cwd=cwd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, check=False)
+    done = subprocess.run(
+        cmd, env=env, cwd=cwd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, check=False
+    )
     wall = time.perf_counter() - t
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
@@ -584,25 +721,41 @@ def cold_budgets(names=None) -> list:
         env = dict(os.environ, PYTHONPATH=str(root) + os.pathsep + os.environ.get("PYTHONPATH", ""))
         vectors = Path(tmp) / "vectors.csv"
         # the graded file is made beforehand, with a cache of its own (not counted)
-        subprocess.run([sys.executable, "-c", _VECTORS_WITH_RESULTS, str(vectors)], check=True, cwd=tmp,
-                       env=dict(env, NUMBA_CACHE_DIR=tempfile.mkdtemp(dir=tmp)))
+        subprocess.run(
+            [sys.executable, "-c", _VECTORS_WITH_RESULTS, str(vectors)],
+            check=True,
+            cwd=tmp,
+            env=dict(env, NUMBA_CACHE_DIR=tempfile.mkdtemp(dir=tmp)),
+        )
         for label, args, budget in COLD_BUDGETS:
             if names and label not in names:
                 continue
             cache = tempfile.mkdtemp(prefix="numba-", dir=tmp)
-            cmd = [sys.executable, "-m", "openpbr_diffuse",
-                   *(a.format(vectors=vectors, root=root, tmp=tmp) for a in args)]
+            cmd = [
+                sys.executable,
+                "-m",
+                "openpbr_diffuse",
+                *(a.format(vectors=vectors, root=root, tmp=tmp) for a in args),
+            ]
             cpu, wall, code, err = _child_cpu(cmd, dict(env, NUMBA_CACHE_DIR=cache), tmp)
             # check FILE exits 0 (conforms); every other command 0 too
-            out.append({"command": label, "cpu_s": cpu, "wall_s": wall, "budget_s": budget,
-                        "ok": code == 0 and cpu <= budget, "exit": code, "stderr": err if code else ""})
+            out.append(
+                {
+                    "command": label,
+                    "cpu_s": cpu,
+                    "wall_s": wall,
+                    "budget_s": budget,
+                    "ok": code == 0 and cpu <= budget,
+                    "exit": code,
+                    "stderr": err if code else "",
+                }
+            )
     return out
 
 
 def format_cold(rows: list) -> str:
     """The compile-budget table of ``cold_budgets``."""
-    lines = [f"{'command':<16} {'CPU s':>7} {'wall s':>7} {'budget':>7}  result",
-             "-" * 52]
+    lines = [f"{'command':<16} {'CPU s':>7} {'wall s':>7} {'budget':>7}  result", "-" * 52]
     for r in rows:
         verdict = "ok" if r["ok"] else (f"FAILED (exit {r['exit']}: {r['stderr'].strip()})" if r["exit"] else "MISSED")
         lines.append(f"{r['command']:<16} {r['cpu_s']:7.1f} {r['wall_s']:7.1f} {r['budget_s']:7.0f}  {verdict}")
@@ -621,9 +774,13 @@ def main(argv=None):
     p.add_argument("--no-startup", action="store_true", help="skip the fresh-process start-up timings")
     p.add_argument("--dtype", choices=("float32", "float64", "both"), default="both")
     p.add_argument("--surface-only", action="store_true", help="only the OpenPBRSurface rows")
-    p.add_argument("--cold", nargs="*", metavar="COMMAND",
-                   help="compile budgets: each CLI command in a fresh process with an empty numba cache, CPU s "
-                        "(optionally only the named commands, e.g. 'albedo' 'report --quick')")
+    p.add_argument(
+        "--cold",
+        nargs="*",
+        metavar="COMMAND",
+        help="compile budgets: each CLI command in a fresh process with an empty numba cache, CPU s "
+        "(optionally only the named commands, e.g. 'albedo' 'report --quick')",
+    )
     a = p.parse_args(argv)
     if a.cold is not None:
         rows = cold_budgets(a.cold or None)
@@ -634,16 +791,28 @@ def main(argv=None):
     n = a.n or (100_000 if a.quick else 1_000_000)
     reps = a.reps or (7 if a.quick else 15)
     if a.surface_only:
-        result = {"n": n, "reps": reps, "c": {"skipped": "--surface-only"}, "rows": surface_rows(n, reps),
-                  "env": environment()}
+        result = {
+            "n": n,
+            "reps": reps,
+            "c": {"skipped": "--surface-only"},
+            "rows": surface_rows(n, reps),
+            "env": environment(),
+        }
         result["targets"] = summary(result)
         print(format_table(result))
         if a.json:
             Path(a.json).write_text(json.dumps(result, indent=1, default=float) + "\n")
         return 0
     dtypes = (np.float32, np.float64) if a.dtype == "both" else (np.dtype(a.dtype).type,)
-    result = run_bench(n=n, reps=reps, c_reps=5 if a.quick else 20, dtypes=dtypes, with_c=not a.no_c,
-                       with_startup=not a.no_startup, cold_start=not a.quick)
+    result = run_bench(
+        n=n,
+        reps=reps,
+        c_reps=5 if a.quick else 20,
+        dtypes=dtypes,
+        with_c=not a.no_c,
+        with_startup=not a.no_startup,
+        cold_start=not a.quick,
+    )
     print(format_table(result))
     if a.json:
         Path(a.json).write_text(json.dumps(result, indent=1, default=float) + "\n")

@@ -8,6 +8,7 @@ own, with the reference values rounded to float32 as results), then runs
 (``resource.getrusage(RUSAGE_CHILDREN).ru_maxrss``), CPU seconds and wall seconds.  The file
 is removed afterwards.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -69,15 +70,31 @@ def main() -> int:
         print(f"wrote {a.rows} rows ({path.stat().st_size / 2**20:.0f} MB) in {time.time() - t:.1f} s")
         env = dict(os.environ, PYTHONPATH=str(ROOT))
         t = time.time()
-        r = subprocess.run([sys.executable, "-m", "openpbr_diffuse", "check", str(path), "--json"],
-                           capture_output=True, text=True, env=env)
+        r = subprocess.run(
+            [sys.executable, "-m", "openpbr_diffuse", "check", str(path), "--json"],
+            capture_output=True,
+            text=True,
+            env=env,
+        )
         wall = time.time() - t
         ru = resource.getrusage(resource.RUSAGE_CHILDREN)
         d = json.loads(r.stdout) if r.stdout.strip() else {}
-        print(json.dumps({"date": time.strftime("%Y-%m-%d"), "cpu": cpu_name(), "cores": os.cpu_count(),
-                          "rows": a.rows, "exit": r.returncode, "passed": d.get("passed"), "n_rows": d.get("n_rows"),
-                          "peak_rss_mb": round(ru.ru_maxrss / 1024, 1), "cpu_s": round(ru.ru_utime + ru.ru_stime, 1),
-                          "wall_s": round(wall, 1)}))
+        print(
+            json.dumps(
+                {
+                    "date": time.strftime("%Y-%m-%d"),
+                    "cpu": cpu_name(),
+                    "cores": os.cpu_count(),
+                    "rows": a.rows,
+                    "exit": r.returncode,
+                    "passed": d.get("passed"),
+                    "n_rows": d.get("n_rows"),
+                    "peak_rss_mb": round(ru.ru_maxrss / 1024, 1),
+                    "cpu_s": round(ru.ru_utime + ru.ru_stime, 1),
+                    "wall_s": round(wall, 1),
+                }
+            )
+        )
         return 0 if r.returncode == 0 else 1
     finally:
         for p in (path, path.with_suffix(".one.csv")):

@@ -15,6 +15,7 @@ Rows (``rows(quick) -> list[dict]`` with name, value, unit, target, ok):
   best and median wall time of several runs, and the child's CPU time (user + sys), which a
   machine shared with other jobs inflates much less than the wall time.
 """
+
 import argparse
 import os
 import resource
@@ -67,7 +68,7 @@ def grid_warm(reps):
     cm = colorimetry("D65", "lin_rec709")
     cs = checker(cm)
     r, mu = np.linspace(0, 1, 16), np.linspace(1 / 32, 1, 32)
-    colour_shift(cs, r, mu, cm)                      # warm-up (numba cache, colour's caches)
+    colour_shift(cs, r, mu, cm)  # warm-up (numba cache, colour's caches)
     best = float("inf")
     for _ in range(reps):
         t = time.perf_counter()
@@ -85,17 +86,37 @@ def rows(quick=False):
     cli = sorted(w for w, _ in runs)
     cpu = sorted(c for _, c in runs)
     out = [
-        {"name": "colorshift 24x16x32x81, first call after import colour (cold)", "value": cold, "unit": "s",
-         "target": TARGET_GRID_S},
-        {"name": "colorshift 24x16x32x81, cold, CPU time (process)", "value": cold_cpu, "unit": "s",
-         "target": TARGET_GRID_S},
+        {
+            "name": "colorshift 24x16x32x81, first call after import colour (cold)",
+            "value": cold,
+            "unit": "s",
+            "target": TARGET_GRID_S,
+        },
+        {
+            "name": "colorshift 24x16x32x81, cold, CPU time (process)",
+            "value": cold_cpu,
+            "unit": "s",
+            "target": TARGET_GRID_S,
+        },
         {"name": "colorshift 24x16x32x81, warm (best)", "value": warm, "unit": "s", "target": TARGET_GRID_S},
-        {"name": "CLI 'colorshift' default run incl. import colour (best)", "value": cli[0], "unit": "s",
-         "target": TARGET_CLI_S},
-        {"name": "CLI 'colorshift' default run incl. import colour (median)", "value": cli[len(cli) // 2],
-         "unit": "s", "target": TARGET_CLI_S},
-        {"name": "CLI 'colorshift' default run, CPU time user+sys (best)", "value": cpu[0], "unit": "s",
-         "target": TARGET_CLI_S},
+        {
+            "name": "CLI 'colorshift' default run incl. import colour (best)",
+            "value": cli[0],
+            "unit": "s",
+            "target": TARGET_CLI_S,
+        },
+        {
+            "name": "CLI 'colorshift' default run incl. import colour (median)",
+            "value": cli[len(cli) // 2],
+            "unit": "s",
+            "target": TARGET_CLI_S,
+        },
+        {
+            "name": "CLI 'colorshift' default run, CPU time user+sys (best)",
+            "value": cpu[0],
+            "unit": "s",
+            "target": TARGET_CLI_S,
+        },
     ]
     for row in out:
         row["ok"] = row["value"] <= row["target"]
@@ -108,8 +129,10 @@ def main(argv=None):
     args = ap.parse_args(argv)
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
     for row in rows(args.quick):
-        print(f"{row['name']:60} {row['value']:8.3f} {row['unit']}  target <= {row['target']:g} "
-              f"{'ok' if row['ok'] else 'MISSED'}")
+        print(
+            f"{row['name']:60} {row['value']:8.3f} {row['unit']}  target <= {row['target']:g} "
+            f"{'ok' if row['ok'] else 'MISSED'}"
+        )
     return 0
 
 

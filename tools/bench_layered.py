@@ -5,6 +5,7 @@ Usage: python tools/bench_layered.py [--target 1e-4] [--workers 2]
 Prints wall-clock and process CPU seconds (the machine may be shared: CPU seconds are the
 steadier number).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -27,7 +28,9 @@ from openpbr_diffuse.simulation.layered import (
 CONFIGS = {
     "smooth n 1.5, Lambert rho 0.8, mu 0.5": (LayeredSurface("smooth", 1.5), 0.8),
     "GGX alpha 0.25 n 1.5, coat_color 0.8, EON r 0.5 rho 0.8, mu 0.5": (
-        LayeredSurface("ggx", 1.5, 0.25, coat_color=0.8, base="eon", roughness=0.5), 0.8),
+        LayeredSurface("ggx", 1.5, 0.25, coat_color=0.8, base="eon", roughness=0.5),
+        0.8,
+    ),
 }
 
 
@@ -42,13 +45,18 @@ def _cpu() -> str:
 
 
 def to_target(surface: LayeredSurface, rho: float, target: float, workers: int) -> dict:
-    simulate_layered_albedo(surface, [0.5], rho=rho, paths=CHUNK_PATHS, seed=99, workers=1)   # compile
+    simulate_layered_albedo(surface, [0.5], rho=rho, paths=CHUNK_PATHS, seed=99, workers=1)  # compile
     pilot = simulate_layered_albedo(surface, [0.5], rho=rho, paths=4 * CHUNK_PATHS, seed=98, workers=workers)
     n = math.ceil(4 * CHUNK_PATHS * (pilot.total_stderr[0, 0] / target) ** 2 * 1.05)
     t0, c0 = time.perf_counter(), time.process_time()
     e = simulate_layered_albedo(surface, [0.5], rho=rho, paths=n, seed=1, workers=workers)
-    return {"paths": n, "wall": time.perf_counter() - t0, "cpu": time.process_time() - c0,
-            "E": float(e.total[0, 0]), "se": float(e.total_stderr[0, 0])}
+    return {
+        "paths": n,
+        "wall": time.perf_counter() - t0,
+        "cpu": time.process_time() - c0,
+        "E": float(e.total[0, 0]),
+        "se": float(e.total_stderr[0, 0]),
+    }
 
 
 def report_section() -> float:
@@ -56,7 +64,7 @@ def report_section() -> float:
     from openpbr_diffuse.report.sections import layered
 
     with tempfile.TemporaryDirectory() as d:
-        layered.build(Context(image_dir=Path(d)))     # warm-up (compiles, loads tables)
+        layered.build(Context(image_dir=Path(d)))  # warm-up (compiles, loads tables)
         t0 = time.perf_counter()
         layered.build(Context(image_dir=Path(d)))
         return time.perf_counter() - t0
@@ -67,12 +75,16 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--target", type=float, default=1e-4)
     ap.add_argument("--workers", type=int, default=2)
     args = ap.parse_args(argv)
-    print(f"# {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; {_cpu()}; {os.cpu_count()} cores; "
-          f"workers {args.workers}; target standard error {args.target:g}")
+    print(
+        f"# {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; {_cpu()}; {os.cpu_count()} cores; "
+        f"workers {args.workers}; target standard error {args.target:g}"
+    )
     for name, (s, rho) in CONFIGS.items():
         r = to_target(s, rho, args.target, args.workers)
-        print(f"{name}: {r['paths']} paths, E = {r['E']:.5f} +- {r['se']:.1e}, wall {r['wall']:.2f} s, "
-              f"CPU {r['cpu']:.2f} s")
+        print(
+            f"{name}: {r['paths']} paths, E = {r['E']:.5f} +- {r['se']:.1e}, wall {r['wall']:.2f} s, "
+            f"CPU {r['cpu']:.2f} s"
+        )
     print(f"report section 'layered' (warm, full): {report_section():.2f} s")
     return 0
 

@@ -24,6 +24,7 @@ unsupported by id, failures with reasons) as the Markdown block of docs/guide/ma
 ``--write FILE`` replaces that block in FILE (between the ``corpus-totals`` markers).  The
 corpus sweep test checks the block against the same function.
 """
+
 import argparse
 import collections
 import os
@@ -43,11 +44,16 @@ TARGET_S = 10.0
 CORPUS_TARGET_S = 180.0
 EVAL_TARGET_S = 2.0
 #: The shared real-world corpus (used when --root is not given).
-CORPUS = Path(os.environ.get("OPENPBR_DIFFUSE_SHARED") or Path(__file__).resolve().parents[1].parent / "shared") \
-    / "corpus" / "realworld"
+CORPUS = (
+    Path(os.environ.get("OPENPBR_DIFFUSE_SHARED") or Path(__file__).resolve().parents[1].parent / "shared")
+    / "corpus"
+    / "realworld"
+)
 #: Files whose ``eval`` is timed (relative to the corpus root).
-EVAL_FILES = ("usd-wg-assets/full_assets/StandardShaderBall/layers/environment.usda",
-              "MaterialX/resources/Materials/Examples/StandardSurface/standard_surface_chrome.mtlx")
+EVAL_FILES = (
+    "usd-wg-assets/full_assets/StandardShaderBall/layers/environment.usda",
+    "MaterialX/resources/Materials/Examples/StandardSurface/standard_surface_chrome.mtlx",
+)
 BEGIN, END = "<!-- corpus-totals:begin -->", "<!-- corpus-totals:end -->"
 
 
@@ -69,17 +75,22 @@ def make_stage(path, n, seed=10):
             mat.specifier, mat.typeName = Sdf.SpecifierDef, "Material"
             sh = Sdf.CreatePrimInLayer(layer, mpath + "/S")
             sh.specifier, sh.typeName = Sdf.SpecifierDef, "Shader"
-            sid = ("ND_open_pbr_surface_surfaceshader", "UsdPreviewSurface", "ND_standard_surface_surfaceshader")[kinds[i]]
+            sid = ("ND_open_pbr_surface_surfaceshader", "UsdPreviewSurface", "ND_standard_surface_surfaceshader")[
+                kinds[i]
+            ]
             Sdf.AttributeSpec(sh, "info:id", Sdf.ValueTypeNames.Token, variability=Sdf.VariabilityUniform).default = sid
             out_name = "outputs:surface" if kinds[i] == 1 else "outputs:out"
             Sdf.AttributeSpec(sh, out_name, Sdf.ValueTypeNames.Token)
-            surf = Sdf.AttributeSpec(mat, "outputs:surface" if kinds[i] == 1 else "outputs:mtlx:surface",
-                                     Sdf.ValueTypeNames.Token)
+            surf = Sdf.AttributeSpec(
+                mat, "outputs:surface" if kinds[i] == 1 else "outputs:mtlx:surface", Sdf.ValueTypeNames.Token
+            )
             surf.connectionPathList.explicitItems = [Sdf.Path(f"{mpath}/S.{out_name}")]
             colour = tuple(float(x) for x in colours[i])
-            names = {0: ("base_color", "base_diffuse_roughness", "specular_roughness"),
-                     1: ("diffuseColor", None, "roughness"),
-                     2: ("base_color", "diffuse_roughness", "specular_roughness")}[kinds[i]]
+            names = {
+                0: ("base_color", "base_diffuse_roughness", "specular_roughness"),
+                1: ("diffuseColor", None, "roughness"),
+                2: ("base_color", "diffuse_roughness", "specular_roughness"),
+            }[kinds[i]]
             via_interface = kinds[i] == 0 and i % 2 == 0
             if via_interface:
                 a = Sdf.AttributeSpec(mat, "inputs:colour", Sdf.ValueTypeNames.Color3f)
@@ -119,14 +130,34 @@ def rows(quick=False, n=None):
     total = t_resolve + t_eval
     target = TARGET_S * n / 10000
     return [
-        {"name": f"readers: resolve + evaluate {n} materials, CPU time of the process", "value": round(cpu, 3),
-         "unit": "s", "target": None, "ok": True},
-        {"name": f"readers: resolve {n} USD materials", "value": round(t_resolve, 3), "unit": "s",
-         "target": None, "ok": True},
-        {"name": f"readers: evaluate {n} materials (evaluate_many)", "value": round(t_eval, 3), "unit": "s",
-         "target": None, "ok": True},
-        {"name": f"readers: resolve + evaluate {n} materials", "value": round(total, 3), "unit": "s",
-         "target": f"< {target:g}", "ok": total < target},
+        {
+            "name": f"readers: resolve + evaluate {n} materials, CPU time of the process",
+            "value": round(cpu, 3),
+            "unit": "s",
+            "target": None,
+            "ok": True,
+        },
+        {
+            "name": f"readers: resolve {n} USD materials",
+            "value": round(t_resolve, 3),
+            "unit": "s",
+            "target": None,
+            "ok": True,
+        },
+        {
+            "name": f"readers: evaluate {n} materials (evaluate_many)",
+            "value": round(t_eval, 3),
+            "unit": "s",
+            "target": None,
+            "ok": True,
+        },
+        {
+            "name": f"readers: resolve + evaluate {n} materials",
+            "value": round(total, 3),
+            "unit": "s",
+            "target": f"< {target:g}",
+            "ok": total < target,
+        },
     ]
 
 
@@ -181,7 +212,7 @@ def sweep(root=CORPUS, evaluate=True):
 
 def _reason(error, file):
     """A failure's reason without its file and element path (for counting)."""
-    text = error[len(file) + 2:] if error.startswith(file + ": ") else error
+    text = error[len(file) + 2 :] if error.startswith(file + ": ") else error
     parts = text.split(": ", 1)
     if len(parts) == 2 and " " not in parts[0]:
         text = parts[1]
@@ -191,10 +222,16 @@ def _reason(error, file):
 def totals(records):
     """The sweep's totals: files, rejected files, tracebacks, materials, supported by shader
     id, unsupported shaders by id, non-shader outputs by type, failures by reason."""
-    t = {"files": len(records), "rejected": [r["file"] for r in records if r["rejected"]],
-         "tracebacks": [r["file"] for r in records if r["traceback"]], "materials": 0,
-         "supported": collections.Counter(), "unsupported": collections.Counter(),
-         "outputs": collections.Counter(), "failures": collections.Counter()}
+    t = {
+        "files": len(records),
+        "rejected": [r["file"] for r in records if r["rejected"]],
+        "tracebacks": [r["file"] for r in records if r["traceback"]],
+        "materials": 0,
+        "supported": collections.Counter(),
+        "unsupported": collections.Counter(),
+        "outputs": collections.Counter(),
+        "failures": collections.Counter(),
+    }
     for r in records:
         for _path, sid, supported, error, out in r["materials"]:
             t["materials"] += 1
@@ -243,8 +280,12 @@ def write_totals(doc, block):
 def _eval_once(path):
     r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "openpbr_diffuse", "eval", str(path), "--json"],
-                          capture_output=True, text=True, timeout=120)
+    proc = subprocess.run(
+        [sys.executable, "-m", "openpbr_diffuse", "eval", str(path), "--json"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     wall = time.perf_counter() - t0
     r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
@@ -263,10 +304,20 @@ def corpus_rows(root=CORPUS):
     t = totals(records)
     assert not t["tracebacks"], t["tracebacks"]
     rows_ = [
-        {"name": f"corpus sweep: {t['files']} files, {t['materials']} materials, CPU time", "value": round(cpu, 2),
-         "unit": "s", "target": None, "ok": True},
-        {"name": f"corpus sweep: {t['files']} files, {t['materials']} materials (load + evaluate)",
-         "value": round(wall, 2), "unit": "s", "target": f"< {CORPUS_TARGET_S:g}", "ok": wall < CORPUS_TARGET_S},
+        {
+            "name": f"corpus sweep: {t['files']} files, {t['materials']} materials, CPU time",
+            "value": round(cpu, 2),
+            "unit": "s",
+            "target": None,
+            "ok": True,
+        },
+        {
+            "name": f"corpus sweep: {t['files']} files, {t['materials']} materials (load + evaluate)",
+            "value": round(wall, 2),
+            "unit": "s",
+            "target": f"< {CORPUS_TARGET_S:g}",
+            "ok": wall < CORPUS_TARGET_S,
+        },
     ]
     for rel in EVAL_FILES:
         f = root / rel
@@ -274,10 +325,22 @@ def corpus_rows(root=CORPUS):
             continue
         _eval_once(f)  # warm-up (numba cache, OS file cache)
         w, c = _eval_once(f)
-        rows_ += [{"name": f"eval {Path(rel).name} --json (subprocess), CPU time", "value": round(c, 2),
-                   "unit": "s", "target": None, "ok": True},
-                  {"name": f"eval {Path(rel).name} --json (subprocess)", "value": round(w, 2), "unit": "s",
-                   "target": f"< {EVAL_TARGET_S:g}", "ok": w < EVAL_TARGET_S}]
+        rows_ += [
+            {
+                "name": f"eval {Path(rel).name} --json (subprocess), CPU time",
+                "value": round(c, 2),
+                "unit": "s",
+                "target": None,
+                "ok": True,
+            },
+            {
+                "name": f"eval {Path(rel).name} --json (subprocess)",
+                "value": round(w, 2),
+                "unit": "s",
+                "target": f"< {EVAL_TARGET_S:g}",
+                "ok": w < EVAL_TARGET_S,
+            },
+        ]
     return rows_
 
 
@@ -298,8 +361,10 @@ def main(argv=None):
         return 0
     table = rows(args.quick, args.materials) + (corpus_rows(args.root) if args.corpus else [])
     for r in table:
-        print(f"{r['name']:72s} {r['value']:>9} {r['unit']}  target {r['target'] or '-':>6}  "
-              f"{'ok' if r['ok'] else 'FAIL'}")
+        print(
+            f"{r['name']:72s} {r['value']:>9} {r['unit']}  target {r['target'] or '-':>6}  "
+            f"{'ok' if r['ok'] else 'FAIL'}"
+        )
     return 0
 
 

@@ -11,6 +11,7 @@ and CPU seconds (user + sys of the child and its children: the GL child processe
 is one GL child process), the evidence sections.  Prints one line per run, the CPU model and the
 load average; the numbers go into docs/benchmarks/report.md.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -42,9 +43,14 @@ def run_once(args: list[str]) -> tuple[float, float, int]:
     """(wall s, CPU s of the child, exit status) of one report run."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "openpbr_diffuse", "report", *args], check=False, cwd=ROOT,
-                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                          env={**os.environ, "PYTHONPATH": str(ROOT)})
+    proc = subprocess.run(
+        [sys.executable, "-m", "openpbr_diffuse", "report", *args],
+        check=False,
+        cwd=ROOT,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+    )
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
@@ -59,9 +65,20 @@ def sampler_variants(tmp: Path) -> dict[str, list[str]]:
 
     path = Path(tmp) / "mine_sampler.glsl"
     path.write_text((SUBJECTS / "eon_conforming.glsl").read_text() + SAMPLER_GLSL)
-    return {"report --glsl FILE --function f --sample-function eon_sample --pdf-function eon_pdf "
-            "--sampler-model eon": ["--glsl", str(path), "--function", "f", "--sample-function", "eon_sample",
-                                    "--pdf-function", "eon_pdf", "--sampler-model", "eon"]}
+    return {
+        "report --glsl FILE --function f --sample-function eon_sample --pdf-function eon_pdf --sampler-model eon": [
+            "--glsl",
+            str(path),
+            "--function",
+            "f",
+            "--sample-function",
+            "eon_sample",
+            "--pdf-function",
+            "eon_pdf",
+            "--sampler-model",
+            "eon",
+        ]
+    }
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -75,11 +92,12 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         glsl, cpp = str(SUBJECTS / "eon_conforming.glsl"), str(SUBJECTS / "eon_conforming.cpp")
         both = ["--function", "f", "--albedo-function", "albedo"]
-        variants = {"report --glsl FILE --function f": ["--glsl", glsl, "--function", "f"],
-                    "report --glsl FILE --function f --albedo-function albedo": ["--glsl", glsl, *both],
-                    "report --quick --glsl FILE --function f --albedo-function albedo": ["--quick", "--glsl", glsl,
-                                                                                        *both],
-                    "report --cpp FILE --function f --albedo-function albedo": ["--cpp", cpp, *both]}
+        variants = {
+            "report --glsl FILE --function f": ["--glsl", glsl, "--function", "f"],
+            "report --glsl FILE --function f --albedo-function albedo": ["--glsl", glsl, *both],
+            "report --quick --glsl FILE --function f --albedo-function albedo": ["--quick", "--glsl", glsl, *both],
+            "report --cpp FILE --function f --albedo-function albedo": ["--cpp", cpp, *both],
+        }
         variants.update(sampler_variants(Path(tmp)))
         if opts.quick:
             variants["report --quick"] = ["--quick"]
@@ -124,10 +142,15 @@ def breakdown(glsl: str, tmp: Path) -> None:
         subject = glsl_subject(glsl, "f", "albedo")
         parts = {}
         for label, work in (
-                ("grade the subject", lambda: grade_subject_under_test(subject)),
-                ("its pictures", lambda: figures(subject, parts["grade the subject"][2], tmp, quick=False)),
-                ("evidence sections", lambda: runner.run_report([], tmp / "r", quick=False, progress=False,
-                                                                sections=["implementations", "approximations"]))):
+            ("grade the subject", lambda: grade_subject_under_test(subject)),
+            ("its pictures", lambda: figures(subject, parts["grade the subject"][2], tmp, quick=False)),
+            (
+                "evidence sections",
+                lambda: runner.run_report(
+                    [], tmp / "r", quick=False, progress=False, sections=["implementations", "approximations"]
+                ),
+            ),
+        ):
             n, t0, c0 = len(runs), time.perf_counter(), _cpu()
             value = work()
             parts[label] = (time.perf_counter() - t0, _cpu() - c0, value, len(runs) - n)

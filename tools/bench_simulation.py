@@ -17,6 +17,7 @@ Rows (``rows(quick) -> list[dict]`` with name, value, unit, target, ok):
 Warm-up runs compile the kernels first (numba caches them on disk), so compile time is not
 counted.
 """
+
 import argparse
 import os
 import sys
@@ -36,8 +37,12 @@ CORES = os.cpu_count() or 1
 def _bounce_rate(geometry, roughness, paths, workers, brdf=False):
     """(bounces per wall-clock second, bounces per CPU second of this process)."""
     if brdf:
-        wo = np.stack([np.sin(t) * np.array([1.0, 0.0, 0.0]) + np.cos(t) * np.array([0.0, 0.0, 1.0])
-                       for t in np.linspace(-1.3, 1.3, 8)])
+        wo = np.stack(
+            [
+                np.sin(t) * np.array([1.0, 0.0, 0.0]) + np.cos(t) * np.array([0.0, 0.0, 1.0])
+                for t in np.linspace(-1.3, 1.3, 8)
+            ]
+        )
         wi = np.broadcast_to([np.sqrt(0.75), 0.0, 0.5], wo.shape)
         simulate_brdf(geometry, roughness, wi, wo, rho=[0.8, 0.5, 0.2], paths=1000, workers=workers)
         start, cpu = time.perf_counter(), time.process_time()
@@ -78,22 +83,64 @@ def rows(quick=False):
     for geometry in ("vcavity", "smith-ggx", "smith-beckmann"):
         for workers in (1, CORES):
             rate, cpu_rate = _bounce_rate(geometry, 0.5, n, workers)
-            out.append({"name": f"simulate {geometry} 0.5: bounces/s, {workers} thread(s)", "value": rate,
-                        "unit": "1/s", "target": None, "ok": True})
-            out.append({"name": f"simulate {geometry} 0.5: bounces per CPU-second, {workers} thread(s)",
-                        "value": cpu_rate, "unit": "1/s", "target": None, "ok": True})
+            out.append(
+                {
+                    "name": f"simulate {geometry} 0.5: bounces/s, {workers} thread(s)",
+                    "value": rate,
+                    "unit": "1/s",
+                    "target": None,
+                    "ok": True,
+                }
+            )
+            out.append(
+                {
+                    "name": f"simulate {geometry} 0.5: bounces per CPU-second, {workers} thread(s)",
+                    "value": cpu_rate,
+                    "unit": "1/s",
+                    "target": None,
+                    "ok": True,
+                }
+            )
         rate, cpu_rate = _bounce_rate(geometry, 0.5, n // 4, CORES, brdf=True)
-        out.append({"name": f"simulate_brdf {geometry} 0.5, 8 wo: bounces/s, {CORES} thread(s)", "value": rate,
-                    "unit": "1/s", "target": None, "ok": True})
-        out.append({"name": f"simulate_brdf {geometry} 0.5, 8 wo: bounces per CPU-second", "value": cpu_rate,
-                    "unit": "1/s", "target": None, "ok": True})
+        out.append(
+            {
+                "name": f"simulate_brdf {geometry} 0.5, 8 wo: bounces/s, {CORES} thread(s)",
+                "value": rate,
+                "unit": "1/s",
+                "target": None,
+                "ok": True,
+            }
+        )
+        out.append(
+            {
+                "name": f"simulate_brdf {geometry} 0.5, 8 wo: bounces per CPU-second",
+                "value": cpu_rate,
+                "unit": "1/s",
+                "target": None,
+                "ok": True,
+            }
+        )
     seconds, paths, se, E = _albedo_to_1e4()
-    out.append({"name": f"directional albedo to stderr 1e-4 (vcavity 0.5, mu 0.5, rho 0.8: {paths} paths, "
-                        f"E = {E:.5f} +- {se:.1e})", "value": seconds, "unit": "s", "target": 10.0,
-                "ok": seconds < 10.0})
+    out.append(
+        {
+            "name": f"directional albedo to stderr 1e-4 (vcavity 0.5, mu 0.5, rho 0.8: {paths} paths, "
+            f"E = {E:.5f} +- {se:.1e})",
+            "value": seconds,
+            "unit": "s",
+            "target": 10.0,
+            "ok": seconds < 10.0,
+        }
+    )
     seconds = _report_section(quick)
-    out.append({"name": f"report section 'simulation' ({'quick' if quick else 'default'})", "value": seconds,
-                "unit": "s", "target": 20.0, "ok": seconds < 20.0})
+    out.append(
+        {
+            "name": f"report section 'simulation' ({'quick' if quick else 'default'})",
+            "value": seconds,
+            "unit": "s",
+            "target": 20.0,
+            "ok": seconds < 20.0,
+        }
+    )
     return out
 
 

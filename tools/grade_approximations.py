@@ -7,6 +7,7 @@ row per approximation: what it approximates, the reference, domain, metric, max 
 and where the max is) and prints the table.  ``--check`` recomputes and compares with the
 shipped file instead of writing it.  Takes ~1-2 min (``--quick``: ~15 s, smaller grids).
 """
+
 import argparse
 import csv
 import io
@@ -22,22 +23,39 @@ from openpbr_diffuse import __version__  # noqa: E402
 from openpbr_diffuse.approximations import grading  # noqa: E402
 
 DEFAULT_OUT = ROOT / "openpbr_diffuse" / "data" / "approximation_errors.csv"
-FIELDS = ["id", "approximation", "equation", "approximates", "reference", "domain", "metric",
-          "max_error", "rms_error", "at", "n", "note"]
+FIELDS = [
+    "id",
+    "approximation",
+    "equation",
+    "approximates",
+    "reference",
+    "domain",
+    "metric",
+    "max_error",
+    "rms_error",
+    "at",
+    "n",
+    "note",
+]
 
 
 def header(quick, seconds):
-    return "\n".join([
-        "# title: openpbr-diffuse grading of the seeds' real-time approximations (Gotanda 2012; "
-        "table-based energy compensation, Kulla-Conty as in patapom's 'Energy Compensation Pt. 2')",
-        "# method: each approximation evaluated on a grid over its domain and compared with an exact "
-        "quantity computed independently: od.evaluate of the exact lobe, Gauss-Legendre quadrature of "
-        "od.evaluate (SH projections, white furnace, brute-force area-light integrals), the shipped "
-        "reference albedo tables; max_error = max |error|, rms_error = root mean square over the grid nodes",
-        f"# grids: {'quick' if quick else 'full'} (openpbr_diffuse.approximations.grading)",
-        f"# library: openpbr-diffuse {__version__}; computed in {seconds:.0f} s",
-        "# regenerate: python tools/grade_approximations.py",
-    ]) + "\n"
+    return (
+        "\n".join(
+            [
+                "# title: openpbr-diffuse grading of the seeds' real-time approximations (Gotanda 2012; "
+                "table-based energy compensation, Kulla-Conty as in patapom's 'Energy Compensation Pt. 2')",
+                "# method: each approximation evaluated on a grid over its domain and compared with an exact "
+                "quantity computed independently: od.evaluate of the exact lobe, Gauss-Legendre quadrature of "
+                "od.evaluate (SH projections, white furnace, brute-force area-light integrals), the shipped "
+                "reference albedo tables; max_error = max |error|, rms_error = root mean square over the grid nodes",
+                f"# grids: {'quick' if quick else 'full'} (openpbr_diffuse.approximations.grading)",
+                f"# library: openpbr-diffuse {__version__}; computed in {seconds:.0f} s",
+                "# regenerate: python tools/grade_approximations.py",
+            ]
+        )
+        + "\n"
+    )
 
 
 def to_csv(rows, quick, seconds):
@@ -63,8 +81,10 @@ def print_table(rows):
     print(f"|{'-' * 60}|{'-' * 62}|-----------|-----------|")
     for r in rows:
         d = r if isinstance(r, dict) else r.to_dict()
-        print(f"| {d['approximation'][:58]:58} | {d['approximates'][:60]:60} | "
-              f"{float(d['max_error']):9.3g} | {float(d['rms_error']):9.3g} |")
+        print(
+            f"| {d['approximation'][:58]:58} | {d['approximates'][:60]:60} | "
+            f"{float(d['max_error']):9.3g} | {float(d['rms_error']):9.3g} |"
+        )
 
 
 def main(argv=None):

@@ -11,6 +11,7 @@ check independent of EON's closed form, every albedo is recomputed from the quad
 reference tables (``reference_albedo``, data/albedo_eon.csv) and the largest difference of
 each field is written into the header.
 """
+
 import argparse
 import sys
 from pathlib import Path
@@ -21,7 +22,6 @@ from openpbr_diffuse import reference_albedo
 from openpbr_diffuse._version import __version__
 from openpbr_diffuse.spectral import checker, colorimetry, colour_shift
 from openpbr_diffuse.spectral import reference as ref
-from openpbr_diffuse.spectral.validation import SCALAR_FIELDS
 
 
 def quadrature_check(res, cm):
@@ -32,10 +32,13 @@ def quadrature_check(res, cm):
     tint = cm.XYZ_to_RGB(cm.spectra_to_XYZ(reference_albedo("eon", mu, r, S, color_mode="white_tint")))
     rgb = reference_albedo("eon", mu, r, np.clip(res.rho_rgb, 0, 1)[:, None, None, :])
     lab = {k: cm.XYZ_to_Lab(cm.RGB_to_XYZ(v)) for k, v in (("s", spec), ("t", tint), ("r", rgb))}
-    d_rgb = max(abs(a - b).max() for a, b in ((spec, res.albedo_spectral), (tint, res.albedo_white_tint),
-                                                (rgb, res.albedo_rgb)))
-    d_de = max(abs(cm.delta_E(lab["r"], lab["s"]) - res.delta_e_rgb_vs_spectral).max(),
-               abs(cm.delta_E(lab["s"], lab["t"]) - res.delta_e_shift).max())
+    d_rgb = max(
+        abs(a - b).max() for a, b in ((spec, res.albedo_spectral), (tint, res.albedo_white_tint), (rgb, res.albedo_rgb))
+    )
+    d_de = max(
+        abs(cm.delta_E(lab["r"], lab["s"]) - res.delta_e_rgb_vs_spectral).max(),
+        abs(cm.delta_E(lab["s"], lab["t"]) - res.delta_e_shift).max(),
+    )
     return float(d_rgb), float(d_de)
 
 
@@ -50,8 +53,8 @@ def build(working_space):
         "quantity: EON directional albedo of the 24 measured ColorChecker spectra evaluated per wavelength "
         "(albedo_spectral), per RGB channel (albedo_rgb) and white then tint (albedo_white_tint), as working-space "
         "linear RGB; CIEDE2000 differences with relative luminance (Y ratio - 1) and chroma (C*ab) differences",
-        f"colours: colour.SDS_COLOURCHECKERS['BabelColor Average'] (measured, 380-730 nm / 10 nm; aligned by "
-        f"colour-science: Sprague interpolation, constant extrapolation)",
+        "colours: colour.SDS_COLOURCHECKERS['BabelColor Average'] (measured, 380-730 nm / 10 nm; aligned by "
+        "colour-science: Sprague interpolation, constant extrapolation)",
         f"colorimetry: illuminant {s['illuminant']}, {s['observer']}, spectral shape {shape['start_nm']:g}-"
         f"{shape['end_nm']:g} nm / {shape['interval_nm']:g} nm ({shape['samples']} samples), {s['xyz_integration']}; "
         f"RGB: colour.XYZ_to_RGB to {s['working_space_colour_science']} with {s['chromatic_adaptation']}; "
@@ -81,7 +84,7 @@ def main(argv=None):
             _, new = ref.load_table(ws, path=_tmp(lines))
             _, old = ref.load_table(ws)
             worst = max(float(abs(new[c] - old[c]).max()) for c in new if c != "patch")
-            ok = new["patch"] == old["patch"] and worst <= 2 * 10.0 ** -ref.DECIMALS
+            ok = new["patch"] == old["patch"] and worst <= 2 * 10.0**-ref.DECIMALS
             print(f"{ws}: max |difference| {worst:.2e} {'ok' if ok else 'DIFFERS'}")
             status |= not ok
             continue

@@ -9,6 +9,7 @@ still equals the installed library.
 
 Usage:  python tools/make_nodedef_snapshot.py
 """
+
 import datetime
 import json
 import os

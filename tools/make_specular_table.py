@@ -20,6 +20,7 @@ mu = 0 is the grazing limit, evaluated at mu = MU0.
 
 Usage:  python tools/make_specular_table.py [--n 48] [--out openpbr_diffuse/data]
 """
+
 import argparse
 import datetime
 import os
@@ -33,8 +34,7 @@ sys.path.insert(0, os.path.dirname(HERE))
 
 from openpbr_diffuse import __version__  # noqa: E402
 from openpbr_diffuse.microfacet import fresnel, ggx, quadrature  # noqa: E402
-from openpbr_diffuse.microfacet.tables import (  # noqa: E402
-    CONDUCTOR_FILE, DIELECTRIC_FILE, MU0, mu_grid, roughness_grid, x_grid)
+from openpbr_diffuse.microfacet.tables import CONDUCTOR_FILE, DIELECTRIC_FILE, MU0, mu_grid, roughness_grid, x_grid  # noqa: E402
 
 #: Conductor (2-D) grid, and the dielectric (3-D) grid, a sub-grid of it in (r, mu).
 N_R_C, N_MU_C = 65, 65
@@ -48,6 +48,7 @@ def dielectric_fresnels(xs):
             # x = 1 is eta = infinity: F = 1 (the formula would give inf/inf)
             out[k] = 1.0 if x >= 1.0 else fresnel.fresnel_dielectric(c, fresnel.eta_of_parameter(x))
         return out
+
     return fresnels
 
 
@@ -87,23 +88,25 @@ def tabulate_dielectric(n):
 
 
 def header(what, n, err, extra):
-    return "\n".join([
-        f"# {what}",
-        "# model: GGX NDF, Smith height-correlated G2, alpha = max(roughness^2, "
-        f"{ggx.ALPHA_MIN:g}) (roughness = OpenPBR specular_roughness), single scattering",
-        "# method: half-vector Gauss-Legendre quadrature with panel edges at the horizon cut "
-        f"(openpbr_diffuse.microfacet.quadrature.albedo_quadrature), order {n} per panel",
-        f"# error estimate of the quadrature: max |Q_{n} - Q_{n // 2}| over the table = {err:.1e} "
-        f"(bounds the error of Q_{n // 2}; the stored Q_{n} is more accurate)",
-        "# interpolated accuracy (tests/test_ggx.py, against an independent quadrature): <= 2e-4 for "
-        "roughness >= 0.2 and mu >= 0.05, <= 6e-4 for roughness >= 0.2, <= 3e-3 for roughness < 0.2 "
-        "and mu >= 0.05",
-        f"# mu = 0 nodes: the grazing limit, evaluated at mu = {MU0:g}",
-        *extra,
-        f"# generated {datetime.date.today().isoformat()} by openpbr-diffuse {__version__} "
-        f"(numpy {np.__version__})",
-        "# regenerate: python tools/make_specular_table.py",
-    ])
+    return "\n".join(
+        [
+            f"# {what}",
+            "# model: GGX NDF, Smith height-correlated G2, alpha = max(roughness^2, "
+            f"{ggx.ALPHA_MIN:g}) (roughness = OpenPBR specular_roughness), single scattering",
+            "# method: half-vector Gauss-Legendre quadrature with panel edges at the horizon cut "
+            f"(openpbr_diffuse.microfacet.quadrature.albedo_quadrature), order {n} per panel",
+            f"# error estimate of the quadrature: max |Q_{n} - Q_{n // 2}| over the table = {err:.1e} "
+            f"(bounds the error of Q_{n // 2}; the stored Q_{n} is more accurate)",
+            "# interpolated accuracy (tests/test_ggx.py, against an independent quadrature): <= 2e-4 for "
+            "roughness >= 0.2 and mu >= 0.05, <= 6e-4 for roughness >= 0.2, <= 3e-3 for roughness < 0.2 "
+            "and mu >= 0.05",
+            f"# mu = 0 nodes: the grazing limit, evaluated at mu = {MU0:g}",
+            *extra,
+            f"# generated {datetime.date.today().isoformat()} by openpbr-diffuse {__version__} "
+            f"(numpy {np.__version__})",
+            "# regenerate: python tools/make_specular_table.py",
+        ]
+    )
 
 
 def main(argv=None):
@@ -114,11 +117,17 @@ def main(argv=None):
     t0 = time.time()
 
     cond, err_c = tabulate_conductor(args.n)
-    hc = header("Basis albedos of the GGX lobe of the OpenPBR metal: E1, E5, E6 for Fresnel "
-                "factors 1, (1-c)^5, c(1-c)^6 (c = wo.h)", args.n, err_c,
-                ["# F82-tint metal albedo = F0 (E1 - E5) + E5 - a E6 (a: microfacet.fresnel.f82_coefficient)",
-                 f"# grid: roughness = k/{N_R_C - 1}, mu = (k/{N_MU_C - 1})^2; interpolation "
-                 "(microfacet.tables): Catmull-Rom in both node coordinates"])
+    hc = header(
+        "Basis albedos of the GGX lobe of the OpenPBR metal: E1, E5, E6 for Fresnel "
+        "factors 1, (1-c)^5, c(1-c)^6 (c = wo.h)",
+        args.n,
+        err_c,
+        [
+            "# F82-tint metal albedo = F0 (E1 - E5) + E5 - a E6 (a: microfacet.fresnel.f82_coefficient)",
+            f"# grid: roughness = k/{N_R_C - 1}, mu = (k/{N_MU_C - 1})^2; interpolation "
+            "(microfacet.tables): Catmull-Rom in both node coordinates",
+        ],
+    )
     with open(os.path.join(args.out, CONDUCTOR_FILE), "w") as fh:
         fh.write(hc + "\nroughness,mu,E1,E5,E6\n")
         for i, r in enumerate(roughness_grid(N_R_C)):
@@ -126,22 +135,28 @@ def main(argv=None):
                 fh.write(f"{r:.9g},{mu:.9g}," + ",".join(f"{v:.7f}" for v in cond[i, j]) + "\n")
 
     diel, err_d = tabulate_dielectric(args.n)
-    hd = header("Directional albedo E(mu, roughness, x) of the OpenPBR dielectric specular "
-                "reflection lobe (exact dielectric Fresnel)", args.n, err_d,
-                ["# x = sqrt(F0) of the (specular_weight-modulated) index eta = (1 + x)/(1 - x) >= 1; "
-                 "x = 1 means F = 1",
-                 f"# grid: roughness = k/{N_R_D - 1}, x = sin^2(pi k/{2 * (N_X - 1)}), "
-                 f"mu = (k/{N_MU_D - 1})^2 (columns)",
-                 "# interpolation (microfacet.tables): E/E1 by tensor-product Catmull-Rom in the node "
-                 "coordinates of roughness, x and mu, times E1 from the conductor table"])
+    hd = header(
+        "Directional albedo E(mu, roughness, x) of the OpenPBR dielectric specular "
+        "reflection lobe (exact dielectric Fresnel)",
+        args.n,
+        err_d,
+        [
+            "# x = sqrt(F0) of the (specular_weight-modulated) index eta = (1 + x)/(1 - x) >= 1; x = 1 means F = 1",
+            f"# grid: roughness = k/{N_R_D - 1}, x = sin^2(pi k/{2 * (N_X - 1)}), mu = (k/{N_MU_D - 1})^2 (columns)",
+            "# interpolation (microfacet.tables): E/E1 by tensor-product Catmull-Rom in the node "
+            "coordinates of roughness, x and mu, times E1 from the conductor table",
+        ],
+    )
     mu_cols = ",".join(f"{m:.9g}" for m in mu_grid(N_MU_D))
     with open(os.path.join(args.out, DIELECTRIC_FILE), "w") as fh:
         fh.write(hd + f"\nroughness,x,{mu_cols}\n")
         for i, r in enumerate(roughness_grid(N_R_D)):
             for k, x in enumerate(x_grid(N_X)):
                 fh.write(f"{r:.9g},{x:.9g}," + ",".join(f"{v:.6f}" for v in diel[i, k]) + "\n")
-    print(f"wrote {CONDUCTOR_FILE} (quadrature error {err_c:.1e}) and {DIELECTRIC_FILE} "
-          f"(quadrature error {err_d:.1e}) in {time.time() - t0:.0f} s")
+    print(
+        f"wrote {CONDUCTOR_FILE} (quadrature error {err_c:.1e}) and {DIELECTRIC_FILE} "
+        f"(quadrature error {err_d:.1e}) in {time.time() - t0:.0f} s"
+    )
     return 0
 
 

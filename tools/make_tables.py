@@ -11,6 +11,7 @@ Each table is an independent numerical integration of the model's ``evaluate`` (
 the interpolation error at every cell centre, which is written into the file's header.
 Progress goes to stderr.
 """
+
 import argparse
 import sys
 import time
@@ -33,8 +34,7 @@ class Progress:
         bar = "#" * int(round(frac * self.width))
         elapsed = time.monotonic() - self.start
         eta = f"{elapsed / frac - elapsed:4.0f}s" if frac > 0 else "  --"
-        self.stream.write(f"\r{self.label:<28} [{bar:<{self.width}}] {done}/{total} "
-                          f"{elapsed:5.0f}s eta {eta}")
+        self.stream.write(f"\r{self.label:<28} [{bar:<{self.width}}] {done}/{total} {elapsed:5.0f}s eta {eta}")
         self.stream.flush()
 
     def done(self, message):
@@ -47,7 +47,7 @@ def generate(model, order=tables.ORDER, held_out=True):
     start = time.monotonic()
     bar = Progress(f"{model}: quadrature")
     res = tables.compute_table(model, n=order, progress=bar)
-    for key in ("e_g", "e_h", "avg_g", "avg_h"):      # as shipped: the held-out check sees the rounding
+    for key in ("e_g", "e_h", "avg_g", "avg_h"):  # as shipped: the held-out check sees the rounding
         res[key] = np.round(res[key], tables.DECIMALS)
     bar.done(f"{res['err'].max():.1e} max quadrature error")
     if not held_out:
@@ -72,13 +72,24 @@ def compare(model, res):
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--models", nargs="+", default=list(MODELS), choices=MODELS, metavar="MODEL",
-                        help=f"models to generate (default all: {' '.join(MODELS)})")
+    parser.add_argument(
+        "--models",
+        nargs="+",
+        default=list(MODELS),
+        choices=MODELS,
+        metavar="MODEL",
+        help=f"models to generate (default all: {' '.join(MODELS)})",
+    )
     parser.add_argument("--out", default=None, help="output directory (default: the package data directory)")
-    parser.add_argument("--order", type=int, default=tables.ORDER,
-                        help="Gauss-Legendre order per panel n (value at 2n, error estimate n vs 2n)")
-    parser.add_argument("--check", action="store_true",
-                        help="recompute and compare with the shipped tables instead of writing")
+    parser.add_argument(
+        "--order",
+        type=int,
+        default=tables.ORDER,
+        help="Gauss-Legendre order per panel n (value at 2n, error estimate n vs 2n)",
+    )
+    parser.add_argument(
+        "--check", action="store_true", help="recompute and compare with the shipped tables instead of writing"
+    )
     args = parser.parse_args(argv)
     status = 0
     for model in args.models:
@@ -87,8 +98,10 @@ def main(argv=None):
             worst, allowance = compare(model, res)
             ok = worst <= allowance
             status |= not ok
-            print(f"{model}: max |recomputed - shipped| = {worst:.1e} (allowed {allowance:.1e}) "
-                  f"{'OK' if ok else 'MISMATCH'}")
+            print(
+                f"{model}: max |recomputed - shipped| = {worst:.1e} (allowed {allowance:.1e}) "
+                f"{'OK' if ok else 'MISMATCH'}"
+            )
         else:
             path = tables.write_table(model, res, interp, args.out)
             print(f"{model}: wrote {path} ({seconds:.0f} s, interpolation error {interp:.1e})")

@@ -19,13 +19,12 @@ Writes <out>.png and <out>.csv (with a '#' provenance header) and prints the tab
 Usage:  python tools/variance_curves.py [--samples 200000] [--roughness 0.25 0.5 1]
                                         [--theta 0 30 60 ...] [--seed 1] [--out out/variance_curves.png]
 """
+
 import argparse
 import datetime
 import math
 import os
 import sys
-
-import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
@@ -98,8 +97,14 @@ def plot(path, rows, strategies, args):
 
     rs = sorted({row[0] for row in rows})
     fig, axes = plt.subplots(len(rs), 3, figsize=(15, 3.6 * len(rs)), squeeze=False)
-    styles = {"cosine": ("tab:red", "-"), "uniform": ("black", ":"), "ltc": ("tab:blue", "-"),
-              "ltc_nonneg": ("tab:blue", ":"), "cltc": ("tab:green", "--"), "eon": ("tab:green", "-")}
+    styles = {
+        "cosine": ("tab:red", "-"),
+        "uniform": ("black", ":"),
+        "ltc": ("tab:blue", "-"),
+        "ltc_nonneg": ("tab:blue", ":"),
+        "cltc": ("tab:green", "--"),
+        "eon": ("tab:green", "-"),
+    }
     for i, r in enumerate(rs):
         for s in strategies:
             pts = sorted((row[1], row[4], row[5], row[6]) for row in rows if row[0] == r and row[3] == s)
@@ -116,9 +121,11 @@ def plot(path, rows, strategies, args):
                 ax.set_yscale("log")
             ax.grid(True, alpha=0.3)
         axes[i, 0].legend(fontsize=8)
-    fig.suptitle("EON throughput weight f mu_i / pdf at rho = 1 by sampling strategy "
-                 f"({args.samples} samples per point, seed {args.seed}, openpbr-diffuse {od.__version__})",
-                 fontsize=10)
+    fig.suptitle(
+        "EON throughput weight f mu_i / pdf at rho = 1 by sampling strategy "
+        f"({args.samples} samples per point, seed {args.seed}, openpbr-diffuse {od.__version__})",
+        fontsize=10,
+    )
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -132,8 +139,11 @@ def main(argv=None):
     ap.add_argument("--theta", type=float, nargs="+", default=list(THETA_DEFAULT), help="theta_o in degrees")
     ap.add_argument("--strategies", nargs="+", default=list(STRATEGIES), choices=STRATEGIES)
     ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--out", default=os.path.join("out", "variance_curves.png"),
-                    help="PNG path; the CSV goes next to it (default out/variance_curves.png)")
+    ap.add_argument(
+        "--out",
+        default=os.path.join("out", "variance_curves.png"),
+        help="PNG path; the CSV goes next to it (default out/variance_curves.png)",
+    )
     args = ap.parse_args(argv)
     args.argv = argv
     if args.samples < 2:

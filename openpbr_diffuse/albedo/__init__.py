@@ -9,8 +9,16 @@
   (the lookup itself is ``openpbr_diffuse.models.tables``, below the models' API).
 - ``export``: 32-bit float EXR lookup textures for real-time engines (``export_lut``).
 """
+
 from .quadrature import hemisphere_albedo, hemisphere_average_albedo
 from .tables import AlbedoTable, load_table, reference_albedo, reference_average_albedo, table_albedo
 
-__all__ = ["hemisphere_albedo", "hemisphere_average_albedo", "reference_albedo",
-           "reference_average_albedo", "table_albedo", "load_table", "AlbedoTable"]
+__all__ = [
+    "hemisphere_albedo",
+    "hemisphere_average_albedo",
+    "reference_albedo",
+    "reference_average_albedo",
+    "table_albedo",
+    "load_table",
+    "AlbedoTable",
+]

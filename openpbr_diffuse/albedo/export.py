@@ -13,6 +13,7 @@ E(rho) = rho e_g + m(rho) e_h (m = 0, rho^2, or EON's rho_ms(rho, <E_F>(r)) of E
 chromatic albedo is exact from G and B.  The axis conventions and channel meaning are also
 written into the files' metadata (``openpbr_diffuse:*`` attributes).
 """
+
 import errno
 import os
 import sys
@@ -28,8 +29,11 @@ DEFAULT_SIZE = 32
 MAX_SIZE = 4096
 BLOCK_TEXELS = 1 << 18
 
-_MIX_TEXT = {MIX_LINEAR: "0 (linear in rho; B = 0)", MIX_RHO2: "rho^2",
-             MIX_RHO_MS: "rho_ms = rho^2 <E_F> / (1 - rho (1 - <E_F>)), <E_F>(r) = (1 + c2 r)/(1 + c1 r) (EON Eq. 15, 18)"}
+_MIX_TEXT = {
+    MIX_LINEAR: "0 (linear in rho; B = 0)",
+    MIX_RHO2: "rho^2",
+    MIX_RHO_MS: "rho_ms = rho^2 <E_F> / (1 - rho (1 - <E_F>)), <E_F>(r) = (1 + c2 r)/(1 + c1 r) (EON Eq. 15, 18)",
+}
 
 
 def texel_centres(size):
@@ -42,8 +46,10 @@ def _roughness_axis(name, size, index="j", where="row (0 = first scanline)"):
     info = INFO[name]
     if name == "lambert":
         return np.zeros(size), "roughness ignored (Lambert): every texel along this axis is the same"
-    return (texel_centres(size) * info.roughness_max,
-            f"{info.roughness_name} = ({index} + 0.5)/{size} * {info.roughness_max!r}, {index} = {where}")
+    return (
+        texel_centres(size) * info.roughness_max,
+        f"{info.roughness_name} = ({index} + 0.5)/{size} * {info.roughness_max!r}, {index} = {where}",
+    )
 
 
 def _check_size(size):
@@ -90,15 +96,20 @@ def _metadata(name, size, kind):
     table = load_table(name)
     meta = {
         "openpbr_diffuse:model": name,
-        "openpbr_diffuse:quantity": ("directional albedo E(mu, roughness)" if kind == "directional"
-                                     else "average albedo <E>(roughness) = 2 int E(mu) mu dmu"),
+        "openpbr_diffuse:quantity": (
+            "directional albedo E(mu, roughness)"
+            if kind == "directional"
+            else "average albedo <E>(roughness) = 2 int E(mu) mu dmu"
+        ),
         "openpbr_diffuse:channels": "R = E(rho = 1), G = e_g, B = e_h; E(rho) = rho*G + m(rho)*B",
         "openpbr_diffuse:mix": f"m(rho) = {_MIX_TEXT[info.mix]}",
         "openpbr_diffuse:rho": "R at rho = 1 (white); G, B give any rho exactly",
         "openpbr_diffuse:roughness_name": info.roughness_name,
         "openpbr_diffuse:roughness_max": 0.0 if name == "lambert" else float(info.roughness_max),
-        "openpbr_diffuse:source": (f"reference table {table_path(name).name} ({table.meta.get('method', '')}); "
-                                   f"interpolation error {table.interpolation_error!r}"),
+        "openpbr_diffuse:source": (
+            f"reference table {table_path(name).name} ({table.meta.get('method', '')}); "
+            f"interpolation error {table.interpolation_error!r}"
+        ),
         "openpbr_diffuse:version": __version__,
         "openpbr_diffuse:texel_convention": "texel centres: value at (index + 0.5)/N",
     }
@@ -148,8 +159,9 @@ def _progress_bar(total, desc, progress):
             raise ImportError("progress=True needs tqdm: pip install tqdm") from None
         return None
 
-    return tqdm(total=total, desc=desc, unit="row", disable=None if progress is None else False,
-                leave=False, file=sys.stderr)
+    return tqdm(
+        total=total, desc=desc, unit="row", disable=None if progress is None else False, leave=False, file=sys.stderr
+    )
 
 
 def export_lut(model, directory, size=DEFAULT_SIZE, *, progress=False):
@@ -213,8 +225,7 @@ def read_exr(path):
     try:
         spec = inp.spec()
         pixels = inp.read_image(oiio.FLOAT)
-        meta = {a.name: spec.getattribute(a.name) for a in spec.extra_attribs
-                if a.name.startswith("openpbr_diffuse:")}
+        meta = {a.name: spec.getattribute(a.name) for a in spec.extra_attribs if a.name.startswith("openpbr_diffuse:")}
     finally:
         inp.close()
     return np.asarray(pixels).reshape(spec.height, spec.width, spec.nchannels), meta

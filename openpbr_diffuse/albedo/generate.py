@@ -8,6 +8,7 @@ channels and the 2x2 system E(1) = e_g + m(1) e_h, E(1/2) = e_g/2 + m(1/2) e_h i
 This is the only table code that needs the models' ``evaluate``; ``tools/make_tables.py``
 drives it.  Grid and interpolation: ``openpbr_diffuse.models.tables``.
 """
+
 import functools
 import math
 import os
@@ -17,9 +18,25 @@ import numpy as np
 from .._version import __version__
 from ..models.api import evaluate
 from ..models.registry import INFO, MIX_LINEAR, MIX_RHO2, MIX_RHO_MS, model_info
-from ..models.tables import (DECIMALS, HALF_PI, N_ROUGH, N_THETA, REGENERATE, ROUNDING, SIGMA_SCALE,
-                             data_dir, is_sigma_model, interpolate_grid, interpolate_line, load_table,
-                             mix_weight, n_columns, roughness_of_u, t_of_mu, theta_of_t)
+from ..models.tables import (
+    DECIMALS,
+    HALF_PI,
+    N_ROUGH,
+    N_THETA,
+    REGENERATE,
+    ROUNDING,
+    SIGMA_SCALE,
+    data_dir,
+    interpolate_grid,
+    interpolate_line,
+    is_sigma_model,
+    load_table,
+    mix_weight,
+    n_columns,
+    roughness_of_u,
+    t_of_mu,
+    theta_of_t,
+)
 from .quadrature import DEFAULT_ORDER, GRAZING_DELTA, hemisphere_albedo, hemisphere_average_albedo
 
 #: Quadrature orders used for the shipped tables (value at 2n, error estimate n vs 2n).
@@ -35,8 +52,10 @@ def _map_text(name):
     if name == "lambert":
         return "a single column (Lambert ignores roughness)"
     if is_sigma_model(name):
-        return (f"sigma_k = {SIGMA_SCALE} sinh(u_k asinh(({HALF_PI:.10f}) / {SIGMA_SCALE})), "
-                f"u_k = k/{N_ROUGH}, k = 0..{N_ROUGH}")
+        return (
+            f"sigma_k = {SIGMA_SCALE} sinh(u_k asinh(({HALF_PI:.10f}) / {SIGMA_SCALE})), "
+            f"u_k = k/{N_ROUGH}, k = 0..{N_ROUGH}"
+        )
     return f"r_k = u_k = k/{N_ROUGH}, k = 0..{N_ROUGH}"
 
 
@@ -61,7 +80,7 @@ def _solve_terms(name, E, dE, roughness):
 # --------------------------------------------------------------------------- quadrature
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def model_kinks(name):
     """theta_i of kinks of a model's integrand besides theta_i = theta_o and s = 0.
 
@@ -131,11 +150,18 @@ def quadrature_terms(model, mu, roughness, n=ORDER):
     roughness = np.atleast_1d(np.asarray(roughness, dtype=np.float64))
     out = [np.empty((mu.size, roughness.size)) for _ in range(3)]
     for k in range(0, roughness.size, _BLOCK):
-        r = roughness[k:k + _BLOCK]
-        E, dE = hemisphere_albedo(_brdf(name, r), mu, n, error=True, kinks=model_kinks(name),
-                                  delta=grazing_delta(name), max_points=_MAX_POINTS)
+        r = roughness[k : k + _BLOCK]
+        E, dE = hemisphere_albedo(
+            _brdf(name, r),
+            mu,
+            n,
+            error=True,
+            kinks=model_kinks(name),
+            delta=grazing_delta(name),
+            max_points=_MAX_POINTS,
+        )
         for o, v in zip(out, _solve_terms(name, E, dE, r)):
-            o[:, k:k + _BLOCK] = v
+            o[:, k : k + _BLOCK] = v
     return tuple(out)
 
 
@@ -145,11 +171,12 @@ def quadrature_average_terms(model, roughness, n=ORDER):
     roughness = np.atleast_1d(np.asarray(roughness, dtype=np.float64))
     out = [np.empty(roughness.size) for _ in range(3)]
     for k in range(0, roughness.size, _BLOCK):
-        r = roughness[k:k + _BLOCK]
-        A, dA = hemisphere_average_albedo(_brdf(name, r), n, n_mu=n, error=True,
-                                          kinks=model_kinks(name), max_points=_MAX_POINTS)
+        r = roughness[k : k + _BLOCK]
+        A, dA = hemisphere_average_albedo(
+            _brdf(name, r), n, n_mu=n, error=True, kinks=model_kinks(name), max_points=_MAX_POINTS
+        )
         for o, v in zip(out, _solve_terms(name, A, dA, r)):
-            o[k:k + _BLOCK] = v
+            o[k : k + _BLOCK] = v
     return tuple(out)
 
 
@@ -180,23 +207,29 @@ def compute_table(model, rows=None, columns=None, *, n=ORDER, average=True, prog
     t = rows / N_THETA
     theta = theta_of_t(t)
     mu = np.cos(theta)
-    mu[rows == N_THETA] = 0.0                   # exactly grazing (cos(pi/2) = 6e-17)
+    mu[rows == N_THETA] = 0.0  # exactly grazing (cos(pi/2) = 6e-17)
     u = columns / nr if nr else np.zeros(columns.size)
     roughness = roughness_of_u(name, u)
-    res = {"order": n, "t": t, "theta": theta, "mu": mu, "u": u, "roughness": roughness,
-           "e_g": np.empty((rows.size, columns.size)), "e_h": np.empty((rows.size, columns.size)),
-           "err": np.empty((rows.size, columns.size))}
+    res = {
+        "order": n,
+        "t": t,
+        "theta": theta,
+        "mu": mu,
+        "u": u,
+        "roughness": roughness,
+        "e_g": np.empty((rows.size, columns.size)),
+        "e_h": np.empty((rows.size, columns.size)),
+        "err": np.empty((rows.size, columns.size)),
+    }
     if average:
         for key in ("avg_g", "avg_h", "avg_err"):
             res[key] = np.empty(columns.size)
     total = columns.size
     for k in range(0, total, _BLOCK):
         sl = slice(k, k + _BLOCK)
-        res["e_g"][:, sl], res["e_h"][:, sl], res["err"][:, sl] = quadrature_terms(
-            name, mu, roughness[sl], n)
+        res["e_g"][:, sl], res["e_h"][:, sl], res["err"][:, sl] = quadrature_terms(name, mu, roughness[sl], n)
         if average:
-            res["avg_g"][sl], res["avg_h"][sl], res["avg_err"][sl] = quadrature_average_terms(
-                name, roughness[sl], n)
+            res["avg_g"][sl], res["avg_h"][sl], res["avg_err"][sl] = quadrature_average_terms(name, roughness[sl], n)
         if progress is not None:
             progress(min(k + _BLOCK, total), total)
     return res
@@ -204,7 +237,7 @@ def compute_table(model, rows=None, columns=None, *, n=ORDER, average=True, prog
 
 def _fmt(v):
     s = f"{v:.{DECIMALS}f}"
-    return s[1:] if s.startswith("-") and not float(s) else s   # no "-0.0000000000"
+    return s[1:] if s.startswith("-") and not float(s) else s  # no "-0.0000000000"
 
 
 def _fmt_err(v):
@@ -221,8 +254,12 @@ def format_table(model, res, meta):
         quantities = [("e_g", _fmt), ("err", _fmt_err)]
     for key, fmt in quantities:
         for j in range(len(res["t"])):
-            lines.append(",".join([key, str(round(res["t"][j] * N_THETA)), _fmt(res["theta"][j]),
-                                   _fmt(res["mu"][j])] + [fmt(v) for v in res[key][j]]))
+            lines.append(
+                ",".join(
+                    [key, str(round(res["t"][j] * N_THETA)), _fmt(res["theta"][j]), _fmt(res["mu"][j])]
+                    + [fmt(v) for v in res[key][j]]
+                )
+            )
     for key, fmt in (("avg_g", _fmt), ("avg_h", _fmt), ("avg_err", _fmt_err)):
         if key == "avg_h" and INFO[name].mix == MIX_LINEAR:
             continue
@@ -236,34 +273,51 @@ def provenance(model, res, interpolation_error):
     info = INFO[name]
     kinks = model_kinks(name)
     delta = grazing_delta(name)
-    mix = {MIX_LINEAR: "0 (linear in rho; e_h omitted)", MIX_RHO2: "rho^2",
-           MIX_RHO_MS: "rho_ms(rho, <E_F>(r)) = rho^2 <E_F> / (1 - rho (1 - <E_F>)) (EON Eq. 18)"}
+    mix = {
+        MIX_LINEAR: "0 (linear in rho; e_h omitted)",
+        MIX_RHO2: "rho^2",
+        MIX_RHO_MS: "rho_ms(rho, <E_F>(r)) = rho^2 <E_F> / (1 - rho (1 - <E_F>)) (EON Eq. 18)",
+    }
     meta = {
         "title": f"openpbr-diffuse reference albedo table, model {name!r} ({info.description})",
-        "quantity": (f"directional albedo E(mu, {info.roughness_name}; rho) = rho e_g + m(rho) e_h "
-                     f"and average albedo <E> = rho avg_g + m(rho) avg_h, m(rho) = {mix[info.mix]}"),
-        "rows": (f"j = 0..{N_THETA}: theta_j = (pi/2) (1 - (1 - j/{N_THETA})^3), mu_j = cos(theta_j) "
-                 "(mu = 0 row: the limit mu -> 0)"),
+        "quantity": (
+            f"directional albedo E(mu, {info.roughness_name}; rho) = rho e_g + m(rho) e_h "
+            f"and average albedo <E> = rho avg_g + m(rho) avg_h, m(rho) = {mix[info.mix]}"
+        ),
+        "rows": (
+            f"j = 0..{N_THETA}: theta_j = (pi/2) (1 - (1 - j/{N_THETA})^3), mu_j = cos(theta_j) "
+            "(mu = 0 row: the limit mu -> 0)"
+        ),
         "columns": _map_text(name),
-        "method": (f"numerical integration of openpbr_diffuse.evaluate (no closed-form albedo): "
-                   f"Gauss-Legendre x Gauss-Legendre in (theta_i, phi_i), panels split at "
-                   f"theta_i = theta_o (graded towards it) and phi = pi/2, phi in [0, pi] by symmetry"
-                   + (f", extra panel edge at theta_i = {kinks[0]:.10f} (eps clamp of the Eq. 14 fit)"
-                      if kinks else "")
-                   + f"; order {2 * res['order']} per panel (error estimate: order {res['order']}); rho = {RHO_PAIR} as two channels, "
-                   "2x2 solve for e_g, e_h; mu = 0 by fitting E0 + a mu ln mu + b mu + c mu^2 at "
-                   f"mu = {delta:g} * (1, 2, 4, 8) (error estimate: * (2, 4, 8, 16)); averages by "
-                   "Gauss-Legendre in theta_o on panels graded towards the horizon"),
-        "error": (f"err / avg_err: estimated error (|Q_n - Q_2n| + 64 ulp; at mu = 0 plus the fit's) "
-                  f"of rho e_g + m(rho) e_h for any rho in [0, 1]; "
-                  f"max {max(res['err'].max(), res['avg_err'].max()):.1e}; values rounded to "
-                  f"{DECIMALS} decimals (+-{ROUNDING:.0e})"),
-        "interpolation": ("tensor-product 4-point Lagrange cubic in (t, u), t = 1 - (1 - acos(mu)/(pi/2))^(1/3), "
-                          "u the column coordinate; stencils clipped at the edges and never across a row kink"),
-        "row_kinks": (" ".join(f"{k:.12f}" for k in row_kinks(name)) + " (t of the eps clamp kink of E)"
-                      if model_kinks(name) else "none"),
-        "interpolation_error": (f"{interpolation_error:.1e} (max |interpolated - quadrature| of "
-                                "|e_g| + |e_h| errors at all cell centres, held out of the grid)"),
+        "method": (
+            "numerical integration of openpbr_diffuse.evaluate (no closed-form albedo): "
+            "Gauss-Legendre x Gauss-Legendre in (theta_i, phi_i), panels split at "
+            "theta_i = theta_o (graded towards it) and phi = pi/2, phi in [0, pi] by symmetry"
+            + (f", extra panel edge at theta_i = {kinks[0]:.10f} (eps clamp of the Eq. 14 fit)" if kinks else "")
+            + f"; order {2 * res['order']} per panel (error estimate: order {res['order']}); rho = {RHO_PAIR} as two channels, "
+            "2x2 solve for e_g, e_h; mu = 0 by fitting E0 + a mu ln mu + b mu + c mu^2 at "
+            f"mu = {delta:g} * (1, 2, 4, 8) (error estimate: * (2, 4, 8, 16)); averages by "
+            "Gauss-Legendre in theta_o on panels graded towards the horizon"
+        ),
+        "error": (
+            f"err / avg_err: estimated error (|Q_n - Q_2n| + 64 ulp; at mu = 0 plus the fit's) "
+            f"of rho e_g + m(rho) e_h for any rho in [0, 1]; "
+            f"max {max(res['err'].max(), res['avg_err'].max()):.1e}; values rounded to "
+            f"{DECIMALS} decimals (+-{ROUNDING:.0e})"
+        ),
+        "interpolation": (
+            "tensor-product 4-point Lagrange cubic in (t, u), t = 1 - (1 - acos(mu)/(pi/2))^(1/3), "
+            "u the column coordinate; stencils clipped at the edges and never across a row kink"
+        ),
+        "row_kinks": (
+            " ".join(f"{k:.12f}" for k in row_kinks(name)) + " (t of the eps clamp kink of E)"
+            if model_kinks(name)
+            else "none"
+        ),
+        "interpolation_error": (
+            f"{interpolation_error:.1e} (max |interpolated - quadrature| of "
+            "|e_g| + |e_h| errors at all cell centres, held out of the grid)"
+        ),
         "library": f"openpbr-diffuse {__version__}",
         "regenerate": f"{REGENERATE} --models {name}",
     }
@@ -292,8 +346,11 @@ def held_out_error(model, table_values, n=ORDER, rows=None, columns=None):
     ih = interpolate_grid(table_values["e_h"], tc[:, None], uc[None, :], kinks)
     directional = np.abs(ig - e_g) + np.abs(ih - e_h) + err
     a_g, a_h, a_err = quadrature_average_terms(name, rough, n)
-    average = (np.abs(interpolate_line(table_values["avg_g"], uc) - a_g)
-               + np.abs(interpolate_line(table_values["avg_h"], uc) - a_h) + a_err)
+    average = (
+        np.abs(interpolate_line(table_values["avg_g"], uc) - a_g)
+        + np.abs(interpolate_line(table_values["avg_h"], uc) - a_h)
+        + a_err
+    )
     return float(directional.max()), float(average.max()), directional
 
 

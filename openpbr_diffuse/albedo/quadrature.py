@@ -32,6 +32,7 @@ tan((alpha + beta)/2) term), so the limit is extrapolated from mu_o = delta, 2 d
 O(delta^3) for an albedo smooth in mu); the same fit on 2 delta .. 16 delta gives the error
 estimate.
 """
+
 import math
 
 import numpy as np
@@ -74,7 +75,7 @@ def _graded_count(theta_o):
     d = 2.0 * (HALF_PI - t)
     k = np.ones(t.shape, dtype=np.int64)
     for j in range(1, _MAX_GRADING + 1):
-        k += t - d * (2.0 ** j - 1.0) > 0.0
+        k += t - d * (2.0**j - 1.0) > 0.0
     return k
 
 
@@ -87,24 +88,31 @@ def _theta_breaks(theta_o, kinks):
     d = 2.0 * (HALF_PI - theta_o)
     K = int(_graded_count(theta_o[:1])[0])
     kk = np.arange(1, K, dtype=np.float64)
-    inner = theta_o[:, None] - d[:, None] * (2.0 ** kk - 1.0)       # descending, all > 0
-    edges = np.concatenate([np.zeros_like(theta_o)[:, None], inner[:, ::-1], theta_o[:, None],
-                            np.full_like(theta_o, HALF_PI)[:, None],
-                            np.broadcast_to(kinks, (len(theta_o), len(kinks)))], axis=1)
+    inner = theta_o[:, None] - d[:, None] * (2.0**kk - 1.0)  # descending, all > 0
+    edges = np.concatenate(
+        [
+            np.zeros_like(theta_o)[:, None],
+            inner[:, ::-1],
+            theta_o[:, None],
+            np.full_like(theta_o, HALF_PI)[:, None],
+            np.broadcast_to(kinks, (len(theta_o), len(kinks))),
+        ],
+        axis=1,
+    )
     return np.sort(edges, axis=1)
 
 
 def _nodes(theta_o, n, symmetric, kinks):
     """Directions wi (G, T, P, 3) and weights (G, T, P) of the rule for theta_o (G,)."""
     breaks = _theta_breaks(theta_o, kinks)
-    th, wt = gauss_legendre(breaks[:, :-1], breaks[:, 1:], n)        # (G, K + 1, n)
+    th, wt = gauss_legendre(breaks[:, :-1], breaks[:, 1:], n)  # (G, K + 1, n)
     th = th.reshape(len(theta_o), -1)
     wt = wt.reshape(len(theta_o), -1)
     phi_edges = np.arange(3 if symmetric else 5) * HALF_PI
     ph, wp = gauss_legendre(phi_edges[:-1], phi_edges[1:], n)
     ph, wp = ph.ravel(), wp.ravel()
     if symmetric:
-        wp = 2.0 * wp          # phi in [pi, 2 pi] mirrors [0, pi]
+        wp = 2.0 * wp  # phi in [pi, 2 pi] mirrors [0, pi]
     st, ct = np.sin(th), np.cos(th)
     wi = np.empty(th.shape + ph.shape + (3,))
     wi[..., 0] = st[:, :, None] * np.cos(ph)
@@ -123,7 +131,7 @@ def _integrate(brdf, theta_o, n, symmetric, max_points, kinks):
         per_row = int(key + 1 + len(kinks)) * n * (2 if symmetric else 4) * n
         step = max(1, max_points // per_row)
         for start in range(0, len(idx), step):
-            rows = idx[start:start + step]
+            rows = idx[start : start + step]
             t = theta_o[rows]
             wi, w = _nodes(t, n, symmetric, kinks)
             wo = np.stack([np.sin(t), np.zeros_like(t), np.cos(t)], axis=-1)[:, None, None, :]
@@ -143,8 +151,9 @@ def _grazing_weights(mu):
     return np.linalg.solve(A.T, np.eye(4)[0])
 
 
-def hemisphere_albedo(brdf, mu_o, n=DEFAULT_ORDER, *, symmetric=True, error=False,
-                      delta=GRAZING_DELTA, max_points=MAX_POINTS, kinks=()):
+def hemisphere_albedo(
+    brdf, mu_o, n=DEFAULT_ORDER, *, symmetric=True, error=False, delta=GRAZING_DELTA, max_points=MAX_POINTS, kinks=()
+):
     """Directional albedo E(mu_o) = int f(wi, wo) mu_i dwi of any vectorised BRDF.
 
     Parameters
@@ -219,8 +228,9 @@ def hemisphere_albedo(brdf, mu_o, n=DEFAULT_ORDER, *, symmetric=True, error=Fals
     return (E, dE) if error else E
 
 
-def hemisphere_average_albedo(brdf, n=DEFAULT_ORDER, *, n_mu=DEFAULT_ORDER, symmetric=True,
-                              error=False, max_points=MAX_POINTS, kinks=()):
+def hemisphere_average_albedo(
+    brdf, n=DEFAULT_ORDER, *, n_mu=DEFAULT_ORDER, symmetric=True, error=False, max_points=MAX_POINTS, kinks=()
+):
     """Average albedo <E> = 2 int_0^1 E(mu) mu dmu = (1/pi) int int f mu_i mu_o dwi dwo.
 
     Gauss-Legendre in theta_o with weight 2 cos(theta_o) sin(theta_o), on panels graded
@@ -243,14 +253,14 @@ def hemisphere_average_albedo(brdf, n=DEFAULT_ORDER, *, n_mu=DEFAULT_ORDER, symm
     1.0
     """
     kinks = np.asarray(kinks, dtype=np.float64).ravel()
-    x_edges = np.unique(np.concatenate([[0.0], HALF_PI * 0.5 ** np.arange(_AVERAGE_GRADING, -1, -1),
-                                        HALF_PI - kinks]))
+    x_edges = np.unique(np.concatenate([[0.0], HALF_PI * 0.5 ** np.arange(_AVERAGE_GRADING, -1, -1), HALF_PI - kinks]))
     results = []
     for m in (n_mu, 2 * n_mu):
         x, w = gauss_legendre(x_edges[:-1], x_edges[1:], m)
         t = HALF_PI - x.ravel()
-        E, dE = hemisphere_albedo(brdf, np.cos(t), n, symmetric=symmetric, error=True,
-                                  max_points=max_points, kinks=kinks)
+        E, dE = hemisphere_albedo(
+            brdf, np.cos(t), n, symmetric=symmetric, error=True, max_points=max_points, kinks=kinks
+        )
         wt = 2.0 * w.ravel() * np.cos(t) * np.sin(t)
         results.append((np.tensordot(wt, E, axes=(0, 0)), np.tensordot(wt, dE, axes=(0, 0))))
     (lo, _), (hi, inner) = results

@@ -9,6 +9,7 @@ quantities.
 - ``sh``: order-2 SH lighting of any lobe with the exact transfer computed by quadrature.
 - ``grading``: the rows of ``data/approximation_errors.csv`` (``tools/grade_approximations.py``).
 """
+
 from . import gotanda2012, kulla_conty, sh
 
 __all__ = ["gotanda2012", "kulla_conty", "sh"]

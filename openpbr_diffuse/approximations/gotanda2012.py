@@ -18,6 +18,7 @@ All BRDF functions return f (no cosine): Gotanda's L_r divided by E0 (N.L).
 f(shi) = 1 - 1/(2 + 0.65 shi) and g(shi) = 1/(2.22222 + 0.1 shi) of Eq. 27 are the A and B
 of Eq. 24-25 (shi = 2/sigma^2).
 """
+
 import math
 
 import numpy as np
@@ -59,8 +60,9 @@ def sigma_from_shininess(shininess):
     >>> float(sigma_from_shininess(2.0))
     1.0
     """
-    shi = ar.in_range("shininess", shininess, np.float64, 0.0, math.inf, " (Blinn-Phong exponent)",
-                      lo_open=True, hi_open=True)
+    shi = ar.in_range(
+        "shininess", shininess, np.float64, 0.0, math.inf, " (Blinn-Phong exponent)", lo_open=True, hi_open=True
+    )
     return np.sqrt(2.0 / shi)
 
 
@@ -101,7 +103,7 @@ def simplified_qon(wi, wo, sigma, rho=1.0):
     A = 1.0 - 0.5 * s2 / (s2 + 0.33)
     B = 0.45 * s2 / (s2 + 0.09)
     with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.minimum(1.0, mu_i / mu_o) / mu_i          # min(1, N.L/N.E) / N.L
+        ratio = np.minimum(1.0, mu_i / mu_o) / mu_i  # min(1, N.L/N.E) / N.L
     value = A + B * np.maximum(0.0, el - mu_o * mu_i) * ratio
     return _finish(lead, value, mu_i, mu_o, rho)
 
@@ -123,7 +125,7 @@ def shininess_qon(wi, wo, shininess, rho=1.0):
         Blinn-Phong exponent, > 0 (sigma = sqrt(2/shi); sigma <= pi/2 for shi >= 8/pi^2).
     """
     shi = np.asarray(shininess, dtype=np.float64)
-    sigma = sigma_from_shininess(shi)          # checks shininess > 0 (any value is valid here)
+    sigma = sigma_from_shininess(shi)  # checks shininess > 0 (any value is valid here)
     lead, mu_i, mu_o, el, _, rho = _dirs_sigma_rho(wi, wo, np.zeros_like(sigma), rho)
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.minimum(1.0, mu_i / mu_o) / mu_i

@@ -24,6 +24,7 @@ F(n) is the exact unpolarised Fresnel reflectance (the library's ``fresnel_diele
 Eq. 1's F_spec is Schlick's approximation, as printed.  All functions are NumPy-vectorised
 (broadcasting); cosines are in (0, 1].
 """
+
 from __future__ import annotations
 
 import math
@@ -132,8 +133,12 @@ def blinn_phong(wi, wo, shininess, F0, rho) -> np.ndarray:
     h = h / np.linalg.norm(h, axis=-1, keepdims=True)
     nh = np.clip(h[..., 2], 0.0, 1.0)
     lh = np.clip(np.sum(wi * h, axis=-1), 0.0, 1.0)
-    spec = normalisation(shininess) * schlick(lh, F0) * nh ** shininess / np.maximum(
-        np.maximum(wi[..., 2], wo[..., 2]), 1e-12)
+    spec = (
+        normalisation(shininess)
+        * schlick(lh, F0)
+        * nh**shininess
+        / np.maximum(np.maximum(wi[..., 2], wo[..., 2]), 1e-12)
+    )
     rho = np.asarray(rho, dtype=float)
     return rho / math.pi * (1.0 - np.asarray(F0, dtype=float))[..., None] + np.asarray(spec)[..., None]
 
@@ -159,7 +164,9 @@ def beer_lambert(alpha, d, mu_i, mu_o, n) -> np.ndarray:
     >>> round(float(beer_lambert(1.0, 0.1, 1.0, 1.0, 1.5)), 6)
     0.818731
     """
-    l = np.asarray(d, dtype=float) * (1.0 / refracted_cos(_cos("mu_i", mu_i), n) + 1.0 / refracted_cos(_cos("mu_o", mu_o), n))
+    l = np.asarray(d, dtype=float) * (
+        1.0 / refracted_cos(_cos("mu_i", mu_i), n) + 1.0 / refracted_cos(_cos("mu_o", mu_o), n)
+    )
     return np.exp(-np.asarray(alpha, dtype=float) * l)
 
 
@@ -171,7 +178,9 @@ def linear_absorption(alpha_p, mu_l, mu_e) -> np.ndarray:
     >>> float(linear_absorption(0.1, 1.0, 0.5))
     0.7
     """
-    return np.maximum(0.0, 1.0 - np.asarray(alpha_p, dtype=float) * (1.0 / _cos("mu_l", mu_l) + 1.0 / _cos("mu_e", mu_e)))
+    return np.maximum(
+        0.0, 1.0 - np.asarray(alpha_p, dtype=float) * (1.0 / _cos("mu_l", mu_l) + 1.0 / _cos("mu_e", mu_e))
+    )
 
 
 def bottom_fresnel(mu, n1, n2) -> np.ndarray:
@@ -232,7 +241,9 @@ def ibl_specular_factor(alpha_p, mu_e, n1, n2) -> np.ndarray:
     >>> round(float(ibl_specular_factor(0.1, 1.0, 1.33333, 1.5)), 6)
     0.002712
     """
-    return bottom_fresnel_constant(n1, n2) * np.maximum(0.0, 1.0 - np.asarray(alpha_p, dtype=float) * mirror_path_factor(mu_e))
+    return bottom_fresnel_constant(n1, n2) * np.maximum(
+        0.0, 1.0 - np.asarray(alpha_p, dtype=float) * mirror_path_factor(mu_e)
+    )
 
 
 def hemispherical_path_factor(mu_r) -> np.ndarray:
@@ -255,7 +266,8 @@ def ibl_diffuse_factor(alpha_p, mu_e, n1, n2) -> np.ndarray:
     0.697627
     """
     return (1.0 - bottom_fresnel_constant(n1, n2)) * np.maximum(
-        0.0, 1.0 - np.asarray(alpha_p, dtype=float) * hemispherical_path_factor(mu_e))
+        0.0, 1.0 - np.asarray(alpha_p, dtype=float) * hemispherical_path_factor(mu_e)
+    )
 
 
 def layered_diffuse_albedo(mu, n, rho, alpha_p=0.0) -> np.ndarray:
@@ -268,8 +280,11 @@ def layered_diffuse_albedo(mu, n, rho, alpha_p=0.0) -> np.ndarray:
     >>> round(float(layered_diffuse_albedo(1.0, 1.5, 0.8)), 6)
     0.768
     """
-    return (np.asarray(rho, dtype=float) * transmittance(mu, n)
-            * np.maximum(0.0, 1.0 - np.asarray(alpha_p, dtype=float) * hemispherical_path_factor(mu)))
+    return (
+        np.asarray(rho, dtype=float)
+        * transmittance(mu, n)
+        * np.maximum(0.0, 1.0 - np.asarray(alpha_p, dtype=float) * hemispherical_path_factor(mu))
+    )
 
 
 def blinn_phong_diffuse_albedo(n, rho) -> np.ndarray:

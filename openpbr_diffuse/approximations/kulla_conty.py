@@ -24,6 +24,7 @@ Roughness: the post's Oren-Nayar roughness alpha in [0, 1] is QON with sigma = a
 (``sigma_of_alpha``; the post's ``BRDF_OrenNayar`` takes sigma in [0, pi/2] and its fits match
 the exact ZH coefficients only with this map — see the README errata); beta = sqrt(alpha).
 """
+
 import math
 
 import numpy as np
@@ -34,7 +35,7 @@ from . import sh
 #: The post's fitted ratio of successive scattering orders (Pt. 1, "varying diffuse reflectance").
 TAU = 0.28430405702379613
 #: A1 = (1 - tau) / tau^2 so that sum_{n >= 2} A1 (tau rho)^n = 1 at rho = 1.
-A1 = (1.0 - TAU) / TAU ** 2
+A1 = (1.0 - TAU) / TAU**2
 #: The MSBRDF_View guard of the post's listing: max(0.001, pi - E_avg).
 VIEW_GUARD = 1e-3
 
@@ -42,15 +43,21 @@ FACTORS = ("tau", "exact", "none")
 
 # The post's fits for Oren-Nayar (rows E0, E1, E2; coefficients of beta, beta^3, beta^5, beta^7
 # as its HLSL evaluates them -- its text prints beta, beta^2, beta^3, beta^4).
-ZH_FIT_OREN_NAYAR = np.array([
-    [-0.0919559140506979, 1.467037714315657, -1.673544888379740, 0.607800523815945],
-    [-0.1136684128860008, 1.901273744271233, -2.322322430339633, 0.909815621695672],
-    [-0.0412482175221291, 1.093354950053632, -1.417191923789875, 0.581084435989362]])
+ZH_FIT_OREN_NAYAR = np.array(
+    [
+        [-0.0919559140506979, 1.467037714315657, -1.673544888379740, 0.607800523815945],
+        [-0.1136684128860008, 1.901273744271233, -2.322322430339633, 0.909815621695672],
+        [-0.0412482175221291, 1.093354950053632, -1.417191923789875, 0.581084435989362],
+    ]
+)
 # The post's fits for GGX (coefficients of beta, beta^3, beta^5 as coded; beta, beta^2, beta^3 as printed).
-ZH_FIT_GGX = np.array([
-    [-0.01792303243636725, 1.0561278339405598, -0.4865495717038784],
-    [-0.06127443169094851, 1.3380225947779523, -0.6195823982255909],
-    [-0.10732852337149004, 0.8686198207608287, -0.3980009298364805]])
+ZH_FIT_GGX = np.array(
+    [
+        [-0.01792303243636725, 1.0561278339405598, -0.4865495717038784],
+        [-0.06127443169094851, 1.3380225947779523, -0.6195823982255909],
+        [-0.10732852337149004, 0.8686198207608287, -0.3980009298364805],
+    ]
+)
 GGX_M33 = (21.342911007109528, 93.01620773161568, 0.4814723396401988, 143.39682026031764, 15.2)
 GGX_MAG = (0.09791431592022058, -1.4272852958071647, 7.768226052923069, -4.475643330561517)
 #: Pseudo-model name of the GGX lobe with F = 1 (table ``microfacet.tables.ggx_albedo``),
@@ -236,7 +243,8 @@ def compensated(model, wi, wo, roughness, rho=1.0, *, factor="tau", guard=VIEW_G
     from ..models import evaluate
 
     return evaluate(model, wi, wo, roughness, rho, color_mode=color_mode) + ms_lobe(
-        model, wi, wo, roughness, rho, factor=factor, guard=guard)
+        model, wi, wo, roughness, rho, factor=factor, guard=guard
+    )
 
 
 def compensated_albedo(model, mu, roughness, rho=1.0, *, factor="tau"):
@@ -297,9 +305,9 @@ def zh_fit_oren_nayar(alpha, *, form="code"):
     a = _alpha(alpha)
     b = np.sqrt(a)
     if form == "code":
-        powers = np.stack([b, b * a, b * a * a, b * a ** 3], axis=-1)
+        powers = np.stack([b, b * a, b * a * a, b * a**3], axis=-1)
     elif form == "text":
-        powers = np.stack([b, b ** 2, b ** 3, b ** 4], axis=-1)
+        powers = np.stack([b, b**2, b**3, b**4], axis=-1)
     else:
         raise ValueError(f"form must be 'code' or 'text'; got {form!r}")
     return np.clip(powers @ ZH_FIT_OREN_NAYAR.T, 0.0, 1.0)
@@ -316,7 +324,7 @@ def zh_fit_ggx(alpha, *, form="code"):
     if form == "code":
         powers = np.stack([b, b * a, b * a * a], axis=-1)
     elif form == "text":
-        powers = np.stack([b, b ** 2, b ** 3], axis=-1)
+        powers = np.stack([b, b**2, b**3], axis=-1)
     else:
         raise ValueError(f"form must be 'code' or 'text'; got {form!r}")
     return np.clip(powers @ ZH_FIT_GGX.T, 0.0, 1.0)
@@ -350,7 +358,7 @@ def sh_response(model, env, normal, mu_o, roughness, rho=1.0, *, zh=None, factor
     mu_o = ar.in_range("mu_o", mu_o, np.float64, 0.0, 1.0, " (cosine of the view angle)")
     if zh is None:
         zh = zh_exact(model, roughness)
-    E = sh.zh_rotate(zh, normal)                     # (..., 9)
+    E = sh.zh_rotate(zh, normal)  # (..., 9)
     irr = np.einsum("...k,...kc->...c", E, env)
     if clamp:
         irr = np.maximum(irr, 0.0)
@@ -408,8 +416,9 @@ def _check_corners(corners):
     if c.ndim < 2 or c.shape[-1] != 3 or c.shape[-2] < 3:
         raise ValueError(f"corners must have shape (..., V, 3) with V >= 3 polygon vertices, got {c.shape}")
     if not np.all(c[..., 2] > 0.0):
-        raise ValueError("corners: every polygon vertex must be above the horizon (z > 0); "
-                         "horizon clipping is not implemented")
+        raise ValueError(
+            "corners: every polygon vertex must be above the horizon (z > 0); horizon clipping is not implemented"
+        )
     return c
 
 
@@ -459,7 +468,7 @@ def polygon_integral_exact(model, corners, roughness, *, n=48):
     x, w = sh._gauss(n)
     c0 = c[..., 0, None, None, :]
     e1, e2 = c[..., 1, :] - c[..., 0, :], c[..., 3, :] - c[..., 0, :]
-    p = c0 + x[:, None, None] * e1[..., None, None, :] + x[None, :, None] * e2[..., None, None, :]   # (..., n, n, 3)
+    p = c0 + x[:, None, None] * e1[..., None, None, :] + x[None, :, None] * e2[..., None, None, :]  # (..., n, n, 3)
     d = np.linalg.norm(p, axis=-1)
     wdir = p / d[..., None]
     normal = np.cross(e1, e2)

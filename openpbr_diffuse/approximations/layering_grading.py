@@ -24,6 +24,7 @@ The physics: the exact closed form for a smooth interface (``simulation.layered.
 smooth_lambert_albedo``), the simulation's diffuse part for rough ones (the shipped table
 ``data/layered_grading.csv``, ``tools/make_layered_tables.py``).
 """
+
 from __future__ import annotations
 
 import math
@@ -86,7 +87,7 @@ def diffuse_albedo(rule: str, mu, n: float, rho, roughness: float = 0.0, tau: fl
     if rule == "openpbr" or rule == "kulla_conty":
         return rho * (1 - spec_albedo(mu, n, roughness))
     if rule == "openpbr_coat":
-        K = 1 - (1 - g.f0(n)) / n ** 2
+        K = 1 - (1 - g.f0(n)) / n**2
         return rho * (1 - spec_albedo(mu, n, roughness)) * math.exp(-tau) * (1 - K) / (1 - rho * K)
     if rule == "reciprocal":
         return rho * (1 - spec_albedo(mu, n, roughness)) * (1 - spec_average(n, roughness))
@@ -117,7 +118,7 @@ def eon_base_albedo(rule: str, mu, n: float, rho, r: float, roughness: float = 0
     if rule == "openpbr":
         return (1 - spec_albedo(mu, n, roughness)) * e
     if rule == "openpbr_coat":
-        K = 1 - (1 - g.f0(n)) / n ** 2
+        K = 1 - (1 - g.f0(n)) / n**2
         return (1 - spec_albedo(mu, n, roughness)) * (1 - K) / (1 - rho * K) * e
     raise ValueError(f"rule must be 'openpbr' or 'openpbr_coat', got {rule!r}")
 
@@ -161,5 +162,10 @@ def error_summary(rows: list[dict], rule: str, **where) -> dict:
         raise ValueError(f"no rows match {where}")
     err = np.array([r[rule] / r["physics"] - 1.0 for r in sel if r["physics"] > 0])
     worst = sel[int(np.argmax(np.abs(err)))]
-    return {"max": float(np.max(np.abs(err))), "mean": float(np.mean(np.abs(err))), "signed_worst": float(err[np.argmax(np.abs(err))]),
-            "n_rows": len(sel), "worst_row": worst}
+    return {
+        "max": float(np.max(np.abs(err))),
+        "mean": float(np.mean(np.abs(err))),
+        "signed_worst": float(err[np.argmax(np.abs(err))]),
+        "n_rows": len(sel),
+        "worst_row": worst,
+    }

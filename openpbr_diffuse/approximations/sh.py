@@ -21,6 +21,7 @@ full SH vector of a ZH lobe about a direction n (Sloan 2008: E_lm = sqrt(4 pi/(2
 These are the exact quantities that Gotanda's DC / linear scales (Eq. 27-29) and the post's
 E0, E1, E2 fits approximate.
 """
+
 import math
 
 import numpy as np
@@ -65,8 +66,20 @@ def basis(w):
     """
     w = ar.directions("w", w, np.float64)
     x, y, z = w[..., 0], w[..., 1], w[..., 2]
-    return np.stack([np.full_like(x, C0), C1 * y, C1 * z, C1 * x, C2 * x * y, C2 * y * z,
-                     C3 * (3.0 * z * z - 1.0), C2 * x * z, 0.5 * C2 * (x * x - y * y)], axis=-1)
+    return np.stack(
+        [
+            np.full_like(x, C0),
+            C1 * y,
+            C1 * z,
+            C1 * x,
+            C2 * x * y,
+            C2 * y * z,
+            C3 * (3.0 * z * z - 1.0),
+            C2 * x * z,
+            0.5 * C2 * (x * x - y * y),
+        ],
+        axis=-1,
+    )
 
 
 def zonal_basis(mu):
@@ -202,8 +215,11 @@ def lobe_transfer(model, mu_o, roughness, rho=1.0, *, n=24, color_mode="referenc
         raise ValueError(f"n must be an integer >= 4 (quadrature nodes per panel), got {n!r}")
     mu_o = ar.in_range("mu_o", mu_o, np.float64, 0.0, 1.0, " (cosine of the view angle)")
     info = models.registry.model_info(model) if brdf is None else None
-    rough = (ar.model_roughness(info, roughness, np.float64) if info is not None
-             else ar.as_float("roughness", roughness, np.float64))
+    rough = (
+        ar.model_roughness(info, roughness, np.float64)
+        if info is not None
+        else ar.as_float("roughness", roughness, np.float64)
+    )
     rho = ar.rho_array("rho", rho, np.float64)
     lead = ar.broadcast_leading(mu_o=mu_o.shape, roughness=rough.shape, rho=rho.shape[:-1])
     C = rho.shape[-1]
@@ -215,7 +231,7 @@ def lobe_transfer(model, mu_o, roughness, rho=1.0, *, n=24, color_mode="referenc
     step = max(1, (1 << 18) // (4 * n * n))
     for s in range(0, len(mu_f), step):
         e = s + step
-        mu_q = np.maximum(mu_f[s:e], MU_MIN)   # mu_o = 0: the grazing limit
+        mu_q = np.maximum(mu_f[s:e], MU_MIN)  # mu_o = 0: the grazing limit
         wi, weight = hemisphere_nodes(mu_q, n)
         wo = wo_of(mu_q)[:, None, None, :]
         r = r_f[s:e, None, None]
@@ -224,9 +240,11 @@ def lobe_transfer(model, mu_o, roughness, rho=1.0, *, n=24, color_mode="referenc
             f = models.evaluate(model, wi, wo, r, rr, color_mode=color_mode)
         else:
             f = brdf(wi, np.broadcast_to(wo, wi.shape), r, rr)
-        out[s:e] = _project_rows(np.ascontiguousarray(wi.reshape(len(wi), -1, 3)),
-                                 np.ascontiguousarray((weight * wi[..., 2]).reshape(len(wi), -1)),
-                                 np.ascontiguousarray(np.asarray(f, np.float64).reshape(len(wi), -1, C)))
+        out[s:e] = _project_rows(
+            np.ascontiguousarray(wi.reshape(len(wi), -1, 3)),
+            np.ascontiguousarray((weight * wi[..., 2]).reshape(len(wi), -1)),
+            np.ascontiguousarray(np.asarray(f, np.float64).reshape(len(wi), -1, C)),
+        )
     return out.reshape(lead + (9, C))
 
 
@@ -257,6 +275,7 @@ def _project_kernel():
                     out[n, 7, c] += y7 * v
                     out[n, 8, c] += y8 * v
         return out
+
     return project
 
 
@@ -275,7 +294,7 @@ def _project_rows(wi, weight, f):
 def _fibonacci(k=64):
     i = np.arange(k) + 0.5
     z = 1.0 - 2.0 * i / k
-    phi = math.pi * (1.0 + 5 ** 0.5) * i
+    phi = math.pi * (1.0 + 5**0.5) * i
     s = np.sqrt(1.0 - z * z)
     return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=-1)
 
@@ -327,8 +346,8 @@ def rotate(coeffs, R):
         coeffs = coeffs[..., None]
     if coeffs.ndim < 2 or coeffs.shape[-2] != 9:
         raise ValueError(f"coeffs must have shape (..., 9) or (..., 9, C), got {coeffs.shape}")
-    local = np.einsum("kj,...ji->...ki", _DIRS, R)   # R^T d_k
-    Y = basis(local / np.linalg.norm(local, axis=-1, keepdims=True))   # (..., 64, 9)
+    local = np.einsum("kj,...ji->...ki", _DIRS, R)  # R^T d_k
+    Y = basis(local / np.linalg.norm(local, axis=-1, keepdims=True))  # (..., 64, 9)
     out = np.einsum("qk,...kj,...jc->...qc", _PINV, Y, coeffs)
     return out[..., 0] if squeeze else out
 

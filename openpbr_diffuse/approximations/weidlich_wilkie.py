@@ -15,6 +15,7 @@ of the diffuse part is, integrating over the outside hemisphere,
 
     E_d(mu) = (1 - F(mu)) T(mu_t) rho int_0^1 2 mu_o (1 - F(mu_o)) T(mu_o') dmu_o.
 """
+
 from __future__ import annotations
 
 import math

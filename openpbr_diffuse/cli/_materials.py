@@ -4,23 +4,44 @@ variants, purpose."""
 
 def add_material_options(p, material_required=False):
     p.add_argument("file", metavar="FILE", help="USD stage (.usda/.usdc/.usdz) or MaterialX document (.mtlx)")
-    p.add_argument("--material", metavar="PRIM_OR_NAME", required=material_required,
-                   help="material prim path or name (MaterialX: node name), or a geometry prim: its bound material")
-    p.add_argument("--uv", type=float, nargs=2, metavar=("U", "V"), default=(0.5, 0.5),
-                   help="texture coordinates where textures are sampled (default 0.5 0.5; v up)")
+    p.add_argument(
+        "--material",
+        metavar="PRIM_OR_NAME",
+        required=material_required,
+        help="material prim path or name (MaterialX: node name), or a geometry prim: its bound material",
+    )
+    p.add_argument(
+        "--uv",
+        type=float,
+        nargs=2,
+        metavar=("U", "V"),
+        default=(0.5, 0.5),
+        help="texture coordinates where textures are sampled (default 0.5 0.5; v up)",
+    )
     p.add_argument("--time", type=_time_code, metavar="T", default=None, help="USD time code for time-sampled inputs")
-    p.add_argument("--variant", action="append", metavar="SET=VALUE", default=[],
-                   help="USD variant selection (repeatable)")
-    p.add_argument("--purpose", choices=("full", "preview", "all"), default="full",
-                   help="material purpose for bindings of a geometry prim (default full)")
+    p.add_argument(
+        "--variant", action="append", metavar="SET=VALUE", default=[], help="USD variant selection (repeatable)"
+    )
+    p.add_argument(
+        "--purpose",
+        choices=("full", "preview", "all"),
+        default="full",
+        help="material purpose for bindings of a geometry prim (default full)",
+    )
 
 
 def load(args):
     from ..readers import load_materials
 
     purpose = "" if args.purpose == "all" else args.purpose
-    return load_materials(args.file, time=args.time, variants=args.variant or None, uv=tuple(args.uv),
-                          material=args.material, purpose=purpose)
+    return load_materials(
+        args.file,
+        time=args.time,
+        variants=args.variant or None,
+        uv=tuple(args.uv),
+        material=args.material,
+        purpose=purpose,
+    )
 
 
 def _time_code(text):

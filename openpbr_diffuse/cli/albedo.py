@@ -10,6 +10,7 @@ tables for "full_on").  ``--reference`` adds an independent value and the differ
 reference-table value for closed-form models, and for "full_on" (whose value already is the
 table's) a direct quadrature of ``evaluate``.
 """
+
 import json
 
 import numpy as np
@@ -25,32 +26,58 @@ EPILOG = """examples:
   openpbr-diffuse albedo eon --export luts/ --size 64"""
 
 #: Options of the query that ``--export`` (whole tables) cannot take.
-_QUERY_OPTIONS = (("roughness", "--roughness"), ("mu", "--mu"), ("rho", "--rho"),
-                  ("color_mode", "--color-mode"), ("average", "--average"), ("reference", "--reference"))
+_QUERY_OPTIONS = (
+    ("roughness", "--roughness"),
+    ("mu", "--mu"),
+    ("rho", "--rho"),
+    ("color_mode", "--color-mode"),
+    ("average", "--average"),
+    ("reference", "--reference"),
+)
 
 
 def add_parser(subparsers):
     import argparse
 
     p = subparsers.add_parser(
-        "albedo", help="directional / average albedo of a lobe model; EXR LUT export",
-        description=DESCRIPTION, epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+        "albedo",
+        help="directional / average albedo of a lobe model; EXR LUT export",
+        description=DESCRIPTION,
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     p.add_argument("model", metavar="MODEL", help=f"lobe model: {', '.join(MODELS)}")
-    p.add_argument("--roughness", type=float, metavar="R",
-                   help="sigma in radians [0, pi/2] (qon*, full_on, gotanda) or r in [0, 1] (fon, eon*); "
-                        "lambert has none")
+    p.add_argument(
+        "--roughness",
+        type=float,
+        metavar="R",
+        help="sigma in radians [0, pi/2] (qon*, full_on, gotanda) or r in [0, 1] (fon, eon*); lambert has none",
+    )
     p.add_argument("--mu", type=float, nargs="+", metavar="MU", help="cosine(s) of the view angle in [0, 1]")
-    p.add_argument("--rho", type=float, nargs="+", metavar="RHO", default=None,
-                   help="albedo per channel in [0, 1] (1, 3 or N values; default 1)")
-    p.add_argument("--color-mode", choices=COLOR_MODES, default=None,
-                   help="EON models only: 'reference' (default) or 'white_tint' = rho * E(rho = 1)")
+    p.add_argument(
+        "--rho",
+        type=float,
+        nargs="+",
+        metavar="RHO",
+        default=None,
+        help="albedo per channel in [0, 1] (1, 3 or N values; default 1)",
+    )
+    p.add_argument(
+        "--color-mode",
+        choices=COLOR_MODES,
+        default=None,
+        help="EON models only: 'reference' (default) or 'white_tint' = rho * E(rho = 1)",
+    )
     p.add_argument("--average", action="store_true", help="average albedo <E> = 2 int E mu dmu instead of E(mu)")
-    p.add_argument("--reference", action="store_true",
-                   help="also show an independent value (reference table, or quadrature for full_on) "
-                        "and the difference")
+    p.add_argument(
+        "--reference",
+        action="store_true",
+        help="also show an independent value (reference table, or quadrature for full_on) and the difference",
+    )
     p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.add_argument("--export", metavar="DIR",
-                   help="write EXR lookup textures of E(mu, roughness) and <E>(roughness) to DIR")
+    p.add_argument(
+        "--export", metavar="DIR", help="write EXR lookup textures of E(mu, roughness) and <E>(roughness) to DIR"
+    )
     p.add_argument("--size", type=int, default=None, metavar="N", help="texture size for --export (default 32)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr during --export")
     p.set_defaults(run=run)
@@ -68,10 +95,13 @@ def _export(args, info):
 
     given = [flag for key, flag in _QUERY_OPTIONS if getattr(args, key) not in (None, False)]
     if given:
-        raise _usage(f"--export writes whole tables over mu and roughness at rho = 1; "
-                     f"it takes no {', '.join(given)}")
-    paths = export_lut(info.name, args.export, DEFAULT_SIZE if args.size is None else args.size,
-                       progress=False if args.no_progress else None)
+        raise _usage(f"--export writes whole tables over mu and roughness at rho = 1; it takes no {', '.join(given)}")
+    paths = export_lut(
+        info.name,
+        args.export,
+        DEFAULT_SIZE if args.size is None else args.size,
+        progress=False if args.no_progress else None,
+    )
     if args.json:
         print(json.dumps({"model": info.name, "files": list(paths)}))
     else:
@@ -117,8 +147,7 @@ def run(args):
         roughness = args.roughness
     color_mode = "reference" if args.color_mode is None else args.color_mode
     if color_mode != "reference" and info.mix != MIX_RHO_MS:
-        raise _usage(f"--color-mode {color_mode} applies to the EON models only (eon, eon_approx), "
-                     f"not {info.name}")
+        raise _usage(f"--color-mode {color_mode} applies to the EON models only (eon, eon_approx), not {info.name}")
     if args.average and args.mu:
         raise _usage("--average takes no --mu")
     if not args.average and not args.mu:
@@ -167,9 +196,11 @@ def run(args):
     C = rho.size
     chan = [""] if C == 1 else [f"[{k}]" for k in range(C)]
     rough_text = f", {rough_key} = {roughness!r}" if rough_key else " (no roughness)"
-    print(f"# model {info.name}{rough_text}, rho = ({', '.join(repr(float(r)) for r in rho)}), "
-          f"color mode {color_mode}, {source}"
-          + (f"; reference: {ref_source}, accurate to {ref_error:.2g}" if ref is not None else ""))
+    print(
+        f"# model {info.name}{rough_text}, rho = ({', '.join(repr(float(r)) for r in rho)}), "
+        f"color mode {color_mode}, {source}"
+        + (f"; reference: {ref_source}, accurate to {ref_error:.2g}" if ref is not None else "")
+    )
     cols = [] if args.average else ["mu"]
     for c in chan:
         cols += ["<E>" + c if args.average else "E" + c]

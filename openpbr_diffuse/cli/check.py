@@ -6,6 +6,7 @@ Rows whose out_r, out_g, out_b are blank are skipped (and counted). Exit status:
 1 does not conform, 2 unusable file (missing columns, non-numeric values, rows that do not
 match the vectors).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -17,10 +18,14 @@ from ..graders import cli as graders_cli
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    p = subparsers.add_parser("check", help="grade an implementation's results on the test vectors",
-                              description=__doc__.splitlines()[0].strip("`").replace("``", ""))
-    p.add_argument("file", metavar="FILE", nargs="?",
-                   help="the vectors file with out_r, out_g, out_b filled in (CSV or JSON)")
+    p = subparsers.add_parser(
+        "check",
+        help="grade an implementation's results on the test vectors",
+        description=__doc__.splitlines()[0].strip("`").replace("``", ""),
+    )
+    p.add_argument(
+        "file", metavar="FILE", nargs="?", help="the vectors file with out_r, out_g, out_b filled in (CSV or JSON)"
+    )
     p.add_argument("--model", choices=VECTOR_MODELS, help="grade only the rows of this model")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     graders_cli.add_arguments(p)  # --implementation / --glsl / --cpp
@@ -51,15 +56,21 @@ def _error(w: dict) -> str:
 
 
 def _print_text(g, path) -> None:
-    print(f"{path}: {'CONFORMS' if g.passed else 'DOES NOT CONFORM'} "
-          f"({g.n_rows} rows of {', '.join(g.models)}, vectors version {g.version}"
-          f"{f'; {g.n_skipped} blank rows skipped' if g.n_skipped else ''})")
-    print(f"  max abs error {_num(g.max_abs_error)}, rms {_num(g.rms_error)}, max relative "
-          f"{_num(g.max_rel_error)}; {g.n_failed_rows} rows outside the tolerance")
+    print(
+        f"{path}: {'CONFORMS' if g.passed else 'DOES NOT CONFORM'} "
+        f"({g.n_rows} rows of {', '.join(g.models)}, vectors version {g.version}"
+        f"{f'; {g.n_skipped} blank rows skipped' if g.n_skipped else ''})"
+    )
+    print(
+        f"  max abs error {_num(g.max_abs_error)}, rms {_num(g.rms_error)}, max relative "
+        f"{_num(g.max_rel_error)}; {g.n_failed_rows} rows outside the tolerance"
+    )
     if g.n_nan or g.n_inf:
         print(f"  non-finite output: {g.n_nan} NaN values, {g.n_inf} Inf values")
-    print(f"  tolerance: {g.tolerance['rule']} with relative {g.tolerance['relative']:g}, "
-          f"absolute {g.tolerance['absolute']:g}")
+    print(
+        f"  tolerance: {g.tolerance['rule']} with relative {g.tolerance['relative']:g}, "
+        f"absolute {g.tolerance['absolute']:g}"
+    )
     if g.passed:
         return
     if g.diagnosis is not None:
@@ -75,8 +86,10 @@ def _print_text(g, path) -> None:
         print("  worst rows:")
         for w in g.worst:
             if w["kind"] == "brdf":
-                where = (f"wi {_vec(w['wi'])} wo {_vec(w['wo'])} mu_i {_num(w['mu_i'])} mu_o {_num(w['mu_o'])} "
-                         f"L.V {_num(w['ldotv'])}")
+                where = (
+                    f"wi {_vec(w['wi'])} wo {_vec(w['wo'])} mu_i {_num(w['mu_i'])} mu_o {_num(w['mu_o'])} "
+                    f"L.V {_num(w['ldotv'])}"
+                )
             else:
                 where = f"albedo at mu {_num(w['mu'])}"
             print(f"    {w['id']} [{w['model']}] {where} roughness {_num(w['roughness'])} rho {_vec(w['rho'])}")
@@ -89,6 +102,7 @@ def run(args: argparse.Namespace) -> int:
         return status
     from ..conformance.grade import grade_chunks
     from ..conformance.vectors import iter_results
+
     if args.file is None:  # ValueError, not main.UsageError: the same exit 2 under `python -m`
         raise ValueError("check: FILE is required (the vectors file with out_r, out_g, out_b filled in)")
     g = grade_chunks(iter_results(args.file), model=args.model)  # streamed: memory bounded by a chunk

@@ -11,6 +11,7 @@ spectra (wavelength in nm, then one column per spectrum) or a USD / MaterialX fi
 materials' diffuse colours are used.  The quantities are those of
 ``openpbr_diffuse.spectral.validation``; colour-science does the colorimetry.
 """
+
 import json
 import math
 
@@ -26,23 +27,53 @@ METHOD_ALIASES = {"auto": "auto", **{m.lower().replace(" ", ""): m for m in RECO
 
 def add_parser(subparsers):
     p = subparsers.add_parser(
-        "colorshift", help="spectral vs RGB colour shift of EON (ColorChecker, RGB colours, material files)",
-        description=__doc__.splitlines()[0].strip("`").replace("``", ""))
-    p.add_argument("--colors", nargs="+", default=["checker"], metavar="COLOR",
-                   help="'checker', R,G,B (linear working-space RGB in [0, 1]) or FILE (.csv spectra, "
-                        ".usd/.usda/.usdc/.usdz/.mtlx materials); default: checker")
-    p.add_argument("--roughness", type=float, nargs="+", default=list(DEFAULT_ROUGHNESS), metavar="R",
-                   help=f"EON roughness r in [0, 1] (default {' '.join(map(str, DEFAULT_ROUGHNESS))})")
-    p.add_argument("--mu", type=float, nargs="+", default=list(DEFAULT_MU), metavar="MU",
-                   help=f"cosine of the view angle in [0, 1] (default {' '.join(map(str, DEFAULT_MU))})")
-    p.add_argument("--method", default="auto", metavar="METHOD",
-                   help=f"RGB -> spectrum upsampling: auto (Mallett 2019 for lin_rec709, else Otsu 2018), "
-                        f"{', '.join(RECOVERY_METHODS)} (spaces optional)")
-    p.add_argument("--illuminant", default=DEFAULT_ILLUMINANT,
-                   help="a colour.SDS_ILLUMINANTS name (default D65; e.g. D50, A, FL2, LED-B1)")
-    p.add_argument("--working-space", default=DEFAULT_WORKING_SPACE, metavar="SPACE",
-                   help=f"RGB working space of the colours and results: {', '.join(WORKING_SPACES)} "
-                        f"(default lin_rec709; case-insensitive, aliases such as lin_ap1_scene)")
+        "colorshift",
+        help="spectral vs RGB colour shift of EON (ColorChecker, RGB colours, material files)",
+        description=__doc__.splitlines()[0].strip("`").replace("``", ""),
+    )
+    p.add_argument(
+        "--colors",
+        nargs="+",
+        default=["checker"],
+        metavar="COLOR",
+        help="'checker', R,G,B (linear working-space RGB in [0, 1]) or FILE (.csv spectra, "
+        ".usd/.usda/.usdc/.usdz/.mtlx materials); default: checker",
+    )
+    p.add_argument(
+        "--roughness",
+        type=float,
+        nargs="+",
+        default=list(DEFAULT_ROUGHNESS),
+        metavar="R",
+        help=f"EON roughness r in [0, 1] (default {' '.join(map(str, DEFAULT_ROUGHNESS))})",
+    )
+    p.add_argument(
+        "--mu",
+        type=float,
+        nargs="+",
+        default=list(DEFAULT_MU),
+        metavar="MU",
+        help=f"cosine of the view angle in [0, 1] (default {' '.join(map(str, DEFAULT_MU))})",
+    )
+    p.add_argument(
+        "--method",
+        default="auto",
+        metavar="METHOD",
+        help=f"RGB -> spectrum upsampling: auto (Mallett 2019 for lin_rec709, else Otsu 2018), "
+        f"{', '.join(RECOVERY_METHODS)} (spaces optional)",
+    )
+    p.add_argument(
+        "--illuminant",
+        default=DEFAULT_ILLUMINANT,
+        help="a colour.SDS_ILLUMINANTS name (default D65; e.g. D50, A, FL2, LED-B1)",
+    )
+    p.add_argument(
+        "--working-space",
+        default=DEFAULT_WORKING_SPACE,
+        metavar="SPACE",
+        help=f"RGB working space of the colours and results: {', '.join(WORKING_SPACES)} "
+        f"(default lin_rec709; case-insensitive, aliases such as lin_ap1_scene)",
+    )
     p.add_argument("--json", action="store_true", help="one JSON document: settings and rows")
     p.add_argument("--image", metavar="PATH", help="write a labelled swatch image (PNG, EXR, ... by suffix)")
     p.set_defaults(run=run)
@@ -80,8 +111,12 @@ def _file_readers():
     from ..spectral import colorsets
 
     readers = {".csv": lambda path, cm, method: (colorsets.from_spectra_csv(path, cm), [])}
-    readers.update({suffix: lambda path, cm, method: colorsets.from_materials([path], cm, method)
-                    for suffix in colorsets.MATERIAL_SUFFIXES})
+    readers.update(
+        {
+            suffix: lambda path, cm, method: colorsets.from_materials([path], cm, method)
+            for suffix in colorsets.MATERIAL_SUFFIXES
+        }
+    )
     return readers
 
 
@@ -113,8 +148,10 @@ def colour_set(tokens, cm, method):
             raise _usage(f"--colors: {token!r} is not 'checker', R,G,B or an existing file")
         reader = readers.get(path.suffix.lower())
         if reader is None:
-            raise _usage(f"--colors: {token!r}: files must be .csv (spectra) or "
-                         f"{'/'.join(colorsets.MATERIAL_SUFFIXES)} (materials)")
+            raise _usage(
+                f"--colors: {token!r}: files must be .csv (spectra) or "
+                f"{'/'.join(colorsets.MATERIAL_SUFFIXES)} (materials)"
+            )
         cs, w = reader(path, cm, method)
         sets.append(cs)
         warnings += w
@@ -127,15 +164,19 @@ def _rgb(v):
 
 
 def _table(result, settings, warnings):
-    lines = [f"EON colour shift: illuminant {settings['illuminant']}, {settings['observer']}, working space "
-             f"{settings['working_space']} ({settings['chromatic_adaptation']}), spectral shape "
-             f"{settings['spectral_shape']['start_nm']:g}-{settings['spectral_shape']['end_nm']:g} nm / "
-             f"{settings['spectral_shape']['interval_nm']:g} nm, dE = CIEDE2000, Lab white = illuminant white",
-             "rgb/spec: albedo_rgb vs albedo_spectral; shift: albedo_spectral vs albedo_white_tint; "
-             "dY = relative luminance difference, dC = chroma difference"]
-    head = (f"{'patch':24} {'r':>5} {'mu':>5}  {'rho_rgb':20}  {'albedo_spectral':20}  {'albedo_rgb':20}  "
-            f"{'albedo_white_tint':20}  {'dE rgb/spec':>11} {'dY %':>7} {'dC':>7}  "
-            f"{'dE shift':>8} {'dY %':>7} {'dC':>7}")
+    lines = [
+        f"EON colour shift: illuminant {settings['illuminant']}, {settings['observer']}, working space "
+        f"{settings['working_space']} ({settings['chromatic_adaptation']}), spectral shape "
+        f"{settings['spectral_shape']['start_nm']:g}-{settings['spectral_shape']['end_nm']:g} nm / "
+        f"{settings['spectral_shape']['interval_nm']:g} nm, dE = CIEDE2000, Lab white = illuminant white",
+        "rgb/spec: albedo_rgb vs albedo_spectral; shift: albedo_spectral vs albedo_white_tint; "
+        "dY = relative luminance difference, dC = chroma difference",
+    ]
+    head = (
+        f"{'patch':24} {'r':>5} {'mu':>5}  {'rho_rgb':20}  {'albedo_spectral':20}  {'albedo_rgb':20}  "
+        f"{'albedo_white_tint':20}  {'dE rgb/spec':>11} {'dY %':>7} {'dC':>7}  "
+        f"{'dE shift':>8} {'dY %':>7} {'dC':>7}"
+    )
     lines += [head, "-" * len(head)]
     for row in result.rows():
         flag = "*" if row["rho_rgb_clipped"] else " "
@@ -144,21 +185,29 @@ def _table(result, settings, warnings):
             f"{_rgb(row['albedo_spectral']):20}  {_rgb(row['albedo_rgb']):20}  {_rgb(row['albedo_white_tint']):20}  "
             f"{row['delta_e_rgb_vs_spectral']:11.4f} {100 * row['rel_luminance_diff_rgb_vs_spectral']:7.3f} "
             f"{row['chroma_diff_rgb_vs_spectral']:7.3f}  {row['delta_e_shift']:8.4f} "
-            f"{100 * row['rel_luminance_diff_shift']:7.3f} {row['chroma_diff_shift']:7.3f}")
+            f"{100 * row['rel_luminance_diff_shift']:7.3f} {row['chroma_diff_shift']:7.3f}"
+        )
     if result.rho_rgb_clipped.any():
         lines.append("* colour outside the working-space gamut: albedo_rgb is evaluated on rho_rgb clipped to [0, 1]")
     rt = [(n, d) for n, d in zip(result.colours.names, result.colours.roundtrip_delta_e) if d == d]
     if rt:
-        lines.append("upsampling round trip (dE2000, rho_rgb vs colour of the spectrum): "
-                     + ", ".join(f"{n} {d:.4f}" for n, d in rt))
+        lines.append(
+            "upsampling round trip (dE2000, rho_rgb vs colour of the spectrum): "
+            + ", ".join(f"{n} {d:.4f}" for n, d in rt)
+        )
     r_max = float(result.roughness.max())
     for mu, s in result.summary(r_max).items():
         a, b = s["delta_e_rgb_vs_spectral"], s["delta_e_shift"]
-        inside = (f", in gamut {a['max_in_gamut'][0]:.4f} ({a['max_in_gamut'][1]})"
-                  if a["max_in_gamut"][1] not in (None, a["max"][1]) else "")
-        lines.append(f"r = {r_max:g}, mu = {mu:g}: dE rgb/spec max {a['max'][0]:.4f} ({a['max'][1]}){inside}, "
-                     f"median {a['median'][0]:.4f} ({a['median'][1]}); dE shift max {b['max'][0]:.4f} "
-                     f"({b['max'][1]}), median {b['median'][0]:.4f} ({b['median'][1]})")
+        inside = (
+            f", in gamut {a['max_in_gamut'][0]:.4f} ({a['max_in_gamut'][1]})"
+            if a["max_in_gamut"][1] not in (None, a["max"][1])
+            else ""
+        )
+        lines.append(
+            f"r = {r_max:g}, mu = {mu:g}: dE rgb/spec max {a['max'][0]:.4f} ({a['max'][1]}){inside}, "
+            f"median {a['median'][0]:.4f} ({a['median'][1]}); dE shift max {b['max'][0]:.4f} "
+            f"({b['max'][1]}), median {b['median'][0]:.4f} ({b['median'][1]})"
+        )
     lines += [f"warning: {w}" for w in warnings]
     return "\n".join(lines)
 

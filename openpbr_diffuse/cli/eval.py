@@ -10,6 +10,7 @@ weight and selection probability, the directional albedo at theta_o and the BRDF
 (no cosine) at the given directions.  Angles in degrees; phi is the azimuth of wi relative
 to wo (180: forward, in the plane of incidence).
 """
+
 import argparse
 import json
 import sys
@@ -20,15 +21,36 @@ from ._materials import add_material_options, load
 
 
 def add_parser(subparsers):
-    p = subparsers.add_parser("eval", help="evaluate the materials of a USD / MaterialX file",
-                              description=__doc__.splitlines()[0].strip("`").replace("``", ""))
+    p = subparsers.add_parser(
+        "eval",
+        help="evaluate the materials of a USD / MaterialX file",
+        description=__doc__.splitlines()[0].strip("`").replace("``", ""),
+    )
     add_material_options(p)
-    p.add_argument("--theta-i", type=float, nargs="+", default=[30.0], metavar="DEG",
-                   help="incidence angle(s) of wi from the normal, degrees in [0, 90] (default 30)")
-    p.add_argument("--theta-o", type=float, nargs="+", default=[30.0], metavar="DEG",
-                   help="view angle(s) of wo, degrees in [0, 90] (default 30)")
-    p.add_argument("--phi", type=float, nargs="+", default=[180.0], metavar="DEG",
-                   help="azimuth of wi relative to wo, degrees (default 180)")
+    p.add_argument(
+        "--theta-i",
+        type=float,
+        nargs="+",
+        default=[30.0],
+        metavar="DEG",
+        help="incidence angle(s) of wi from the normal, degrees in [0, 90] (default 30)",
+    )
+    p.add_argument(
+        "--theta-o",
+        type=float,
+        nargs="+",
+        default=[30.0],
+        metavar="DEG",
+        help="view angle(s) of wo, degrees in [0, 90] (default 30)",
+    )
+    p.add_argument(
+        "--phi",
+        type=float,
+        nargs="+",
+        default=[180.0],
+        metavar="DEG",
+        help="azimuth of wi relative to wo, degrees (default 180)",
+    )
     p.add_argument("--all", action="store_true", help="list every parameter, not only the set and modelled ones")
     p.add_argument("--json", action="store_true", help="one JSON document (schema in the README)")
     p.set_defaults(run=run)
@@ -58,8 +80,10 @@ def _rgb(a):
 def _node_defaults(node_class):
     from ..readers import mxlib
 
-    nd = {"OpenPBRSurface": "ND_open_pbr_surface_surfaceshader",
-          "OrenNayarDiffuseBSDF": "ND_oren_nayar_diffuse_bsdf"}.get(node_class)
+    nd = {
+        "OpenPBRSurface": "ND_open_pbr_surface_surfaceshader",
+        "OrenNayarDiffuseBSDF": "ND_oren_nayar_diffuse_bsdf",
+    }.get(node_class)
     return {n: v for n, (t, v, g) in mxlib.inputs(nd).items()} if nd else {}
 
 
@@ -78,10 +102,18 @@ def run(args: "argparse.Namespace") -> int:
     status = 1 if any(m.error for m in materials) else 0
     if args.json:
         doc = {
-            "file": args.file, "working_space": WORKING_SPACE, "time": args.time,
-            "variants": dict(v.split("=", 1) for v in args.variant), "uv": list(args.uv),
-            "directions": {"theta_i": ti.tolist(), "theta_o": to.tolist(), "phi": ph.tolist(),
-                           "units": "degrees", "frame": "local, normal +z; phi = azimuth of wi relative to wo"},
+            "file": args.file,
+            "working_space": WORKING_SPACE,
+            "time": args.time,
+            "variants": dict(v.split("=", 1) for v in args.variant),
+            "uv": list(args.uv),
+            "directions": {
+                "theta_i": ti.tolist(),
+                "theta_o": to.tolist(),
+                "phi": ph.tolist(),
+                "units": "degrees",
+                "frame": "local, normal +z; phi = azimuth of wi relative to wo",
+            },
             "materials": [dict(m.to_dict(), evaluation=r) for m, r in results],
         }
         print(json.dumps(doc, allow_nan=False))
@@ -97,13 +129,27 @@ def run(args: "argparse.Namespace") -> int:
             for w in m.warnings:
                 print(f"  warning: {_safe(w)}")
             continue
-        print(f"  node: {m.node_class}" + (f" (diffuse {m.diffuse_model})" if m.diffuse_model else "")
-              + f"; colours in {WORKING_SPACE}")
+        print(
+            f"  node: {m.node_class}"
+            + (f" (diffuse {m.diffuse_model})" if m.diffuse_model else "")
+            + f"; colours in {WORKING_SPACE}"
+        )
         print("  parameters:")
         for name, p in m.parameters.items():
-            if not args.all and p.kind == "default" and name not in ("base_color", "base_diffuse_roughness",
-                                                                       "base_weight", "color", "roughness",
-                                                                       "weight", "diffuseColor"):
+            if (
+                not args.all
+                and p.kind == "default"
+                and name
+                not in (
+                    "base_color",
+                    "base_diffuse_roughness",
+                    "base_weight",
+                    "color",
+                    "roughness",
+                    "weight",
+                    "diffuseColor",
+                )
+            ):
                 continue
             print(f"    {name} = {_fmt(p.value)}    <- {p.provenance}")
         # node inputs that differ from the shader's own (mapped from another shader, or
@@ -112,8 +158,11 @@ def run(args: "argparse.Namespace") -> int:
         node_defaults = _node_defaults(m.node_class)
         for name, p in m.node_inputs.items():
             own = m.parameters.get(name)
-            if not args.all and (p.kind == "default" or (own is not None and own.value == p.value)
-                                 or (own is None and node_defaults.get(name) == p.value)):
+            if not args.all and (
+                p.kind == "default"
+                or (own is not None and own.value == p.value)
+                or (own is None and node_defaults.get(name) == p.value)
+            ):
                 continue
             if not shown:
                 print(f"  {m.node_class} inputs (mapped / clamped):")
@@ -125,14 +174,18 @@ def run(args: "argparse.Namespace") -> int:
         first = sorted({r["theta_o"][k]: k for k in reversed(range(n))}.values())
         print("  diffuse lobe (weight, selection probability, albedo of the lobe, weight x albedo):")
         for k in first:
-            print(f"    theta_o {r['theta_o'][k]:g}: weight {_rgb(d['weight'][k])}  P {d['probability'][k]:.6f}  "
-                  f"E {_rgb(d['albedo'][k])}  w*E {_rgb(d['contribution'][k])}")
+            print(
+                f"    theta_o {r['theta_o'][k]:g}: weight {_rgb(d['weight'][k])}  P {d['probability'][k]:.6f}  "
+                f"E {_rgb(d['albedo'][k])}  w*E {_rgb(d['contribution'][k])}"
+            )
         print("  directional albedo of the material:")
         for k in first:
             print(f"    theta_o {r['theta_o'][k]:g}: {_rgb(r['albedo'][k])}")
         print("  BRDF f(wi, wo) (no cosine):")
         for k in range(n):
-            print(f"    theta_i {r['theta_i'][k]:g} theta_o {r['theta_o'][k]:g} phi {r['phi'][k]:g}: {_rgb(r['brdf'][k])}")
+            print(
+                f"    theta_i {r['theta_i'][k]:g} theta_o {r['theta_o'][k]:g} phi {r['phi'][k]:g}: {_rgb(r['brdf'][k])}"
+            )
         for u in m.unsupported:
             print(f"  unsupported: {_safe(u)}")
         for a in m.approximations:
@@ -141,8 +194,11 @@ def run(args: "argparse.Namespace") -> int:
             print(f"  warning: {_safe(w)}")
     bad = [m for m in materials if m.error]
     if bad:
-        print(f"{len(bad)} of {len(materials)} material(s) could not be evaluated: "
-              + ", ".join(_safe(m.path) for m in bad), file=sys.stderr)
+        print(
+            f"{len(bad)} of {len(materials)} material(s) could not be evaluated: "
+            + ", ".join(_safe(m.path) for m in bad),
+            file=sys.stderr,
+        )
     return status
 
 

@@ -13,6 +13,7 @@ Conventions (tested in ``tests/test_cli_conventions.py``):
   sees that the output was cut short);
 - Ctrl-C prints ``openpbr-diffuse: interrupted`` and exits 130 (128 + SIGINT), no traceback.
 """
+
 import argparse
 import importlib
 import os
@@ -35,8 +36,10 @@ COMMANDS = {
 }
 
 PROG = "openpbr-diffuse"
-DESCRIPTION = ("Reference implementation and conformance validator of the OpenPBR rough diffuse "
-               "lobe (EON, Portsmouth-Kutz-Hill JCGT 2025) and the Oren-Nayar family.")
+DESCRIPTION = (
+    "Reference implementation and conformance validator of the OpenPBR rough diffuse "
+    "lobe (EON, Portsmouth-Kutz-Hill JCGT 2025) and the Oren-Nayar family."
+)
 EXIT_USAGE, EXIT_SIGPIPE, EXIT_SIGINT = 2, 141, 130
 
 #: Any float literal Python's float() reads, with a leading minus: taken as a value.
@@ -62,8 +65,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser():
-    parser = _Parser(prog=PROG, description=DESCRIPTION,
-                     epilog=f"Run '{PROG} COMMAND --help' for a command's options.")
+    parser = _Parser(prog=PROG, description=DESCRIPTION, epilog=f"Run '{PROG} COMMAND --help' for a command's options.")
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
@@ -103,15 +105,16 @@ def _parse(parser: argparse.ArgumentParser, argv: list[str] | None) -> argparse.
     words = sys.argv[1:] if argv is None else list(argv)
     command = next((w for w in words if not w.startswith("-")), None)
     if command is not None and command not in sub.choices:
-        raise UsageError(f"unknown command {command!r}{_suggest(command, sub.choices)}; "
-                         f"choose from {', '.join(sub.choices)}", prog=PROG)
+        raise UsageError(
+            f"unknown command {command!r}{_suggest(command, sub.choices)}; choose from {', '.join(sub.choices)}",
+            prog=PROG,
+        )
     args, extra = parser.parse_known_args(argv)
     if extra:
         cmd = sub.choices[args.command]
         options = [o for a in cmd._actions for o in a.option_strings]
         usage = " ".join(cmd.format_usage().split())
-        raise UsageError(f"unrecognized argument {extra[0]}{_suggest(extra[0], options)}; {usage}",
-                         prog=cmd.prog)
+        raise UsageError(f"unrecognized argument {extra[0]}{_suggest(extra[0], options)}; {usage}", prog=cmd.prog)
     return args
 
 

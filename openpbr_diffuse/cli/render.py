@@ -7,6 +7,7 @@ Left: the sphere under a directional light; right: under a uniform white environ
 furnace: each pixel is the directional albedo at its view angle).  EXR: linear ACEScg, float;
 PNG: sRGB, 8 bit (see :mod:`openpbr_diffuse.readers.preview`).
 """
+
 import argparse
 import os
 
@@ -15,8 +16,11 @@ from ._materials import add_material_options, load
 
 
 def add_parser(subparsers):
-    p = subparsers.add_parser("render", help="preview a material on a sphere (directional and furnace light)",
-                              description=__doc__.splitlines()[0].strip("`").replace("``", ""))
+    p = subparsers.add_parser(
+        "render",
+        help="preview a material on a sphere (directional and furnace light)",
+        description=__doc__.splitlines()[0].strip("`").replace("``", ""),
+    )
     add_material_options(p)
     p.add_argument("--out", required=True, metavar="IMAGE", help="output image (.exr linear, .png sRGB)")
     p.add_argument("--size", type=int, default=256, metavar="N", help="height of the image in pixels (default 256)")

@@ -15,6 +15,7 @@ only when the new one is complete.  Exit status: 0 the implementation conforms (
 library's evidence passes), 1 it does not conform (or a check of the evidence fails),
 2 unusable input, 3 the implementation could not run (no GL driver, no compiler, ...).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -26,10 +27,14 @@ FAST_EVIDENCE = ("implementations", "approximations")
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
     """Add the ``report`` sub-command."""
-    p = subparsers.add_parser("report", help="does your implementation conform? HTML + JSON + images",
-                              description=__doc__.splitlines()[0].strip("`").replace("``", ""))
-    p.add_argument("paths", nargs="*", metavar="PATHS",
-                   help="USD / MaterialX files or folders (default: the bundled materials/)")
+    p = subparsers.add_parser(
+        "report",
+        help="does your implementation conform? HTML + JSON + images",
+        description=__doc__.splitlines()[0].strip("`").replace("``", ""),
+    )
+    p.add_argument(
+        "paths", nargs="*", metavar="PATHS", help="USD / MaterialX files or folders (default: the bundled materials/)"
+    )
     p.add_argument("--out", default="report", metavar="DIR", help="output directory (default: report)")
     p.add_argument("--quick", action="store_true", help="smaller grids and sample counts")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -37,22 +42,40 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     g.add_argument("--vectors", metavar="FILE", help="a filled vectors file (CSV / JSON with out_r, out_g, out_b)")
     added = _grader_arguments(g)
     if not added:
-        for flag, kw in (("--implementation", {"metavar": "NAME"}), ("--source", {"metavar": "PATH"}),
-                         ("--glsl", {"metavar": "FILE"}), ("--cpp", {"metavar": "FILE"}),
-                         ("--function", {"metavar": "NAME"}), ("--albedo-function", {"metavar": "NAME"}),
-                         ("--sample-function", {"metavar": "NAME"}), ("--pdf-function", {"metavar": "NAME"})):
+        for flag, kw in (
+            ("--implementation", {"metavar": "NAME"}),
+            ("--source", {"metavar": "PATH"}),
+            ("--glsl", {"metavar": "FILE"}),
+            ("--cpp", {"metavar": "FILE"}),
+            ("--function", {"metavar": "NAME"}),
+            ("--albedo-function", {"metavar": "NAME"}),
+            ("--sample-function", {"metavar": "NAME"}),
+            ("--pdf-function", {"metavar": "NAME"}),
+        ):
             g.add_argument(flag, **kw)
         g.add_argument("--include", metavar="DIR", action="append", default=[])
         g.add_argument("--define", metavar="NAME=VALUE", action="append", default=[])
     g.add_argument("--model", default=None, metavar="MODEL", help="the model it claims (default eon)")
     c = p.add_argument_group("checks")
-    c.add_argument("--evidence", choices=("all", "fast", "none"), default=None,
-                   help="the library's own evidence to run: all sections, the fast ones "
-                        f"({', '.join(FAST_EVIDENCE)}; default with an implementation) or none")
-    c.add_argument("--select", nargs="+", metavar="ID", default=None,
-                   help="run only these checks / sections (ids or glob patterns, e.g. 'albedo.*' models)")
-    c.add_argument("--list-checks", action="store_true",
-                   help="print the check ids (from a run of the selected sections into a scratch folder) and exit")
+    c.add_argument(
+        "--evidence",
+        choices=("all", "fast", "none"),
+        default=None,
+        help="the library's own evidence to run: all sections, the fast ones "
+        f"({', '.join(FAST_EVIDENCE)}; default with an implementation) or none",
+    )
+    c.add_argument(
+        "--select",
+        nargs="+",
+        metavar="ID",
+        default=None,
+        help="run only these checks / sections (ids or glob patterns, e.g. 'albedo.*' models)",
+    )
+    c.add_argument(
+        "--list-checks",
+        action="store_true",
+        help="print the check ids (from a run of the selected sections into a scratch folder) and exit",
+    )
     c.add_argument("--junit", metavar="FILE", help="also write the checks as JUnit XML")
     p.set_defaults(run=run)
     return p
@@ -92,8 +115,13 @@ def _grader_arguments(group) -> bool:
         group.add_argument(*action.option_strings, **kwargs)
     for flag, dest in (("--sample-function", "sample_function"), ("--pdf-function", "pdf_function")):
         if dest not in have:
-            group.add_argument(flag, dest=dest, metavar="NAME", default=None,
-                               help="sampler / pdf function (graded when the graders support it)")
+            group.add_argument(
+                flag,
+                dest=dest,
+                metavar="NAME",
+                default=None,
+                help="sampler / pdf function (graded when the graders support it)",
+            )
     return True
 
 
@@ -104,8 +132,7 @@ def subject_from_args(args):
     gcli = importlib.import_module("openpbr_diffuse.graders.cli")
     hook = getattr(gcli, "subject_from_args", None)
     if hook is not None:
-        ns = argparse.Namespace(**{**vars(args), "quick": True, "json": False, "file": None,
-                                   "model": args.model})
+        ns = argparse.Namespace(**{**vars(args), "quick": True, "json": False, "file": None, "model": args.model})
         return hook(ns)
     # fallback: the graders' generic adapters (BRDF and albedo)
     modes = [m for m in ("implementation", "glsl", "cpp") if getattr(args, m, None)]
@@ -120,11 +147,18 @@ def subject_from_args(args):
     from ..graders.generic import cpp_subject, glsl_subject
 
     make = glsl_subject if args.glsl else cpp_subject
-    subject = make(args.glsl or args.cpp, args.function, args.albedo_function, includes=args.include or (),
-                   defines=args.define or (), model=args.model or "eon")
+    subject = make(
+        args.glsl or args.cpp,
+        args.function,
+        args.albedo_function,
+        includes=args.include or (),
+        defines=args.define or (),
+        model=args.model or "eon",
+    )
     if getattr(args, "sample_function", None) or getattr(args, "pdf_function", None):
-        subject.notes.append("sampler: not graded: this installation's graders do not run "
-                             "--sample-function / --pdf-function")
+        subject.notes.append(
+            "sampler: not graded: this installation's graders do not run --sample-function / --pdf-function"
+        )
     return subject
 
 
@@ -183,8 +217,14 @@ def run(args) -> int:
         import tempfile
 
         with tempfile.TemporaryDirectory(prefix="openpbr-diffuse-checks-") as tmp:
-            result = run_report(args.paths, f"{tmp}/r", quick=args.quick, progress=progress,
-                                sections=_sections(args, None), select=args.select)
+            result = run_report(
+                args.paths,
+                f"{tmp}/r",
+                quick=args.quick,
+                progress=progress,
+                sections=_sections(args, None),
+                select=args.select,
+            )
             for s in result.document["sections"]:
                 if not s["checks"]:
                     print(f"{s['key']}.section\t({s['status']}{': ' + s['not_run'] if s['not_run'] else ''})")
@@ -192,13 +232,26 @@ def run(args) -> int:
                     print(f"{c['id']}\t{c['name']}")
         for q in ("brdf", "albedo", "sampler_pdf", "sampler_chi2"):
             print(f"implementation.{q}\t(with --glsl / --cpp / --vectors / --implementation)")
-        for q in ("sampler_pdf.normalisation", "sampler_pdf.reference", "sampler_chi2.chi2", "sampler_chi2.valid",
-                  "sampler_chi2.variance"):
+        for q in (
+            "sampler_pdf.normalisation",
+            "sampler_pdf.reference",
+            "sampler_chi2.chi2",
+            "sampler_chi2.valid",
+            "sampler_chi2.variance",
+        ):
             print(f"implementation.{q}\t(with --sample-function / --pdf-function)")
         return 0
     under, subject = _under_test(args)
-    result = run_report(args.paths, args.out, quick=args.quick, progress=progress,
-                        sections=_sections(args, under), select=args.select, under_test=under, subject=subject)
+    result = run_report(
+        args.paths,
+        args.out,
+        quick=args.quick,
+        progress=progress,
+        sections=_sections(args, under),
+        select=args.select,
+        under_test=under,
+        subject=subject,
+    )
     doc = result.document
     if args.junit:
         from ..report.junit import write_junit
@@ -213,8 +266,10 @@ def run(args) -> int:
             if v["status"] == "does not conform" and v["where"]:
                 print(f"           worst row (error / tolerance): {v['where']}")
     else:
-        print("No implementation under test: this report shows the reference's own evidence. "
-              "Use --glsl/--cpp/--vectors/--implementation to grade yours.")
+        print(
+            "No implementation under test: this report shows the reference's own evidence. "
+            "Use --glsl/--cpp/--vectors/--implementation to grade yours."
+        )
     print("The library's own evidence:")
     for s in doc["sections"]:
         ran = [c for c in s["checks"] if c["status"] != "not run"]
@@ -226,11 +281,15 @@ def run(args) -> int:
         print(f"  FAIL {c['id']}: {c['name']} (measured {c['measured']}, {c['comparison']} {c['threshold']})")
     ev = doc["evidence"]
     if ev["n_checks"] == 0:
-        print(f"NOT RUN: no check of the library's evidence ran; report in {result.out_dir / 'index.html'} "
-              f"({doc['elapsed_s']:.1f} s)")
+        print(
+            f"NOT RUN: no check of the library's evidence ran; report in {result.out_dir / 'index.html'} "
+            f"({doc['elapsed_s']:.1f} s)"
+        )
         return result.exit_status
-    print(f"{'PASS' if result.passed else 'FAIL'}: {ev['n_checks'] - ev['n_failed']}/{ev['n_checks']} checks "
-          f"of the library's evidence; report in {result.out_dir / 'index.html'} ({doc['elapsed_s']:.1f} s)")
+    print(
+        f"{'PASS' if result.passed else 'FAIL'}: {ev['n_checks'] - ev['n_failed']}/{ev['n_checks']} checks "
+        f"of the library's evidence; report in {result.out_dir / 'index.html'} ({doc['elapsed_s']:.1f} s)"
+    )
     return result.exit_status
 
 

@@ -7,6 +7,7 @@
 Prints, per mu, the directional albedo in total and per bounce order (1, 2, >= 3) with
 standard errors (``--json``: a ``rows`` list with mu, albedo, albedo_by_order, stderr).
 """
+
 import json
 import math
 import sys
@@ -19,25 +20,47 @@ from . import simulate_layered
 
 def add_parser(subparsers):
     p = subparsers.add_parser(
-        "simulate", help="Monte Carlo albedo of a V-cavity / Smith Lambertian microsurface",
-        description=__doc__.splitlines()[0].strip("`").replace("``", ""))
-    p.add_argument("--geometry", choices=list(GEOMETRIES),
-                   help="vcavity (Oren-Nayar V-grooves) or a Smith microsurface (Heitz et al. 2016)")
-    p.add_argument("--roughness", type=float, metavar="S",
-                   help="sigma in radians [0, pi/2] for vcavity; alpha [0, 2] for smith-*; EON r with --layered")
+        "simulate",
+        help="Monte Carlo albedo of a V-cavity / Smith Lambertian microsurface",
+        description=__doc__.splitlines()[0].strip("`").replace("``", ""),
+    )
+    p.add_argument(
+        "--geometry",
+        choices=list(GEOMETRIES),
+        help="vcavity (Oren-Nayar V-grooves) or a Smith microsurface (Heitz et al. 2016)",
+    )
+    p.add_argument(
+        "--roughness",
+        type=float,
+        metavar="S",
+        help="sigma in radians [0, pi/2] for vcavity; alpha [0, 2] for smith-*; EON r with --layered",
+    )
     p.add_argument("--mu", type=float, nargs="+", metavar="MU", help="cosine(s) of the incident angle in [1e-100, 1]")
     p.add_argument("--average", action="store_true", help="average albedo <E> instead of E(mu)")
-    p.add_argument("--rho", type=float, nargs="+", metavar="RHO", default=[1.0],
-                   help="microfacet albedo per channel in [0, 1] (default 1)")
-    p.add_argument("--paths", type=_count, default=1_000_000, metavar="N", help="paths per mu (default 10^6; 1e6 accepted)")
+    p.add_argument(
+        "--rho",
+        type=float,
+        nargs="+",
+        metavar="RHO",
+        default=[1.0],
+        help="microfacet albedo per channel in [0, 1] (default 1)",
+    )
+    p.add_argument(
+        "--paths", type=_count, default=1_000_000, metavar="N", help="paths per mu (default 10^6; 1e6 accepted)"
+    )
     p.add_argument("--seed", type=int, default=0, metavar="K", help="seed (default 0)")
     p.add_argument("--workers", type=int, default=None, metavar="W", help="local threads (default: all cores)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="run the chunks on this Dask distributed scheduler")
     p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar (off anyway when stderr is not a terminal)")
-    p.add_argument("--yes", action="store_true",
-                   help=f"run even above the work budget of {WORK_BUDGET_PATHS:.0e} paths in total "
-                        "(paths x number of mu; about 25 min on 2 cores)")
+    p.add_argument(
+        "--no-progress", action="store_true", help="no progress bar (off anyway when stderr is not a terminal)"
+    )
+    p.add_argument(
+        "--yes",
+        action="store_true",
+        help=f"run even above the work budget of {WORK_BUDGET_PATHS:.0e} paths in total "
+        "(paths x number of mu; about 25 min on 2 cores)",
+    )
     simulate_layered.add_arguments(p)
     p.set_defaults(run=run)
     return p
@@ -71,8 +94,10 @@ def _usage(message):
 def run(args):
     total = args.paths * (1 if args.average or not args.mu else len(args.mu))
     if total > WORK_BUDGET_PATHS and not args.yes:
-        raise _usage(f"{total:.3g} paths in total exceed the work budget of {WORK_BUDGET_PATHS:.0e} "
-                     f"(about {total / PATHS_PER_S / 3600:.3g} h here); pass --yes to run anyway")
+        raise _usage(
+            f"{total:.3g} paths in total exceed the work budget of {WORK_BUDGET_PATHS:.0e} "
+            f"(about {total / PATHS_PER_S / 3600:.3g} h here); pass --yes to run anyway"
+        )
     if args.layered:
         return simulate_layered.run(args)
     if args.geometry is None or args.roughness is None:
@@ -82,8 +107,14 @@ def run(args):
     if not args.average and not args.mu:
         raise _usage("--mu is required (or --average)")
     rho = np.array(args.rho, dtype=np.float64)
-    kw = dict(rho=rho, paths=args.paths, seed=args.seed, workers=args.workers, scheduler=args.scheduler,
-              progress=not args.no_progress and sys.stderr.isatty())
+    kw = dict(
+        rho=rho,
+        paths=args.paths,
+        seed=args.seed,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        progress=not args.no_progress and sys.stderr.isatty(),
+    )
     try:
         if args.average:
             est = simulate_average_albedo(args.geometry, args.roughness, **kw)
@@ -97,8 +128,10 @@ def run(args):
     name = GEOMETRIES[args.geometry][0]
     C = rho.size
     chan = [""] if C == 1 else [f"[{k}]" for k in range(C)]
-    print(f"# {args.geometry}, {name} = {args.roughness:g}, rho = ({', '.join(f'{r:g}' for r in rho)}), "
-          f"{args.paths} paths per row, seed {args.seed}; values +- one standard error")
+    print(
+        f"# {args.geometry}, {name} = {args.roughness:g}, rho = ({', '.join(f'{r:g}' for r in rho)}), "
+        f"{args.paths} paths per row, seed {args.seed}; values +- one standard error"
+    )
     cols = ["mu"]
     for c in chan:
         cols += ["E" + c, "E1" + c, "E2" + c, "E3+" + c]

@@ -8,6 +8,7 @@ Prints, per mu, the directional albedo split into the specular part (first-inter
 reflection), the diffuse part (light that reached the base) and the total, each with its
 standard error (``--json``: the same numbers, ``LayeredAlbedo.to_dict``).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -21,19 +22,38 @@ BASES = ("lambert", "eon", "smith-ggx", "vcavity")
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Add the ``--layered`` options to the ``simulate`` parser."""
     g = p.add_argument_group("layered surface (--layered)")
-    g.add_argument("--layered", action="store_true",
-                   help="simulate a dielectric interface over an absorbing slab over a diffuse base")
+    g.add_argument(
+        "--layered",
+        action="store_true",
+        help="simulate a dielectric interface over an absorbing slab over a diffuse base",
+    )
     g.add_argument("--interface", choices=("smooth", "ggx"), default="smooth", help="interface (default smooth)")
     g.add_argument("--ior", type=float, metavar="N", help="relative index of refraction of the layer, [1, 4]")
-    g.add_argument("--interface-roughness", type=float, default=0.0, metavar="A",
-                   help="GGX width alpha of the interface in [0, 1] (OpenPBR: coat_roughness^2)")
-    g.add_argument("--absorption", type=float, nargs="+", metavar="A", help="absorption coefficient(s), with --thickness")
+    g.add_argument(
+        "--interface-roughness",
+        type=float,
+        default=0.0,
+        metavar="A",
+        help="GGX width alpha of the interface in [0, 1] (OpenPBR: coat_roughness^2)",
+    )
+    g.add_argument(
+        "--absorption", type=float, nargs="+", metavar="A", help="absorption coefficient(s), with --thickness"
+    )
     g.add_argument("--thickness", type=float, metavar="D", help="slab thickness, with --absorption")
-    g.add_argument("--coat-color", type=float, nargs="+", metavar="C",
-                   help="transmittance of one pass at normal incidence (OpenPBR coat_color), per channel")
-    g.add_argument("--base", choices=BASES, default="lambert",
-                   help="diffuse base (default lambert; smith-ggx: simulated Smith GGX Lambertian microsurface, "
-                        "--roughness its alpha)")
+    g.add_argument(
+        "--coat-color",
+        type=float,
+        nargs="+",
+        metavar="C",
+        help="transmittance of one pass at normal incidence (OpenPBR coat_color), per channel",
+    )
+    g.add_argument(
+        "--base",
+        choices=BASES,
+        default="lambert",
+        help="diffuse base (default lambert; smith-ggx: simulated Smith GGX Lambertian microsurface, "
+        "--roughness its alpha)",
+    )
 
 
 def _usage(message: str):
@@ -74,8 +94,9 @@ def run(args: argparse.Namespace) -> int:
         kw = {"absorption": np.array(args.absorption), "thickness": args.thickness}
     elif args.coat_color is not None:
         kw = {"coat_color": np.array(args.coat_color)}
-    surface = LayeredSurface(args.interface, args.ior, args.interface_roughness, base=args.base,
-                             roughness=roughness, **kw)
+    surface = LayeredSurface(
+        args.interface, args.ior, args.interface_roughness, base=args.base, roughness=roughness, **kw
+    )
     rho = np.array(args.rho, dtype=np.float64)
     run_kw = {"rho": rho, "paths": args.paths, "seed": args.seed, "workers": args.workers, "scheduler": args.scheduler}
     try:
@@ -90,13 +111,19 @@ def run(args: argparse.Namespace) -> int:
         return 0
     C = est.total.shape[1]
     chan = [""] if C == 1 else [f"[{k}]" for k in range(C)]
-    slab = ("coat_color = (" + ", ".join(f"{c:g}" for c in args.coat_color) + ")" if args.coat_color is not None
-            else f"tau = ({', '.join(f'{t:g}' for t in surface.tau)})")
-    print(f"# {args.interface} interface, ior {surface.ior:g}"
-          + (f", alpha {surface.interface_alpha:g}" if args.interface == "ggx" else "")
-          + f", {slab}, base {args.base}" + (f" roughness {roughness:g}" if args.base != "lambert" else "")
-          + f", rho = ({', '.join(f'{r:g}' for r in est.rho)}), {args.paths} paths per row, seed {args.seed};"
-          " values +- one standard error")
+    slab = (
+        "coat_color = (" + ", ".join(f"{c:g}" for c in args.coat_color) + ")"
+        if args.coat_color is not None
+        else f"tau = ({', '.join(f'{t:g}' for t in surface.tau)})"
+    )
+    print(
+        f"# {args.interface} interface, ior {surface.ior:g}"
+        + (f", alpha {surface.interface_alpha:g}" if args.interface == "ggx" else "")
+        + f", {slab}, base {args.base}"
+        + (f" roughness {roughness:g}" if args.base != "lambert" else "")
+        + f", rho = ({', '.join(f'{r:g}' for r in est.rho)}), {args.paths} paths per row, seed {args.seed};"
+        " values +- one standard error"
+    )
     cols = ["mu"]
     for c in chan:
         cols += ["specular" + c, "diffuse" + c, "total" + c]
@@ -105,9 +132,11 @@ def run(args: argparse.Namespace) -> int:
     for i in range(est.total.shape[0]):
         cells = ["average" if est.mu is None else f"{est.mu[i]:.6f}"]
         for k in range(C):
-            cells += [f"{est.specular[i, k]:.6f} +- {est.specular_stderr[i, k]:.1e}",
-                      f"{est.diffuse[i, k]:.6f} +- {est.diffuse_stderr[i, k]:.1e}",
-                      f"{est.total[i, k]:.6f} +- {est.total_stderr[i, k]:.1e}"]
+            cells += [
+                f"{est.specular[i, k]:.6f} +- {est.specular_stderr[i, k]:.1e}",
+                f"{est.diffuse[i, k]:.6f} +- {est.diffuse_stderr[i, k]:.1e}",
+                f"{est.total[i, k]:.6f} +- {est.total_stderr[i, k]:.1e}",
+            ]
         print("  ".join(c.rjust(w) for c, w in zip(cells, widths)))
     return 0
 

@@ -7,6 +7,7 @@
 The code templates hold a clearly marked Lambertian placeholder (they compile and run as
 they are).  An existing file is never overwritten without ``--force``.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -15,8 +16,11 @@ _DEFAULT = {"glsl": "diffuse.glsl", "cpp": "diffuse.cpp", "csv": "vectors.csv"}
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    p = subparsers.add_parser("template", help="write a starting GLSL, C++ or CSV file to grade with check",
-                              description=__doc__.splitlines()[0].strip("`").replace("``", ""))
+    p = subparsers.add_parser(
+        "template",
+        help="write a starting GLSL, C++ or CSV file to grade with check",
+        description=__doc__.splitlines()[0].strip("`").replace("``", ""),
+    )
     p.add_argument("kind", choices=sorted(_DEFAULT), help="glsl, cpp or csv")
     p.add_argument("--out", metavar="FILE", help="output file (default diffuse.glsl / diffuse.cpp / vectors.csv)")
     p.add_argument("--force", action="store_true", help="replace FILE if it exists")
@@ -35,8 +39,10 @@ def run(args: argparse.Namespace) -> int:
     if args.kind == "csv":
         print(f"wrote {path}: fill out_r, out_g, out_b of the rows you grade, then: openpbr-diffuse check {path}")
     else:
-        print(f"wrote {path} (a Lambertian placeholder): replace the bodies, then: "
-              f"openpbr-diffuse check --{args.kind} {path} --function f --albedo-function albedo")
+        print(
+            f"wrote {path} (a Lambertian placeholder): replace the bodies, then: "
+            f"openpbr-diffuse check --{args.kind} {path} --function f --albedo-function albedo"
+        )
     return 0
 
 

@@ -6,6 +6,7 @@ Fill ``out_r, out_g, out_b`` of the rows to grade (the BRDF value without the co
 or the directional albedo; rows left blank are skipped) and grade the file with
 ``openpbr-diffuse check FILE``.  An existing file is not replaced without ``--force``.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -15,8 +16,11 @@ from ..conformance.vectors import COLUMNS, OUT_COLUMNS, default_vectors, write_v
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    p = subparsers.add_parser("vectors", help="write the conformance test vectors (CSV or JSON)",
-                              description=__doc__.splitlines()[0].strip("`").replace("``", ""))
+    p = subparsers.add_parser(
+        "vectors",
+        help="write the conformance test vectors (CSV or JSON)",
+        description=__doc__.splitlines()[0].strip("`").replace("``", ""),
+    )
     p.add_argument("--out", required=True, metavar="FILE", help="output file (.csv, or .json)")
     p.add_argument("--force", action="store_true", help="replace FILE if it exists")
     p.set_defaults(run=run)
@@ -28,8 +32,10 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"{args.out} exists: not overwritten (use --force to replace it)")
     v = default_vectors()
     path = write_vectors(v, args.out, blank_out=True)
-    print(f"wrote {len(v)} vectors (version {v.version}) to {path}; columns {', '.join(COLUMNS)}; "
-          f"fill {', '.join(OUT_COLUMNS)} (blank rows are skipped) and run: openpbr-diffuse check {path}")
+    print(
+        f"wrote {len(v)} vectors (version {v.version}) to {path}; columns {', '.join(COLUMNS)}; "
+        f"fill {', '.join(OUT_COLUMNS)} (blank rows are skipped) and run: openpbr-diffuse check {path}"
+    )
     return 0
 
 

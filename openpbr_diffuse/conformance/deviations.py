@@ -40,6 +40,7 @@ Examples
 >>> round(float(ref[0, 0]), 4), round(float(spec[0, 0]), 3)    # white: furnace fails
 (1.0, 0.945)
 """
+
 from __future__ import annotations
 
 import math
@@ -58,8 +59,9 @@ def _roughness_of(vectors):
     return np.where(np.isnan(vectors.roughness), 0.0, vectors.roughness)
 
 
-def _predict(vectors, *, model_map=None, roughness_map=None, color_mode="reference", wi=None, wo=None,
-             rho=None, mu=None):
+def _predict(
+    vectors, *, model_map=None, roughness_map=None, color_mode="reference", wi=None, wo=None, rho=None, mu=None
+):
     """Evaluate the library for every row: (n, 3).
 
     ``model_map``: {vector model: model used}; ``roughness_map(model_used, roughness)`` ->
@@ -204,6 +206,7 @@ def _sqrt(info, x):
 
 def _ms_scaled_brdf(scale):
     """f_ms scaled in the BRDF rows only (the albedo computed by a separate, right formula)."""
+
     def predict(vectors):
         out = _ms_scaled(vectors, lambda rho: scale)
         alb = vectors.kind == "albedo"
@@ -272,8 +275,17 @@ def _predict_qon_scaled(vectors):
     eon = np.isin(vectors.model, _EON_MODELS)
     if eon.any():
         sub = vectors.subset(eon)
-        sub = type(sub)(sub.id, sub.kind, np.full(len(sub), "qon"), sub.wi, sub.wo, sub.mu,
-                        np.minimum(_roughness_of(sub) * _HALF_PI, _HALF_PI), sub.rho, sub.version)
+        sub = type(sub)(
+            sub.id,
+            sub.kind,
+            np.full(len(sub), "qon"),
+            sub.wi,
+            sub.wo,
+            sub.mu,
+            np.minimum(_roughness_of(sub) * _HALF_PI, _HALF_PI),
+            sub.rho,
+            sub.version,
+        )
         out[eon] = _predict(sub)
     return out
 
@@ -282,6 +294,7 @@ def _eq14(listing_albedo):
     """EON rows computed with the Eq. 14 fit of E_F.  The albedo rows: Listing 1's
     E_EON(exact = false) = rho E_F~ + rho_ms (1 - E_F~) (``listing_albedo``), or the
     exact albedo of the approximate lobe."""
+
     def predict(vectors):
         from ..models.eon import rho_ms
         from ..models.fon import E_F_approx, E_F_avg
@@ -308,8 +321,12 @@ def _mu_floor_predict(vectors, floor, base=None):
     brdf = vectors.kind == "brdf"
     with np.errstate(invalid="ignore", divide="ignore"):
         ldotv = np.einsum("ij,ij->i", vectors.wi, vectors.wo)
-        up = brdf & (vectors.wi[:, 2] > 0) & (vectors.wo[:, 2] > 0) & (
-            (vectors.wi[:, 2] < floor) | (vectors.wo[:, 2] < floor))
+        up = (
+            brdf
+            & (vectors.wi[:, 2] > 0)
+            & (vectors.wo[:, 2] > 0)
+            & ((vectors.wi[:, 2] < floor) | (vectors.wo[:, 2] < floor))
+        )
         mi = np.maximum(vectors.wi[:, 2], floor)
         mo = np.maximum(vectors.wo[:, 2], floor)
         si, so = np.sqrt(np.maximum(0.0, 1.0 - mi * mi)), np.sqrt(np.maximum(0.0, 1.0 - mo * mo))
@@ -345,9 +362,15 @@ class Fitted:
         return self.predict(vectors, self.default)
 
 
-_NAMED_FACTORS = ((math.pi, "1/pi forgotten"), (1.0 / math.pi, "an extra 1/pi"), (2.0, "x 2"),
-                  (0.5, "x 1/2"), (2.0 * math.pi, "1/(2 pi) forgotten"), (1.0 / (2.0 * math.pi), "an extra 1/(2 pi)"),
-                  (4.0 * math.pi, "1/(4 pi) forgotten"))
+_NAMED_FACTORS = (
+    (math.pi, "1/pi forgotten"),
+    (1.0 / math.pi, "an extra 1/pi"),
+    (2.0, "x 2"),
+    (0.5, "x 1/2"),
+    (2.0 * math.pi, "1/(2 pi) forgotten"),
+    (1.0 / (2.0 * math.pi), "an extra 1/(2 pi)"),
+    (4.0 * math.pi, "1/(4 pi) forgotten"),
+)
 
 
 def factor_name(k: float) -> str:
@@ -428,54 +451,127 @@ class Deviation:
 
 
 _TABLE = (
-    ("no_energy_compensation_qon", "QON (sigma = the given r) instead of EON: no energy compensation",
-     "MaterialX OSL backend (ignores energy_compensation)",
-     (("qon with sigma = r", _no_ec("qon")), ("qon with sigma = r pi/2", _predict_qon_scaled))),
-    ("no_energy_compensation_fon", "FON instead of EON: the single-scattering lobe without f_ms",
-     "EON without its Eq. 16-19 compensation term", (("fon", _no_ec("fon")),)),
-    ("rho_ms_extra_inv_pi", "rho_ms with an extra 1/pi in f_ms (white furnace fails)",
-     "OpenPBR specification text v1.1", (("f_ms / pi", _rho_ms_extra_inv_pi),)),
-    ("rho_ms_extra_rho", "f_ms multiplied by rho once more (coloured albedo too dark)",
-     "Blender Cycles", (("rho f_ms", _rho_ms_extra_rho),)),
-    ("ldotv_clamped", "L.V clamped to [eps, 1] before s = L.V - mu_i mu_o (changes the s <= 0 branch)",
-     "MaterialX GLSL", (("clamp(L.V, 1e-8, 1)", _ldotv_clamped),)),
-    ("white_tint", "evaluated at rho = 1 then multiplied by rho (no colour shift)",
-     "OpenPBR-viewer", (("rho f(rho = 1)", _white_tint),)),
-    ("times_cos_theta_i", "the BRDF multiplied by cos(theta_i) (a radiance response, not f)",
-     "common integration mistake", (("f mu_i", _times_cos), ("f mu_i, albedo E mu", _times_cos_albedo_too))),
-    ("roughness_sigma_vs_r", "roughness read in the other parameterisation (sigma in [0, pi/2] vs r in [0, 1])",
-     "parameter mix-up between QON (sigma) and FON/EON (r)",
-     (("r' = 2r/pi, sigma' = sigma pi/2", _rough(_read_as_other)),
-      ("r' = r pi/2, sigma' = 2 sigma/pi", _rough(_read_as_other_inverse)))),
-    ("roughness_squared", "roughness squared (or square-rooted) before use",
-     "perceptual-roughness convention mix-up",
-     (("r' = r^2 (sigma normalised to [0, 1])", _rough(_squared)),
-      ("sigma' = sigma^2 (radians)", _rough(_squared_radians)),
-      ("r' = sqrt(r)", _rough(_sqrt)))),
-    ("no_energy_compensation_lambert", "Lambert instead of EON: rho/pi, no roughness",
-     "EON rows answered by a Lambertian lobe", (("lambert", _lambert_for_eon),)),
-    ("eq14_fit_for_exact", "the Eq. 14 fit of E_F where the exact E_F (Eq. 12-13) is claimed",
-     "Listing 1 with exact = false: grade such code as eon_approx (fill the eon_approx rows, "
-     "check --model eon_approx)",
-     (("E_F~ in f_ms, Listing 1 albedo", _eq14(True)), ("E_F~ in f_ms, the lobe's albedo", _eq14(False)))),
-    ("constant_factor", "every value multiplied by a constant factor", "a 1/pi forgotten or added, a factor 2",
-     (("{}", Fitted(_scale_fit(("brdf", "albedo"))[0], _scale_predict(("brdf", "albedo")), factor_name,
-                    math.pi)),
-      ("{} (BRDF rows only)", Fitted(_scale_fit(("brdf",))[0], _scale_predict(("brdf",)),
-                                     lambda k: factor_name(k).replace("every value", "every BRDF value"),
-                                     math.pi)))),
-    ("ms_missing_inv_pi", "f_ms without its 1/pi (multiple scattering x pi)", "Eq. 17 with the 1/pi dropped",
-     (("f_ms x pi", _ms_times_pi), ("f_ms x pi, albedo right", _ms_scaled_brdf(math.pi)))),
-    ("divided_by_cos_theta_i", "the BRDF divided by cos(theta_i) (the cosine divided out)",
-     "a cosine removed that was never in f", (("f / mu_i", _divided_by_cos),)),
-    ("roughness_degrees", "roughness converted between degrees and radians",
-     "a radians value read as degrees (or the reverse)",
-     (("x' = x pi/180", _rough(_degrees)), ("x' = x 180/pi", _rough(_radians_to_degrees)))),
-    ("rho_srgb_encoded", "rho used sRGB-encoded instead of linear",
-     "a colour texture or swatch read without (or with a second) sRGB decode",
-     (("rho' = srgb_encode(rho)", _rho_mapped(srgb_encode)), ("rho' = srgb_decode(rho)", _rho_mapped(srgb_decode)))),
-    ("mu_floor", "mu_i, mu_o clamped at a floor", "max(mu, floor) against grazing division",
-     (("mu' = max(mu, {:.4g})", Fitted(_floor_fit, _mu_floor_predict, lambda m: f"mu' = max(mu, {m:.4g})", 0.01)),)),
+    (
+        "no_energy_compensation_qon",
+        "QON (sigma = the given r) instead of EON: no energy compensation",
+        "MaterialX OSL backend (ignores energy_compensation)",
+        (("qon with sigma = r", _no_ec("qon")), ("qon with sigma = r pi/2", _predict_qon_scaled)),
+    ),
+    (
+        "no_energy_compensation_fon",
+        "FON instead of EON: the single-scattering lobe without f_ms",
+        "EON without its Eq. 16-19 compensation term",
+        (("fon", _no_ec("fon")),),
+    ),
+    (
+        "rho_ms_extra_inv_pi",
+        "rho_ms with an extra 1/pi in f_ms (white furnace fails)",
+        "OpenPBR specification text v1.1",
+        (("f_ms / pi", _rho_ms_extra_inv_pi),),
+    ),
+    (
+        "rho_ms_extra_rho",
+        "f_ms multiplied by rho once more (coloured albedo too dark)",
+        "Blender Cycles",
+        (("rho f_ms", _rho_ms_extra_rho),),
+    ),
+    (
+        "ldotv_clamped",
+        "L.V clamped to [eps, 1] before s = L.V - mu_i mu_o (changes the s <= 0 branch)",
+        "MaterialX GLSL",
+        (("clamp(L.V, 1e-8, 1)", _ldotv_clamped),),
+    ),
+    (
+        "white_tint",
+        "evaluated at rho = 1 then multiplied by rho (no colour shift)",
+        "OpenPBR-viewer",
+        (("rho f(rho = 1)", _white_tint),),
+    ),
+    (
+        "times_cos_theta_i",
+        "the BRDF multiplied by cos(theta_i) (a radiance response, not f)",
+        "common integration mistake",
+        (("f mu_i", _times_cos), ("f mu_i, albedo E mu", _times_cos_albedo_too)),
+    ),
+    (
+        "roughness_sigma_vs_r",
+        "roughness read in the other parameterisation (sigma in [0, pi/2] vs r in [0, 1])",
+        "parameter mix-up between QON (sigma) and FON/EON (r)",
+        (
+            ("r' = 2r/pi, sigma' = sigma pi/2", _rough(_read_as_other)),
+            ("r' = r pi/2, sigma' = 2 sigma/pi", _rough(_read_as_other_inverse)),
+        ),
+    ),
+    (
+        "roughness_squared",
+        "roughness squared (or square-rooted) before use",
+        "perceptual-roughness convention mix-up",
+        (
+            ("r' = r^2 (sigma normalised to [0, 1])", _rough(_squared)),
+            ("sigma' = sigma^2 (radians)", _rough(_squared_radians)),
+            ("r' = sqrt(r)", _rough(_sqrt)),
+        ),
+    ),
+    (
+        "no_energy_compensation_lambert",
+        "Lambert instead of EON: rho/pi, no roughness",
+        "EON rows answered by a Lambertian lobe",
+        (("lambert", _lambert_for_eon),),
+    ),
+    (
+        "eq14_fit_for_exact",
+        "the Eq. 14 fit of E_F where the exact E_F (Eq. 12-13) is claimed",
+        "Listing 1 with exact = false: grade such code as eon_approx (fill the eon_approx rows, "
+        "check --model eon_approx)",
+        (("E_F~ in f_ms, Listing 1 albedo", _eq14(True)), ("E_F~ in f_ms, the lobe's albedo", _eq14(False))),
+    ),
+    (
+        "constant_factor",
+        "every value multiplied by a constant factor",
+        "a 1/pi forgotten or added, a factor 2",
+        (
+            ("{}", Fitted(_scale_fit(("brdf", "albedo"))[0], _scale_predict(("brdf", "albedo")), factor_name, math.pi)),
+            (
+                "{} (BRDF rows only)",
+                Fitted(
+                    _scale_fit(("brdf",))[0],
+                    _scale_predict(("brdf",)),
+                    lambda k: factor_name(k).replace("every value", "every BRDF value"),
+                    math.pi,
+                ),
+            ),
+        ),
+    ),
+    (
+        "ms_missing_inv_pi",
+        "f_ms without its 1/pi (multiple scattering x pi)",
+        "Eq. 17 with the 1/pi dropped",
+        (("f_ms x pi", _ms_times_pi), ("f_ms x pi, albedo right", _ms_scaled_brdf(math.pi))),
+    ),
+    (
+        "divided_by_cos_theta_i",
+        "the BRDF divided by cos(theta_i) (the cosine divided out)",
+        "a cosine removed that was never in f",
+        (("f / mu_i", _divided_by_cos),),
+    ),
+    (
+        "roughness_degrees",
+        "roughness converted between degrees and radians",
+        "a radians value read as degrees (or the reverse)",
+        (("x' = x pi/180", _rough(_degrees)), ("x' = x 180/pi", _rough(_radians_to_degrees))),
+    ),
+    (
+        "rho_srgb_encoded",
+        "rho used sRGB-encoded instead of linear",
+        "a colour texture or swatch read without (or with a second) sRGB decode",
+        (("rho' = srgb_encode(rho)", _rho_mapped(srgb_encode)), ("rho' = srgb_decode(rho)", _rho_mapped(srgb_decode))),
+    ),
+    (
+        "mu_floor",
+        "mu_i, mu_o clamped at a floor",
+        "max(mu, floor) against grazing division",
+        (("mu' = max(mu, {:.4g})", Fitted(_floor_fit, _mu_floor_predict, lambda m: f"mu' = max(mu, {m:.4g})", 0.01)),),
+    ),
 )
 
 #: name -> Deviation (predictor of such an implementation's output).

@@ -30,6 +30,7 @@ True
 >>> g.passed, g.diagnosis
 (False, 'rho_ms_extra_rho')
 """
+
 from __future__ import annotations
 
 import math
@@ -44,7 +45,8 @@ TOLERANCE_REASON = (
     "|out - ref| <= 1e-6 + 1e-4 |ref| per value. Float32 rounding of the vectors' inputs and of "
     "the result moves the reference by at most 6.4e-6 relative / 2.4e-5 absolute on f = 247 "
     "(measured on this vector set); 1e-4 relative leaves a 15x margin for float32 arithmetic, "
-    "1e-6 absolute covers values near 0. The smallest known deviation (extra rho on f_ms) is 2 %.")
+    "1e-6 absolute covers values near 0. The smallest known deviation (extra rho on f_ms) is 2 %."
+)
 #: A deviation is diagnosed when it matches (within the tolerance) at least this fraction
 #: of the values that fail against the reference, and of all graded values.
 EXPLAIN_FRACTION = 0.9
@@ -95,16 +97,31 @@ class Grade:
     candidate_match_fractions: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
-        return json_safe({
-            "passed": self.passed, "version": self.version, "models": self.models,
-            "n_rows": self.n_rows, "n_failed_rows": self.n_failed_rows,
-            "max_abs_error": self.max_abs_error, "max_rel_error": self.max_rel_error,
-            "rms_error": self.rms_error, "max_normalised_error": self.max_normalised_error,
-            "tolerance": self.tolerance, "tolerance_reason": self.tolerance_reason,
-            "worst": self.worst, "diagnosis": self.diagnosis, "diagnosis_detail": self.diagnosis_detail,
-            "candidates": self.candidates, "candidate_details": self.candidate_details,
-            "regions": self.regions, "n_nan": self.n_nan, "n_inf": self.n_inf, "n_skipped": self.n_skipped,
-            "candidate_match_fractions": self.candidate_match_fractions})
+        return json_safe(
+            {
+                "passed": self.passed,
+                "version": self.version,
+                "models": self.models,
+                "n_rows": self.n_rows,
+                "n_failed_rows": self.n_failed_rows,
+                "max_abs_error": self.max_abs_error,
+                "max_rel_error": self.max_rel_error,
+                "rms_error": self.rms_error,
+                "max_normalised_error": self.max_normalised_error,
+                "tolerance": self.tolerance,
+                "tolerance_reason": self.tolerance_reason,
+                "worst": self.worst,
+                "diagnosis": self.diagnosis,
+                "diagnosis_detail": self.diagnosis_detail,
+                "candidates": self.candidates,
+                "candidate_details": self.candidate_details,
+                "regions": self.regions,
+                "n_nan": self.n_nan,
+                "n_inf": self.n_inf,
+                "n_skipped": self.n_skipped,
+                "candidate_match_fractions": self.candidate_match_fractions,
+            }
+        )
 
 
 def _tolerance(tolerance):
@@ -142,15 +159,24 @@ def _row(vectors, i, ref, out, e):
         status = "inf"
     else:
         status = "fail" if e[i].max() > 1.0 else "ok"
-    return {"id": str(vectors.id[i]), "kind": str(vectors.kind[i]), "model": str(vectors.model[i]),
-            "wi": vec(vectors.wi[i]), "wo": vec(vectors.wo[i]), "mu": num(vectors.mu[i]),
-            "mu_i": float(vectors.wi[i, 2]) if brdf else None,
-            "mu_o": float(vectors.wo[i, 2]) if brdf else num(vectors.mu[i]),
-            "ldotv": float(vectors.wi[i] @ vectors.wo[i]) if brdf else None,
-            "roughness": num(vectors.roughness[i]), "rho": vec(vectors.rho[i]),
-            "expected": [float(x) for x in ref[i]], "got": [float(x) for x in got], "status": status,
-            "abs_error": float(np.max(np.abs(got - ref[i]))) if np.isfinite(got).all() else math.inf,
-            "normalised_error": float(e[i].max())}
+    return {
+        "id": str(vectors.id[i]),
+        "kind": str(vectors.kind[i]),
+        "model": str(vectors.model[i]),
+        "wi": vec(vectors.wi[i]),
+        "wo": vec(vectors.wo[i]),
+        "mu": num(vectors.mu[i]),
+        "mu_i": float(vectors.wi[i, 2]) if brdf else None,
+        "mu_o": float(vectors.wo[i, 2]) if brdf else num(vectors.mu[i]),
+        "ldotv": float(vectors.wi[i] @ vectors.wo[i]) if brdf else None,
+        "roughness": num(vectors.roughness[i]),
+        "rho": vec(vectors.rho[i]),
+        "expected": [float(x) for x in ref[i]],
+        "got": [float(x) for x in got],
+        "status": status,
+        "abs_error": float(np.max(np.abs(got - ref[i]))) if np.isfinite(got).all() else math.inf,
+        "normalised_error": float(e[i].max()),
+    }
 
 
 #: Roughness bins of the region breakdown (the value as given: r, or sigma in radians).
@@ -168,10 +194,12 @@ def region_masks(vectors) -> dict[str, np.ndarray]:
     with np.errstate(invalid="ignore"):
         mu_min = np.where(brdf, np.minimum(vectors.wi[:, 2], vectors.wo[:, 2]), vectors.mu)
         ldotv = np.einsum("ij,ij->i", vectors.wi, vectors.wo)
-        masks = {"all": np.ones(len(vectors), bool),
-                 "grazing (mu < 0.1)": (mu_min > 0) & (mu_min < 0.1),
-                 "L.V < 0": brdf & (ldotv < 0) & (vectors.wi[:, 2] > 0) & (vectors.wo[:, 2] > 0),
-                 "below the horizon": brdf & ((vectors.wi[:, 2] <= 0) | (vectors.wo[:, 2] <= 0))}
+        masks = {
+            "all": np.ones(len(vectors), bool),
+            "grazing (mu < 0.1)": (mu_min > 0) & (mu_min < 0.1),
+            "L.V < 0": brdf & (ldotv < 0) & (vectors.wi[:, 2] > 0) & (vectors.wo[:, 2] > 0),
+            "below the horizon": brdf & ((vectors.wi[:, 2] <= 0) | (vectors.wo[:, 2] <= 0)),
+        }
         r = vectors.roughness
         for lo, hi in ROUGHNESS_BINS:
             if lo == hi:
@@ -187,8 +215,13 @@ def region_masks(vectors) -> dict[str, np.ndarray]:
 def _region_names():
     names = ["all", "grazing (mu < 0.1)", "L.V < 0", "below the horizon"]
     for lo, hi in ROUGHNESS_BINS:
-        names.append(f"roughness = {lo:g}" if lo == hi else f"roughness > {lo:g}" if math.isinf(hi)
-                     else f"roughness in ({lo:g}, {hi:g}]")
+        names.append(
+            f"roughness = {lo:g}"
+            if lo == hi
+            else f"roughness > {lo:g}"
+            if math.isinf(hi)
+            else f"roughness in ({lo:g}, {hi:g}]"
+        )
     return names + ["dark (rho < 0.1)"]
 
 
@@ -198,23 +231,37 @@ def _regions(vectors, row_e):
         n = int(m.sum())
         if n == 0:
             continue
-        out.append({"region": name, "n": n, "n_failed": int((row_e[m] > 1.0).sum()),
-                    "max_normalised_error": float(row_e[m].max())})
+        out.append(
+            {
+                "region": name,
+                "n": n,
+                "n_failed": int((row_e[m] > 1.0).sum()),
+                "max_normalised_error": float(row_e[m].max()),
+            }
+        )
     return out
 
 
 def where_it_fails(regions: list[dict]) -> str:
     """One sentence: the regions with failures, worst first ("" when nothing fails)."""
-    bad = sorted((r for r in regions if r["n_failed"] and r["region"] != "all"),
-                 key=lambda r: -r["n_failed"] / r["n"])
+    bad = sorted((r for r in regions if r["n_failed"] and r["region"] != "all"), key=lambda r: -r["n_failed"] / r["n"])
     parts = [f"{r['region']}: {r['n_failed']}/{r['n']} rows" for r in bad]
     return "fails in " + "; ".join(parts) if parts else ""
 
 
 def _swapped(vectors):
     """The rows with wi and wo exchanged (an implementation that swapped its arguments)."""
-    return type(vectors)(vectors.id, vectors.kind, vectors.model, vectors.wo, vectors.wi, vectors.mu,
-                         vectors.roughness, vectors.rho, vectors.version)
+    return type(vectors)(
+        vectors.id,
+        vectors.kind,
+        vectors.model,
+        vectors.wo,
+        vectors.wi,
+        vectors.mu,
+        vectors.roughness,
+        vectors.rho,
+        vectors.version,
+    )
 
 
 def _variants(vectors, out, ref, rel, ab):
@@ -263,8 +310,14 @@ def _diagnose(vectors, out, ref, e_ref, rel, ab):
         key = (explained, overall, -residual)
         prev = details.get(name)
         if prev is None or not prev.get("distinguishable") or key > prev["_key"]:
-            details[name] = {"distinguishable": True, "variant": label, "explained_fraction": explained,
-                             "matching_fraction": overall, "residual": residual, "_key": key}
+            details[name] = {
+                "distinguishable": True,
+                "variant": label,
+                "explained_fraction": explained,
+                "matching_fraction": overall,
+                "residual": residual,
+                "_key": key,
+            }
             candidates[name] = residual
             fractions[name] = explained
         if best is None or key > best[0]:
@@ -275,14 +328,17 @@ def _diagnose(vectors, out, ref, e_ref, rel, ab):
         _, name, label, explained, overall = best
         if explained >= EXPLAIN_FRACTION and overall >= EXPLAIN_FRACTION:
             dev = DEVIATIONS[name.split("+")[0]]
-            text = (f"{dev.description} [{dev.source}]: {label}; matches {explained:.0%} of the {n_fail} "
-                    f"failing values and {overall:.0%} of all values within the tolerance")
+            text = (
+                f"{dev.description} [{dev.source}]: {label}; matches {explained:.0%} of the {n_fail} "
+                f"failing values and {overall:.0%} of all values within the tolerance"
+            )
             return name, text, candidates, details, fractions
     return None, NOT_EXPLAINED, candidates, details, fractions
 
 
-def grade(vectors, out: np.ndarray, *, model: str | None = None, tolerance: float | tuple | None = None,
-          n_skipped: int = 0) -> Grade:
+def grade(
+    vectors, out: np.ndarray, *, model: str | None = None, tolerance: float | tuple | None = None, n_skipped: int = 0
+) -> Grade:
     """Grade submitted values ``out`` (n, 3) for the rows of ``vectors``.
 
     Parameters
@@ -335,7 +391,7 @@ DIAGNOSIS_ROWS = 50_000
 def _row_keys(start, n):
     """A pseudo-random key per global row position (splitmix64): the diagnosis sample is the
     rows with the smallest keys, the same whatever the chunking."""
-    x = (np.arange(start, start + n, dtype=np.uint64) + np.uint64(0x9E3779B97F4A7C15))
+    x = np.arange(start, start + n, dtype=np.uint64) + np.uint64(0x9E3779B97F4A7C15)
     with np.errstate(over="ignore"):
         x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
         x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
@@ -345,8 +401,13 @@ def _row_keys(start, n):
 def _concat(parts):
     from .vectors import VectorSet
 
-    return VectorSet(*(np.concatenate([getattr(v, f) for v in parts]) for f in
-                       ("id", "kind", "model", "wi", "wo", "mu", "roughness", "rho")), version=parts[0].version)
+    return VectorSet(
+        *(
+            np.concatenate([getattr(v, f) for v in parts])
+            for f in ("id", "kind", "model", "wi", "wo", "mu", "roughness", "rho")
+        ),
+        version=parts[0].version,
+    )
 
 
 class _Accumulator:
@@ -387,19 +448,22 @@ class _Accumulator:
         self.max_norm = max(self.max_norm, float(row_e.max()))
         if self.finite:
             self.max_abs = max(self.max_abs, float(np.max(diff)))
-            self.sum_sq += float(np.sum(diff ** 2))
+            self.sum_sq += float(np.sum(diff**2))
             self.n_values += diff.size
-            self.max_rel = max(self.max_rel, float(np.max(np.where(np.abs(ref) > 0, rel_err,
-                                                                   np.where(diff > 0, math.inf, 0.0)))))
+            self.max_rel = max(
+                self.max_rel, float(np.max(np.where(np.abs(ref) > 0, rel_err, np.where(diff > 0, math.inf, 0.0))))
+            )
         for r in _regions(vectors, row_e):
-            t = self.regions.setdefault(r["region"], {"region": r["region"], "n": 0, "n_failed": 0,
-                                                       "max_normalised_error": 0.0})
+            t = self.regions.setdefault(
+                r["region"], {"region": r["region"], "n": 0, "n_failed": 0, "max_normalised_error": 0.0}
+            )
             t["n"] += r["n"]
             t["n_failed"] += r["n_failed"]
             t["max_normalised_error"] = max(t["max_normalised_error"], r["max_normalised_error"])
         order = np.argsort(-row_e, kind="stable")[:N_WORST]
-        self.worst += [(-float(row_e[i]), start + int(i), _row(vectors, int(i), ref, out, e))
-                       for i in order if row_e[i] > 0]
+        self.worst += [
+            (-float(row_e[i]), start + int(i), _row(vectors, int(i), ref, out, e)) for i in order if row_e[i] > 0
+        ]
         self.worst = sorted(self.worst, key=lambda t: (t[0], t[1]))[:N_WORST]
         keys = _row_keys(start, len(vectors))
         pos = np.arange(start, start + len(vectors))
@@ -425,18 +489,27 @@ class _Accumulator:
             rms_error=math.sqrt(self.sum_sq / self.n_values) if self.finite else math.inf,
             tolerance={"relative": rel, "absolute": ab, "rule": "|out - ref| <= absolute + relative |ref|"},
             tolerance_reason=TOLERANCE_REASON if tolerance is None else "tolerance given by the caller",
-            worst=[t[2] for t in self.worst], n_rows=self.n, n_failed_rows=self.n_failed,
+            worst=[t[2] for t in self.worst],
+            n_rows=self.n,
+            n_failed_rows=self.n_failed,
             max_rel_error=self.max_rel if self.finite else math.inf,
-            max_normalised_error=self.max_norm, models=sorted(self.models), version=self.version,
-            regions=sorted(self.regions.values(), key=lambda r: _region_names().index(r["region"])), n_nan=self.n_nan, n_inf=self.n_inf, n_skipped=int(n_skipped))
+            max_normalised_error=self.max_norm,
+            models=sorted(self.models),
+            version=self.version,
+            regions=sorted(self.regions.values(), key=lambda r: _region_names().index(r["region"])),
+            n_nan=self.n_nan,
+            n_inf=self.n_inf,
+            n_skipped=int(n_skipped),
+        )
         if passed:
             g.diagnosis_detail = "conforms: every value within the tolerance"
             return g
         _, _, vectors, out = self.sample
         ref = reference(vectors)
         e = _normalised(out, ref, rel, ab)
-        (g.diagnosis, g.diagnosis_detail, g.candidates, g.candidate_details,
-         g.candidate_match_fractions) = _diagnose(vectors, out, ref, e, rel, ab)
+        (g.diagnosis, g.diagnosis_detail, g.candidates, g.candidate_details, g.candidate_match_fractions) = _diagnose(
+            vectors, out, ref, e, rel, ab
+        )
         if len(vectors) < self.n:
             g.diagnosis_detail += f" (fitted on a sample of {len(vectors)} of the {self.n} rows)"
         if g.diagnosis is None:
@@ -480,5 +553,15 @@ def grade_chunks(chunks, *, model: str | None = None, tolerance: float | tuple |
     return acc.result(tolerance, skipped)
 
 
-__all__ = ["grade", "grade_chunks", "Grade", "DIAGNOSIS_ROWS", "REL_TOL", "ABS_TOL", "TOLERANCE_REASON", "NOT_EXPLAINED", "region_masks",
-           "where_it_fails"]
+__all__ = [
+    "grade",
+    "grade_chunks",
+    "Grade",
+    "DIAGNOSIS_ROWS",
+    "REL_TOL",
+    "ABS_TOL",
+    "TOLERANCE_REASON",
+    "NOT_EXPLAINED",
+    "region_masks",
+    "where_it_fails",
+]

@@ -18,6 +18,7 @@ Examples
 >>> "vec3 f(vec3 wi, vec3 wo, float roughness, vec3 rho)" in template_text("glsl")
 True
 """
+
 from __future__ import annotations
 
 from pathlib import Path

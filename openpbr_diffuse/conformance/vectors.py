@@ -26,6 +26,7 @@ Examples
 >>> bool(((v.wi[:, 2] < 0.002) & (v.kind == "brdf")).any())   # grazing rows
 True
 """
+
 from __future__ import annotations
 
 import csv
@@ -42,8 +43,22 @@ import numpy as np
 #: Version of the default vector set; bump when its rows change.
 VERSION = "2"  # 2: no albedo rows at exactly mu = 0 (a convention, not conformance)
 #: Input columns, in file order.
-COLUMNS = ("id", "kind", "model", "wi_x", "wi_y", "wi_z", "wo_x", "wo_y", "wo_z", "mu",
-           "roughness", "rho_r", "rho_g", "rho_b")
+COLUMNS = (
+    "id",
+    "kind",
+    "model",
+    "wi_x",
+    "wi_y",
+    "wi_z",
+    "wo_x",
+    "wo_y",
+    "wo_z",
+    "mu",
+    "roughness",
+    "rho_r",
+    "rho_g",
+    "rho_b",
+)
 #: Result columns the implementer appends.
 OUT_COLUMNS = ("out_r", "out_g", "out_b")
 FORMAT_NAME = "openpbr-diffuse conformance vectors"
@@ -84,9 +99,17 @@ class VectorSet:
 
     def subset(self, index):
         """The rows selected by a boolean mask or an index array."""
-        return VectorSet(self.id[index], self.kind[index], self.model[index], self.wi[index],
-                         self.wo[index], self.mu[index], self.roughness[index], self.rho[index],
-                         self.version)
+        return VectorSet(
+            self.id[index],
+            self.kind[index],
+            self.model[index],
+            self.wi[index],
+            self.wo[index],
+            self.mu[index],
+            self.roughness[index],
+            self.rho[index],
+            self.version,
+        )
 
     def columns(self):
         """{column name: (n,) array} in :data:`COLUMNS` order."""
@@ -157,8 +180,9 @@ def _pairs():
     for _ in range(_N_RANDOM_PAIRS):
         mu = rng.uniform(0.02, 1.0, 2)
         phi = rng.uniform(0.0, 360.0, 2)
-        pairs.append((_direction(math.degrees(math.acos(mu[0])), phi[0]),
-                      _direction(math.degrees(math.acos(mu[1])), phi[1])))
+        pairs.append(
+            (_direction(math.degrees(math.acos(mu[0])), phi[0]), _direction(math.degrees(math.acos(mu[1])), phi[1]))
+        )
     return pairs
 
 
@@ -193,14 +217,20 @@ def default_vectors() -> VectorSet:
                     rows.append((f"{model}-albedo-{k:03d}", "albedo", model, (nan,) * 3, (nan,) * 3, mu, r, rho))
                     k += 1
     return VectorSet(
-        id=np.array([r[0] for r in rows]), kind=np.array([r[1] for r in rows]),
-        model=np.array([r[2] for r in rows]), wi=np.array([r[3] for r in rows], dtype=np.float64),
-        wo=np.array([r[4] for r in rows], dtype=np.float64), mu=np.array([r[5] for r in rows]),
-        roughness=np.array([r[6] for r in rows]), rho=np.array([r[7] for r in rows], dtype=np.float64),
-        version=VERSION)
+        id=np.array([r[0] for r in rows]),
+        kind=np.array([r[1] for r in rows]),
+        model=np.array([r[2] for r in rows]),
+        wi=np.array([r[3] for r in rows], dtype=np.float64),
+        wo=np.array([r[4] for r in rows], dtype=np.float64),
+        mu=np.array([r[5] for r in rows]),
+        roughness=np.array([r[6] for r in rows]),
+        rho=np.array([r[7] for r in rows], dtype=np.float64),
+        version=VERSION,
+    )
 
 
 # ----------------------------------------------------------------------------- writing
+
 
 def _cell(v):
     if isinstance(v, (str, np.str_)):
@@ -210,15 +240,18 @@ def _cell(v):
 
 
 def _header_lines(vectors):
-    return [f"{FORMAT_NAME}, version {vectors.version}",
-            "kind brdf: f(wi, wo) without the cosine factor; kind albedo: directional albedo E(mu)",
-            "directions in the local frame (normal +z), both pointing away from the surface; blank = not applicable",
-            "roughness: r in [0, 1] for fon/eon/eon_approx, sigma in radians for qon; fill out_r,out_g,out_b "
-            "(rows left blank are skipped)"]
+    return [
+        f"{FORMAT_NAME}, version {vectors.version}",
+        "kind brdf: f(wi, wo) without the cosine factor; kind albedo: directional albedo E(mu)",
+        "directions in the local frame (normal +z), both pointing away from the surface; blank = not applicable",
+        "roughness: r in [0, 1] for fon/eon/eon_approx, sigma in radians for qon; fill out_r,out_g,out_b "
+        "(rows left blank are skipped)",
+    ]
 
 
-def write_vectors(vectors: VectorSet, path: str | Path, *, out: np.ndarray | None = None,
-                  blank_out: bool = False) -> Path:
+def write_vectors(
+    vectors: VectorSet, path: str | Path, *, out: np.ndarray | None = None, blank_out: bool = False
+) -> Path:
     """Write ``vectors`` to ``path`` (CSV, or JSON if the name ends in ``.json``).
 
     ``out`` (n, 3), if given, is appended as ``out_r, out_g, out_b`` (a results file);
@@ -235,6 +268,7 @@ def write_vectors(vectors: VectorSet, path: str | Path, *, out: np.ndarray | Non
             cols[name] = out[:, k]
     n = len(vectors)
     if path.suffix.lower() == ".json":
+
         def value(name, i):
             v = cols[name][i]
             if isinstance(v, (str, np.str_)):
@@ -245,8 +279,13 @@ def write_vectors(vectors: VectorSet, path: str | Path, *, out: np.ndarray | Non
                 return str(float(v))  # a result NaN stays "nan"
             return float(v)
 
-        doc = {"format": FORMAT_NAME, "version": vectors.version, "notes": _header_lines(vectors)[1:],
-               "columns": names, "rows": [{name: value(name, i) for name in names} for i in range(n)]}
+        doc = {
+            "format": FORMAT_NAME,
+            "version": vectors.version,
+            "notes": _header_lines(vectors)[1:],
+            "columns": names,
+            "rows": [{name: value(name, i) for name in names} for i in range(n)],
+        }
         path.write_text(json.dumps(doc, indent=1) + "\n")
         return path
     buf = io.StringIO()
@@ -257,13 +296,16 @@ def write_vectors(vectors: VectorSet, path: str | Path, *, out: np.ndarray | Non
     text_cols = [cols[name] for name in names]
     n_in = len(COLUMNS)
     for i in range(n):
-        w.writerow([_cell(c[i]) for c in text_cols[:n_in]]
-                   + [("" if blank_out else repr(float(c[i]))) for c in text_cols[n_in:]])
+        w.writerow(
+            [_cell(c[i]) for c in text_cols[:n_in]]
+            + [("" if blank_out else repr(float(c[i]))) for c in text_cols[n_in:]]
+        )
     path.write_text(buf.getvalue())
     return path
 
 
 # ----------------------------------------------------------------------------- reading
+
 
 def _parse_number(text, column, row_label, allow_nonfinite=False):
     if text is None:
@@ -305,8 +347,11 @@ def _read_records(path):
         rows = doc.get("rows") if isinstance(doc, dict) else doc
         if not isinstance(rows, list) or not all(isinstance(r, dict) for r in rows):
             raise ValueError(f"{path}: expected a JSON object with a 'rows' list of objects")
-        names = list(doc.get("columns") or (rows[0].keys() if rows else [])) if isinstance(doc, dict) else \
-            list(rows[0].keys() if rows else [])
+        names = (
+            list(doc.get("columns") or (rows[0].keys() if rows else []))
+            if isinstance(doc, dict)
+            else list(rows[0].keys() if rows else [])
+        )
         return names, rows
     lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
     reader = csv.reader(lines)
@@ -408,8 +453,10 @@ def _csv_rows(path):
 def _json_rows(path):
     path = Path(path)
     if path.stat().st_size > MAX_JSON_BYTES:
-        raise ValueError(f"{path}: JSON results files are read whole and this one is larger than "
-                         f"{MAX_JSON_BYTES >> 20} MB: write the results as CSV (read in chunks)")
+        raise ValueError(
+            f"{path}: JSON results files are read whole and this one is larger than "
+            f"{MAX_JSON_BYTES >> 20} MB: write the results as CSV (read in chunks)"
+        )
     names, records = _read_records(path)
     return names, iter(records)
 
@@ -427,8 +474,9 @@ def _own_row(rec, label):
         raise ValueError(f"{label}: column kind must be brdf or albedo, got {kind[:40]!r}")
     if model not in VECTOR_MODELS or (kind == "albedo" and model not in ALBEDO_MODELS):
         allowed = VECTOR_MODELS if kind == "brdf" else ALBEDO_MODELS
-        raise ValueError(f"{label}: column model must be one of {', '.join(allowed)} for kind {kind}, "
-                         f"got {model[:40]!r}")
+        raise ValueError(
+            f"{label}: column model must be one of {', '.join(allowed)} for kind {kind}, got {model[:40]!r}"
+        )
     vals = {c: _parse_number(rec.get(c), c, label) for c in _NUMERIC}
     need = ["rho_r", "rho_g", "rho_b"] + ([] if model == "lambert" else ["roughness"])
     need += [f"w{d}_{a}" for d in "io" for a in "xyz"] if kind == "brdf" else ["mu"]
@@ -449,8 +497,9 @@ def _own_row(rec, label):
     return kind, model, vals
 
 
-def iter_results(path: str | Path, vectors: VectorSet | None = None, *,
-                 chunk_rows: int = CHUNK_ROWS) -> Iterator[tuple[VectorSet, np.ndarray, int]]:
+def iter_results(
+    path: str | Path, vectors: VectorSet | None = None, *, chunk_rows: int = CHUNK_ROWS
+) -> Iterator[tuple[VectorSet, np.ndarray, int]]:
     """Read a submitted results file in chunks: yield ``(vectors_chunk, out, n_skipped)``.
 
     The rules are those of :func:`read_results`; a CSV file is read line by line, so memory
@@ -497,8 +546,9 @@ def iter_results(path: str | Path, vectors: VectorSet | None = None, *,
             if first:
                 missing = [c for c in COLUMNS if c not in names and c not in rec]
                 if missing:
-                    raise ValueError(f"{path}: missing column(s) {', '.join(missing)} "
-                                     f"(expected {', '.join(COLUMNS + OUT_COLUMNS)})")
+                    raise ValueError(
+                        f"{path}: missing column(s) {', '.join(missing)} (expected {', '.join(COLUMNS + OUT_COLUMNS)})"
+                    )
                 first = False
             n += 1
             rid = str(rec.get("id", "")).strip()
@@ -515,16 +565,20 @@ def iter_results(path: str | Path, vectors: VectorSet | None = None, *,
                 seen[i] = True
                 for col in ("kind", "model"):
                     if str(rec.get(col, "")).strip() != str(ref_cols[col][i]):
-                        raise ValueError(f"{label}: column {col} is {str(rec.get(col))[:40]!r}, "
-                                         f"the vector has {ref_cols[col][i]!r}")
+                        raise ValueError(
+                            f"{label}: column {col} is {str(rec.get(col))[:40]!r}, the vector has {ref_cols[col][i]!r}"
+                        )
                 for col in _NUMERIC:
                     got = _parse_number(rec.get(col), col, label)
                     want = float(ref_cols[col][i])
                     if math.isnan(want) != math.isnan(got) or (
-                            not math.isnan(want) and abs(got - want) > INPUT_MATCH_TOL * (1.0 + abs(want))):
-                        raise ValueError(f"{label}: column {col} is {got!r}, the vector has "
-                                         f"{'blank' if math.isnan(want) else repr(want)}: "
-                                         f"rows do not match the vectors")
+                        not math.isnan(want) and abs(got - want) > INPUT_MATCH_TOL * (1.0 + abs(want))
+                    ):
+                        raise ValueError(
+                            f"{label}: column {col} is {got!r}, the vector has "
+                            f"{'blank' if math.isnan(want) else repr(want)}: "
+                            f"rows do not match the vectors"
+                        )
                 row = i
             vals_out = _record_out(rec, label)
             if vals_out is None:
@@ -568,8 +622,7 @@ def _chunk(vectors, take, own, out):
     return VectorSet(ids.astype(str), kind.astype(str), model.astype(str), wi, wo, mu, rough, rho, vectors.version)
 
 
-def read_results(path: str | Path, vectors: VectorSet | None = None, *,
-                 with_skipped: bool = False) -> tuple:
+def read_results(path: str | Path, vectors: VectorSet | None = None, *, with_skipped: bool = False) -> tuple:
     """Read a submitted results file; return ``(vectors_subset, out)`` matched by id.
 
     ``vectors`` defaults to :func:`default_vectors`.  Every row must carry the columns
@@ -594,12 +647,28 @@ def read_results(path: str | Path, vectors: VectorSet | None = None, *,
     vs = [c[0] for c in chunks if len(c[0])]
     if not vs:
         raise ValueError(f"{path}: no row has results (fill out_r, out_g, out_b of the rows to grade)")
-    cat = VectorSet(*(np.concatenate([getattr(v, f) for v in vs]) for f in
-                      ("id", "kind", "model", "wi", "wo", "mu", "roughness", "rho")), version=vs[0].version)
+    cat = VectorSet(
+        *(
+            np.concatenate([getattr(v, f) for v in vs])
+            for f in ("id", "kind", "model", "wi", "wo", "mu", "roughness", "rho")
+        ),
+        version=vs[0].version,
+    )
     out = np.concatenate([c[1] for c in chunks])
     skipped = sum(c[2] for c in chunks)
     return (cat, out, skipped) if with_skipped else (cat, out)
 
 
-__all__ = ["VERSION", "COLUMNS", "OUT_COLUMNS", "VECTOR_MODELS", "ALBEDO_MODELS", "VectorSet", "default_vectors",
-           "write_vectors", "read_results", "iter_results", "CHUNK_ROWS"]
+__all__ = [
+    "VERSION",
+    "COLUMNS",
+    "OUT_COLUMNS",
+    "VECTOR_MODELS",
+    "ALBEDO_MODELS",
+    "VectorSet",
+    "default_vectors",
+    "write_vectors",
+    "read_results",
+    "iter_results",
+    "CHUNK_ROWS",
+]

@@ -20,11 +20,12 @@ Code that is not installed by a package -- a checkout of another project, your o
 renderer's lobe -- is graded with the generic adapters (:mod:`.generic`: ``check --glsl FILE``
 / ``check --cpp FILE`` with the documented signatures).
 """
+
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
 from .errors import GraderUnavailable
 
@@ -37,7 +38,7 @@ class Implementation:
     module: str
     needs_source: bool
     upstream: str
-    options: tuple = ()         # (keyword, value) pairs for the module's subject()
+    options: tuple = ()  # (keyword, value) pairs for the module's subject()
 
     def factory(self) -> Callable:
         import functools
@@ -46,13 +47,17 @@ class Implementation:
         return functools.partial(importlib.import_module(f"{__name__}.{self.module}").subject, **dict(self.options))
 
 
-IMPLEMENTATIONS = {i.name: i for i in (
-    Implementation("materialx-glsl", "materialx", False, "pip install MaterialX"),
-    Implementation("materialx-glsl-qon", "materialx", False, "pip install MaterialX",
-                   (("energy_compensation", False),)),
-    Implementation("cycles", "cycles", False, "pip install bpy"),
-    Implementation("babylonjs", "babylon", False, "npm install @babylonjs/core"),
-)}
+IMPLEMENTATIONS = {
+    i.name: i
+    for i in (
+        Implementation("materialx-glsl", "materialx", False, "pip install MaterialX"),
+        Implementation(
+            "materialx-glsl-qon", "materialx", False, "pip install MaterialX", (("energy_compensation", False),)
+        ),
+        Implementation("cycles", "cycles", False, "pip install bpy"),
+        Implementation("babylonjs", "babylon", False, "npm install @babylonjs/core"),
+    )
+}
 
 
 def load(name: str, source: Path | str | None = None):
@@ -69,8 +74,9 @@ def load(name: str, source: Path | str | None = None):
         raise ValueError(f"implementation: {name!r} is not one of {', '.join(IMPLEMENTATIONS)}")
     impl = IMPLEMENTATIONS[name]
     if impl.needs_source and source is None:
-        raise GraderUnavailable(f"{name}: its source is not bundled with a package: pass --source PATH "
-                                f"(a checkout of {impl.upstream})")
+        raise GraderUnavailable(
+            f"{name}: its source is not bundled with a package: pass --source PATH (a checkout of {impl.upstream})"
+        )
     return impl.factory()(Path(source) if source is not None else None)
 
 

@@ -1,4 +1,5 @@
 """Packing NumPy inputs into the float32 rows a wrapped kernel reads, and test directions."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -15,8 +16,9 @@ def rows(*columns, n=None) -> np.ndarray:
         n = max((c.shape[0] for c in cols if c.ndim > 0), default=1)
     out = []
     for c in cols:
-        c = np.broadcast_to(c if c.ndim != 1 or c.shape[0] != n else c[:, None],
-                            (n, 1) if c.ndim < 2 else (n, c.shape[-1]))
+        c = np.broadcast_to(
+            c if c.ndim != 1 or c.shape[0] != n else c[:, None], (n, 1) if c.ndim < 2 else (n, c.shape[-1])
+        )
         out.append(c)
     return np.ascontiguousarray(np.concatenate(out, axis=1), dtype=np.float32)
 

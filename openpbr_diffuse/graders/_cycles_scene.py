@@ -14,6 +14,7 @@ same direction wo:
 Returns, per row, the mean over the image's pixels and its standard error (pixels are
 independent estimates: different sample sequences per pixel).
 """
+
 import json
 import os
 import sys
@@ -38,6 +39,7 @@ def rotation_to_z(w):
 def look_along(direction):
     """Blender rotation (as a Matrix) whose local +Z axis is ``direction``."""
     from mathutils import Vector
+
     return Vector(tuple(direction)).to_track_quat("Z", "Y").to_euler()
 
 
@@ -132,8 +134,9 @@ def main(job_path, out_path):
         mu_o = max(float(wo[2]), 1e-3)
         scale = 4.0 / mu_o
         camera.location = (0.0, 0.0, 2.0 / mu_o + 10.0)
-        plane.matrix_world = Matrix([list(R[0]) + [0.0], list(R[1]) + [0.0], list(R[2]) + [0.0],
-                                     [0.0, 0.0, 0.0, 1.0]]) @ Matrix.Diagonal((scale, scale, 1.0, 1.0))
+        plane.matrix_world = Matrix(
+            [list(R[0]) + [0.0], list(R[1]) + [0.0], list(R[2]) + [0.0], [0.0, 0.0, 0.0, 1.0]]
+        ) @ Matrix.Diagonal((scale, scale, 1.0, 1.0))
         scene.render.resolution_x = scene.render.resolution_y = int(res)
         cy.samples = int(spp)
         scene.render.filepath = f"{out_path}.{k}.exr"
@@ -145,10 +148,13 @@ def main(job_path, out_path):
         os.remove(scene.render.filepath)
         pixels = pixels.reshape(-1, 4)[:, :3].astype(np.float64)
         means.append(pixels.mean(axis=0))
-        errors.append(pixels.std(axis=0, ddof=1) / np.sqrt(pixels.shape[0]) if pixels.shape[0] > 1
-                      else np.zeros(3))
-    np.savez(out_path, mean=np.array(means).reshape(-1, 3), stderr=np.array(errors).reshape(-1, 3),
-             version=bpy.app.version_string)
+        errors.append(pixels.std(axis=0, ddof=1) / np.sqrt(pixels.shape[0]) if pixels.shape[0] > 1 else np.zeros(3))
+    np.savez(
+        out_path,
+        mean=np.array(means).reshape(-1, 3),
+        stderr=np.array(errors).reshape(-1, 3),
+        version=bpy.app.version_string,
+    )
 
 
 if __name__ == "__main__":

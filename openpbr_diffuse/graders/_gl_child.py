@@ -4,6 +4,7 @@ Reads a pickled job (shader text, stage, row sizes, uniforms, inputs) on stdin f
 and writes the float32 outputs on stdout; a shader that does not compile exits with status 3 and
 one line on stderr.  Running the GL part here lets the parent kill a shader that never ends.
 """
+
 from __future__ import annotations
 
 import pickle

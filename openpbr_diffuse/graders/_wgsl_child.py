@@ -6,6 +6,7 @@ the float32 outputs on stdout.  The shader reads ``grader_in`` (binding 0) and w
 backend runs on Mesa's lavapipe (llvmpipe for Vulkan, Debian ``mesa-vulkan-drivers``).  Exit
 status 3 with one line on stderr: no adapter, or the shader does not compile.
 """
+
 from __future__ import annotations
 
 import os
@@ -30,8 +31,10 @@ def main() -> int:
         adapter = wgpu.gpu.request_adapter_sync(power_preference="low-power")
         device = adapter.request_device_sync()
     except Exception as exc:  # noqa: BLE001 - wgpu raises several kinds
-        sys.stderr.write(f"no WebGPU adapter ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__}): "
-                         "install Mesa's Vulkan driver, apt-get install mesa-vulkan-drivers\n")
+        sys.stderr.write(
+            f"no WebGPU adapter ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__}): "
+            "install Mesa's Vulkan driver, apt-get install mesa-vulkan-drivers\n"
+        )
         return 3
     try:
         module = device.create_shader_module(code=job["source"])
@@ -47,8 +50,10 @@ def main() -> int:
     data[: rows * job["n_in"]] = np.frombuffer(job["inputs"], np.float32)
     buf_in = device.create_buffer_with_data(data=data.tobytes(), usage=wgpu.BufferUsage.STORAGE)
     buf_out = device.create_buffer(size=padded * n_out * 4, usage=wgpu.BufferUsage.STORAGE | wgpu.BufferUsage.COPY_SRC)
-    group = device.create_bind_group(layout=pipe.get_bind_group_layout(0), entries=[
-        {"binding": 0, "resource": {"buffer": buf_in}}, {"binding": 1, "resource": {"buffer": buf_out}}])
+    group = device.create_bind_group(
+        layout=pipe.get_bind_group_layout(0),
+        entries=[{"binding": 0, "resource": {"buffer": buf_in}}, {"binding": 1, "resource": {"buffer": buf_out}}],
+    )
     encoder = device.create_command_encoder()
     compute = encoder.begin_compute_pass()
     compute.set_pipeline(pipe)

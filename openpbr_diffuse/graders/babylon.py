@@ -49,6 +49,7 @@ the first answers the environment's irradiance times rho, the same for every mu_
 (as the hemispheric light), and the second's dominant direction is the zero vector
 (normalize(0): undefined).
 """
+
 from __future__ import annotations
 
 import json
@@ -69,28 +70,41 @@ from .subject import Subject
 PACKAGE = "@babylonjs/core"
 #: where ``.ci/run`` installs the package (``npm install --prefix``); overridden by the variable
 CACHE_VARIABLE = "OPENPBR_DIFFUSE_NPM_CACHE"
-INSTALL = (f"install it with: npm install --prefix ~/.cache/openpbr-diffuse/npm {PACKAGE} "
-           f"(or set ${CACHE_VARIABLE} to the --prefix folder you used); Debian: apt-get install nodejs npm")
+INSTALL = (
+    f"install it with: npm install --prefix ~/.cache/openpbr-diffuse/npm {PACKAGE} "
+    f"(or set ${CACHE_VARIABLE} to the --prefix folder you used); Debian: apt-get install nodejs npm"
+)
 #: the include modules the harness concatenates, in dependency order
-INCLUDES = ("helperFunctions", "importanceSampling", "pbrBRDFFunctions", "pbrDirectLightingFalloffFunctions",
-            "pbrDirectLightingSetupFunctions", "pbrDirectLightingFunctions", "hdrFilteringFunctions")
+INCLUDES = (
+    "helperFunctions",
+    "importanceSampling",
+    "pbrBRDFFunctions",
+    "pbrDirectLightingFalloffFunctions",
+    "pbrDirectLightingSetupFunctions",
+    "pbrDirectLightingFunctions",
+    "hdrFilteringFunctions",
+)
 #: statements of the installed shaders the harness replays; missing ones mean the harness is out
 #: of date for that version, and the grader refuses to run rather than grade something else
 EXPECTED = {
-    "lightFragment": ("preInfo=computeDirectionalPreLightingInfo(light{X}.vLightData,viewDirectionW,normalW);",
-                      "preInfo=computePointAndSpotPreLightingInfo(light{X}.vLightData,viewDirectionW,normalW,vPositionW);",
-                      "preInfo=computeHemisphericPreLightingInfo(light{X}.vLightData,viewDirectionW,normalW);",
-                      "preInfo.NdotV=NdotV;",
-                      "preInfo.attenuation=computeDistanceLightFalloff_Physical(preInfo.lightDistanceSquared);",
-                      "preInfo.diffuseRoughness=diffuseRoughness;preInfo.surfaceAlbedo=surfaceAlbedo;",
-                      "info.diffuse=computeDiffuseLighting(preInfo,diffuse{X}.rgb);",
-                      "info.diffuse=computeHemisphericDiffuseLighting(preInfo,diffuse{X}.rgb,light{X}.vLightGround);",
-                      "info.diffuse=computeAreaDiffuseLighting(preInfo,diffuse{X}.rgb);"),
+    "lightFragment": (
+        "preInfo=computeDirectionalPreLightingInfo(light{X}.vLightData,viewDirectionW,normalW);",
+        "preInfo=computePointAndSpotPreLightingInfo(light{X}.vLightData,viewDirectionW,normalW,vPositionW);",
+        "preInfo=computeHemisphericPreLightingInfo(light{X}.vLightData,viewDirectionW,normalW);",
+        "preInfo.NdotV=NdotV;",
+        "preInfo.attenuation=computeDistanceLightFalloff_Physical(preInfo.lightDistanceSquared);",
+        "preInfo.diffuseRoughness=diffuseRoughness;preInfo.surfaceAlbedo=surfaceAlbedo;",
+        "info.diffuse=computeDiffuseLighting(preInfo,diffuse{X}.rgb);",
+        "info.diffuse=computeHemisphericDiffuseLighting(preInfo,diffuse{X}.rgb,light{X}.vLightGround);",
+        "info.diffuse=computeAreaDiffuseLighting(preInfo,diffuse{X}.rgb);",
+    ),
     "pbrBlockGeometryInfo": ("float NdotV=absEps(NdotVUnclamped);",),
     "pbrBlockFinalUnlitComponents": ("finalDiffuse*=surfaceAlbedo;",),
     "pbrBlockFinalLitComponents": ("finalIrradiance*=surfaceAlbedo.rgb;",),
-    "pbrBlockReflection": ("environmentIrradiance=irradiance(reflectionSampler,irradianceVector,"
-                           "vReflectionFilteringInfo,diffuseRoughness,surfaceAlbedo,irradianceView"),
+    "pbrBlockReflection": (
+        "environmentIrradiance=irradiance(reflectionSampler,irradianceVector,"
+        "vReflectionFilteringInfo,diffuseRoughness,surfaceAlbedo,irradianceView"
+    ),
 }
 #: GLSL ES / WebGL names the engine's shader processor maps for desktop GLSL
 PROLOGUE = "#define texture2D texture\n#define textureCubeLodEXT textureLod\n#define texture2DLodEXT textureLod\n"
@@ -103,20 +117,27 @@ AREA_HALF = 0.02
 IBL_SAMPLES = 4096
 TOLERANCE, TOLERANCE_REASON = glsl.TOLERANCE, glsl.TOLERANCE_REASON
 #: BRDF (f·N·L) and albedo paths: (key, label, kind)
-PATHS = (("function", "diffuseBRDF_EON alone", "brdf"),
-         ("directional", "directional light", "brdf"),
-         ("point", "point light", "brdf"),
-         ("spot", "spot light", "brdf"),
-         ("area", "rectangular area light", "brdf"),
-         ("hemispheric", "hemispheric light", "albedo"),
-         ("ibl_filtered", "filtered environment", "albedo"),
-         ("wgsl_function", "WGSL diffuseBRDF_EON alone", "brdf"),
-         ("wgsl_directional", "WGSL directional light", "brdf"),
-         ("wgsl_point", "WGSL point light", "brdf"),
-         ("wgsl_spot", "WGSL spot light", "brdf"))
+PATHS = (
+    ("function", "diffuseBRDF_EON alone", "brdf"),
+    ("directional", "directional light", "brdf"),
+    ("point", "point light", "brdf"),
+    ("spot", "spot light", "brdf"),
+    ("area", "rectangular area light", "brdf"),
+    ("hemispheric", "hemispheric light", "albedo"),
+    ("ibl_filtered", "filtered environment", "albedo"),
+    ("wgsl_function", "WGSL diffuseBRDF_EON alone", "brdf"),
+    ("wgsl_directional", "WGSL directional light", "brdf"),
+    ("wgsl_point", "WGSL point light", "brdf"),
+    ("wgsl_spot", "WGSL spot light", "brdf"),
+)
 #: the WGSL include modules (ShadersWGSL/ShadersInclude): the paths above that need no texture
-WGSL_INCLUDES = ("helperFunctions", "pbrBRDFFunctions", "pbrDirectLightingFalloffFunctions",
-                 "pbrDirectLightingSetupFunctions", "pbrDirectLightingFunctions")
+WGSL_INCLUDES = (
+    "helperFunctions",
+    "pbrBRDFFunctions",
+    "pbrDirectLightingFalloffFunctions",
+    "pbrDirectLightingSetupFunctions",
+    "pbrDirectLightingFunctions",
+)
 
 _EXTRACT = """
 import { pathToFileURL } from "url";
@@ -172,8 +193,9 @@ def package_version(folder: Path) -> str:
 @lru_cache(maxsize=8)
 def _shaders(folder: Path, names: tuple, wgsl: bool) -> dict:
     if shutil.which("node") is None:
-        raise GraderUnavailable(f"node is not installed (it reads {PACKAGE}'s shader modules): "
-                                "apt-get install nodejs npm")
+        raise GraderUnavailable(
+            f"node is not installed (it reads {PACKAGE}'s shader modules): apt-get install nodejs npm"
+        )
     sub = "ShadersWGSL" if wgsl else "Shaders"
     files = []
     for name in names:
@@ -183,10 +205,15 @@ def _shaders(folder: Path, names: tuple, wgsl: bool) -> dict:
                 files.append(str(f))
                 break
         else:
-            raise GraderUnavailable(f"{folder / sub}: no shader module {name}.js in {PACKAGE} "
-                                    f"{package_version(folder)} (the grader knows its 9.x layout)")
-    run = limits.run_limited(["node", "--input-type=module", "-e", _EXTRACT], input=json.dumps(files).encode(),
-                             label=f"reading {PACKAGE}'s shader modules with node")
+            raise GraderUnavailable(
+                f"{folder / sub}: no shader module {name}.js in {PACKAGE} "
+                f"{package_version(folder)} (the grader knows its 9.x layout)"
+            )
+    run = limits.run_limited(
+        ["node", "--input-type=module", "-e", _EXTRACT],
+        input=json.dumps(files).encode(),
+        label=f"reading {PACKAGE}'s shader modules with node",
+    )
     if run.returncode != 0:
         last = (run.stderr.decode(errors="replace").strip().splitlines() or ["?"])[-1]
         raise GraderUnavailable(f"node could not import {PACKAGE}'s shader modules: {last}")
@@ -209,12 +236,14 @@ _INCLUDE = re.compile(r"^[ \t]*#include<(\w+)>[^\n]*$", re.MULTILINE)
 
 def _resolve(text: str, folder: Path, seen: set) -> str:
     """Babylon's ``#include<name>`` lines replaced by the modules' text (each once)."""
+
     def sub(m):
         name = m.group(1)
         if name in seen:
             return ""
         seen.add(name)
         return _resolve(shaders([name], folder)[name], folder, seen)
+
     return _INCLUDE.sub(sub, text)
 
 
@@ -223,8 +252,10 @@ def _check_expected(folder: Path) -> None:
     texts = shaders(tuple(EXPECTED), folder)
     missing = [f"{k}: {s}" for k, stmts in EXPECTED.items() for s in stmts if s not in texts[k]]
     if missing:
-        raise GraderUnavailable(f"{PACKAGE} {package_version(folder)} no longer holds what the harness replays "
-                                f"({missing[0]}{' and more' if len(missing) > 1 else ''}): the grader needs updating")
+        raise GraderUnavailable(
+            f"{PACKAGE} {package_version(folder)} no longer holds what the harness replays "
+            f"({missing[0]}{' and more' if len(missing) > 1 else ''}): the grader needs updating"
+        )
 
 
 def _source(folder: Path, defines: dict) -> str:
@@ -258,28 +289,33 @@ BODIES = {
     vec3 f = diffuseBRDF_EON(vec3(IN(7), IN(8), IN(9)), IN(6), wi.z, wo.z, dot(wi, wo));
     OUT(0) = f.x; OUT(1) = f.y; OUT(2) = f.z; OUT(3) = 1.0;""",
     # DirectionalLight: vLightData.xyz = the light's direction of travel, -wi
-    "directional": _SETUP + """
+    "directional": _SETUP
+    + """
     preInfo = computeDirectionalPreLightingInfo(vec4(-wi, 0.0), V, N);
-    preInfo.attenuation = 1.0;""" + _LIGHT.replace("{call}", "computeDiffuseLighting(preInfo, vec3(1.0))"),
+    preInfo.attenuation = 1.0;"""
+    + _LIGHT.replace("{call}", "computeDiffuseLighting(preInfo, vec3(1.0))"),
     # PointLight at LIGHT_DISTANCE along wi, physical falloff
-    "point": _SETUP + """
+    "point": _SETUP
+    + """
     preInfo = computePointAndSpotPreLightingInfo(vec4(wi * LIGHT_DISTANCE, 0.0), V, N, vPositionW);
-    preInfo.attenuation = computeDistanceLightFalloff_Physical(preInfo.lightDistanceSquared);""" +
-    _LIGHT.replace("{call}", "computeDiffuseLighting(preInfo, vec3(1.0))"),
+    preInfo.attenuation = computeDistanceLightFalloff_Physical(preInfo.lightDistanceSquared);"""
+    + _LIGHT.replace("{call}", "computeDiffuseLighting(preInfo, vec3(1.0))"),
     # SpotLight at LIGHT_DISTANCE along wi aimed at the shaded point (cone axis: falloff 1), 90 deg cone
-    "spot": _SETUP + """
+    "spot": _SETUP
+    + """
     preInfo = computePointAndSpotPreLightingInfo(vec4(wi * LIGHT_DISTANCE, 0.0), V, N, vPositionW);
     preInfo.attenuation = computeDistanceLightFalloff_Physical(preInfo.lightDistanceSquared);
-    preInfo.attenuation *= computeDirectionalLightFalloff_Physical(-wi, preInfo.L, cos(0.7853981634));""" +
-    _LIGHT.replace("{call}", "computeDiffuseLighting(preInfo, vec3(1.0))"),
+    preInfo.attenuation *= computeDirectionalLightFalloff_Physical(-wi, preInfo.L, cos(0.7853981634));"""
+    + _LIGHT.replace("{call}", "computeDiffuseLighting(preInfo, vec3(1.0))"),
     # RectAreaLight centred at distance 1 along wi, facing the point; halfWidth x halfHeight = wi
-    "area": _SETUP + """
+    "area": _SETUP
+    + """
     vec3 t1 = normalize(abs(wi.z) < 0.999 ? cross(vec3(0.0, 0.0, 1.0), wi) : vec3(1.0, 0.0, 0.0));
     vec3 t2 = cross(wi, t1);
     preInfo = computeAreaPreLightingInfo(areaLightsLTC1Sampler, areaLightsLTC2Sampler, V, N, vPositionW,
                                          vec4(wi, 0.0), AREA_HALF * t1, AREA_HALF * t2, 0.5);
-    preInfo.attenuation = 1.0; preInfo.NdotL = 1.0;""" +
-    _LIGHT.replace("{call}", "computeAreaDiffuseLighting(preInfo, vec3(1.0))"),
+    preInfo.attenuation = 1.0; preInfo.NdotL = 1.0;"""
+    + _LIGHT.replace("{call}", "computeAreaDiffuseLighting(preInfo, vec3(1.0))"),
 }
 ALBEDO_BODIES = {
     # HemisphericLight: sky direction = the normal, sky = ground = 1 (a uniform white environment)
@@ -300,13 +336,21 @@ ALBEDO_BODIES = {
     vec3 e = irradiance(0.0, N, vec2(256.0, 8.0), IN(1), surfaceAlbedo, V) * surfaceAlbedo;
     OUT(0) = e.x; OUT(1) = e.y; OUT(2) = e.z;""",
 }
-_DEFINES = {"BASE_DIFFUSE_MODEL": "BRDF_DIFFUSE_MODEL_EON", "WEBGL2": "1", "USEPHYSICALLIGHTFALLOFF": "1",
-            "LIGHT_DISTANCE": repr(LIGHT_DISTANCE), "AREA_HALF": repr(AREA_HALF)}
+_DEFINES = {
+    "BASE_DIFFUSE_MODEL": "BRDF_DIFFUSE_MODEL_EON",
+    "WEBGL2": "1",
+    "USEPHYSICALLIGHTFALLOFF": "1",
+    "LIGHT_DISTANCE": repr(LIGHT_DISTANCE),
+    "AREA_HALF": repr(AREA_HALF),
+}
 _PATH_DEFINES = {
     "area": {"AREALIGHTUSED": "1", "AREALIGHTSUPPORTED": "1"},
     # Babylon's own hooks: the texture argument becomes a float, and each sample reads white
-    "ibl_filtered": {"NUM_SAMPLES": f"{IBL_SAMPLES}u", "CUSTOM_IRRADIANCE_FILTERING_INPUT": "float grader_white,",
-                     "CUSTOM_IRRADIANCE_FILTERING_FUNCTION": "vec3 c = vec3(1.0);"},
+    "ibl_filtered": {
+        "NUM_SAMPLES": f"{IBL_SAMPLES}u",
+        "CUSTOM_IRRADIANCE_FILTERING_INPUT": "float grader_white,",
+        "CUSTOM_IRRADIANCE_FILTERING_FUNCTION": "vec3 c = vec3(1.0);",
+    },
 }
 
 
@@ -335,27 +379,35 @@ WGSL_BODIES = {
     "wgsl_function": "    d = diffuseBRDF_EON(surfaceAlbedo, roughness, wi.z, V.z, dot(wi, V));",
     "wgsl_directional": """
     var preInfo = computeDirectionalPreLightingInfo(vec4f(-wi, 0.0), V, N);
-    preInfo.attenuation = 1.0;""" + _WGSL_LIGHT,
+    preInfo.attenuation = 1.0;"""
+    + _WGSL_LIGHT,
     "wgsl_point": f"""
     var preInfo = computePointAndSpotPreLightingInfo(vec4f(wi * {LIGHT_DISTANCE!r}, 0.0), V, N, vec3f(0.0));
-    preInfo.attenuation = computeDistanceLightFalloff_Physical(preInfo.lightDistanceSquared);""" + _WGSL_LIGHT,
+    preInfo.attenuation = computeDistanceLightFalloff_Physical(preInfo.lightDistanceSquared);"""
+    + _WGSL_LIGHT,
     "wgsl_spot": f"""
     var preInfo = computePointAndSpotPreLightingInfo(vec4f(wi * {LIGHT_DISTANCE!r}, 0.0), V, N, vec3f(0.0));
     preInfo.attenuation = computeDistanceLightFalloff_Physical(preInfo.lightDistanceSquared);
-    preInfo.attenuation *= computeDirectionalLightFalloff_Physical(-wi, preInfo.L, cos(0.7853981634));""" + _WGSL_LIGHT,
+    preInfo.attenuation *= computeDirectionalLightFalloff_Physical(-wi, preInfo.L, cos(0.7853981634));"""
+    + _WGSL_LIGHT,
 }
 
 
 def _wgsl_source(folder: Path, key: str) -> str:
     """The WGSL include modules, preprocessed (EON diffuse model, physical falloff), and the harness."""
     if shutil.which("cpp") is None:
-        raise GraderUnavailable("cpp (the C preprocessor, for Babylon's #if lines in WGSL) is missing: apt-get install g++")
+        raise GraderUnavailable(
+            "cpp (the C preprocessor, for Babylon's #if lines in WGSL) is missing: apt-get install g++"
+        )
     texts = shaders(WGSL_INCLUDES, folder, wgsl=True)
-    head = "".join(f"#define {k} {v}\n" for k, v in (("BASE_DIFFUSE_MODEL", "BRDF_DIFFUSE_MODEL_EON"),
-                                                      ("USEPHYSICALLIGHTFALLOFF", "1")))
+    head = "".join(
+        f"#define {k} {v}\n"
+        for k, v in (("BASE_DIFFUSE_MODEL", "BRDF_DIFFUSE_MODEL_EON"), ("USEPHYSICALLIGHTFALLOFF", "1"))
+    )
     text = head + "\n".join(texts[n] for n in WGSL_INCLUDES)
-    run = limits.run_limited(["cpp", "-P", "-undef", "-nostdinc", "-w", "-"], input=text.encode(),
-                             label="preprocessing Babylon's WGSL")
+    run = limits.run_limited(
+        ["cpp", "-P", "-undef", "-nostdinc", "-w", "-"], input=text.encode(), label="preprocessing Babylon's WGSL"
+    )
     if run.returncode != 0:
         raise GraderUnavailable(f"cpp could not preprocess Babylon's WGSL: {run.stderr.decode(errors='replace')[:200]}")
     return run.stdout.decode() + _WGSL_MAIN.replace("BODY", WGSL_BODIES[key])
@@ -367,19 +419,30 @@ def _run_wgsl(source_text: str, inputs: np.ndarray, n_out: int, label: str) -> n
     import sys
 
     inputs = np.ascontiguousarray(inputs, np.float32)
-    job = {"source": source_text, "n_in": inputs.shape[1], "n_out": n_out, "rows": inputs.shape[0],
-           "inputs": inputs.tobytes()}
+    job = {
+        "source": source_text,
+        "n_in": inputs.shape[1],
+        "n_out": n_out,
+        "rows": inputs.shape[0],
+        "inputs": inputs.tobytes(),
+    }
     root = str(Path(__file__).resolve().parents[2])
     env = dict(os.environ)
     env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
-    run = limits.run_limited([sys.executable, "-m", "openpbr_diffuse.graders._wgsl_child"], input=pickle.dumps(job),
-                             label=f"{label} (WGSL through wgpu)", env=env)
+    run = limits.run_limited(
+        [sys.executable, "-m", "openpbr_diffuse.graders._wgsl_child"],
+        input=pickle.dumps(job),
+        label=f"{label} (WGSL through wgpu)",
+        env=env,
+    )
     err = [line for line in run.stderr.decode(errors="replace").splitlines() if "XDG_RUNTIME_DIR" not in line]
     if run.returncode != 0:
         raise GraderUnavailable(f"{label} (WGSL): {err[-1] if err else f'status {run.returncode}'}")
     out = np.frombuffer(run.stdout, np.float32)
     if out.size != inputs.shape[0] * n_out:
-        raise GraderUnavailable(f"{label} (WGSL): the child wrote {out.size} values, expected {inputs.shape[0] * n_out}")
+        raise GraderUnavailable(
+            f"{label} (WGSL): the child wrote {out.size} values, expected {inputs.shape[0] * n_out}"
+        )
     return out.reshape(-1, n_out).copy()
 
 
@@ -395,8 +458,11 @@ def rect_cosine_solid_angle(wi: np.ndarray, half: float = AREA_HALF) -> np.ndarr
     """
     wi = np.asarray(wi, float)
     z = np.array([0.0, 0.0, 1.0])
-    t1 = np.where((np.abs(wi[:, 2]) < 0.999)[:, None], np.cross(np.broadcast_to(z, wi.shape), wi),
-                  np.broadcast_to([1.0, 0.0, 0.0], wi.shape))
+    t1 = np.where(
+        (np.abs(wi[:, 2]) < 0.999)[:, None],
+        np.cross(np.broadcast_to(z, wi.shape), wi),
+        np.broadcast_to([1.0, 0.0, 0.0], wi.shape),
+    )
     t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
     t2 = np.cross(wi, t1)
     corners = [wi + half * (a * t1 + b * t2) for a, b in ((1, -1), (-1, -1), (-1, 1), (1, 1))]
@@ -429,8 +495,12 @@ def path_subject(key: str, folder: Path | None = None) -> Subject:
     version = package_version(folder)
     code = "" if key.startswith("wgsl_") else _source(folder, {**_DEFINES, **_PATH_DEFINES.get(key, {})})
     files = [f"Shaders/ShadersInclude/{n}.js" for n in INCLUDES]
-    info: dict[str, Any] = {"babylonjs": version, "source": str(folder), "files": files,
-                            "sha256": glsl.sources_hash([folder / f for f in files])}
+    info: dict[str, Any] = {
+        "babylonjs": version,
+        "source": str(folder),
+        "files": files,
+        "sha256": glsl.sources_hash([folder / f for f in files]),
+    }
     common: dict[str, Any] = {"tolerance": TOLERANCE, "tolerance_reason": TOLERANCE_REASON, "version": info}
     name = f"babylonjs {label}"
     run_label = f"Babylon.js {version} ({label})"
@@ -440,6 +510,7 @@ def path_subject(key: str, folder: Path | None = None) -> Subject:
         info.update(files=wfiles, sha256=glsl.sources_hash([folder / f for f in wfiles]))
     if kind == "brdf":
         if key.startswith("wgsl_"):
+
             def run(x):
                 return _run_wgsl(wgsl_text, x, 4, run_label)
         else:
@@ -452,11 +523,11 @@ def path_subject(key: str, folder: Path | None = None) -> Subject:
             out = run(rows(wi, wo, roughness, rho)).astype(np.float64)
             resp = out[:, :3]
             if key in ("point", "spot", "wgsl_point", "wgsl_spot"):
-                resp = resp * LIGHT_DISTANCE ** 2              # the attenuation 1/d^2 divided out
+                resp = resp * LIGHT_DISTANCE**2  # the attenuation 1/d^2 divided out
             if key == "area":
                 f = resp / rect_cosine_solid_angle(np.asarray(wi, float))[:, None]
             else:
-                f = resp / out[:, 3:4]                         # Babylon's NdotL divided out
+                f = resp / out[:, 3:4]  # Babylon's NdotL divided out
             below = np.asarray(wi)[:, 2] <= 0
             f[below] = resp[below]
             return f
@@ -465,14 +536,15 @@ def path_subject(key: str, folder: Path | None = None) -> Subject:
             # a renderer shades the side the viewer sees (NdotV = |N.V|); the area light only
             # where its rectangle is wholly above the horizon (its LTC clips at the horizon)
             ok = np.asarray(wo)[:, 2] > 0
-            if key.endswith("function"):    # the light functions call it with NdotL >= Epsilon only
+            if key.endswith("function"):  # the light functions call it with NdotL >= Epsilon only
                 ok &= np.asarray(wi)[:, 2] > 0
             if key == "area":
                 ok &= np.asarray(wi)[:, 2] > 2 * AREA_HALF
             return ok
 
-        return Subject(name=name, model="eon", brdf=brdf, brdf_domain=domain, **common,
-                       notes=[f"{label}: " + _NOTES[key]])
+        return Subject(
+            name=name, model="eon", brdf=brdf, brdf_domain=domain, **common, notes=[f"{label}: " + _NOTES[key]]
+        )
     kernel = glsl.Kernel(code=code, n_in=5, n_out=3, body=ALBEDO_BODIES[key])
 
     def albedo(mu, roughness, rho):
@@ -481,30 +553,32 @@ def path_subject(key: str, folder: Path | None = None) -> Subject:
     return Subject(name=name, model="eon", albedo=albedo, **common, notes=[f"{label}: " + _NOTES[key]])
 
 
-_CLAMP = ("the lobe is called with c = clamp(rho, 0.1, 1) and its result scaled by rho/c: "
-          "f = (rho/c) f_EON~(c), f_EON~ with the Eq. 14 fit of E_F")
+_CLAMP = (
+    "the lobe is called with c = clamp(rho, 0.1, 1) and its result scaled by rho/c: "
+    "f = (rho/c) f_EON~(c), f_EON~ with the Eq. 14 fit of E_F"
+)
 _NOTES = {
     "function": "diffuseBRDF_EON(rho, r, wi.z, wo.z, wi.wo) called directly (pbrBRDFFunctions): "
-                "EON with the Eq. 14 fit of E_F (E_FON_approx)",
+    "EON with the Eq. 14 fit of E_F (E_FON_approx)",
     "directional": "computeDirectionalPreLightingInfo + computeDiffuseLighting, x surfaceAlbedo, divided by "
-                   "Babylon's NdotL; " + _CLAMP,
+    "Babylon's NdotL; " + _CLAMP,
     "point": f"computePointAndSpotPreLightingInfo (light at d = {LIGHT_DISTANCE:g} along wi) + physical falloff "
-             "+ computeDiffuseLighting, x surfaceAlbedo, divided by 1/d^2 and NdotL; the setup leaves "
-             "LdotV = 0, so the lobe sees s = -mu_i mu_o whatever the azimuths; " + _CLAMP,
+    "+ computeDiffuseLighting, x surfaceAlbedo, divided by 1/d^2 and NdotL; the setup leaves "
+    "LdotV = 0, so the lobe sees s = -mu_i mu_o whatever the azimuths; " + _CLAMP,
     "spot": "as the point light, aimed at the point (computeDirectionalLightFalloff_Physical = 1 on the axis); "
-            "LdotV = 0 as for the point light",
+    "LdotV = 0 as for the point light",
     "area": f"computeAreaPreLightingInfo (rectangle of half-size {AREA_HALF:g} at distance 1 along wi) + "
-            "computeAreaDiffuseLighting, x surfaceAlbedo, divided by the rectangle's cosine-weighted solid "
-            f"angle (rows with mu_i <= {2 * AREA_HALF:g} not graded); the diffuse part is an LTC form factor "
-            "with the identity matrix, i.e. Lambert (rho/pi, no roughness), and 0 at mu_o = 1 exactly "
-            "(its frame T1 = normalize(V - N (V.N)) is undefined there)",
+    "computeAreaDiffuseLighting, x surfaceAlbedo, divided by the rectangle's cosine-weighted solid "
+    f"angle (rows with mu_i <= {2 * AREA_HALF:g} not graded); the diffuse part is an LTC form factor "
+    "with the identity matrix, i.e. Lambert (rho/pi, no roughness), and 0 at mu_o = 1 exactly "
+    "(its frame T1 = normalize(V - N (V.N)) is undefined there)",
     "hemispheric": "computeHemisphericPreLightingInfo + computeHemisphericDiffuseLighting with sky = ground = 1 "
-                   "(a uniform white environment), x surfaceAlbedo: rho for every mu_o and roughness "
-                   "(the lobe is not called)",
+    "(a uniform white environment), x surfaceAlbedo: rho for every mu_o and roughness "
+    "(the lobe is not called)",
     "ibl_filtered": f"irradiance() of hdrFilteringFunctions (REALTIME_FILTERING) with NUM_SAMPLES = {IBL_SAMPLES} "
-                    "(TEXTURE_FILTERING_QUALITY_OFFLINE) under a white environment, x surfaceAlbedo: the clamped "
-                    "lobe above integrated with cosine-weighted Hammersley samples (the estimate is poor at "
-                    "grazing mu_o, where f has a 1/mu_i peak the cosine pdf does not follow)",
+    "(TEXTURE_FILTERING_QUALITY_OFFLINE) under a white environment, x surfaceAlbedo: the clamped "
+    "lobe above integrated with cosine-weighted Hammersley samples (the estimate is poor at "
+    "grazing mu_o, where f has a 1/mu_i peak the cosine pdf does not follow)",
     "wgsl_function": "the WGSL copy of diffuseBRDF_EON (ShadersWGSL), run through wgpu",
     "wgsl_directional": "the WGSL copies of the directional light's functions, run through wgpu",
     "wgsl_point": "the WGSL copies of the point light's functions, run through wgpu (LdotV = 0 there too)",
@@ -527,9 +601,16 @@ def subject(source: Path | None = None) -> Subject:
     by = dict(paths)
     version = package_version(folder)
     top = by["directional light"]
-    return Subject(name="babylonjs", model="eon", tolerance=TOLERANCE, tolerance_reason=TOLERANCE_REASON,
-                   version={**top.version, "gl": glsl.gl_version()}, brdf=top.brdf, brdf_domain=top.brdf_domain,
-                   albedo=by["filtered environment"].albedo,
-                   notes=[f"{PACKAGE} {version}: graded per light type and environment path"]
-                   + [n for _, s in paths for n in s.notes],
-                   paths=paths)
+    return Subject(
+        name="babylonjs",
+        model="eon",
+        tolerance=TOLERANCE,
+        tolerance_reason=TOLERANCE_REASON,
+        version={**top.version, "gl": glsl.gl_version()},
+        brdf=top.brdf,
+        brdf_domain=top.brdf_domain,
+        albedo=by["filtered environment"].albedo,
+        notes=[f"{PACKAGE} {version}: graded per light type and environment path"]
+        + [n for _, s in paths for n in s.notes],
+        paths=paths,
+    )

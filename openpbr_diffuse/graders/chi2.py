@@ -18,6 +18,7 @@ True
 >>> chi2_test(wi, lambda d: od.pdf("uniform", wo, d, 0.5))["p"] < 1e-10
 True
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -68,5 +69,4 @@ def chi2_test(samples, pdf, res=(16, 32), nq=4):
     observed = histogram(samples[inside], z_edges, phi_edges)
     n = samples.shape[0]
     p, chi2, dof = pearson(observed, n * mass)
-    return {"p": p, "chi2": chi2, "dof": dof, "mass": float(mass.sum()), "outside": int((~inside).sum()),
-            "n": int(n)}
+    return {"p": p, "chi2": chi2, "dof": dof, "mass": float(mass.sum()), "outside": int((~inside).sum()), "n": int(n)}

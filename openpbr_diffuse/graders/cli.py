@@ -12,6 +12,7 @@ process group is killed on timeout or when the command is interrupted.
 Exit status: 0 every graded quantity conforms, 1 one does not, 2 a piece is missing (GL driver,
 compiler, bpy, source files) or the code does not compile.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -51,33 +52,62 @@ def add_arguments(parser: argparse.ArgumentParser | argparse._ArgumentGroup) -> 
             "grade an implementation by running its own code",
             "--glsl and --cpp COMPILE AND RUN THE GIVEN CODE WITH YOUR USER'S RIGHTS (in a child process "
             f"with a time limit, --timeout, default {limits.TIMEOUT:g} s, and a "
-            f"{limits.MEMORY / 2**30:g} GiB memory limit): grade only code you would run yourself")
-    g.add_argument("--implementation", choices=sorted(IMPLEMENTATIONS), metavar="NAME",
-                   help="one of: " + ", ".join(IMPLEMENTATIONS))
+            f"{limits.MEMORY / 2**30:g} GiB memory limit): grade only code you would run yourself",
+        )
+    g.add_argument(
+        "--implementation",
+        choices=sorted(IMPLEMENTATIONS),
+        metavar="NAME",
+        help="one of: " + ", ".join(IMPLEMENTATIONS),
+    )
     g.add_argument("--source", metavar="PATH", help="the implementation's checkout (its code is not in a package)")
-    g.add_argument("--glsl", metavar="FILE",
-                   help="a GLSL file holding FUNCTION (see --function); compiled and run on llvmpipe with your rights")
-    g.add_argument("--cpp", metavar="FILE",
-                   help="a C++ file holding FUNCTION (see --function); compiled with g++ and run with your rights")
-    g.add_argument("--function", metavar="NAME",
-                   help="BRDF function: vec3 NAME(vec3 wi, vec3 wo, float roughness, vec3 rho), local frame, no cosine")
-    g.add_argument("--albedo-function", metavar="NAME",
-                   help="albedo function: vec3 NAME(float mu, float roughness, vec3 rho)")
-    g.add_argument("--sample-function", metavar="NAME",
-                   help="sampler: vec3 NAME(vec3 wo, vec2 u, float roughness) -> wi, u in [0, 1)^2, local frame "
-                        "(with --pdf-function)")
-    g.add_argument("--pdf-function", metavar="NAME",
-                   help="its solid-angle pdf: float NAME(vec3 wo, vec3 wi, float roughness)")
+    g.add_argument(
+        "--glsl",
+        metavar="FILE",
+        help="a GLSL file holding FUNCTION (see --function); compiled and run on llvmpipe with your rights",
+    )
+    g.add_argument(
+        "--cpp",
+        metavar="FILE",
+        help="a C++ file holding FUNCTION (see --function); compiled with g++ and run with your rights",
+    )
+    g.add_argument(
+        "--function",
+        metavar="NAME",
+        help="BRDF function: vec3 NAME(vec3 wi, vec3 wo, float roughness, vec3 rho), local frame, no cosine",
+    )
+    g.add_argument(
+        "--albedo-function", metavar="NAME", help="albedo function: vec3 NAME(float mu, float roughness, vec3 rho)"
+    )
+    g.add_argument(
+        "--sample-function",
+        metavar="NAME",
+        help="sampler: vec3 NAME(vec3 wo, vec2 u, float roughness) -> wi, u in [0, 1)^2, local frame "
+        "(with --pdf-function)",
+    )
+    g.add_argument(
+        "--pdf-function", metavar="NAME", help="its solid-angle pdf: float NAME(vec3 wo, vec3 wi, float roughness)"
+    )
     from ..sampling.registry import STRATEGIES
 
-    g.add_argument("--sampler-model", choices=STRATEGIES, metavar="STRATEGY",
-                   help="the reference strategy the sampler claims to implement (e.g. eon): its pdf must then "
-                        "match that one's; default: compared and reported, not graded")
+    g.add_argument(
+        "--sampler-model",
+        choices=STRATEGIES,
+        metavar="STRATEGY",
+        help="the reference strategy the sampler claims to implement (e.g. eon): its pdf must then "
+        "match that one's; default: compared and reported, not graded",
+    )
     g.add_argument("--include", metavar="DIR", action="append", default=[], help="include path (repeatable)")
-    g.add_argument("--define", metavar="NAME=VALUE", action="append", default=[],
-                   help="preprocessor define (repeatable)")
-    g.add_argument("--timeout", metavar="SECONDS", type=_seconds, default=None,
-                   help=f"wall-time limit of each compile and run of --glsl/--cpp code (default {limits.TIMEOUT:g})")
+    g.add_argument(
+        "--define", metavar="NAME=VALUE", action="append", default=[], help="preprocessor define (repeatable)"
+    )
+    g.add_argument(
+        "--timeout",
+        metavar="SECONDS",
+        type=_seconds,
+        default=None,
+        help=f"wall-time limit of each compile and run of --glsl/--cpp code (default {limits.TIMEOUT:g})",
+    )
     g.add_argument("--quick", action="store_true", help="fewer sampler samples (40k instead of 200k per case)")
 
 
@@ -88,8 +118,10 @@ def _print_text(result) -> None:
             print(f"  {k}: {v if not isinstance(v, list) else ', '.join(map(str, v))}")
     for q in result.quantities:
         verdict = "pass" if q.passed else "FAIL"
-        print(f"  {q.quantity:30s} {verdict}  max {q.max_abs_error:.3g}  rms {q.rms_error:.3g}  "
-              f"[{q.tolerance}]" + (f"  ({q.excluded} rows outside its input domain)" if q.excluded else ""))
+        print(
+            f"  {q.quantity:30s} {verdict}  max {q.max_abs_error:.3g}  rms {q.rms_error:.3g}  "
+            f"[{q.tolerance}]" + (f"  ({q.excluded} rows outside its input domain)" if q.excluded else "")
+        )
         if q.sentence is not None:  # the sampler's quantities: a sentence and sub-checks with ids
             print(f"      {'diagnosis: ' + (q.diagnosis or 'none') + ' -- ' if not q.passed else ''}{q.sentence}")
             for c in q.checks:
@@ -121,26 +153,35 @@ def subject_from_args(args: argparse.Namespace) -> Subject | None:
 
     modes = [m for m in ("implementation", "glsl", "cpp") if getattr(args, m, None)]
     if not modes:
-        for opt in ("source", "function", "albedo_function", "sample_function", "pdf_function",
-                    "sampler_model"):
+        for opt in ("source", "function", "albedo_function", "sample_function", "pdf_function", "sampler_model"):
             if getattr(args, opt, None):
                 raise ValueError(f"check: --{opt.replace('_', '-')} needs --implementation, --glsl or --cpp")
         return None
     if len(modes) > 1 or getattr(args, "file", None):
         raise ValueError("check: give one of FILE, --implementation, --glsl, --cpp")
     if args.implementation:
-        if args.function or args.albedo_function or getattr(args, "sample_function", None) \
-                or getattr(args, "pdf_function", None):
+        if (
+            args.function
+            or args.albedo_function
+            or getattr(args, "sample_function", None)
+            or getattr(args, "pdf_function", None)
+        ):
             raise ValueError("check: --function / --sample-function are for --glsl / --cpp, not --implementation")
         subject = load(args.implementation, args.source)
     else:
         if args.source:
             raise ValueError("check: --source is for --implementation")
         make = glsl_subject if args.glsl else cpp_subject
-        subject = make(args.glsl or args.cpp, args.function, args.albedo_function, includes=args.include,
-                       defines=args.define, model=getattr(args, "model", None) or "eon",
-                       sample_function=getattr(args, "sample_function", None),
-                       pdf_function=getattr(args, "pdf_function", None))
+        subject = make(
+            args.glsl or args.cpp,
+            args.function,
+            args.albedo_function,
+            includes=args.include,
+            defines=args.define,
+            model=getattr(args, "model", None) or "eon",
+            sample_function=getattr(args, "sample_function", None),
+            pdf_function=getattr(args, "pdf_function", None),
+        )
     return subject
 
 
@@ -163,8 +204,11 @@ def run(args: argparse.Namespace) -> int | None:
     if subject is None:
         return None
     _exit_on_sigterm()  # so a SIGTERM unwinds through run_limited, which kills the child's group
-    result = grade_subject(subject, quick=args.quick,  # GraderUnavailable (an OSError): exit 2
-                           sampler_model=getattr(args, "sampler_model", None))
+    result = grade_subject(
+        subject,
+        quick=args.quick,  # GraderUnavailable (an OSError): exit 2
+        sampler_model=getattr(args, "sampler_model", None),
+    )
     if args.json:
         print(json.dumps(result.to_dict()))
     else:

@@ -6,6 +6,7 @@ binary is cached under ``$OPENPBR_DIFFUSE_CACHE`` (default ``~/.cache/openpbr-di
 by the SHA-256 of the harness text, the subject's sources, the compiler's version and flags, so
 a second run with unchanged sources does not recompile.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -60,26 +61,32 @@ class Harness:
     entries: dict[str, Entry]
     include_dirs: list = field(default_factory=list)
     defines: dict = field(default_factory=dict)
-    sources: list = field(default_factory=list)   # the subject's files, hashed into the cache key
+    sources: list = field(default_factory=list)  # the subject's files, hashed into the cache key
     label: str = "C++ source"
 
     def text(self) -> str:
         parts = [self.prelude, "\n#include <cstdio>\n#include <cstring>\n#include <vector>\n"]
         for name, e in self.entries.items():
             parts.append(f"static void grader_{name}(const float* in, float* out) {{\n{e.body}\n}}\n")
-        parts.append("int main(int argc, char** argv) {\n"
-                     "    if (argc < 2) return 64;\n"
-                     "    int n_in = 0, n_out = 0; void (*fn)(const float*, float*) = nullptr;\n")
+        parts.append(
+            "int main(int argc, char** argv) {\n"
+            "    if (argc < 2) return 64;\n"
+            "    int n_in = 0, n_out = 0; void (*fn)(const float*, float*) = nullptr;\n"
+        )
         for name, e in self.entries.items():
-            parts.append(f'    if (!std::strcmp(argv[1], "{name}")) {{ n_in = {e.n_in}; n_out = {e.n_out}; '
-                         f"fn = grader_{name}; }}\n")
-        parts.append("    if (!fn) return 65;\n"
-                     "    std::vector<float> in(n_in), out(n_out);\n"
-                     "    while (std::fread(in.data(), sizeof(float), n_in, stdin) == (size_t)n_in) {\n"
-                     "        for (int k = 0; k < n_out; ++k) out[k] = 0.0f;\n"
-                     "        fn(in.data(), out.data());\n"
-                     "        std::fwrite(out.data(), sizeof(float), n_out, stdout);\n"
-                     "    }\n    return 0;\n}\n")
+            parts.append(
+                f'    if (!std::strcmp(argv[1], "{name}")) {{ n_in = {e.n_in}; n_out = {e.n_out}; '
+                f"fn = grader_{name}; }}\n"
+            )
+        parts.append(
+            "    if (!fn) return 65;\n"
+            "    std::vector<float> in(n_in), out(n_out);\n"
+            "    while (std::fread(in.data(), sizeof(float), n_in, stdin) == (size_t)n_in) {\n"
+            "        for (int k = 0; k < n_out; ++k) out[k] = 0.0f;\n"
+            "        fn(in.data(), out.data());\n"
+            "        std::fwrite(out.data(), sizeof(float), n_out, stdout);\n"
+            "    }\n    return 0;\n}\n"
+        )
         return "".join(parts)
 
     def _key(self, text: str) -> str:
@@ -87,8 +94,9 @@ class Harness:
         for f in self.sources:
             h.update(str(f).encode())
             h.update(Path(f).read_bytes())
-        h.update(" ".join((*FLAGS, *map(str, self.include_dirs),
-                           *(f"{k}={v}" for k, v in self.defines.items()))).encode())
+        h.update(
+            " ".join((*FLAGS, *map(str, self.include_dirs), *(f"{k}={v}" for k, v in self.defines.items()))).encode()
+        )
         h.update(compiler_version().encode())
         return h.hexdigest()[:24]
 
@@ -102,21 +110,31 @@ class Harness:
         with tempfile.TemporaryDirectory() as tmp:
             src = Path(tmp) / "harness.cpp"
             src.write_text(text)
-            cmd = [compiler(), *FLAGS, *(f"-I{d}" for d in self.include_dirs),
-                   *(f"-D{k}={v}" for k, v in self.defines.items()), str(src), "-o", str(Path(tmp) / "a.out")]
+            cmd = [
+                compiler(),
+                *FLAGS,
+                *(f"-I{d}" for d in self.include_dirs),
+                *(f"-D{k}={v}" for k, v in self.defines.items()),
+                str(src),
+                "-o",
+                str(Path(tmp) / "a.out"),
+            ]
             run = limits.run_limited(cmd, label=f"compiling {self.label}")
             if run.returncode != 0:
                 err = run.stderr.decode(errors="replace")
                 if limits.memory_message(err) or run.returncode < 0:
-                    raise GraderUnavailable(f"compiling {self.label} exceeded the memory limit of user code "
-                                            f"({limits.MEMORY / 2**30:g} GiB) or was killed (status "
-                                            f"{run.returncode})")
+                    raise GraderUnavailable(
+                        f"compiling {self.label} exceeded the memory limit of user code "
+                        f"({limits.MEMORY / 2**30:g} GiB) or was killed (status "
+                        f"{run.returncode})"
+                    )
                 if "glm/glm.hpp" in err and "No such file" in err:
-                    raise GraderUnavailable("GLM headers not found (glm/glm.hpp): apt-get install libglm-dev "
-                                            "(or pass --include DIR holding glm/)")
+                    raise GraderUnavailable(
+                        "GLM headers not found (glm/glm.hpp): apt-get install libglm-dev "
+                        "(or pass --include DIR holding glm/)"
+                    )
                 first = next((line for line in err.splitlines() if "error" in line), err.strip()[:300])
-                raise GraderUnavailable(f"{self.label} does not compile with {Path(compiler()).name}: "
-                                        f"{first.strip()}")
+                raise GraderUnavailable(f"{self.label} does not compile with {Path(compiler()).name}: {first.strip()}")
             # move into place atomically so parallel runs never execute a half-written file
             tmp_exe = exe.with_suffix(f".tmp{os.getpid()}")
             shutil.move(str(Path(tmp) / "a.out"), tmp_exe)
@@ -127,15 +145,19 @@ class Harness:
         """Run entry ``name`` on rows of ``inputs``; returns (rows, n_out) float32."""
         e = self.entries[name]
         inputs = np.ascontiguousarray(inputs, dtype=np.float32).reshape(-1, e.n_in)
-        run = limits.run_limited([str(self.binary()), name], input=inputs.tobytes(),
-                                 label=f"{self.label} (harness entry {name})")
+        run = limits.run_limited(
+            [str(self.binary()), name], input=inputs.tobytes(), label=f"{self.label} (harness entry {name})"
+        )
         if run.returncode != 0:
-            raise GraderUnavailable(f"{self.label}: harness entry {name} exited with status "
-                                    f"{run.returncode}: {run.stderr.decode(errors='replace').strip()[:200]}")
+            raise GraderUnavailable(
+                f"{self.label}: harness entry {name} exited with status "
+                f"{run.returncode}: {run.stderr.decode(errors='replace').strip()[:200]}"
+            )
         out = np.frombuffer(run.stdout, dtype=np.float32)
         if out.size != inputs.shape[0] * e.n_out:
-            raise GraderUnavailable(f"{self.label}: harness entry {name} wrote {out.size} values, "
-                                    f"expected {inputs.shape[0] * e.n_out}")
+            raise GraderUnavailable(
+                f"{self.label}: harness entry {name} wrote {out.size} values, expected {inputs.shape[0] * e.n_out}"
+            )
         return out.reshape(-1, e.n_out).copy()
 
 
@@ -153,13 +175,21 @@ def sampler_entries(sample_function: str, pdf_function: str) -> dict[str, Entry]
     ['pdf', 'sample']
     """
     return {
-        "sample": Entry(6, 4, f"""
+        "sample": Entry(
+            6,
+            4,
+            f"""
     const glm::vec3 grader_wo(in[0], in[1], in[2]);
     const auto grader_wi = {sample_function}(grader_wo, glm::vec2(in[3], in[4]), in[5]);
     out[0] = grader_wi[0]; out[1] = grader_wi[1]; out[2] = grader_wi[2];
-    out[3] = {pdf_function}(grader_wo, glm::vec3(grader_wi[0], grader_wi[1], grader_wi[2]), in[5]);"""),
-        "pdf": Entry(7, 1, f"""
-    out[0] = {pdf_function}(glm::vec3(in[0], in[1], in[2]), glm::vec3(in[3], in[4], in[5]), in[6]);"""),
+    out[3] = {pdf_function}(grader_wo, glm::vec3(grader_wi[0], grader_wi[1], grader_wi[2]), in[5]);""",
+        ),
+        "pdf": Entry(
+            7,
+            1,
+            f"""
+    out[0] = {pdf_function}(glm::vec3(in[0], in[1], in[2]), glm::vec3(in[3], in[4], in[5]), in[6]);""",
+        ),
     }
 
 

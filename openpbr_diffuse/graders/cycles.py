@@ -11,6 +11,7 @@ Blender cannot take the grader down and ``bpy`` (which pins its own numpy) is im
 Render budget (defaults): BRDF 2x2 px at 1 sample (exact up to float32), albedo 32x32 px at
 256 samples per pixel (262 144 paths per row).
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -26,25 +27,35 @@ import numpy as np
 from .errors import GraderUnavailable
 from .subject import Subject
 
-BUDGET = {"brdf_resolution": 2, "brdf_samples": 1, "albedo_resolution": 32, "albedo_samples": 256,
-          "threads": 2, "seed": 0}
+BUDGET = {
+    "brdf_resolution": 2,
+    "brdf_samples": 1,
+    "albedo_resolution": 32,
+    "albedo_samples": 256,
+    "threads": 2,
+    "seed": 0,
+}
 #: albedo rows with mu_o below this are not graded: Cycles samples the lobe with cosine sampling,
 #: whose throughput variance grows at grazing view (standard error 3e-3 at mu = 0.001 with the
 #: default budget, vs <= 1e-4 from mu = 0.1), and there every candidate formula tends to the
 #: same E = rho anyway (1 - E_F -> 0), so those rows cannot separate them
 ALBEDO_MU_MIN = 0.05
 TOLERANCE = (3e-4, 1e-6)
-TOLERANCE_REASON = ("Cycles renders: BRDF values free of noise (delta sun of angle 0, black world, one "
-                    "path vertex) but read through float32 scene transforms: |d mu_i| <~ 1.5e-7, i.e. "
-                    "1.5e-4 relative on f = pixel / mu_i at mu_i = 0.001 (measured); 3e-4 relative")
+TOLERANCE_REASON = (
+    "Cycles renders: BRDF values free of noise (delta sun of angle 0, black world, one "
+    "path vertex) but read through float32 scene transforms: |d mu_i| <~ 1.5e-7, i.e. "
+    "1.5e-4 relative on f = pixel / mu_i at mu_i = 0.001 (measured); 3e-4 relative"
+)
 
 
 SCENE_SCRIPT = Path(__file__).with_name("_cycles_scene.py")
 #: environment variable naming a Python interpreter that has bpy (bpy pins its own numpy and
 #: CPython 3.11, so it often lives in a virtual environment of its own)
 PYTHON_VARIABLE = "OPENPBR_DIFFUSE_BPY_PYTHON"
-_INSTALL = ("bpy pins numpy<2, so give it a separate Python 3.11 (~0.8 GB): python3.11 -m venv bpy-env && "
-            f"bpy-env/bin/pip install bpy && export {PYTHON_VARIABLE}=$PWD/bpy-env/bin/python")
+_INSTALL = (
+    "bpy pins numpy<2, so give it a separate Python 3.11 (~0.8 GB): python3.11 -m venv bpy-env && "
+    f"bpy-env/bin/pip install bpy && export {PYTHON_VARIABLE}=$PWD/bpy-env/bin/python"
+)
 
 
 def bpy_python() -> str:
@@ -53,9 +64,11 @@ def bpy_python() -> str:
 
 
 def _probe():
-    code = ("import bpy, sys, os; h = os.path.join(bpy.utils.system_resource('SCRIPTS'), 'addons_core', "
-            "'cycles', 'source', 'kernel', 'closure', 'bsdf_oren_nayar.h'); "
-            "sys.stdout.write(bpy.app.version_string + '\\n' + (h if os.path.isfile(h) else ''))")
+    code = (
+        "import bpy, sys, os; h = os.path.join(bpy.utils.system_resource('SCRIPTS'), 'addons_core', "
+        "'cycles', 'source', 'kernel', 'closure', 'bsdf_oren_nayar.h'); "
+        "sys.stdout.write(bpy.app.version_string + '\\n' + (h if os.path.isfile(h) else ''))"
+    )
     try:
         run = subprocess.run([bpy_python(), "-c", code], capture_output=True, text=True, check=False)
     except OSError as exc:
@@ -85,8 +98,9 @@ def render(rows: list[dict], budget: dict | None = None) -> tuple[np.ndarray, np
     with tempfile.TemporaryDirectory() as tmp:
         job_path, out_path = Path(tmp) / "job.json", Path(tmp) / "out"
         job_path.write_text(json.dumps(job))
-        run = subprocess.run([bpy_python(), str(SCENE_SCRIPT), str(job_path), str(out_path)],
-                             capture_output=True, text=True, check=False)
+        run = subprocess.run(
+            [bpy_python(), str(SCENE_SCRIPT), str(job_path), str(out_path)], capture_output=True, text=True, check=False
+        )
         if run.returncode != 0:
             tail = (run.stderr.strip().splitlines() or ["no output"])[-1]
             raise GraderUnavailable(f"the Cycles render failed: {tail}")
@@ -106,11 +120,19 @@ def subject(source: Path | None = None, budget: dict | None = None) -> Subject:
         rho = np.broadcast_to(np.asarray(rho, float), (n, 3))
         out = np.full((n, 3), np.nan)  # NaN outside brdf_domain: not measurable by a render
         ok = brdf_domain(wi, wo)
-        rows = [{"kind": "brdf", "wi": wi[k].tolist(), "wo": wo[k].tolist(), "roughness": float(roughness[k]),
-                 "rho": rho[k].tolist()} for k in np.flatnonzero(ok)]
+        rows = [
+            {
+                "kind": "brdf",
+                "wi": wi[k].tolist(),
+                "wo": wo[k].tolist(),
+                "roughness": float(roughness[k]),
+                "rho": rho[k].tolist(),
+            }
+            for k in np.flatnonzero(ok)
+        ]
         if rows:
             mean, _ = render(rows, budget)
-            out[ok] = mean / wi[ok, 2:3]   # pixel = f cos(theta_i) for a sun of strength 1
+            out[ok] = mean / wi[ok, 2:3]  # pixel = f cos(theta_i) for a sun of strength 1
         return out
 
     def albedo(mu, roughness, rho):
@@ -118,8 +140,10 @@ def subject(source: Path | None = None, budget: dict | None = None) -> Subject:
         n = mu.shape[0]
         roughness = np.broadcast_to(np.asarray(roughness, float), (n,))
         rho = np.broadcast_to(np.asarray(rho, float), (n, 3))
-        rows = [{"kind": "albedo", "mu": float(mu[k]), "roughness": float(roughness[k]),
-                 "rho": rho[k].tolist()} for k in range(n)]
+        rows = [
+            {"kind": "albedo", "mu": float(mu[k]), "roughness": float(roughness[k]), "rho": rho[k].tolist()}
+            for k in range(n)
+        ]
         mean, err = render(rows, budget)
         last["albedo_stderr"] = err
         return mean
@@ -134,12 +158,26 @@ def subject(source: Path | None = None, budget: dict | None = None) -> Subject:
 
     sha = hashlib.sha256(kernel.read_bytes()).hexdigest() if kernel else None
     return Subject(
-        name="cycles", model="eon", tolerance=TOLERANCE, tolerance_reason=TOLERANCE_REASON,
-        version={"blender": version, "source": str(kernel) if kernel else None,
-                 "files": ["kernel/closure/bsdf_oren_nayar.h"], "sha256": sha,
-                 "budget": {**BUDGET, **(budget or {})}},
-        brdf=brdf, albedo=albedo, brdf_domain=brdf_domain, albedo_domain=albedo_domain, noise=last,
-        notes=["Diffuse BSDF node (Cycles bsdf_oren_nayar) rendered: sun of angle 0 for f, white world for E",
-               "BRDF rows with a direction below the horizon cannot be rendered and are not graded",
-               f"albedo rows with mu < {ALBEDO_MU_MIN} are not graded (cosine-sampling noise at grazing view, "
-               "where every candidate tends to E = rho)"])
+        name="cycles",
+        model="eon",
+        tolerance=TOLERANCE,
+        tolerance_reason=TOLERANCE_REASON,
+        version={
+            "blender": version,
+            "source": str(kernel) if kernel else None,
+            "files": ["kernel/closure/bsdf_oren_nayar.h"],
+            "sha256": sha,
+            "budget": {**BUDGET, **(budget or {})},
+        },
+        brdf=brdf,
+        albedo=albedo,
+        brdf_domain=brdf_domain,
+        albedo_domain=albedo_domain,
+        noise=last,
+        notes=[
+            "Diffuse BSDF node (Cycles bsdf_oren_nayar) rendered: sun of angle 0 for f, white world for E",
+            "BRDF rows with a direction below the horizon cannot be rendered and are not graded",
+            f"albedo rows with mu < {ALBEDO_MU_MIN} are not graded (cosine-sampling noise at grazing view, "
+            "where every candidate tends to E = rho)",
+        ],
+    )

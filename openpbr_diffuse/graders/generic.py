@@ -19,6 +19,7 @@ The file is included unchanged; ``#include`` paths and preprocessor defines come
 command line (``--include DIR``, ``--define NAME=VALUE``).  Directions point away from the
 surface in the local frame whose normal is +z; ``mu`` is cos(theta_o).
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -41,19 +42,31 @@ def _defines(defines):
 
 
 def _names(function, albedo_function, sample_function=None, pdf_function=None):
-    for name, opt in ((function, "--function"), (albedo_function, "--albedo-function"),
-                      (sample_function, "--sample-function"), (pdf_function, "--pdf-function")):
+    for name, opt in (
+        (function, "--function"),
+        (albedo_function, "--albedo-function"),
+        (sample_function, "--sample-function"),
+        (pdf_function, "--pdf-function"),
+    ):
         if name is not None:
             limits.check_identifier(name, opt)
     if (sample_function is None) != (pdf_function is None):
-        raise ValueError("--sample-function and --pdf-function go together (the sampler is graded "
-                         "against its own pdf)")
+        raise ValueError("--sample-function and --pdf-function go together (the sampler is graded against its own pdf)")
     if not (function or albedo_function or sample_function):
         raise ValueError("--function, --albedo-function or --sample-function/--pdf-function is required")
 
 
-def glsl_subject(path, function=None, albedo_function=None, *, includes=(), defines=(), model="eon",
-                 sample_function=None, pdf_function=None) -> Subject:
+def glsl_subject(
+    path,
+    function=None,
+    albedo_function=None,
+    *,
+    includes=(),
+    defines=(),
+    model="eon",
+    sample_function=None,
+    pdf_function=None,
+) -> Subject:
     """A GLSL file's BRDF function ``function``, albedo function ``albedo_function`` and/or
     sampler ``sample_function`` with its pdf ``pdf_function`` (given together)."""
     path = _check_file(path, "GLSL")
@@ -63,63 +76,124 @@ def glsl_subject(path, function=None, albedo_function=None, *, includes=(), defi
     brdf = albedo = None
     label = str(path)
     if function:
-        k_brdf = glsl.Kernel(code=code, n_in=10, n_out=3, defines=defs, body=f"""
+        k_brdf = glsl.Kernel(
+            code=code,
+            n_in=10,
+            n_out=3,
+            defines=defs,
+            body=f"""
     vec3 grader_f = {function}(vec3(IN(0), IN(1), IN(2)), vec3(IN(3), IN(4), IN(5)), IN(6), vec3(IN(7), IN(8), IN(9)));
-    OUT(0) = grader_f.x; OUT(1) = grader_f.y; OUT(2) = grader_f.z;""")
+    OUT(0) = grader_f.x; OUT(1) = grader_f.y; OUT(2) = grader_f.z;""",
+        )
 
         def brdf(wi, wo, roughness, rho):
             return k_brdf.run(rows(wi, wo, roughness, rho), label)
 
     if albedo_function:
-        k_albedo = glsl.Kernel(code=code, n_in=5, n_out=3, defines=defs, body=f"""
+        k_albedo = glsl.Kernel(
+            code=code,
+            n_in=5,
+            n_out=3,
+            defines=defs,
+            body=f"""
     vec3 grader_E = {albedo_function}(IN(0), IN(1), vec3(IN(2), IN(3), IN(4)));
-    OUT(0) = grader_E.x; OUT(1) = grader_E.y; OUT(2) = grader_E.z;""")
+    OUT(0) = grader_E.x; OUT(1) = grader_E.y; OUT(2) = grader_E.z;""",
+        )
 
         def albedo(mu, roughness, rho):
             return k_albedo.run(rows(mu, roughness, rho), label)
 
-    sample, pdf = (glsl.sampler_functions(code, sample_function, pdf_function, defs, label)
-                   if sample_function else (None, None))
-    return Subject(name=f"glsl:{path.name}:{function or albedo_function or sample_function}", model=model,
-                   tolerance=glsl.TOLERANCE, tolerance_reason=glsl.TOLERANCE_REASON,
-                   version={"source": str(path.resolve()), "sha256": glsl.sources_hash([path]),
-                            "gl": glsl.gl_version(), "defines": defs},
-                   brdf=brdf, albedo=albedo, sample=sample, pdf=pdf)
+    sample, pdf = (
+        glsl.sampler_functions(code, sample_function, pdf_function, defs, label) if sample_function else (None, None)
+    )
+    return Subject(
+        name=f"glsl:{path.name}:{function or albedo_function or sample_function}",
+        model=model,
+        tolerance=glsl.TOLERANCE,
+        tolerance_reason=glsl.TOLERANCE_REASON,
+        version={
+            "source": str(path.resolve()),
+            "sha256": glsl.sources_hash([path]),
+            "gl": glsl.gl_version(),
+            "defines": defs,
+        },
+        brdf=brdf,
+        albedo=albedo,
+        sample=sample,
+        pdf=pdf,
+    )
 
 
-def cpp_subject(path, function=None, albedo_function=None, *, includes=(), defines=(), model="eon",
-                sample_function=None, pdf_function=None) -> Subject:
+def cpp_subject(
+    path,
+    function=None,
+    albedo_function=None,
+    *,
+    includes=(),
+    defines=(),
+    model="eon",
+    sample_function=None,
+    pdf_function=None,
+) -> Subject:
     """A C++ file's BRDF function ``function``, albedo function ``albedo_function`` and/or
     sampler ``sample_function`` with its pdf ``pdf_function`` (given together)."""
     path = _check_file(path, "C++")
     _names(function, albedo_function, sample_function, pdf_function)
     entries = {}
     if function:
-        entries["brdf"] = cpp.Entry(10, 3, f"""
+        entries["brdf"] = cpp.Entry(
+            10,
+            3,
+            f"""
     const auto grader_f = {function}(glm::vec3(in[0], in[1], in[2]), glm::vec3(in[3], in[4], in[5]), in[6],
                               glm::vec3(in[7], in[8], in[9]));
-    out[0] = grader_f[0]; out[1] = grader_f[1]; out[2] = grader_f[2];""")
+    out[0] = grader_f[0]; out[1] = grader_f[1]; out[2] = grader_f[2];""",
+        )
     if albedo_function:
-        entries["albedo"] = cpp.Entry(5, 3, f"""
+        entries["albedo"] = cpp.Entry(
+            5,
+            3,
+            f"""
     const auto grader_E = {albedo_function}(in[0], in[1], glm::vec3(in[2], in[3], in[4]));
-    out[0] = grader_E[0]; out[1] = grader_E[1]; out[2] = grader_E[2];""")
+    out[0] = grader_E[0]; out[1] = grader_E[1]; out[2] = grader_E[2];""",
+        )
     if sample_function:
         entries.update(cpp.sampler_entries(sample_function, pdf_function))
     prelude = f'#include <glm/glm.hpp>\n#include "{path.resolve()}"\n'
-    h = cpp.Harness(prelude=prelude, entries=entries,
-                    include_dirs=[str(path.parent.resolve()), *map(str, includes)],
-                    defines=_defines(defines), sources=[path], label=str(path))
+    h = cpp.Harness(
+        prelude=prelude,
+        entries=entries,
+        include_dirs=[str(path.parent.resolve()), *map(str, includes)],
+        defines=_defines(defines),
+        sources=[path],
+        label=str(path),
+    )
     h.binary()
     brdf = albedo = None
     if function:
+
         def brdf(wi, wo, roughness, rho):
             return h.run("brdf", rows(wi, wo, roughness, rho))
+
     if albedo_function:
+
         def albedo(mu, roughness, rho):
             return h.run("albedo", rows(mu, roughness, rho))
+
     sample, pdf = cpp.sampler_functions(h) if sample_function else (None, None)
-    return Subject(name=f"cpp:{path.name}:{function or albedo_function or sample_function}", model=model,
-                   tolerance=None, tolerance_reason="compiled C++: the float32 tolerance of check FILE",
-                   version={"source": str(path.resolve()), "sha256": glsl.sources_hash([path]),
-                            "compiler": cpp.compiler_version(), "defines": _defines(defines)},
-                   brdf=brdf, albedo=albedo, sample=sample, pdf=pdf)
+    return Subject(
+        name=f"cpp:{path.name}:{function or albedo_function or sample_function}",
+        model=model,
+        tolerance=None,
+        tolerance_reason="compiled C++: the float32 tolerance of check FILE",
+        version={
+            "source": str(path.resolve()),
+            "sha256": glsl.sources_hash([path]),
+            "compiler": cpp.compiler_version(),
+            "defines": _defines(defines),
+        },
+        brdf=brdf,
+        albedo=albedo,
+        sample=sample,
+        pdf=pdf,
+    )

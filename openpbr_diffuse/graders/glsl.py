@@ -8,6 +8,7 @@ including file, then against the given search folders (MaterialX's ``libraries/`
 llvmpipe evaluates ``acos`` and friends with polynomial approximations (max abs error about
 1.6e-4 on acos), so values computed in GLSL carry that error on top of float32 rounding.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -29,8 +30,10 @@ from .errors import GraderUnavailable
 #: vectors the listings need only 5.4e-7 absolute on top of 1e-4 relative; 5e-5 covers the bound
 #: and stays 400x below the smallest known deviation (2 %, extra rho on f_ms).
 TOLERANCE = (1e-4, 5e-5)
-TOLERANCE_REASON = ("GLSL on llvmpipe: float32 arithmetic (1e-4 relative, as check FILE) plus llvmpipe's "
-                    "acos approximation (<= 1.6e-4 in the angle, <= ~5e-5 on f through E_F): 5e-5 absolute")
+TOLERANCE_REASON = (
+    "GLSL on llvmpipe: float32 arithmetic (1e-4 relative, as check FILE) plus llvmpipe's "
+    "acos approximation (<= 1.6e-4 in the angle, <= ~5e-5 on f through E_F): 5e-5 absolute"
+)
 _INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$', re.MULTILINE)
 _CONTEXT = None
 LOCAL_SIZE = 64
@@ -54,7 +57,8 @@ def gl_context():
         except Exception as exc:  # moderngl raises plain Exception for a missing driver
             raise GraderUnavailable(
                 "no OpenGL 4.3 context through EGL (" + str(exc).splitlines()[0] + "): install Mesa's "
-                "software driver, e.g. apt-get install libgl1-mesa-dri libegl1 libegl-mesa0") from exc
+                "software driver, e.g. apt-get install libgl1-mesa-dri libegl1 libegl-mesa0"
+            ) from exc
     return _CONTEXT
 
 
@@ -83,8 +87,10 @@ def resolve_includes(path: Path, search: tuple[Path, ...] = (), _seen: set | Non
             candidate = Path(folder) / name
             if candidate.is_file():
                 return resolve_includes(candidate, search, seen)
-        raise GraderUnavailable(f'{path}: #include "{name}" not found next to the file or in '
-                                f'{", ".join(str(s) for s in search) or "no search path"} (pass --include DIR)')
+        raise GraderUnavailable(
+            f'{path}: #include "{name}" not found next to the file or in '
+            f'{", ".join(str(s) for s in search) or "no search path"} (pass --include DIR)'
+        )
 
     return _INCLUDE.sub(sub, text)
 
@@ -128,8 +134,7 @@ class Kernel:
             head = "#version 430\nout vec4 grader_colour;\n"
             row = f"uint(gl_FragCoord.y) * {FRAGMENT_WIDTH}u + uint(gl_FragCoord.x)"
         return (
-            head +
-            f"{defines}{self.preamble}\n"
+            head + f"{defines}{self.preamble}\n"
             "#line 1 1\n"
             f"{self.code}\n"
             "#line 1 2\n"
@@ -142,7 +147,8 @@ class Kernel:
             f"    uint grader_row = {row};\n"
             "    if (grader_row >= uint(grader_rows)) return;\n"
             f"{self.body}\n"
-            "}\n")
+            "}\n"
+        )
 
     def run(self, inputs: np.ndarray, label: str = "shader") -> np.ndarray:
         """Run on ``inputs`` (rows, n_in) and return (rows, n_out) float32 results.
@@ -154,22 +160,36 @@ class Kernel:
         rows = inputs.shape[0]
         if rows == 0:
             return np.zeros((0, self.n_out), np.float32)
-        job = {"source": self.source(), "stage": self.stage, "n_out": self.n_out, "rows": rows,
-               "uniforms": dict(self.uniforms), "inputs": inputs.tobytes()}
+        job = {
+            "source": self.source(),
+            "stage": self.stage,
+            "n_out": self.n_out,
+            "rows": rows,
+            "uniforms": dict(self.uniforms),
+            "inputs": inputs.tobytes(),
+        }
         root = str(Path(__file__).resolve().parents[2])
         env = dict(os.environ)
         env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
-        run = limits.run_limited([sys.executable, "-m", "openpbr_diffuse.graders._gl_child"],
-                                 input=pickle.dumps(job), label=f"{label} (GLSL on llvmpipe)", env=env)
+        run = limits.run_limited(
+            [sys.executable, "-m", "openpbr_diffuse.graders._gl_child"],
+            input=pickle.dumps(job),
+            label=f"{label} (GLSL on llvmpipe)",
+            env=env,
+        )
         err = run.stderr.decode(errors="replace").strip()
         if run.returncode == 3:
-            raise GraderUnavailable(f"{label} does not compile on {gl_version()}: {err.splitlines()[-1] if err else ''} "
-                                    "(file 1 = the subject's code, 2 = the grader's wrapper)")
+            raise GraderUnavailable(
+                f"{label} does not compile on {gl_version()}: {err.splitlines()[-1] if err else ''} "
+                "(file 1 = the subject's code, 2 = the grader's wrapper)"
+            )
         if run.returncode != 0:
             last = err.splitlines()[-1] if err else f"status {run.returncode}"
             if limits.memory_message(err) or run.returncode < 0:
-                last = (f"exceeded the memory limit of user code ({limits.MEMORY / 2**30:g} GiB) or was killed "
-                        f"(status {run.returncode})")
+                last = (
+                    f"exceeded the memory limit of user code ({limits.MEMORY / 2**30:g} GiB) or was killed "
+                    f"(status {run.returncode})"
+                )
             raise GraderUnavailable(f"{label}: the GL child failed: {last}")
         out = np.frombuffer(run.stdout, dtype=np.float32)
         if out.size != rows * self.n_out:
@@ -195,8 +215,9 @@ def _draw_rows(ctx, program, rows):
         target.release()
 
 
-def sampler_functions(code: str, sample_function: str, pdf_function: str, defines: dict | None = None,
-                      label: str = "shader"):
+def sampler_functions(
+    code: str, sample_function: str, pdf_function: str, defines: dict | None = None, label: str = "shader"
+):
     """``(sample, pdf)`` array functions around a subject's GLSL sampler and pdf.
 
     The GLSL signatures (local frame, normal +z, directions pointing away from the surface)::
@@ -221,16 +242,33 @@ def sampler_functions(code: str, sample_function: str, pdf_function: str, define
     from ._arrays import rows
 
     defs = dict(defines or {})
-    k_sample = Kernel(code=code, n_in=6, n_out=4, defines=defs, body=f"""
+    k_sample = Kernel(
+        code=code,
+        n_in=6,
+        n_out=4,
+        defines=defs,
+        body=f"""
     vec3 grader_wo = vec3(IN(0), IN(1), IN(2));
     float grader_r = IN(5);
     vec3 grader_wi = {sample_function}(grader_wo, vec2(IN(3), IN(4)), grader_r);
     float grader_p = {pdf_function}(grader_wo, grader_wi, grader_r);
-    OUT(0) = grader_wi.x; OUT(1) = grader_wi.y; OUT(2) = grader_wi.z; OUT(3) = grader_p;""")
-    k_pdf = Kernel(code=code, n_in=7, n_out=1, defines=defs, body=f"""
-    OUT(0) = {pdf_function}(vec3(IN(0), IN(1), IN(2)), vec3(IN(3), IN(4), IN(5)), IN(6));""")
+    OUT(0) = grader_wi.x; OUT(1) = grader_wi.y; OUT(2) = grader_wi.z; OUT(3) = grader_p;""",
+    )
+    k_pdf = Kernel(
+        code=code,
+        n_in=7,
+        n_out=1,
+        defines=defs,
+        body=f"""
+    OUT(0) = {pdf_function}(vec3(IN(0), IN(1), IN(2)), vec3(IN(3), IN(4), IN(5)), IN(6));""",
+    )
     # both in one run: IN(0) = 1 for a sample row (wo, u, -, r), 0 for a pdf row (wo, wi, r)
-    k_both = Kernel(code=code, n_in=8, n_out=4, defines=defs, body=f"""
+    k_both = Kernel(
+        code=code,
+        n_in=8,
+        n_out=4,
+        defines=defs,
+        body=f"""
     vec3 grader_wo = vec3(IN(1), IN(2), IN(3));
     float grader_r = IN(7);
     if (IN(0) > 0.5) {{
@@ -240,7 +278,8 @@ def sampler_functions(code: str, sample_function: str, pdf_function: str, define
     }} else {{
         OUT(0) = 0.0; OUT(1) = 0.0; OUT(2) = 0.0;
         OUT(3) = {pdf_function}(grader_wo, vec3(IN(4), IN(5), IN(6)), grader_r);
-    }}""")
+    }}""",
+    )
 
     def sample(wo, roughness, u):
         out = k_sample.run(rows(wo, u, roughness), f"{label} ({sample_function})")

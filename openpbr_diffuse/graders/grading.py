@@ -8,6 +8,7 @@ reference strategy's pdf and by a chi-square test of their samples against their
 surface implementations by the diffuse lobe's weight x albedo and selection probability against
 ``OpenPBRSurface``.
 """
+
 from __future__ import annotations
 
 import math
@@ -48,22 +49,24 @@ SAMPLER_VARIANCE_N = 50_000
 #: the reference sampler the variance is compared with
 SAMPLER_REFERENCE = "eon"
 #: u values at the corners of [0, 1)^2 added to every case (not histogrammed): NaN hunting
-_U_EDGES = (0.0, 0.5, 1.0 - 2.0 ** -24)
+_U_EDGES = (0.0, 0.5, 1.0 - 2.0**-24)
 #: surface: the materials and view directions; tolerances and why
 SURFACE_MATERIALS = (
     {"base_color": (0.8, 0.5, 0.2), "base_diffuse_roughness": 0.5, "specular_roughness": 0.3},
     {"base_color": (0.9, 0.9, 0.9), "base_diffuse_roughness": 1.0, "specular_roughness": 0.6},
-    {"base_color": (0.2, 0.6, 0.3), "base_diffuse_roughness": 0.0, "specular_roughness": 0.2,
-     "specular_ior": 1.8},
+    {"base_color": (0.2, 0.6, 0.3), "base_diffuse_roughness": 0.0, "specular_roughness": 0.2, "specular_ior": 1.8},
 )
 SURFACE_MU = (0.1, 0.3, 0.6, 0.9)
 SURFACE_WEIGHT_TOL = 5e-3
-SURFACE_WEIGHT_REASON = ("albedo scaling is approximate by definition and each renderer has its own "
-                         "GGX albedo tables (ours: 2e-4; the viewer: a 4-sample estimate averaged over "
-                         "256 seeds): 5e-3 absolute on w*E, below the colour shift white-tint removes (~2e-2)")
+SURFACE_WEIGHT_REASON = (
+    "albedo scaling is approximate by definition and each renderer has its own "
+    "GGX albedo tables (ours: 2e-4; the viewer: a 4-sample estimate averaged over "
+    "256 seeds): 5e-3 absolute on w*E, below the colour shift white-tint removes (~2e-2)"
+)
 SURFACE_PROB_TOL = 2e-2
-SURFACE_PROB_REASON = ("any selection probability > 0 is unbiased; 0.02 flags a different selection "
-                       "rule, not table-level differences")
+SURFACE_PROB_REASON = (
+    "any selection probability > 0 is unbiased; 0.02 flags a different selection rule, not table-level differences"
+)
 
 
 @dataclass
@@ -96,9 +99,19 @@ class QuantityGrade:
     @classmethod
     def from_grade(cls, quantity, g, excluded=0, tolerance_reason=None):
         tol = f"|out - ref| <= {g.tolerance['absolute']:g} + {g.tolerance['relative']:g} |ref|"
-        return cls(quantity, bool(g.passed), float(g.max_abs_error), float(g.rms_error), tol,
-                   tolerance_reason or g.tolerance_reason, g.diagnosis, g.diagnosis_detail, g.n_rows,
-                   excluded, g.to_dict())
+        return cls(
+            quantity,
+            bool(g.passed),
+            float(g.max_abs_error),
+            float(g.rms_error),
+            tol,
+            tolerance_reason or g.tolerance_reason,
+            g.diagnosis,
+            g.diagnosis_detail,
+            g.n_rows,
+            excluded,
+            g.to_dict(),
+        )
 
 
 @dataclass
@@ -118,10 +131,16 @@ class ImplementationGrade:
     def to_dict(self) -> dict:
         from ..conformance.grade import json_safe
 
-        return json_safe({"implementation": self.name, "model": self.model, "passed": self.passed,
-                      "version": self.version, "notes": self.notes,
-                      "quantities": [{k: v for k, v in asdict(q).items() if k != "plot"}
-                                     for q in self.quantities]})
+        return json_safe(
+            {
+                "implementation": self.name,
+                "model": self.model,
+                "passed": self.passed,
+                "version": self.version,
+                "notes": self.notes,
+                "quantities": [{k: v for k, v in asdict(q).items() if k != "plot"} for q in self.quantities],
+            }
+        )
 
 
 def _tolerance_pair(tolerance):
@@ -172,8 +191,10 @@ def grade_values(subject, vectors=None, kinds=("brdf", "albedo")) -> list[Quanti
             se = float(np.max(subject.noise["albedo_stderr"]))
             rel, ab = _tolerance_pair(tolerance)
             tolerance = (rel, max(ab, 4.0 * se))
-            reason = (f"rendered albedo: Monte Carlo standard error <= {se:.2g} (measured from the pixels); "
-                      f"tolerance 4 standard errors = {4 * se:.2g} absolute")
+            reason = (
+                f"rendered albedo: Monte Carlo standard error <= {se:.2g} (measured from the pixels); "
+                f"tolerance 4 standard errors = {4 * se:.2g} absolute"
+            )
         out = np.asarray(out, dtype=np.float64)
         g = grade(rows, out, model=subject.model, tolerance=tolerance)
         q = QuantityGrade.from_grade(kind, g, excluded, None if tolerance is None else reason)
@@ -215,11 +236,16 @@ def _sample_counts(wi, p):
     p_bad = finite & ~below & ~(np.isfinite(p) & (p >= 0.0))
     zero = finite & ~below & np.isfinite(p) & (p == 0.0)
     valid = finite & ~below & ~not_unit & ~p_bad
-    return {"nan": int((~finite).sum()), "below_horizon": int(below.sum()),
-            "horizon_rounding": int(rounded.sum()), "not_unit": int(not_unit.sum()),
-            "pdf_not_finite_or_negative": int(p_bad.sum()), "pdf_zero": int(zero.sum()),
-            "max_length_error": float(np.max(np.abs(length[finite & ~below] - 1.0), initial=0.0)),
-            "valid": valid}
+    return {
+        "nan": int((~finite).sum()),
+        "below_horizon": int(below.sum()),
+        "horizon_rounding": int(rounded.sum()),
+        "not_unit": int(not_unit.sum()),
+        "pdf_not_finite_or_negative": int(p_bad.sum()),
+        "pdf_zero": int(zero.sum()),
+        "max_length_error": float(np.max(np.abs(length[finite & ~below] - 1.0), initial=0.0)),
+        "valid": valid,
+    }
 
 
 def grade_sampler(subject, quick: bool = False, seed: int = 12, claim: str | None = None) -> list[QuantityGrade]:
@@ -319,7 +345,7 @@ def grade_sampler(subject, quick: bool = False, seed: int = 12, claim: str | Non
     U = np.concatenate([np.concatenate([rng.random((n, 2)), corners]) for _ in SAMPLER_CASES])
     WO_s = np.repeat(wo_c[idx], per, axis=0)
     R_s = np.repeat(r_c[idx], per)
-    combined = getattr(subject.sample, "combined", None)   # GLSL: both in one shader run
+    combined = getattr(subject.sample, "combined", None)  # GLSL: both in one shader run
     if combined is not None:
         wi_all, p_all, p_nodes = combined(WO_s, R_s, U, WO, WI, R)
     else:
@@ -340,74 +366,116 @@ def grade_sampler(subject, quick: bool = False, seed: int = 12, claim: str | Non
         n_nan = int(np.isnan(p_nodes).sum())
         n_neg = int((p_nodes < 0).sum())
         n_inf = int(np.isinf(p_nodes).sum())
-        what = ", ".join(f"{c} {name}" for c, name in ((n_nan, "NaN"), (n_inf, "Inf"), (n_neg, "negative"))
-                         if c)
-        norm_sentence = (f"pdf is not a density: {what} values at the {m * len(cases)} quadrature "
-                         f"directions (first at {_case_label(*cases[k])})")
+        what = ", ".join(f"{c} {name}" for c, name in ((n_nan, "NaN"), (n_inf, "Inf"), (n_neg, "negative")) if c)
+        norm_sentence = (
+            f"pdf is not a density: {what} values at the {m * len(cases)} quadrature "
+            f"directions (first at {_case_label(*cases[k])})"
+        )
     else:
         off_mu = sorted({mu for (mu, _), e in zip(cases, mass_err) if e > SAMPLER_MASS_TOL})
-        norm_sentence = (f"pdf integrates to {mass[k_worst]:.4g} at {grazing}{_case_label(mu_w, r_w)}"
-                         + (f" ({n_off} of {len(cases)} (mu_o, roughness) cases off by more than "
-                            f"{SAMPLER_MASS_TOL:g}, at mu_o {off_mu[0]:g} to {off_mu[-1]:g})" if n_off > 1 else ""))
+        norm_sentence = f"pdf integrates to {mass[k_worst]:.4g} at {grazing}{_case_label(mu_w, r_w)}" + (
+            f" ({n_off} of {len(cases)} (mu_o, roughness) cases off by more than "
+            f"{SAMPLER_MASS_TOL:g}, at mu_o {off_mu[0]:g} to {off_mu[-1]:g})"
+            if n_off > 1
+            else ""
+        )
     # (c) against every reference strategy at the same nodes
     ok = ~bad_nodes.reshape(-1)
     ref_err = {}
     for strategy in od.STRATEGIES:
         ref = od.pdf(strategy, WO[ok], WI[ok], R[ok])
-        ref_err[strategy] = float(np.max(np.abs(p_nodes.reshape(-1)[ok] - ref)
-                                         / np.maximum(ref, SAMPLER_PDF_FLOOR), initial=0.0))
+        ref_err[strategy] = float(
+            np.max(np.abs(p_nodes.reshape(-1)[ok] - ref) / np.maximum(ref, SAMPLER_PDF_FLOOR), initial=0.0)
+        )
     best = min(ref_err, key=ref_err.get)
     matches = ref_err[best] <= SAMPLER_PDF_TOL
-    ref_detail = (f"matches the reference '{best}' strategy's pdf to {ref_err[best]:.2g} relative"
-                  if matches else f"matches no reference strategy's pdf (closest '{best}', {ref_err[best]:.2g})")
+    ref_detail = (
+        f"matches the reference '{best}' strategy's pdf to {ref_err[best]:.2g} relative"
+        if matches
+        else f"matches no reference strategy's pdf (closest '{best}', {ref_err[best]:.2g})"
+    )
     if best != "eon":
         ref_detail += f"; differs from the reference 'eon' pdf by up to {ref_err['eon']:.2g} relative"
     if claim is not None:
         ref_ok = ref_err[claim] <= SAMPLER_PDF_TOL
         ref_status = "pass" if ref_ok else "fail"
-        ref_detail = (f"claimed '{claim}': " + (f"matches to {ref_err[claim]:.2g} relative" if ref_ok else
-                      f"differs by up to {ref_err[claim]:.2g} relative") + "; " + ref_detail)
+        ref_detail = (
+            f"claimed '{claim}': "
+            + (
+                f"matches to {ref_err[claim]:.2g} relative"
+                if ref_ok
+                else f"differs by up to {ref_err[claim]:.2g} relative"
+            )
+            + "; "
+            + ref_detail
+        )
     else:
         ref_ok, ref_status = True, "info"
         ref_detail += " (no sampler model claimed: reported, not graded)"
     pdf_checks = [
-        {"id": "sampler_pdf.normalisation", "status": "pass" if norm_ok else "fail",
-         "measured": float(mass_err.max()), "threshold": SAMPLER_MASS_TOL,
-         "detail": (f"|integral of pdf - 1| <= {mass_err.max():.2g} over {len(cases)} (mu_o, roughness) cases"
-                    if norm_ok else norm_sentence)},
-        {"id": "sampler_pdf.reference", "status": ref_status,
-         "measured": ref_err[claim if claim else "eon"], "threshold": SAMPLER_PDF_TOL, "detail": ref_detail,
-         "by_strategy": ref_err}]
+        {
+            "id": "sampler_pdf.normalisation",
+            "status": "pass" if norm_ok else "fail",
+            "measured": float(mass_err.max()),
+            "threshold": SAMPLER_MASS_TOL,
+            "detail": (
+                f"|integral of pdf - 1| <= {mass_err.max():.2g} over {len(cases)} (mu_o, roughness) cases"
+                if norm_ok
+                else norm_sentence
+            ),
+        },
+        {
+            "id": "sampler_pdf.reference",
+            "status": ref_status,
+            "measured": ref_err[claim if claim else "eon"],
+            "threshold": SAMPLER_PDF_TOL,
+            "detail": ref_detail,
+            "by_strategy": ref_err,
+        },
+    ]
     if not norm_ok:
         pdf_diag, pdf_sentence = ("pdf_not_finite" if bad_nodes.any() else "pdf_not_normalised"), norm_sentence
     elif not ref_ok:
         pdf_diag = f"pdf_differs_from_{claim}"
-        pdf_sentence = (f"pdf differs from the reference '{claim}' pdf by up to {ref_err[claim]:.2g} relative"
-                        + (f" (it matches '{best}')" if matches else ""))
+        pdf_sentence = f"pdf differs from the reference '{claim}' pdf by up to {ref_err[claim]:.2g} relative" + (
+            f" (it matches '{best}')" if matches else ""
+        )
     else:
         pdf_diag = None
         pdf_sentence = f"pdf integrates to 1 within {mass_err.max():.1g} at every (mu_o, roughness) and "
         if claim is not None:
             pdf_sentence += f"matches the claimed '{claim}' pdf to {ref_err[claim]:.2g} relative"
         elif matches:
-            pdf_sentence += (f"matches the reference '{best}' strategy's pdf"
-                             + (f" (not the 'eon' one: relative difference up to {ref_err['eon']:.2g})"
-                                if best != "eon" else ""))
+            pdf_sentence += f"matches the reference '{best}' strategy's pdf" + (
+                f" (not the 'eon' one: relative difference up to {ref_err['eon']:.2g})" if best != "eon" else ""
+            )
         else:
             pdf_sentence += f"matches no reference strategy's pdf (closest '{best}', {ref_err[best]:.2g} relative)"
     regions = {}
     for i, mu in enumerate(SAMPLER_NORM_MU):
         row = [mass[i * len(SAMPLER_NORM_R) + j] for j in range(len(SAMPLER_NORM_R))]
-        regions[f"mu_o {mu:g}"] = ("integral of pdf " + " / ".join(f"{v:.4f}" for v in row) + " at roughness "
-                                   + ", ".join(f"{r:g}" for r in SAMPLER_NORM_R))
+        regions[f"mu_o {mu:g}"] = (
+            "integral of pdf "
+            + " / ".join(f"{v:.4f}" for v in row)
+            + " at roughness "
+            + ", ".join(f"{r:g}" for r in SAMPLER_NORM_R)
+        )
     q_pdf = QuantityGrade(
-        "sampler pdf", bool(norm_ok and ref_ok), float(mass_err.max()), float("nan"),
+        "sampler pdf",
+        bool(norm_ok and ref_ok),
+        float(mass_err.max()),
+        float("nan"),
         f"|integral of pdf - 1| <= {SAMPLER_MASS_TOL:g}"
         + (f"; pdf vs '{claim}' relative {SAMPLER_PDF_TOL:g}" if claim else ""),
         "quadrature error < 1e-5 on the reference pdfs, float32 values; 20x below a 10 % error",
-        pdf_diag, f"{pdf_checks[0]['detail']}; {ref_detail}", n=m * len(cases),
+        pdf_diag,
+        f"{pdf_checks[0]['detail']}; {ref_detail}",
+        n=m * len(cases),
         where=(f"{_case_label(mu_w, r_w)}: integral of pdf {mass[k_worst]:.4g}" if not norm_ok else ""),
-        sentence=pdf_sentence, checks=pdf_checks, regions=regions)
+        sentence=pdf_sentence,
+        checks=pdf_checks,
+        regions=regions,
+    )
 
     wi_all = np.asarray(wi_all, np.float64).reshape(len(SAMPLER_CASES), per, 3)
     p_all = np.asarray(p_all, np.float64).reshape(len(SAMPLER_CASES), per)
@@ -428,11 +496,12 @@ def grade_sampler(subject, quick: bool = False, seed: int = 12, claim: str | Non
         f_all = np.asarray(subject.brdf(f_wi, f_wo, f_r, ones), np.float64)[:, 0]
         f_whose = "their f"
     else:
-        f_all = evaluate(subject.model if subject.model in ("eon", "fon", "eon_approx", "lambert") else "eon",
-                         f_wi, f_wo, f_r, ones)[:, 0]
+        f_all = evaluate(
+            subject.model if subject.model in ("eon", "fon", "eon_approx", "lambert") else "eon", f_wi, f_wo, f_r, ones
+        )[:, 0]
         f_whose = "the reference f (no BRDF function given)"
     f_theirs = f_all[: len(idx) * nv].reshape(len(idx), nv)
-    f_ref = f_all[len(idx) * nv:].reshape(len(idx), nv)
+    f_ref = f_all[len(idx) * nv :].reshape(len(idx), nv)
 
     sidak = 1.0 - (1.0 - SAMPLER_ALPHA) ** (1.0 / len(SAMPLER_CASES))
     tests, counts_total, first_bad, warnings, chi_regions, plot = [], {}, None, [], {}, []
@@ -447,93 +516,168 @@ def grade_sampler(subject, quick: bool = False, seed: int = 12, claim: str | Non
                 counts_total[key] = counts_total.get(key, 0) + v
         if first_bad is None and not valid.all():
             j = int(np.argmin(valid))
-            first_bad = (f"first at {_case_label(mu, r)}, u = ({U[c * per + j, 0]:.8g}, {U[c * per + j, 1]:.8g}): "
-                         f"wi = ({', '.join(f'{x:.4g}' for x in wi[j])}), pdf {p[j]:.4g}")
+            first_bad = (
+                f"first at {_case_label(mu, r)}, u = ({U[c * per + j, 0]:.8g}, {U[c * per + j, 1]:.8g}): "
+                f"wi = ({', '.join(f'{x:.4g}' for x in wi[j])}), pdf {p[j]:.4g}"
+            )
         rnd = valid[:n]
         d = wi[:n][rnd]
         d = d / np.linalg.norm(d, axis=1, keepdims=True)
-        d[:, 2] = np.maximum(d[:, 2], 0.0)       # rounded just below the horizon: the first bin
+        d[:, 2] = np.maximum(d[:, 2], 0.0)  # rounded just below the horizon: the first bin
         observed = histogram(d, z_edges, phi_edges)
         k = idx[c]
         expected = rnd.sum() * bin_mass[k].reshape(SAMPLER_BINS)
         pval, chi2, dof = pearson_chi2(observed, expected)
         p_norm = pearson_chi2(observed, expected / mass[k])[0] if mass[k] > 0 else float("nan")
-        tests.append({"mu_o": mu, "roughness": r, "p": pval, "chi2": chi2, "dof": dof,
-                      "p_normalised": p_norm, "n": int(rnd.sum())})
+        tests.append(
+            {
+                "mu_o": mu,
+                "roughness": r,
+                "p": pval,
+                "chi2": chi2,
+                "dof": dof,
+                "p_normalised": p_norm,
+                "n": int(rnd.sum()),
+            }
+        )
         # variance of f mu_i / pdf, theirs and the reference sampler's with the same f
         pt, zt = p[:nv], wi[:nv, 2]
         good = np.isfinite(pt) & (pt > 0) & np.isfinite(zt) & (zt > 0)
         wt = np.where(good, f_theirs[c] * np.where(good, zt, 0.0) / np.where(good, pt, 1.0), 0.0)
-        wr = np.where(ref_p[c] > 0, f_ref[c] * np.maximum(ref_wi[c, :, 2], 0.0) / np.where(ref_p[c] > 0, ref_p[c], 1.0),
-                      0.0)
+        wr = np.where(
+            ref_p[c] > 0, f_ref[c] * np.maximum(ref_wi[c, :, 2], 0.0) / np.where(ref_p[c] > 0, ref_p[c], 1.0), 0.0
+        )
         vt, vr = float(np.var(wt)), float(np.var(wr))
         ratio = vt / vr if vr > 1e-12 else (1.0 if vt <= 1e-12 else math.inf)
-        tests[-1].update({"variance": vt, "variance_reference": vr, "variance_ratio": ratio,
-                          "mean": float(wt.mean()), "mean_reference": float(wr.mean())})
+        tests[-1].update(
+            {
+                "variance": vt,
+                "variance_reference": vr,
+                "variance_ratio": ratio,
+                "mean": float(wt.mean()),
+                "mean_reference": float(wr.mean()),
+            }
+        )
         if ratio > SAMPLER_VARIANCE_WARN:
-            warnings.append(f"variance of f mu_i / pdf is {ratio:.3g}x the reference '{SAMPLER_REFERENCE}' "
-                            f"sampler's at {_case_label(mu, r)}")
+            warnings.append(
+                f"variance of f mu_i / pdf is {ratio:.3g}x the reference '{SAMPLER_REFERENCE}' "
+                f"sampler's at {_case_label(mu, r)}"
+            )
         chi_regions[_case_label(mu, r)] = (
             f"chi2 p = {pval:.3g} ({int(rnd.sum())} samples, {dof} dof); variance of f mu_i / pdf {vt:.3g} "
-            f"vs {vr:.3g} for '{SAMPLER_REFERENCE}' (ratio {ratio:.3g}); mean {wt.mean():.4f} vs {wr.mean():.4f}")
+            f"vs {vr:.3g} for '{SAMPLER_REFERENCE}' (ratio {ratio:.3g}); mean {wt.mean():.4f} vs {wr.mean():.4f}"
+        )
         plot.append({"mu_o": mu, "roughness": r, "observed": observed, "expected": expected, "p": pval})
     pmin_t = min(tests, key=lambda t: t["p"])
     chi_ok = pmin_t["p"] >= sidak
     invalid = sum(counts_total[k] for k in ("nan", "below_horizon", "not_unit", "pdf_not_finite_or_negative"))
     n_total = per * len(SAMPLER_CASES)
-    named = [f"{counts_total[k]} {label}" for k, label in (
-        ("nan", "NaN/Inf"), ("below_horizon", f"below the horizon (z < -{SAMPLER_HORIZON_TOL:g})"),
-        ("not_unit", f"not unit vectors (|wi| off by up to {counts_total['max_length_error']:.2g})"),
-        ("pdf_not_finite_or_negative", "with a NaN/Inf/negative pdf")) if counts_total[k]]
-    valid_detail = (f"{', '.join(named)} of {n_total} samples ({first_bad})" if named else
-                    f"all {n_total} samples finite, unit and above the horizon (u corners included)")
+    named = [
+        f"{counts_total[k]} {label}"
+        for k, label in (
+            ("nan", "NaN/Inf"),
+            ("below_horizon", f"below the horizon (z < -{SAMPLER_HORIZON_TOL:g})"),
+            ("not_unit", f"not unit vectors (|wi| off by up to {counts_total['max_length_error']:.2g})"),
+            ("pdf_not_finite_or_negative", "with a NaN/Inf/negative pdf"),
+        )
+        if counts_total[k]
+    ]
+    valid_detail = (
+        f"{', '.join(named)} of {n_total} samples ({first_bad})"
+        if named
+        else f"all {n_total} samples finite, unit and above the horizon (u corners included)"
+    )
     if counts_total["horizon_rounding"]:
-        valid_detail += (f"; {counts_total['horizon_rounding']} on the horizon rounded below it "
-                         f"(-{SAMPLER_HORIZON_TOL:g} <= z < 0; f = 0 there: not a failure)")
+        valid_detail += (
+            f"; {counts_total['horizon_rounding']} on the horizon rounded below it "
+            f"(-{SAMPLER_HORIZON_TOL:g} <= z < 0; f = 0 there: not a failure)"
+        )
     if counts_total["pdf_zero"]:
         valid_detail += f"; {counts_total['pdf_zero']} samples with pdf 0 (discarded by a renderer)"
     worst_var = max(tests, key=lambda t: t["variance_ratio"])
     chi_checks = [
-        {"id": "sampler_chi2.chi2", "status": "pass" if chi_ok else "fail", "measured": pmin_t["p"],
-         "threshold": sidak, "detail": f"min p = {pmin_t['p']:.3g} at {_case_label(pmin_t['mu_o'], pmin_t['roughness'])} "
-                                       f"over {len(tests)} cases (Sidak threshold {sidak:.2g})"},
-        {"id": "sampler_chi2.valid", "status": "fail" if invalid else "pass", "measured": invalid,
-         "threshold": 0, "detail": valid_detail, "counts": counts_total},
-        {"id": "sampler_chi2.variance", "status": "warn" if warnings else "pass",
-         "measured": worst_var["variance_ratio"], "threshold": SAMPLER_VARIANCE_WARN,
-         "detail": (f"variance of f mu_i / pdf ({f_whose}) at most {worst_var['variance_ratio']:.3g}x the reference "
-                    f"'{SAMPLER_REFERENCE}' sampler's (at {_case_label(worst_var['mu_o'], worst_var['roughness'])}); "
-                    f"a warning above {SAMPLER_VARIANCE_WARN:g}x, not a failure")}]
+        {
+            "id": "sampler_chi2.chi2",
+            "status": "pass" if chi_ok else "fail",
+            "measured": pmin_t["p"],
+            "threshold": sidak,
+            "detail": f"min p = {pmin_t['p']:.3g} at {_case_label(pmin_t['mu_o'], pmin_t['roughness'])} "
+            f"over {len(tests)} cases (Sidak threshold {sidak:.2g})",
+        },
+        {
+            "id": "sampler_chi2.valid",
+            "status": "fail" if invalid else "pass",
+            "measured": invalid,
+            "threshold": 0,
+            "detail": valid_detail,
+            "counts": counts_total,
+        },
+        {
+            "id": "sampler_chi2.variance",
+            "status": "warn" if warnings else "pass",
+            "measured": worst_var["variance_ratio"],
+            "threshold": SAMPLER_VARIANCE_WARN,
+            "detail": (
+                f"variance of f mu_i / pdf ({f_whose}) at most {worst_var['variance_ratio']:.3g}x the reference "
+                f"'{SAMPLER_REFERENCE}' sampler's (at {_case_label(worst_var['mu_o'], worst_var['roughness'])}); "
+                f"a warning above {SAMPLER_VARIANCE_WARN:g}x, not a failure"
+            ),
+        },
+    ]
     if invalid:
         key = next(k for k in ("nan", "below_horizon", "not_unit", "pdf_not_finite_or_negative") if counts_total[k])
-        diag = {"nan": "samples_not_finite", "below_horizon": "samples_below_horizon",
-                "not_unit": "samples_not_unit", "pdf_not_finite_or_negative": "pdf_not_finite"}[key]
+        diag = {
+            "nan": "samples_not_finite",
+            "below_horizon": "samples_below_horizon",
+            "not_unit": "samples_not_unit",
+            "pdf_not_finite_or_negative": "pdf_not_finite",
+        }[key]
         sentence = f"the sampler returns {', '.join(named)} of {n_total} samples ({first_bad})"
     elif not chi_ok:
         diag = "samples_do_not_follow_pdf"
-        sentence = (f"samples do not follow the pdf (chi² p = {pmin_t['p']:.2g}, chi² = {pmin_t['chi2']:.4g} "
-                    f"on {pmin_t['dof']} dof, at {_case_label(pmin_t['mu_o'], pmin_t['roughness'])})")
+        sentence = (
+            f"samples do not follow the pdf (chi² p = {pmin_t['p']:.2g}, chi² = {pmin_t['chi2']:.4g} "
+            f"on {pmin_t['dof']} dof, at {_case_label(pmin_t['mu_o'], pmin_t['roughness'])})"
+        )
         k = cases.index((pmin_t["mu_o"], pmin_t["roughness"]))
         if abs(mass[k] - 1.0) > SAMPLER_MASS_TOL:
-            sentence += (f"; the pdf integrates to {mass[k]:.4g} there (against it rescaled to 1: "
-                         f"p = {pmin_t['p_normalised']:.2g})")
+            sentence += (
+                f"; the pdf integrates to {mass[k]:.4g} there (against it rescaled to 1: "
+                f"p = {pmin_t['p_normalised']:.2g})"
+            )
     else:
         diag = None
         sentence = f"samples follow the pdf (min chi² p = {pmin_t['p']:.2g} over {len(tests)} cases)"
         if warnings:
-            sentence += (f"; warning: the variance of f mu_i / pdf is {worst_var['variance_ratio']:.3g}x the "
-                         f"reference '{SAMPLER_REFERENCE}' sampler's at "
-                         f"{_case_label(worst_var['mu_o'], worst_var['roughness'])}")
+            sentence += (
+                f"; warning: the variance of f mu_i / pdf is {worst_var['variance_ratio']:.3g}x the "
+                f"reference '{SAMPLER_REFERENCE}' sampler's at "
+                f"{_case_label(worst_var['mu_o'], worst_var['roughness'])}"
+            )
     q_chi = QuantityGrade(
-        "sampler chi2", bool(chi_ok and not invalid), float("nan"), float("nan"),
+        "sampler chi2",
+        bool(chi_ok and not invalid),
+        float("nan"),
+        float("nan"),
         f"p >= {sidak:.2g} (Sidak, alpha {SAMPLER_ALPHA}); no NaN / below-horizon / non-unit sample",
         f"chi-square of its samples against its own pdf over {SAMPLER_BINS[0]} x {SAMPLER_BINS[1]} "
         "(cos theta, phi) bins (sparse bins pooled)",
-        diag, "; ".join(c["detail"] for c in chi_checks), n=n_total, sentence=sentence, checks=chi_checks,
-        where=(first_bad if invalid else (f"{_case_label(pmin_t['mu_o'], pmin_t['roughness'])}: chi2 p = "
-                                          f"{pmin_t['p']:.3g}" if not chi_ok else "")),
-        warnings=warnings, regions=chi_regions,
-        plot={"cases": plot, "z_edges": z_edges, "phi_edges": phi_edges})
+        diag,
+        "; ".join(c["detail"] for c in chi_checks),
+        n=n_total,
+        sentence=sentence,
+        checks=chi_checks,
+        where=(
+            first_bad
+            if invalid
+            else (
+                f"{_case_label(pmin_t['mu_o'], pmin_t['roughness'])}: chi2 p = {pmin_t['p']:.3g}" if not chi_ok else ""
+            )
+        ),
+        warnings=warnings,
+        regions=chi_regions,
+        plot={"cases": plot, "z_edges": z_edges, "phi_edges": phi_edges},
+    )
     return [q_pdf, q_chi]
 
 
@@ -579,19 +723,50 @@ def grade_surface(subject, selection) -> list[QuantityGrade]:
                 diagnosis = best
                 detail = f"explained by {best} (max deviation {fits[best]:.3g} from that prediction)"
             else:
-                detail = ("no known deviation explains it; closest: "
-                          + ", ".join(f"{k} ({v:.3g})" for k, v in sorted(fits.items(), key=lambda kv: kv[1])))
-        return QuantityGrade(name, passed, float(err.max()), float(np.sqrt(np.mean(err ** 2))),
-                             f"absolute {tol:g}", reason, diagnosis, detail, n=int(got.shape[0]))
+                detail = "no known deviation explains it; closest: " + ", ".join(
+                    f"{k} ({v:.3g})" for k, v in sorted(fits.items(), key=lambda kv: kv[1])
+                )
+        return QuantityGrade(
+            name,
+            passed,
+            float(err.max()),
+            float(np.sqrt(np.mean(err**2))),
+            f"absolute {tol:g}",
+            reason,
+            diagnosis,
+            detail,
+            n=int(got.shape[0]),
+        )
 
-    return [q("surface weight x albedo", got_w, ref_w, SURFACE_WEIGHT_TOL, SURFACE_WEIGHT_REASON,
-              {"white_tint": cand["white_tint"]}),
-            q(f"surface probability ({selection})", got_p, ref_p, SURFACE_PROB_TOL, SURFACE_PROB_REASON,
-              {f"selection_{other}": cand["selection_other"]})]
+    return [
+        q(
+            "surface weight x albedo",
+            got_w,
+            ref_w,
+            SURFACE_WEIGHT_TOL,
+            SURFACE_WEIGHT_REASON,
+            {"white_tint": cand["white_tint"]},
+        ),
+        q(
+            f"surface probability ({selection})",
+            got_p,
+            ref_p,
+            SURFACE_PROB_TOL,
+            SURFACE_PROB_REASON,
+            {f"selection_{other}": cand["selection_other"]},
+        ),
+    ]
 
 
-def grade_subject(subject, *, vectors=None, quick=False, quantities=("brdf", "albedo", "sampler", "surface"),
-                  selection=None, sampler_model=None) -> ImplementationGrade:
+def grade_subject(
+    subject,
+    *,
+    vectors=None,
+    quick=False,
+    quantities=("brdf", "albedo", "sampler", "surface"),
+    selection=None,
+    sampler_model=None,
+) -> ImplementationGrade:
     """Grade every quantity ``subject`` offers; returns an :class:`ImplementationGrade`.
 
     ``sampler_model`` names the reference strategy the sampler claims to implement (e.g.
@@ -600,8 +775,9 @@ def grade_subject(subject, *, vectors=None, quick=False, quantities=("brdf", "al
     result = ImplementationGrade(subject.name, subject.model, dict(subject.version), notes=list(subject.notes))
     if getattr(subject, "paths", None):  # one subject per code path (light type): each graded, quantities named by path
         for label, path in subject.paths:
-            for q in grade_subject(path, vectors=vectors, quick=quick, quantities=quantities,
-                                   selection=selection).quantities:
+            for q in grade_subject(
+                path, vectors=vectors, quick=quick, quantities=quantities, selection=selection
+            ).quantities:
                 q.quantity = f"{q.quantity} {label}"
                 result.quantities.append(q)
         return result

@@ -14,6 +14,7 @@ The limits are module settings, changed by ``check --timeout SECONDS``:
 >>> limits.run_limited(["true"], label="true").returncode
 0
 """
+
 from __future__ import annotations
 
 import math
@@ -90,15 +91,46 @@ def parse_defines(defines: Sequence[str] | None) -> dict[str, str]:
     return out
 
 
-_RESERVED = frozenset({"lambda", "if", "else", "for", "while", "do", "return", "switch", "case", "break",
-                       "continue", "struct", "void", "int", "float", "double", "bool", "true", "false",
-                       "vec2", "vec3", "vec4", "main", "sizeof", "class", "new", "delete", "template"})
+_RESERVED = frozenset(
+    {
+        "lambda",
+        "if",
+        "else",
+        "for",
+        "while",
+        "do",
+        "return",
+        "switch",
+        "case",
+        "break",
+        "continue",
+        "struct",
+        "void",
+        "int",
+        "float",
+        "double",
+        "bool",
+        "true",
+        "false",
+        "vec2",
+        "vec3",
+        "vec4",
+        "main",
+        "sizeof",
+        "class",
+        "new",
+        "delete",
+        "template",
+    }
+)
 
 
 #: a small exec wrapper sets the limits in the child (preexec_fn is unsafe when threads run)
-_WRAPPER = ("import os, resource, sys; m = int(sys.argv[1]); "
-            "resource.setrlimit(resource.RLIMIT_AS, (m, m)); resource.setrlimit(resource.RLIMIT_CORE, (0, 0)); "
-            "os.execvp(sys.argv[2], sys.argv[2:])")
+_WRAPPER = (
+    "import os, resource, sys; m = int(sys.argv[1]); "
+    "resource.setrlimit(resource.RLIMIT_AS, (m, m)); resource.setrlimit(resource.RLIMIT_CORE, (0, 0)); "
+    "os.execvp(sys.argv[2], sys.argv[2:])"
+)
 
 
 def kill_group(proc: subprocess.Popen) -> None:
@@ -113,9 +145,15 @@ def kill_group(proc: subprocess.Popen) -> None:
         pass
 
 
-def run_limited(cmd: Sequence[str], input: bytes | None = None, *, label: str,
-                timeout: float | None = None, memory: int | None = None,
-                env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
+def run_limited(
+    cmd: Sequence[str],
+    input: bytes | None = None,
+    *,
+    label: str,
+    timeout: float | None = None,
+    memory: int | None = None,
+    env: dict[str, str] | None = None,
+) -> subprocess.CompletedProcess:
     """Run ``cmd`` in a new session under the limits; its whole group is killed on timeout/interrupt.
 
     Returns the CompletedProcess (stdout/stderr bytes).  A timeout raises GraderUnavailable with
@@ -124,14 +162,22 @@ def run_limited(cmd: Sequence[str], input: bytes | None = None, *, label: str,
     """
     timeout = TIMEOUT if timeout is None else timeout
     memory = MEMORY if memory is None else memory
-    proc = subprocess.Popen([sys.executable, "-c", _WRAPPER, str(int(memory)), *cmd], stdin=subprocess.PIPE if input is not None else subprocess.DEVNULL,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True, env=env)
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _WRAPPER, str(int(memory)), *cmd],
+        stdin=subprocess.PIPE if input is not None else subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        start_new_session=True,
+        env=env,
+    )
     try:
         out, err = proc.communicate(input, timeout=timeout)
     except subprocess.TimeoutExpired:
         kill_group(proc)
-        raise GraderUnavailable(f"{label} did not finish within {timeout:g} s (the time limit of user code; "
-                                "raise it with --timeout SECONDS): killed") from None
+        raise GraderUnavailable(
+            f"{label} did not finish within {timeout:g} s (the time limit of user code; "
+            "raise it with --timeout SECONDS): killed"
+        ) from None
     except BaseException:
         kill_group(proc)
         raise
@@ -151,5 +197,13 @@ def memory_message(stderr: bytes | str) -> bool:
     """
     text = stderr.decode(errors="replace") if isinstance(stderr, bytes) else stderr
     low = text.lower()
-    return any(s in low for s in ("out of memory", "cannot allocate memory", "std::bad_alloc",
-                                  "memory exhausted", "virtual memory exhausted"))
+    return any(
+        s in low
+        for s in (
+            "out of memory",
+            "cannot allocate memory",
+            "std::bad_alloc",
+            "memory exhausted",
+            "virtual memory exhausted",
+        )
+    )

@@ -16,6 +16,7 @@ grader divides by N·L to get f; with ``CLOSURE_TYPE_INDIRECT`` it returns
 ``mx_environment_irradiance(N) · E(N·V)``, and the wrapper's environment is uniform white
 (irradiance 1), so the response is the directional albedo.
 """
+
 from __future__ import annotations
 
 import re
@@ -65,8 +66,9 @@ def generated_pixel_shader(energy_compensation: bool = True) -> str:
         from MaterialX import PyMaterialXGenGlsl as mx_glsl
         from MaterialX import PyMaterialXGenShader as mx_gen
     except ImportError as exc:
-        raise GraderUnavailable("MaterialX's GLSL generator (PyMaterialXGenGlsl) is missing: "
-                                "pip install MaterialX") from exc
+        raise GraderUnavailable(
+            "MaterialX's GLSL generator (PyMaterialXGenGlsl) is missing: pip install MaterialX"
+        ) from exc
     lib = mx.createDocument()
     mx.loadLibraries(mx.getDefaultDataLibraryFolders(), mx.getDefaultDataSearchPath(), lib)
     doc = mx.createDocument()
@@ -100,17 +102,18 @@ def token_values(library_text: str, generated: str, context: int = 3) -> dict[st
         tokens = _TOKEN.findall(line)
         if not tokens or line.startswith("//"):
             continue
-        before = lib[max(0, i - context):i]
+        before = lib[max(0, i - context) : i]
         pattern = re.compile("^" + "(.+?)".join(re.escape(p) for p in _TOKEN.split(line)) + "$")
         for j in range(len(before), len(gen)):
-            if gen[j - len(before):j] != before:
+            if gen[j - len(before) : j] != before:
                 continue
             m = pattern.match(gen[j])
             if m:
                 for token, value in zip(tokens, m.groups()):
                     if values.setdefault(token, value) != value:
-                        raise GraderUnavailable(f"MaterialX generator token {token} has two values "
-                                                f"({values[token]!r}, {value!r})")
+                        raise GraderUnavailable(
+                            f"MaterialX generator token {token} has two values ({values[token]!r}, {value!r})"
+                        )
                 break
     return values
 
@@ -120,8 +123,7 @@ def substitute_tokens(text: str, values: dict[str, str]) -> str:
     # Lines with tokens the generated shader never used are functions that the node does not
     # call (e.g. the shadow-map helpers): such a token is left to fail the compile if used.
     if missing:
-        raise GraderUnavailable("MaterialX generator tokens not found in the generated shader: "
-                                + ", ".join(missing))
+        raise GraderUnavailable("MaterialX generator tokens not found in the generated shader: " + ", ".join(missing))
     return _TOKEN.sub(lambda m: values[m.group(0)], text)
 
 
@@ -131,9 +133,12 @@ def prologue(generated: str) -> str:
     keep = []
     for line in generated.splitlines():
         s = line.strip()
-        if s.startswith("struct BSDF") or s.startswith("#define EDF") or \
-                s.startswith("#define DIRECTIONAL_ALBEDO_METHOD") or \
-                (s.startswith("uniform sampler2D u_albedoTable")):
+        if (
+            s.startswith("struct BSDF")
+            or s.startswith("#define EDF")
+            or s.startswith("#define DIRECTIONAL_ALBEDO_METHOD")
+            or (s.startswith("uniform sampler2D u_albedoTable"))
+        ):
             keep.append(s)
     return "\n".join(keep) + "\n"
 
@@ -147,8 +152,12 @@ def wrapped_source(libraries: Path) -> tuple[str, list[Path]]:
             raise GraderUnavailable(f"{f} is missing: reinstall MaterialX (pip install MaterialX)")
     generated = generated_pixel_shader(True)
     seen: set = set()
-    text = glsl.resolve_includes(math, (libraries,), seen) + "\n" + ENVIRONMENT + \
-        glsl.resolve_includes(node, (libraries,), seen)
+    text = (
+        glsl.resolve_includes(math, (libraries,), seen)
+        + "\n"
+        + ENVIRONMENT
+        + glsl.resolve_includes(node, (libraries,), seen)
+    )
     values = token_values(text, generated)
     files = sorted(seen, key=str)
     return prologue(generated) + substitute_tokens(text, values), files
@@ -162,24 +171,38 @@ def subject(source: Path | None = None, energy_compensation: bool = True) -> Sub
         if (libraries / "libraries" / NODE_FILE).is_file():
             libraries = libraries / "libraries"
         else:
-            raise GraderUnavailable(f"{source} does not hold MaterialX's {NODE_FILE}: pass --source "
-                                    "MATERIALX/libraries, or omit --source to use the installed package")
+            raise GraderUnavailable(
+                f"{source} does not hold MaterialX's {NODE_FILE}: pass --source "
+                "MATERIALX/libraries, or omit --source to use the installed package"
+            )
     code, files = wrapped_source(libraries)
     ec = "true" if energy_compensation else "false"
     # N = +z, the closure's local frame; P is unused by the node; occlusion 1.
-    k_brdf = glsl.Kernel(code=code, n_in=10, n_out=4, stage="fragment", body=f"""
+    k_brdf = glsl.Kernel(
+        code=code,
+        n_in=10,
+        n_out=4,
+        stage="fragment",
+        body=f"""
     vec3 L = vec3(IN(0), IN(1), IN(2)); vec3 V = vec3(IN(3), IN(4), IN(5)); vec3 N = vec3(0.0, 0.0, 1.0);
     ClosureData cd = makeClosureData(CLOSURE_TYPE_REFLECTION, L, V, N, vec3(0.0), 1.0);
     BSDF bsdf = BSDF(vec3(0.0), vec3(1.0));
     mx_oren_nayar_diffuse_bsdf(cd, 1.0, vec3(IN(7), IN(8), IN(9)), IN(6), N, {ec}, bsdf);
     OUT(0) = bsdf.response.x; OUT(1) = bsdf.response.y; OUT(2) = bsdf.response.z;
-    OUT(3) = clamp(dot(N, L), M_FLOAT_EPS, 1.0);""")
-    k_albedo = glsl.Kernel(code=code, n_in=5, n_out=3, stage="fragment", body=f"""
+    OUT(3) = clamp(dot(N, L), M_FLOAT_EPS, 1.0);""",
+    )
+    k_albedo = glsl.Kernel(
+        code=code,
+        n_in=5,
+        n_out=3,
+        stage="fragment",
+        body=f"""
     float mu = IN(0); vec3 V = vec3(sqrt(max(0.0, 1.0 - mu*mu)), 0.0, mu); vec3 N = vec3(0.0, 0.0, 1.0);
     ClosureData cd = makeClosureData(CLOSURE_TYPE_INDIRECT, vec3(0.0), V, N, vec3(0.0), 1.0);
     BSDF bsdf = BSDF(vec3(0.0), vec3(1.0));
     mx_oren_nayar_diffuse_bsdf(cd, 1.0, vec3(IN(2), IN(3), IN(4)), IN(1), N, {ec}, bsdf);
-    OUT(0) = bsdf.response.x; OUT(1) = bsdf.response.y; OUT(2) = bsdf.response.z;""")
+    OUT(0) = bsdf.response.x; OUT(1) = bsdf.response.y; OUT(2) = bsdf.response.z;""",
+    )
     label = f"MaterialX {mx.getVersionString()} {NODE_FILE}"
 
     def brdf(wi, wo, roughness, rho):
@@ -197,13 +220,23 @@ def subject(source: Path | None = None, energy_compensation: bool = True) -> Sub
     return Subject(
         name="materialx-glsl" if energy_compensation else "materialx-glsl-qon",
         model="eon" if energy_compensation else "qon",
-        tolerance=TOLERANCE, tolerance_reason=TOLERANCE_REASON,
-        version={"materialx": mx.getVersionString(), "source": str(libraries.resolve()),
-                 "files": [str(f.relative_to(libraries.resolve())) if f.is_relative_to(libraries.resolve())
-                           else str(f) for f in files],
-                 "sha256": glsl.sources_hash(files), "gl": glsl.gl_version()},
-        brdf=brdf, albedo=albedo,
-        notes=["closure response (f·N·L, CLOSURE_TYPE_REFLECTION) divided by MaterialX's clamped N·L",
-               "albedo: CLOSURE_TYPE_INDIRECT response under a uniform white environment "
-               "(mx_environment_irradiance = 1)",
-               f"energy_compensation = {ec}"])
+        tolerance=TOLERANCE,
+        tolerance_reason=TOLERANCE_REASON,
+        version={
+            "materialx": mx.getVersionString(),
+            "source": str(libraries.resolve()),
+            "files": [
+                str(f.relative_to(libraries.resolve())) if f.is_relative_to(libraries.resolve()) else str(f)
+                for f in files
+            ],
+            "sha256": glsl.sources_hash(files),
+            "gl": glsl.gl_version(),
+        },
+        brdf=brdf,
+        albedo=albedo,
+        notes=[
+            "closure response (f·N·L, CLOSURE_TYPE_REFLECTION) divided by MaterialX's clamped N·L",
+            "albedo: CLOSURE_TYPE_INDIRECT response under a uniform white environment (mx_environment_irradiance = 1)",
+            f"energy_compensation = {ec}",
+        ],
+    )

@@ -6,10 +6,11 @@ both pointing away from the surface; BRDF values without the cosine).  Every cal
 implementation's own code (GLSL on llvmpipe, a compiled C++ harness, a Cycles render); what it
 does not offer is ``None``.
 """
+
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 
 @dataclass

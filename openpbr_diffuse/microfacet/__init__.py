@@ -11,6 +11,7 @@
 Shading nodes (``openpbr_diffuse.nodes``) compose these lobes; nothing here knows about
 nodes.
 """
+
 from . import fresnel, ggx, quadrature, tables
 
 __all__ = ["ggx", "fresnel", "tables", "quadrature"]

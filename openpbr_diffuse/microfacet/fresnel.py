@@ -12,6 +12,7 @@ Walter, Marschner, Li, Torrance, EGSR 2007, Eq. 22 (dielectric Fresnel).  Kutz, 
 Edmondson, "Novel aspects of the Adobe Standard Material", 2021 (F82-tint).  OpenPBR 1.1,
 "Specular" and "Metal" (specular_weight as a modulation of F0; the F82-tint metal).
 """
+
 import math
 
 import numba

@@ -28,6 +28,7 @@ Walter, Marschner, Li, Torrance, "Microfacet models for refraction through rough
 surfaces", EGSR 2007 (W07).  Heitz, "Understanding the masking-shadowing function in
 microfacet-based BRDFs", JCGT 3(2), 2014 (H14).  Heitz, JCGT 7(4), 2018.
 """
+
 import math
 
 import numpy as np
@@ -120,9 +121,11 @@ def sample_vndf_normal(wo, alpha, u1, u2):
     Vh, _ = _normalize(np.stack([a * wo[..., 0], a * wo[..., 1], wo[..., 2]], axis=-1))
     lensq = Vh[..., 0] ** 2 + Vh[..., 1] ** 2
     inv = np.where(lensq > 0.0, 1.0 / np.sqrt(np.where(lensq > 0.0, lensq, 1.0)), 0.0)
-    T1 = np.where((lensq > 0.0)[..., None],
-                  np.stack([-Vh[..., 1] * inv, Vh[..., 0] * inv, np.zeros_like(inv)], axis=-1),
-                  np.array([1.0, 0.0, 0.0]))
+    T1 = np.where(
+        (lensq > 0.0)[..., None],
+        np.stack([-Vh[..., 1] * inv, Vh[..., 0] * inv, np.zeros_like(inv)], axis=-1),
+        np.array([1.0, 0.0, 0.0]),
+    )
     T2 = np.cross(Vh, T1)
     r = np.sqrt(u1)
     phi = 2.0 * math.pi * u2
@@ -130,8 +133,7 @@ def sample_vndf_normal(wo, alpha, u1, u2):
     t2 = r * np.sin(phi)
     s = 0.5 * (1.0 + Vh[..., 2])
     t2 = (1.0 - s) * np.sqrt(np.maximum(0.0, 1.0 - t1 * t1)) + s * t2
-    Nh = (t1[..., None] * T1 + t2[..., None] * T2
-          + np.sqrt(np.maximum(0.0, 1.0 - t1 * t1 - t2 * t2))[..., None] * Vh)
+    Nh = t1[..., None] * T1 + t2[..., None] * T2 + np.sqrt(np.maximum(0.0, 1.0 - t1 * t1 - t2 * t2))[..., None] * Vh
     Ne, _ = _normalize(np.stack([a * Nh[..., 0], a * Nh[..., 1], np.maximum(0.0, Nh[..., 2])], axis=-1))
     return Ne
 

@@ -16,6 +16,7 @@ vector (``ndf_fraction``), Lambda as mu (1 + 2 Lambda) = sqrt(mu^2 + alpha^2 (1 
 (``lambda_root``), and each verb's factors folded into one division.  ``ggx`` (NumPy, the
 textbook forms) is the independent check.
 """
+
 import math
 
 from .._jit import INV_PI, kernel
@@ -62,7 +63,7 @@ def reflection(ix, iy, iz, ox, oy, oz, alpha):
     c = min(max((ox * hx + oy * hy + oz * hz) / math.sqrt(n2), 0.0), 1.0)
     num, den = ndf_fraction(hx, hy, hz, a2)
     f = num / (den * 2.0 * (oz * lambda_root(iz, a2) + iz * lambda_root(oz, a2)))
-    ok = (iz > 0.0) & (oz > 0.0) & (n2 > 0.0)   # selects: the rows' loop stays vectorisable
+    ok = (iz > 0.0) & (oz > 0.0) & (n2 > 0.0)  # selects: the rows' loop stays vectorisable
     return (f if ok else 0.0), (c if ok else 0.0)
 
 
@@ -79,7 +80,7 @@ def reflection_pdf(ix, iy, iz, ox, oy, oz, alpha, vndf):
     a2 = alpha * alpha
     num, den = ndf_fraction(hx, hy, hz, a2)
     q = num / (den * 2.0 * (oz + lambda_root(oz, a2))) if vndf else num * hz / (den * 4.0 * oh)
-    ok = (oz > 0.0) & (hz > 0.0) & (oh > 0.0)   # selects: the rows' loop stays vectorisable
+    ok = (oz > 0.0) & (hz > 0.0) & (oh > 0.0)  # selects: the rows' loop stays vectorisable
     return q if ok else 0.0
 
 
@@ -93,7 +94,7 @@ def ggx_visible_normal_h(vx, vy, vz, alpha, u1, u2):
     # T1 = (-s.y, s.x, 0)/|s.xy| = (-v.y, v.x, 0)/|v.xy|: from v, so that its square root
     # and division run beside the stretch's, not after them
     lensq = vx * vx + vy * vy
-    il = 1.0 / math.sqrt(lensq)   # inf at the normal, not selected there
+    il = 1.0 / math.sqrt(lensq)  # inf at the normal, not selected there
     side = lensq > 0.0
     t1x, t1y, t1z = (-vy * il if side else 1.0), (vx * il if side else 0.0), 0.0
     t2x, t2y, t2z = sy * t1z - sz * t1y, sz * t1x - sx * t1z, sx * t1y - sy * t1x

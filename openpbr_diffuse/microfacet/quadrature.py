@@ -4,6 +4,7 @@ Independent of the samplers and of ``ggx.microfacet_terms`` (only ``ggx.smith_g2
 shared); ``tools/make_specular_table.py`` drives it and ``tests/test_ggx.py`` grades it
 against a spherical-coordinate quadrature of the BRDF.
 """
+
 import math
 
 import numpy as np
@@ -83,13 +84,13 @@ def albedo_quadrature(mu_o, alpha, fresnels, n_t=64, n_phi=64):
     cphi = np.cos(phi)
     delta = np.arctan2(so * cphi, mu_o)
     theta_max = 0.5 * (delta + 0.5 * math.pi)
-    edges = np.stack([np.zeros_like(phi), theta_max], axis=-1)         # (P, 2)
+    edges = np.stack([np.zeros_like(phi), theta_max], axis=-1)  # (P, 2)
     ve = _v_of_theta(edges, alpha)
-    v, wv = _gauss(ve[:, :-1], ve[:, 1:], n_t)                         # (P, E-1, n_t)
+    v, wv = _gauss(ve[:, :-1], ve[:, 1:], n_t)  # (P, E-1, n_t)
     v = v.reshape(len(phi), -1)
-    w = wv.reshape(len(phi), -1) * wphi[:, None] * 2.0 * (1.0 - v)     # dt = 2 (1 - v) dv
+    w = wv.reshape(len(phi), -1) * wphi[:, None] * 2.0 * (1.0 - v)  # dt = 2 (1 - v) dv
     one_v = 1.0 - v
-    u = alpha * alpha * v * (2.0 - v) / np.square(one_v)              # tan^2 theta_h
+    u = alpha * alpha * v * (2.0 - v) / np.square(one_v)  # tan^2 theta_h
     mu_h = 1.0 / np.sqrt(1.0 + u)
     sin_h = np.sqrt(u) * mu_h
     h = np.stack([sin_h * cphi[:, None], sin_h * np.sin(phi)[:, None], mu_h], axis=-1)

@@ -13,6 +13,7 @@ paper's fitted functions in the rational/Gaussian form that MaterialX ships
 (``mx_microfacet_sheen.glsl``); r = fuzz_roughness is clamped to [0.01, 1], the range of
 the fit.  Sampling draws a cosine direction and maps it by M (pdf = D).
 """
+
 import math
 
 from .._jit import INV_PI, kernel
@@ -71,7 +72,7 @@ def sheen_density(lx, ly, lz, mu, r):
     x, y, z = a * lx + b * lz, a * ly, lz
     len2 = x * x + y * y + z * z
     q = a / len2
-    return z * INV_PI * q * q if lz > 0.0 else 0.0   # a select: the rows' loop stays vectorisable
+    return z * INV_PI * q * q if lz > 0.0 else 0.0  # a select: the rows' loop stays vectorisable
 
 
 @kernel

@@ -21,6 +21,7 @@ for r >= 0.2 and mu >= 0.05 (typically 1e-5), <= 6e-4 for r >= 0.2 at any mu, <=
 r < 0.2 and mu >= 0.05; near-mirror lobes at extreme grazing (r < 0.05, mu < 0.01) up to
 ~7e-3.  specular_roughness < 0.2 with grazing views is where the tables are weakest.
 """
+
 import functools
 import itertools
 import math
@@ -69,18 +70,21 @@ def _check_grid(name, ok):
         raise RuntimeError(f"{name}: grid does not match the layout microfacet.tables assumes")
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _conductor():
     head, cols, data = _read(CONDUCTOR_FILE)
     rs, mus = np.unique(data[:, 0]), np.unique(data[:, 1])
-    _check_grid(CONDUCTOR_FILE, cols[:5] == ["roughness", "mu", "E1", "E5", "E6"]
-                and np.allclose(mus, mu_grid(len(mus)), atol=1e-8)
-                and np.allclose(rs, roughness_grid(len(rs)), atol=1e-8)
-                and len(data) == len(rs) * len(mus))
+    _check_grid(
+        CONDUCTOR_FILE,
+        cols[:5] == ["roughness", "mu", "E1", "E5", "E6"]
+        and np.allclose(mus, mu_grid(len(mus)), atol=1e-8)
+        and np.allclose(rs, roughness_grid(len(rs)), atol=1e-8)
+        and len(data) == len(rs) * len(mus),
+    )
     return data[:, 2:5].reshape(len(rs), len(mus), 3), head
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _dielectric():
     head, cols, data = _read(DIELECTRIC_FILE)
     mus = np.array([float(c) for c in cols[2:]])
@@ -89,10 +93,14 @@ def _dielectric():
     C, _ = _conductor()
     # the dielectric grid must be a sub-grid of the conductor one (E1 at its nodes)
     sr, sm = (C.shape[0] - 1) // (len(rs) - 1), (C.shape[1] - 1) // (len(mus) - 1)
-    _check_grid(DIELECTRIC_FILE, np.allclose(mus, mu_grid(len(mus)), atol=1e-8)
-                and np.allclose(rs, roughness_grid(len(rs)), atol=1e-8)
-                and np.allclose(xs, x_grid(len(xs)), atol=1e-8)
-                and (len(rs) - 1) * sr == C.shape[0] - 1 and (len(mus) - 1) * sm == C.shape[1] - 1)
+    _check_grid(
+        DIELECTRIC_FILE,
+        np.allclose(mus, mu_grid(len(mus)), atol=1e-8)
+        and np.allclose(rs, roughness_grid(len(rs)), atol=1e-8)
+        and np.allclose(xs, x_grid(len(xs)), atol=1e-8)
+        and (len(rs) - 1) * sr == C.shape[0] - 1
+        and (len(mus) - 1) * sm == C.shape[1] - 1,
+    )
     E1 = C[::sr, ::sm, 0]
     return E / E1[:, None, :], head
 
@@ -105,11 +113,11 @@ def provenance():
 def _node_coord(v, n, kind):
     """(i, t): node index (0 .. n-2) and fraction, in the axis' node coordinate."""
     v = np.clip(v, 0.0, 1.0)
-    if kind == "mu":          # nodes (k/(n-1))^2
+    if kind == "mu":  # nodes (k/(n-1))^2
         s = np.sqrt(v) * (n - 1)
-    elif kind == "x":         # nodes sin^2(pi k/(2(n-1)))
+    elif kind == "x":  # nodes sin^2(pi k/(2(n-1)))
         s = np.arcsin(np.sqrt(v)) * (2.0 * (n - 1) / np.pi)
-    else:                     # uniform
+    else:  # uniform
         s = v * (n - 1)
     i = np.minimum(s.astype(np.intp), n - 2)
     return i, s - i
@@ -118,8 +126,15 @@ def _node_coord(v, n, kind):
 def _catmull_rom(t):
     """Weights (..., 4) of nodes i-1 .. i+2 (Catmull-Rom spline, exact for quadratics)."""
     t2, t3 = t * t, t * t * t
-    return np.stack([0.5 * (-t3 + 2.0 * t2 - t), 0.5 * (3.0 * t3 - 5.0 * t2 + 2.0),
-                     0.5 * (-3.0 * t3 + 4.0 * t2 + t), 0.5 * (t3 - t2)], axis=-1)
+    return np.stack(
+        [
+            0.5 * (-t3 + 2.0 * t2 - t),
+            0.5 * (3.0 * t3 - 5.0 * t2 + 2.0),
+            0.5 * (-3.0 * t3 + 4.0 * t2 + t),
+            0.5 * (t3 - t2),
+        ],
+        axis=-1,
+    )
 
 
 def _pad(table, axes):
@@ -160,8 +175,7 @@ def dielectric_albedo(mu, roughness, x):
     R, _ = _padded_dielectric()
     mu, roughness, x = _floats(mu, roughness, x)
     nr, nx, nm = (n - 2 for n in R.shape)
-    ratio = _interpolate(R, [_node_coord(roughness, nr, "r"), _node_coord(x, nx, "x"),
-                             _node_coord(mu, nm, "mu")])
+    ratio = _interpolate(R, [_node_coord(roughness, nr, "r"), _node_coord(x, nx, "x"), _node_coord(mu, nm, "mu")])
     # the spline may overshoot a little near sharp features: E_diel/E1 lies in [0, 1]
     return np.where(x > 0.0, np.clip(ratio, 0.0, 1.0), 0.0) * ggx_albedo(mu, roughness)
 
@@ -176,13 +190,13 @@ def conductor_basis(mu, roughness):
     return np.minimum(out[..., 0], 1.0), out[..., 1], out[..., 2]
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _padded_conductor():
     C, head = _conductor()
     return _pad(C, 2), head
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _padded_dielectric():
     R, head = _dielectric()
     return _pad(R, 3), head
@@ -225,14 +239,20 @@ def node_at(v, n, kind):
 def catmull_rom_at(t):
     t2 = t * t
     t3 = t2 * t
-    return (0.5 * (-t3 + 2.0 * t2 - t), 0.5 * (3.0 * t3 - 5.0 * t2 + 2.0),
-            0.5 * (-3.0 * t3 + 4.0 * t2 + t), 0.5 * (t3 - t2))
+    return (
+        0.5 * (-t3 + 2.0 * t2 - t),
+        0.5 * (3.0 * t3 - 5.0 * t2 + 2.0),
+        0.5 * (-3.0 * t3 + 4.0 * t2 + t),
+        0.5 * (t3 - t2),
+    )
 
 
 def padded_tables():
     """(C, R): the padded conductor basis and dielectric ratio tables, float64, C-contiguous."""
-    return (np.ascontiguousarray(_padded_conductor()[0], dtype=np.float64),
-            np.ascontiguousarray(_padded_dielectric()[0], dtype=np.float64))
+    return (
+        np.ascontiguousarray(_padded_conductor()[0], dtype=np.float64),
+        np.ascontiguousarray(_padded_dielectric()[0], dtype=np.float64),
+    )
 
 
 # The surface collapses both tables per material on their roughness (and x) axes and

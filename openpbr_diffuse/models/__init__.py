@@ -3,6 +3,7 @@
 ``registry`` names them; ``api`` holds the public verbs; ``_kernels`` the compiled batch
 drivers that call the per-model formula functions.
 """
+
 from .api import average_albedo, directional_albedo, evaluate
 from .registry import COLOR_MODES, MODELS, model_info
 

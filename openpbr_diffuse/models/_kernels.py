@@ -21,6 +21,7 @@ direction) are tiled into a buffer of at most ``CHUNK`` rows and the driver is c
 chunk by chunk, so no input is ever expanded to the full batch.  Drivers are built on
 first use (``functools.cache``) and compiled lazily per dtype; numba caches them on disk.
 """
+
 import functools
 
 import numpy as np
@@ -41,8 +42,20 @@ from .registry import INFO, MIX_RHO2, MIX_RHO_MS
 from .van_ouwerkerk import van_ouwerkerk_terms
 
 LAMBERT, QON, QON_FOOTNOTE, QON_VO, QON_FUJII, FON, FULL_ON, GOTANDA, EON, EON_APPROX = (
-    INFO[n].id for n in ("lambert", "qon", "qon_footnote", "qon_van_ouwerkerk", "qon_fujii",
-                         "fon", "full_on", "gotanda", "eon", "eon_approx"))
+    INFO[n].id
+    for n in (
+        "lambert",
+        "qon",
+        "qon_footnote",
+        "qon_van_ouwerkerk",
+        "qon_fujii",
+        "fon",
+        "full_on",
+        "gotanda",
+        "eon",
+        "eon_approx",
+    )
+)
 
 
 def _model_id(model):
@@ -81,6 +94,7 @@ def _lobe_terms(model, ix, iy, iz, ox, oy, oz, r):
         def impl(model, ix, iy, iz, ox, oy, oz, r):
             return eon_terms(iz, oz, min(max(ix * ox + iy * oy, -1.0), 1.0), r, approx)
     elif m == FON:
+
         def impl(model, ix, iy, iz, ox, oy, oz, r):
             return fon_terms(iz, oz, min(max(ix * ox + iy * oy, -1.0), 1.0), r), 0.0, 0.0
     elif m == QON or m == QON_FOOTNOTE:
@@ -90,22 +104,28 @@ def _lobe_terms(model, ix, iy, iz, ox, oy, oz, r):
             A, B = qon_AB(r, a_const)
             return qon_terms(iz, oz, min(max(ix * ox + iy * oy, -1.0), 1.0), A, B), 0.0, 0.0
     elif m == QON_VO:
+
         def impl(model, ix, iy, iz, ox, oy, oz, r):
             return van_ouwerkerk_terms(ix, iy, iz, ox, oy, oz, r), 0.0, 0.0
     elif m == QON_FUJII:
+
         def impl(model, ix, iy, iz, ox, oy, oz, r):
             g, h = fujii_terms(iz, oz, min(max(ix * ox + iy * oy, -1.0), 1.0), r)
             return g, h, 0.0
     elif m == FULL_ON:
+
         def impl(model, ix, iy, iz, ox, oy, oz, r):
             g, h = full_on_terms(iz, oz, min(max(ix * ox + iy * oy, -1.0), 1.0), r)
             return g, h, 0.0
     elif m == GOTANDA:
+
         def impl(model, ix, iy, iz, ox, oy, oz, r):
             return gotanda_terms(iz, oz, min(max(ix * ox + iy * oy, -1.0), 1.0), r), 0.0, 0.0
     else:
+
         def impl(model, ix, iy, iz, ox, oy, oz, r):
             return lambert_terms(), 0.0, 0.0
+
     return impl
 
 
@@ -123,38 +143,47 @@ def _albedo_terms(model, mu, r, average):
     (``eon``).  ("full_on" has none: its albedo comes from the reference tables.)
     """
     m = _model_id(model)
-    avg_on = bool(_model_id(average))   # 0/1, a compile-time constant as the model id
+    avg_on = bool(_model_id(average))  # 0/1, a compile-time constant as the model id
     if m == EON or m == EON_APPROX:
         approx = m == EON_APPROX
         if avg_on:
+
             def impl(model, mu, r, average):
                 return eon_average_terms(r, approx)
         else:
+
             def impl(model, mu, r, average):
                 return eon_albedo_terms(mu, r, approx)
     elif m == QON or m == QON_FOOTNOTE or m == QON_VO:
         a_const = 0.57 if m == QON_FOOTNOTE else 0.33
         if avg_on:
+
             def impl(model, mu, r, average):
                 A, B = qon_AB(r, a_const)
                 return qon_average_albedo(A, B), 0.0, 0.0
         else:
+
             def impl(model, mu, r, average):
                 A, B = qon_AB(r, a_const)
                 return qon_albedo(mu, A, B), 0.0, 0.0
     elif m == FON:
+
         def impl(model, mu, r, average):
             return fon_albedo(mu, r, avg_on), 0.0, 0.0
     elif m == GOTANDA:
+
         def impl(model, mu, r, average):
             return gotanda_albedo(mu, r, avg_on), 0.0, 0.0
     elif m == QON_FUJII:
+
         def impl(model, mu, r, average):
             g, h = fujii_albedo_terms(mu, r, avg_on)
             return g, h, 0.0
     else:
+
         def impl(model, mu, r, average):
             return lambert_albedo(), 0.0, 0.0
+
     return impl
 
 
@@ -265,7 +294,7 @@ def albedo_driver(model, C, average):
     """
     kind = _MIX[model]
     nc = 0 if average else _channels(C)  # <E> is not a batch hot path: one variant per model
-    which = 1 if average else 0          # an int: numba types a captured int as a literal
+    which = 1 if average else 0  # an int: numba types a captured int as a literal
 
     @compiled
     def drive(tint, rlo, rhi, mu, r, rho, out):
@@ -300,8 +329,13 @@ def evaluate_rows(model, tint, rlo, rhi, wi, wo, r, rho, lead, C, dtype):
     r, tr = rows(r, lead)
     rho, trho = rows(rho, lead, C)
     t = np.dtype(dtype).type
-    bad = launch(eval_driver(model, C), (tint, t(rlo), t(rhi)),
-                 [(wi, 3, twi), (wo, 3, two), (r, 1, tr), (rho, C, trho)], [(out, C)], n)
+    bad = launch(
+        eval_driver(model, C),
+        (tint, t(rlo), t(rhi)),
+        [(wi, 3, twi), (wo, 3, two), (r, 1, tr), (rho, C, trho)],
+        [(out, C)],
+        n,
+    )
     return out, bad
 
 
@@ -313,6 +347,11 @@ def albedo_rows(model, tint, average, rlo, rhi, mu, r, rho, lead, C, dtype):
     mu, tmu = (r, tr) if average else rows(mu, lead)  # average: mu is not read
     rho, trho = rows(rho, lead, C)
     t = np.dtype(dtype).type
-    bad = launch(albedo_driver(model, C, average), (tint, t(rlo), t(rhi)),
-                 [(mu, 1, tmu), (r, 1, tr), (rho, C, trho)], [(out, C)], n)
+    bad = launch(
+        albedo_driver(model, C, average),
+        (tint, t(rlo), t(rhi)),
+        [(mu, 1, tmu), (r, 1, tr), (rho, C, trho)],
+        [(out, C)],
+        n,
+    )
     return out, bad

@@ -1,4 +1,5 @@
 """Public lobe-model verbs: ``evaluate``, ``directional_albedo``, ``average_albedo``."""
+
 import numpy as np
 
 from .. import _arrays as ar
@@ -68,8 +69,16 @@ def evaluate(model, wi, wo, roughness, rho=1.0, *, color_mode="reference"):
     from ._kernels import evaluate_rows
 
     out, bad = evaluate_rows(info.id, tint, 0.0, info.roughness_max, wi, wo, r, rho, lead, C, dtype)
-    _recheck(bad, out.size, (lambda: ar.directions("wi", wi, dtype), lambda: ar.directions("wo", wo, dtype),
-                             lambda: ar.model_roughness(info, r, dtype), lambda: ar.rho_array("rho", rho, dtype)))
+    _recheck(
+        bad,
+        out.size,
+        (
+            lambda: ar.directions("wi", wi, dtype),
+            lambda: ar.directions("wo", wo, dtype),
+            lambda: ar.model_roughness(info, r, dtype),
+            lambda: ar.rho_array("rho", rho, dtype),
+        ),
+    )
     return out.reshape(lead + (C,))
 
 
@@ -90,8 +99,15 @@ def _albedo(model, mu, roughness, rho, color_mode, average):
     from ._kernels import albedo_rows
 
     out, bad = albedo_rows(info.id, tint, average, 0.0, info.roughness_max, mu, r, rho, lead, C, dtype)
-    _recheck(bad, out.size, (lambda: ar.in_range("mu", mu, dtype, 0.0, 1.0, mu_what),
-                             lambda: ar.model_roughness(info, r, dtype), lambda: ar.rho_array("rho", rho, dtype)))
+    _recheck(
+        bad,
+        out.size,
+        (
+            lambda: ar.in_range("mu", mu, dtype, 0.0, 1.0, mu_what),
+            lambda: ar.model_roughness(info, r, dtype),
+            lambda: ar.rho_array("rho", rho, dtype),
+        ),
+    )
     return out.reshape(lead + (C,))
 
 

@@ -10,6 +10,7 @@ f_EON = f_FON + f_ms with
 "eon" uses the exact E_F (Eq. 12), "eon_approx" the Eq. 14 fit inside f_ms; the
 single-scattering FON term is the same in both.
 """
+
 from .._jit import EPS, INV_PI, kernel
 from .fon import E_F, E_F_avg, E_F_avg_of, fon_A, fon_shape_albedo, fon_terms
 
@@ -25,8 +26,7 @@ def eon_terms(mu_i, mu_o, s, r, approx):
     """Return (g, h, <E_F>) with f_EON = rho g + rho_ms(rho, <E_F>) h."""
     avg = E_F_avg(r)
     g = fon_terms(mu_i, mu_o, s, r)
-    h = (max(EPS, 1.0 - E_F(mu_o, r, approx)) * max(EPS, 1.0 - E_F(mu_i, r, approx))
-         / max(EPS, 1.0 - avg) * INV_PI)
+    h = max(EPS, 1.0 - E_F(mu_o, r, approx)) * max(EPS, 1.0 - E_F(mu_i, r, approx)) / max(EPS, 1.0 - avg) * INV_PI
     return g, h, avg
 
 

@@ -7,6 +7,7 @@ References
 Portsmouth, Kutz, Hill, "EON: A practical energy-preserving rough diffuse BRDF",
 JCGT 14(1), 2025, Section 2.2 (Eq. 10-15) and Listing 1.
 """
+
 import math
 
 from .._jit import INV_PI, PI, kernel, max_mu

@@ -6,6 +6,7 @@ A = 1 - 0.5 s2/(s2 + 0.33) + 0.17 rho s2/(s2 + 0.13), B = 0.45 s2/(s2 + 0.09),
 f = rho/pi (A + B s/t).  A depends on rho, so f = rho g + rho^2 h with h = K/pi.
 Fujii notes it exceeds unit albedo for rho > 0.97 (as full Oren-Nayar does).
 """
+
 from .._jit import INV_PI, kernel
 from .fon import fon_shape_albedo, fon_shape_average, s_over_t
 

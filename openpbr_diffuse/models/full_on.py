@@ -13,6 +13,7 @@ cos(dphi) = s / (sin theta_i sin theta_o) (0 when either sine is 0):
 No closed-form albedo: its albedo comes from the reference tables.  It gains energy near
 grazing angles (albedo 1.0047 at rho = 1, sigma = 0.5, mu = 0.05).
 """
+
 import math
 
 from .._jit import INV_PI, acos, kernel, max_mu

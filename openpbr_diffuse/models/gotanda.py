@@ -11,6 +11,7 @@ and A = 1 - 0.5 s2/(s2 + 0.65), B = 0.45 s2/(s2 + 0.09) (2.22222 is 1/0.45 round
 the notes; this uses 1/0.45).  It is an approximation of full Oren-Nayar, graded, not a
 reference.
 """
+
 import math
 
 from .._jit import INV_PI, kernel

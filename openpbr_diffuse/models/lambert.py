@@ -1,4 +1,5 @@
 """Lambert: f = rho/pi, E = rho."""
+
 from .._jit import INV_PI, kernel
 
 

@@ -4,6 +4,7 @@ sigma is the slope angle in radians.  f = rho/pi (A + B max(0, s) / max(mu_i, mu
 The "footnote" variant uses 0.57 instead of 0.33 in A (Oren & Nayar's footnote).
 Albedo: E(mu) = A + B G(mu)/pi (Eq. 8), <E> = A + (2/3 - 64/(45 pi)) B (Eq. 9).
 """
+
 import math
 
 from .._jit import INV_PI, PI, acos, kernel, max_mu

@@ -8,6 +8,7 @@ Every model is written f = rho g + m(rho) h with g, h independent of rho:
 
 so an albedo table of g and h at rho = 1 gives the albedo at any rho exactly.
 """
+
 import math
 from dataclasses import dataclass
 
@@ -20,11 +21,11 @@ MIX_LINEAR, MIX_RHO2, MIX_RHO_MS = 0, 1, 2
 class ModelInfo:
     name: str
     id: int
-    roughness_name: str        # "sigma" (radians) or "r" (weight in [0, 1])
+    roughness_name: str  # "sigma" (radians) or "r" (weight in [0, 1])
     roughness_max: float
     mix: int
     closed_form_albedo: bool
-    energy_conserving: bool    # albedo <= rho for every rho <= 1, mu, roughness (strictly)
+    energy_conserving: bool  # albedo <= rho for every rho <= 1, mu, roughness (strictly)
     description: str
 
 
@@ -47,7 +48,6 @@ INFO = {m[0]: ModelInfo(m[0], i, *m[1:]) for i, m in enumerate(_MODELS)}
 
 #: The public tuple of model names.
 MODELS = tuple(INFO)
-
 
 
 def model_info(model):

@@ -21,6 +21,7 @@ Grid (tensor product, interpolated by 4-point Lagrange cubics in (t, u)):
   (sigma^2 + 0.09) factors of the Oren-Nayar family have poles at sigma = +-0.3i, and this
   spacing (proportional to |sigma - 0.3i|) equalises the interpolation error.
 """
+
 import functools
 import importlib.resources
 import math
@@ -42,7 +43,7 @@ N_ROUGH = 48
 SIGMA_SCALE = 0.3
 #: Decimal places of the CSV values (rounding error <= 5e-11).
 DECIMALS = 10
-ROUNDING = 0.5 * 10.0 ** -DECIMALS
+ROUNDING = 0.5 * 10.0**-DECIMALS
 
 REGENERATE = "python tools/make_tables.py"
 
@@ -131,13 +132,17 @@ def _cubic(s, n, kinks=()):
         raise ValueError("cubic interpolation needs at least 4 nodes")
     i0 = np.clip(np.floor(s).astype(np.int64) - 1, 0, n - 3)
     for k in kinks:
-        left = int(math.floor(k))                   # last node on the left of the kink
+        left = int(math.floor(k))  # last node on the left of the kink
         i0 = np.where(s < k, np.minimum(i0, left - 3), np.maximum(i0, left + 1))
     x = s - i0
-    w = np.stack([-(x - 1.0) * (x - 2.0) * (x - 3.0) / 6.0,
-                  x * (x - 2.0) * (x - 3.0) / 2.0,
-                  -x * (x - 1.0) * (x - 3.0) / 2.0,
-                  x * (x - 1.0) * (x - 2.0) / 6.0])
+    w = np.stack(
+        [
+            -(x - 1.0) * (x - 2.0) * (x - 3.0) / 6.0,
+            x * (x - 2.0) * (x - 3.0) / 2.0,
+            -x * (x - 1.0) * (x - 3.0) / 2.0,
+            x * (x - 1.0) * (x - 2.0) / 6.0,
+        ]
+    )
     return i0, w
 
 
@@ -206,8 +211,7 @@ class AlbedoTable:
         """(e_g, e_h) interpolated at (mu, roughness) (broadcast, float64, validated)."""
         t = t_of_mu(mu)
         u = u_of_roughness(self.model, roughness)
-        return (interpolate_grid(self.e_g, t, u, self.row_kinks),
-                interpolate_grid(self.e_h, t, u, self.row_kinks))
+        return (interpolate_grid(self.e_g, t, u, self.row_kinks), interpolate_grid(self.e_h, t, u, self.row_kinks))
 
     def average_terms(self, roughness):
         """(<e_g>, <e_h>) interpolated at roughness."""
@@ -239,8 +243,10 @@ def parse_table(model, text):
     j = np.array([int(r[0]) for r in rows])
     nr = n_columns(name)
     if len(rows) != N_THETA + 1 or roughness.size != nr + 1 or not np.array_equal(j, np.arange(N_THETA + 1)):
-        raise ValueError(f"{name}: table grid is {len(rows)} x {roughness.size}, "
-                         f"expected {N_THETA + 1} x {nr + 1}; regenerate with {REGENERATE}")
+        raise ValueError(
+            f"{name}: table grid is {len(rows)} x {roughness.size}, "
+            f"expected {N_THETA + 1} x {nr + 1}; regenerate with {REGENERATE}"
+        )
     u = np.arange(nr + 1) / nr if nr else np.zeros(1)
     if not np.allclose(roughness, roughness_of_u(name, u), rtol=0, atol=2 * ROUNDING):
         raise ValueError(f"{name}: table roughness columns do not match the grid map")
@@ -262,13 +268,23 @@ def parse_table(model, text):
     mu[-1] = 0.0
     if not np.allclose(mu, [float(r[2]) for r in rows], rtol=0, atol=2 * ROUNDING):
         raise ValueError(f"{name}: table mu rows do not match the grid map")
-    grid = {"t": t, "theta": theta, "mu": mu, "u": u, "roughness": roughness_of_u(name, u),
-            "e_g": block("e_g"), "e_h": block("e_h"), "err": block("err"),
-            "avg_g": line("avg_g"), "avg_h": line("avg_h"), "avg_err": line("avg_err")}
+    grid = {
+        "t": t,
+        "theta": theta,
+        "mu": mu,
+        "u": u,
+        "roughness": roughness_of_u(name, u),
+        "e_g": block("e_g"),
+        "e_h": block("e_h"),
+        "err": block("err"),
+        "avg_g": line("avg_g"),
+        "avg_h": line("avg_h"),
+        "avg_err": line("avg_err"),
+    }
     return AlbedoTable(name, meta, grid)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def load_table(model):
     """The shipped ``AlbedoTable`` of ``model`` (read once, cached)."""
     name = model_info(model).name
@@ -276,8 +292,9 @@ def load_table(model):
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
-        raise FileNotFoundError(f"reference table for {name!r} missing ({path}); "
-                                f"regenerate with {REGENERATE}") from None
+        raise FileNotFoundError(
+            f"reference table for {name!r} missing ({path}); regenerate with {REGENERATE}"
+        ) from None
     return parse_table(name, text)
 
 

@@ -5,6 +5,7 @@ published forms agree to rounding error.  Follows the HLSL listing of the post: 
 cosines, in-plane projections normalised, cos(phi) saturated, and
 ``cos(phi) sin(theta_i) sin(theta_o) / max(cos theta_i, cos theta_o)``.
 """
+
 import math
 
 from .._jit import INV_PI, kernel, max_mu

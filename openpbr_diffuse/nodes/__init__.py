@@ -12,6 +12,7 @@ library (``materialx_defs``) and share the verbs ``eval(wi, wo)``, ``albedo(wo)`
 ``sample(wo, u) -> (wi, pdf)`` and ``pdf(wo, wi)``.  Modules: ``frame`` (shading frames);
 the GGX lobes they compose live in ``openpbr_diffuse.microfacet``.
 """
+
 from .materialx_defs import nodedef_inputs
 from .openpbr_surface import IgnoredInputWarning, Lobe, OpenPBRSurface
 from .oren_nayar import OrenNayarDiffuseBSDF

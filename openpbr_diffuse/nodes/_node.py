@@ -5,6 +5,7 @@ defaults and ranges are built from the nodedef's inputs (``materialx_defs``), so
 cannot drift from the MaterialX library.  Inputs with a ``defaultgeomprop`` (normals,
 tangents supplied by the renderer) default to None and are keyword-only.
 """
+
 import inspect
 
 import numpy as np
@@ -31,8 +32,9 @@ def node_signature(nodedef, options=(), keyword_only=False):
     defs = nodedef_inputs(nodedef)
     kind = inspect.Parameter.KEYWORD_ONLY if keyword_only else inspect.Parameter.POSITIONAL_OR_KEYWORD
     params = [inspect.Parameter(n, kind, default=d.default) for n, d in defs.items() if not _geomprop(d)]
-    params += [inspect.Parameter(n, inspect.Parameter.KEYWORD_ONLY, default=None)
-               for n, d in defs.items() if _geomprop(d)]
+    params += [
+        inspect.Parameter(n, inspect.Parameter.KEYWORD_ONLY, default=None) for n, d in defs.items() if _geomprop(d)
+    ]
     params += [inspect.Parameter(n, inspect.Parameter.KEYWORD_ONLY, default=v) for n, v in options]
     return inspect.Signature(params)
 
@@ -101,8 +103,10 @@ def bind_inputs(cls, args, kwargs):
     sig = cls.signature()
     unknown = sorted(set(kwargs) - set(sig.parameters))
     if unknown:
-        raise ValueError(f"{cls.__name__}: unknown input(s) {', '.join(unknown)}; "
-                         f"the inputs of {cls.NODEDEF} are {', '.join(nodedef_inputs(cls.NODEDEF))}")
+        raise ValueError(
+            f"{cls.__name__}: unknown input(s) {', '.join(unknown)}; "
+            f"the inputs of {cls.NODEDEF} are {', '.join(nodedef_inputs(cls.NODEDEF))}"
+        )
     try:
         bound = sig.bind(*args, **kwargs)
     except TypeError as exc:

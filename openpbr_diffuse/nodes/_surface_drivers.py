@@ -22,6 +22,7 @@ on a pool of Python threads (``_Builds``).
 No input is checked here: the public class checks its inputs once, at construction and on
 each call's directions.
 """
+
 import functools
 import math
 
@@ -106,6 +107,7 @@ def _local_params(p):
 # --------------------------------------------------------------------------- lobe loops
 # One block pass per active lobe slot, the slot a literal constant (and the diffuse model
 # too, for the diffuse slot's pass).
+
 
 @kernel
 def _each_eval(active, dmodel, weighted, ms, p, ps, s0, m, f):
@@ -241,9 +243,9 @@ def _lobes_run(ps):
         """W, E (n*8*3), P (n*8): weight, albedo and probability of every lobe slot."""
         n = wo.shape[0] // 3
         f = _scratch()
-        if ps == 0:   # one material: a local copy (ps is a constant: the other branch is pruned)
+        if ps == 0:  # one material: a local copy (ps is a constant: the other branch is pruned)
             q = _local_params(p)
-        else:         # a material per row: read where they are
+        else:  # a material per row: read where they are
             q = p
         b0, b1 = _block_range(t, nt, n)
         for b in range(b0, b1):
@@ -253,6 +255,7 @@ def _lobes_run(ps):
             probability_pass(active, sel, q, ps, s0, mb, f, ms)
             for k in range(N_LOBES):
                 lobe_outputs_pass(k, is_on(active, k), ms, q, ps, s0, m, f, W, E, P)
+
     return lobes_run
 
 
@@ -262,9 +265,9 @@ def _albedo_run(ps):
         """out (n*3) = sum_k w_k E_k."""
         n = wo.shape[0] // 3
         f = _scratch()
-        if ps == 0:   # one material: a local copy (ps is a constant: the other branch is pruned)
+        if ps == 0:  # one material: a local copy (ps is a constant: the other branch is pruned)
             q = _local_params(p)
-        else:         # a material per row: read where they are
+        else:  # a material per row: read where they are
             q = p
         b0, b1 = _block_range(t, nt, n)
         for b in range(b0, b1):
@@ -276,6 +279,7 @@ def _albedo_run(ps):
             fill_pass(f, A2, mb, 0.0)
             _each_albedo(active, dmodel, ms, q, ps, s0, mb, f)
             rgb_out_pass(s0, m, f, out)
+
     return albedo_run
 
 
@@ -286,9 +290,9 @@ def _eval_run(ps):
         n = wo.shape[0] // 3
         lobes = active if only < 0 else active & (1 << only)
         f = _scratch()
-        if ps == 0:   # one material: a local copy (ps is a constant: the other branch is pruned)
+        if ps == 0:  # one material: a local copy (ps is a constant: the other branch is pruned)
             q = _local_params(p)
-        else:         # a material per row: read where they are
+        else:  # a material per row: read where they are
             q = p
         b0, b1 = _block_range(t, nt, n)
         for b in range(b0, b1):
@@ -302,6 +306,7 @@ def _eval_run(ps):
             fill_pass(f, A2, mb, 0.0)
             _each_eval(lobes, dmodel, only < 0, ms, q, ps, s0, mb, f)
             rgb_out_pass(s0, m, f, out)
+
     return eval_run
 
 
@@ -311,9 +316,9 @@ def _pdf_run(ps):
         """out (n) = sum_k P_k pdf_k(wi | wo); 0 where wo is below the horizon."""
         n = wo.shape[0] // 3
         f = _scratch()
-        if ps == 0:   # one material: a local copy (ps is a constant: the other branch is pruned)
+        if ps == 0:  # one material: a local copy (ps is a constant: the other branch is pruned)
             q = _local_params(p)
-        else:         # a material per row: read where they are
+        else:  # a material per row: read where they are
             q = p
         b0, b1 = _block_range(t, nt, n)
         for b in range(b0, b1):
@@ -327,6 +332,7 @@ def _pdf_run(ps):
             _each_pdf(active, dmodel, False, vndf, q, ps, s0, mb, f)
             for r in range(m):
                 out[_U(s0 + r)] = f[at(Q, r)] if f[at(OZ, r)] > 0.0 else 0.0
+
     return pdf_run
 
 
@@ -340,9 +346,9 @@ def _sample_run(ps):
         f = _scratch()
         idx = _lists()
         cnt = _counts()
-        if ps == 0:   # one material: a local copy (ps is a constant: the other branch is pruned)
+        if ps == 0:  # one material: a local copy (ps is a constant: the other branch is pruned)
             q = _local_params(p)
-        else:         # a material per row: read where they are
+        else:  # a material per row: read where they are
             q = p
         b0, b1 = _block_range(t, nt, n)
         for b in range(b0, b1):
@@ -365,6 +371,7 @@ def _sample_run(ps):
                 wi[j] = f[at(IX, r)] if up else 0.0
                 wi[j + _U(1)] = f[at(IX + 1, r)] if up else 0.0
                 wi[j + _U(2)] = f[at(IX + 2, r)] if up else 1.0
+
     return sample_run
 
 
@@ -416,9 +423,11 @@ def tables():
     from ..microfacet.tables import padded_tables
 
     C, R = padded_tables()
-    if R.shape[2] != N_CURVE or C.shape[1] != N_CCURVE:   # the parameter layout reserves them
-        raise RuntimeError(f"GGX albedo tables have {R.shape[2] - 2} and {C.shape[1] - 2} mu nodes; the "
-                           f"parameter layout expects {N_CURVE - 2} (N_CURVE) and {N_CCURVE - 2} (N_CCURVE)")
+    if R.shape[2] != N_CURVE or C.shape[1] != N_CCURVE:  # the parameter layout reserves them
+        raise RuntimeError(
+            f"GGX albedo tables have {R.shape[2] - 2} and {C.shape[1] - 2} mu nodes; the "
+            f"parameter layout expects {N_CURVE - 2} (N_CURVE) and {N_CCURVE - 2} (N_CCURVE)"
+        )
     return C, R
 
 
@@ -428,7 +437,7 @@ def _run(builds, head, params, lead, dirs, outs):
     n = math.prod(lead)
     if n == 0:
         return
-    if params.ndim == 1 and n == 1:   # one material, one row (lobes(wo) of a material): no batch machinery
+    if params.ndim == 1 and n == 1:  # one material, one row (lobes(wo) of a material): no batch machinery
         builds.one(0, 1, *head, params, *(rows(d, lead, k)[0] for d, k in dirs), *(o for o, _ in outs))
         return
     if params.ndim == 1:
@@ -436,12 +445,12 @@ def _run(builds, head, params, lead, dirs, outs):
         for d, k in dirs:
             b, t = rows(d, lead, k)
             inputs.append((b, k, t))
-        first = len(head) + 1   # the first direction buffer (3 a row) follows the parameters
+        first = len(head) + 1  # the first direction buffer (3 a row) follows the parameters
 
         def drive(*args):
             builds(False, args[first].size // 3, *args)
 
-        launch(drive, head + (params,), inputs, outs, n, split=False)   # the runners use the pool themselves
+        launch(drive, head + (params,), inputs, outs, n, split=False)  # the runners use the pool themselves
         return
     # a material per row (no copy when the materials already have the rows' shape).  The
     # passes of a short block run up to 3 rows past its end (``span``) and read a material for
@@ -451,14 +460,26 @@ def _run(builds, head, params, lead, dirs, outs):
     full = [np.ascontiguousarray(np.broadcast_to(d, lead + (k,))).reshape(-1) for d, k in dirs]
     whole = n - n % B
     if whole:
-        builds(True, whole, *head, p[:whole * N_PARAMS], *(d[:whole * k] for d, (_, k) in zip(full, dirs)),
-               *(o[:whole * k] for o, k in outs))
+        builds(
+            True,
+            whole,
+            *head,
+            p[: whole * N_PARAMS],
+            *(d[: whole * k] for d, (_, k) in zip(full, dirs)),
+            *(o[: whole * k] for o, k in outs),
+        )
     if whole < n:
         tail = np.empty(B * N_PARAMS)
-        tail[:(n - whole) * N_PARAMS] = p[whole * N_PARAMS:]
-        tail[(n - whole) * N_PARAMS:] = np.tile(p[(n - 1) * N_PARAMS:], B - (n - whole))
-        builds(True, n - whole, *head, tail, *(d[whole * k:] for d, (_, k) in zip(full, dirs)),
-               *(o[whole * k:] for o, k in outs))
+        tail[: (n - whole) * N_PARAMS] = p[whole * N_PARAMS :]
+        tail[(n - whole) * N_PARAMS :] = np.tile(p[(n - 1) * N_PARAMS :], B - (n - whole))
+        builds(
+            True,
+            n - whole,
+            *head,
+            tail,
+            *(d[whole * k :] for d, (_, k) in zip(full, dirs)),
+            *(o[whole * k :] for o, k in outs),
+        )
 
 
 def lobes_rows(flags, params, wo, lead):
@@ -467,8 +488,14 @@ def lobes_rows(flags, params, wo, lead):
     W = np.empty(n * N_LOBES * 3)
     E = np.empty(n * N_LOBES * 3)
     P = np.empty(n * N_LOBES)
-    _run(LOBES, (flags.active, flags.dmodel, flags.sel, flags.ms), params, lead, [(wo, 3)],
-         [(W, N_LOBES * 3), (E, N_LOBES * 3), (P, N_LOBES)])
+    _run(
+        LOBES,
+        (flags.active, flags.dmodel, flags.sel, flags.ms),
+        params,
+        lead,
+        [(wo, 3)],
+        [(W, N_LOBES * 3), (E, N_LOBES * 3), (P, N_LOBES)],
+    )
     return W.reshape(lead + (N_LOBES, 3)), E.reshape(lead + (N_LOBES, 3)), P.reshape(lead + (N_LOBES,))
 
 
@@ -486,8 +513,9 @@ def eval_rows(flags, params, wi, wo, lead, only=-1):
 
 def pdf_rows(flags, params, wo, wi, lead):
     out = np.empty(math.prod(lead))
-    _run(PDF, (flags.active, flags.dmodel, flags.sel, flags.ms, flags.vndf), params, lead, [(wo, 3), (wi, 3)],
-         [(out, 1)])
+    _run(
+        PDF, (flags.active, flags.dmodel, flags.sel, flags.ms, flags.vndf), params, lead, [(wo, 3), (wi, 3)], [(out, 1)]
+    )
     return out.reshape(lead)
 
 
@@ -495,6 +523,12 @@ def sample_rows(flags, params, wo, u, lead):
     n = math.prod(lead)
     wi = np.empty(n * 3)
     out = np.empty(n)
-    _run(SAMPLE, (flags.active, flags.dmodel, flags.sel, flags.ms, flags.vndf), params, lead,
-         [(wo, 3), (u, u.shape[-1])], [(wi, 3), (out, 1)])
+    _run(
+        SAMPLE,
+        (flags.active, flags.dmodel, flags.sel, flags.ms, flags.vndf),
+        params,
+        lead,
+        [(wo, 3), (u, u.shape[-1])],
+        [(wi, 3), (out, 1)],
+    )
     return wi.reshape(lead + (3,)), out.reshape(lead)

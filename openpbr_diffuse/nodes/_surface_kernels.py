@@ -19,6 +19,7 @@ and the kernels branch on directions only through selects, so the loops vectoris
 Lobe ids (slots): DIFFUSE, SPECULAR, METAL, TRANSMISSION, SUBSURFACE (the thin-walled
 reflection part when thin-walled), SUBSURFACE_T (thin-walled translucency), COAT, FUZZ.
 """
+
 import math
 
 import numba
@@ -38,84 +39,102 @@ from ..sampling.simple import cosine_pdf, cosine_sample_local
 
 DIFFUSE, SPECULAR, METAL, TRANSMISSION, SUBSURFACE, SUBSURFACE_T, COAT, FUZZ = range(8)
 N_LOBES = 8
-LOBE_NAMES = ("diffuse", "specular", "metal", "transmission", "subsurface", "subsurface_transmission",
-              "coat", "fuzz")
+LOBE_NAMES = ("diffuse", "specular", "metal", "transmission", "subsurface", "subsurface_transmission", "coat", "fuzz")
 #: diffuse lobe models
 D_EON, D_QON, D_LAMBERT = 0, 1, 2
 #: selection rules
 SEL_LENGTH, SEL_MAX, SEL_UNIFORM = 0, 1, 2
 
 # parameter layout of one surface row (float64)
-P_BASE_COLOR = 0          # 3: rho of the diffuse lobe
-P_R_DIFF = 3              # base_diffuse_roughness (EON r; QON sigma)
+P_BASE_COLOR = 0  # 3: rho of the diffuse lobe
+P_R_DIFF = 3  # base_diffuse_roughness (EON r; QON sigma)
 P_BASE_WEIGHT = 4
-P_METAL = 5               # base_metalness
-P_SPEC_COLOR = 6          # 3
+P_METAL = 5  # base_metalness
+P_SPEC_COLOR = 6  # 3
 P_SPEC_WEIGHT = 9
-P_ALPHA_S = 10            # GGX alpha of the base specular and metal (coat-affected)
-P_R_S = 11                # its roughness (table coordinate)
-P_X_S = 12                # |sqrt(F0)| of the modulated index (table coordinate)
-P_ETA_S = 13              # modulated index eta' >= 1
-P_METAL_F0 = 14           # 3: base_weight * base_color
-P_METAL_A = 17            # 3: F82-tint coefficient a
+P_ALPHA_S = 10  # GGX alpha of the base specular and metal (coat-affected)
+P_R_S = 11  # its roughness (table coordinate)
+P_X_S = 12  # |sqrt(F0)| of the modulated index (table coordinate)
+P_ETA_S = 13  # modulated index eta' >= 1
+P_METAL_F0 = 14  # 3: base_weight * base_color
+P_METAL_A = 17  # 3: F82-tint coefficient a
 P_TRANS_W = 20
-P_TRANS_TINT = 21         # 3
+P_TRANS_TINT = 21  # 3
 P_SSS_W = 24
-P_SSS_COLOR = 25          # 3
+P_SSS_COLOR = 25  # 3
 P_SSS_ANISO = 28
 P_COAT_W = 29
 P_ALPHA_C = 30
 P_R_C = 31
 P_X_C = 32
 P_ETA_C = 33
-P_BASE_MUL = 34           # 3: coat attenuation x darkening of everything under the coat
+P_BASE_MUL = 34  # 3: coat attenuation x darkening of everything under the coat
 P_FUZZ_W = 37
-P_FUZZ_COLOR = 38         # 3
+P_FUZZ_COLOR = 38  # 3
 P_FUZZ_R = 41
-P_THIN = 42               # geometry_thin_walled (0/1)
+P_THIN = 42  # geometry_thin_walled (0/1)
 # table axes fixed per material (``microfacet.tables.axis_weights``): for the base specular
 # (P_TAB_S) and the coat (P_TAB_C), the conductor table's roughness node and 4 weights, the
 # dielectric table's roughness node and 4 weights, its x node and 4 weights
-P_TAB_S = 43              # 15
-P_TAB_C = 58              # 15
+P_TAB_S = 43  # 15
+P_TAB_C = 58  # 15
 # the dielectric table collapsed on those two axes: E_diel/E1 at every (padded) mu node of the
 # table, for the base specular and the coat; per row only a 4-point cubic in mu remains
-N_CURVE = 35              # mu nodes of the dielectric table + 2 ghost nodes
+N_CURVE = 35  # mu nodes of the dielectric table + 2 ghost nodes
 P_CURVE_S = 73
 P_CURVE_C = P_CURVE_S + N_CURVE
 # the conductor table collapsed on its roughness axis: E1, E5, E6 of the base specular's
 # roughness and E1 of the coat's at every (padded) mu node; per row only a 4-point cubic in
 # mu remains (``_conductor_curve``)
-N_CCURVE = 67             # mu nodes of the conductor table + 2 ghost nodes
+N_CCURVE = 67  # mu nodes of the conductor table + 2 ghost nodes
 P_E1S = P_CURVE_C + N_CURVE
 P_E5S = P_E1S + N_CCURVE
 P_E6S = P_E5S + N_CCURVE
 P_E1C = P_E6S + N_CCURVE
 # values of one material that the per-row formulas would otherwise recompute
-P_R_TENTH = P_E1C + N_CCURVE   # base_diffuse_roughness^0.1 (the EON sampler's P_u)
-P_RHO_MS = P_R_TENTH + 1       # 3: rho_ms(base_color, <E_F>) of the EON lobe (Eq. 18)
-P_SHEEN_FIT = P_RHO_MS + 3     # 3: (s, m, o) of the fuzz albedo fit at fuzz_roughness
+P_R_TENTH = P_E1C + N_CCURVE  # base_diffuse_roughness^0.1 (the EON sampler's P_u)
+P_RHO_MS = P_R_TENTH + 1  # 3: rho_ms(base_color, <E_F>) of the EON lobe (Eq. 18)
+P_SHEEN_FIT = P_RHO_MS + 3  # 3: (s, m, o) of the fuzz albedo fit at fuzz_roughness
 # every lobe's weight is a layer factor of mu_o times a constant of the material,
 # w_k[c](wo) = L_k(wo) K_k[c] (``layer_factors``); the selection scores |w_k E_k| then
 # reduce to constants of the material times functions of mu_o (``lobe_score``)
-P_K = P_SHEEN_FIT + 3          # 8 x 3: K_k[c]
-P_SC = P_K + 3 * N_LOBES       # 8 x 2: |K_k e_k| and max_c |K_k[c] e_k[c]| for the lobes whose albedo is
-                               # a constant colour e_k or a scalar times 1 (e_k = 1)
-P_DQ = P_SC + 2 * N_LOBES      # 3: |K rho|^2, (K rho).(K rho_ms), |K rho_ms|^2 of the diffuse lobe
-P_EON_FIT = P_DQ + 3           # 3: (A_F, B_F, s_h) of the EON albedo at base_diffuse_roughness
-P_QON_AB = P_EON_FIT + 3       # 2: QON's (A, B) at base_diffuse_roughness (QON diffuse, thin-walled subsurface)
+P_K = P_SHEEN_FIT + 3  # 8 x 3: K_k[c]
+P_SC = P_K + 3 * N_LOBES  # 8 x 2: |K_k e_k| and max_c |K_k[c] e_k[c]| for the lobes whose albedo is
+# a constant colour e_k or a scalar times 1 (e_k = 1)
+P_DQ = P_SC + 2 * N_LOBES  # 3: |K rho|^2, (K rho).(K rho_ms), |K rho_ms|^2 of the diffuse lobe
+P_EON_FIT = P_DQ + 3  # 3: (A_F, B_F, s_h) of the EON albedo at base_diffuse_roughness
+P_QON_AB = P_EON_FIT + 3  # 2: QON's (A, B) at base_diffuse_roughness (QON diffuse, thin-walled subsurface)
 N_PARAMS = P_QON_AB + 2
 
 
 # --------------------------------------------------------------------------- packing
 # The material's inputs, in this order (float64; colours 3 wide), are packed into the
 # parameter layout above by ``pack_drive``, once per material.
-RAW = (("base_color", 3), ("base_diffuse_roughness", 1), ("base_weight", 1), ("base_metalness", 1),
-       ("specular_color", 3), ("specular_weight", 1), ("specular_roughness", 1), ("specular_ior", 1),
-       ("transmission_weight", 1), ("transmission_color", 3), ("transmission_depth", 1),
-       ("subsurface_weight", 1), ("subsurface_color", 3), ("subsurface_scatter_anisotropy", 1),
-       ("coat_weight", 1), ("coat_color", 3), ("coat_roughness", 1), ("coat_ior", 1), ("coat_darkening", 1),
-       ("fuzz_weight", 1), ("fuzz_color", 3), ("fuzz_roughness", 1), ("geometry_thin_walled", 1))
+RAW = (
+    ("base_color", 3),
+    ("base_diffuse_roughness", 1),
+    ("base_weight", 1),
+    ("base_metalness", 1),
+    ("specular_color", 3),
+    ("specular_weight", 1),
+    ("specular_roughness", 1),
+    ("specular_ior", 1),
+    ("transmission_weight", 1),
+    ("transmission_color", 3),
+    ("transmission_depth", 1),
+    ("subsurface_weight", 1),
+    ("subsurface_color", 3),
+    ("subsurface_scatter_anisotropy", 1),
+    ("coat_weight", 1),
+    ("coat_color", 3),
+    ("coat_roughness", 1),
+    ("coat_ior", 1),
+    ("coat_darkening", 1),
+    ("fuzz_weight", 1),
+    ("fuzz_color", 3),
+    ("fuzz_roughness", 1),
+    ("geometry_thin_walled", 1),
+)
 N_RAW = sum(w for _, w in RAW)
 #: warning bits of ``pack_drive``
 W_SPEC_TIR, W_COAT_TIR, W_F82_NEGATIVE = 1, 2, 4
@@ -159,8 +178,12 @@ def _conductor_curve(out, q, t, C, c):
     weights are out[t:t + 5], for every padded mu node m."""
     ir = int(out[t])
     for m in range(N_CCURVE):
-        out[q + m] = (out[t + 1] * C[ir, m, c] + out[t + 2] * C[ir + 1, m, c] + out[t + 3] * C[ir + 2, m, c]
-                      + out[t + 4] * C[ir + 3, m, c])
+        out[q + m] = (
+            out[t + 1] * C[ir, m, c]
+            + out[t + 2] * C[ir + 1, m, c]
+            + out[t + 3] * C[ir + 2, m, c]
+            + out[t + 4] * C[ir + 3, m, c]
+        )
 
 
 @kernel
@@ -178,21 +201,23 @@ def _pack_weights(out, o):
         diel = base * (1.0 - M)
         opaque = diel * (1.0 - T)
         color = out[o + P_SSS_COLOR + c]
-        K = (opaque * (1.0 - S) * out[o + P_BASE_WEIGHT],              # DIFFUSE
-             diel * out[o + P_SPEC_COLOR + c],                          # SPECULAR
-             base * M * out[o + P_SPEC_WEIGHT],                         # METAL
-             diel * T,                                                  # TRANSMISSION
-             opaque * S * 0.5 * color * (1.0 - g) if thin else opaque * S,   # SUBSURFACE
-             opaque * S * 0.5 * color * (1.0 + g),                      # SUBSURFACE_T
-             out[o + P_COAT_W],                                         # COAT
-             out[o + P_FUZZ_W] * out[o + P_FUZZ_COLOR + c])             # FUZZ
+        K = (
+            opaque * (1.0 - S) * out[o + P_BASE_WEIGHT],  # DIFFUSE
+            diel * out[o + P_SPEC_COLOR + c],  # SPECULAR
+            base * M * out[o + P_SPEC_WEIGHT],  # METAL
+            diel * T,  # TRANSMISSION
+            opaque * S * 0.5 * color * (1.0 - g) if thin else opaque * S,  # SUBSURFACE
+            opaque * S * 0.5 * color * (1.0 + g),  # SUBSURFACE_T
+            out[o + P_COAT_W],  # COAT
+            out[o + P_FUZZ_W] * out[o + P_FUZZ_COLOR + c],
+        )  # FUZZ
         for k in range(N_LOBES):
             out[o + P_K + 3 * k + c] = K[k]
     for k in range(N_LOBES):
         n2 = 0.0
         mx = 0.0
         for c in range(3):
-            e = 1.0   # SPECULAR, COAT, FUZZ (scalar albedos), and DIFFUSE, METAL (unused)
+            e = 1.0  # SPECULAR, COAT, FUZZ (scalar albedos), and DIFFUSE, METAL (unused)
             if k == TRANSMISSION:
                 e = out[o + P_TRANS_TINT + c]
             elif k == SUBSURFACE or k == SUBSURFACE_T:
@@ -228,7 +253,7 @@ def _pack_drive(raw, out, CT, RT):
         C, r_c, c_ior, c_dark = raw[a + 22], raw[a + 26], raw[a + 27], raw[a + 28]
         F, thin = raw[a + 29], raw[a + 34]
         # the coat's effect on the base specular [effective_specular_roughness, eta_s]
-        r_eff = (1.0 - C) * r_s + C * min(1.0, 2.0 * r_c ** 4 + r_s ** 4) ** 0.25
+        r_eff = (1.0 - C) * r_s + C * min(1.0, 2.0 * r_c**4 + r_s**4) ** 0.25
         eta_s = ior
         if C > 0.0:
             ratio = ior / c_ior
@@ -301,8 +326,16 @@ def _pack_drive(raw, out, CT, RT):
         # lobes that can be non-zero
         diel = 1.0 - M
         sc_any = raw[a + 6] > 0.0 or raw[a + 7] > 0.0 or raw[a + 8] > 0.0
-        on = ((diel * (1.0 - T) * (1.0 - S) * bw > 0.0, diel > 0.0 and x > 0.0 and sc_any, M > 0.0 and sw > 0.0,
-               diel * T > 0.0, diel * (1.0 - T) * S > 0.0, thin > 0.0 and diel * (1.0 - T) * S > 0.0, C > 0.0, F > 0.0))
+        on = (
+            diel * (1.0 - T) * (1.0 - S) * bw > 0.0,
+            diel > 0.0 and x > 0.0 and sc_any,
+            M > 0.0 and sw > 0.0,
+            diel * T > 0.0,
+            diel * (1.0 - T) * S > 0.0,
+            thin > 0.0 and diel * (1.0 - T) * S > 0.0,
+            C > 0.0,
+            F > 0.0,
+        )
         for k in range(N_LOBES):
             if on[k]:
                 mask |= 1 << k
@@ -331,7 +364,7 @@ def layer_albedos(p, o, e1, e5, e6, q, mu, x, ms):
     im, tm = node_at(mu, N_CURVE - 2, MU_AXIS)
     w0, w1, w2, w3 = catmull_rom_at(tm)
     E = min(max(cubic_at(p, o + q + im, w0, w1, w2, w3), 0.0), 1.0) * E1
-    E = E if x > 0.0 else 0.0   # a select: a loop over rows calling this stays branch-free
+    E = E if x > 0.0 else 0.0  # a select: a loop over rows calling this stays branch-free
     return E1, E5, E6, E * mf.multiscatter(x * x, E1, ms)
 
 
@@ -445,7 +478,7 @@ def lobe_score(k, sel, p, o, ms, L, E1s, E5s, E6s, Es, Ec, Ef, eg, eh, Eq):
             s = Ef * c
         elif k == SUBSURFACE:
             s = Eq * c
-        else:   # TRANSMISSION, SUBSURFACE_T: constant colours
+        else:  # TRANSMISSION, SUBSURFACE_T: constant colours
             s = c
     return 1.0 if sel == SEL_UNIFORM else abs(L) * s
 
@@ -474,7 +507,7 @@ def lobe_f(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
     up = (iz > 0.0) & (oz > 0.0)
     if k == DIFFUSE or k == SUBSURFACE:
         s = ix * ox + iy * oy + iz * oz - iz * oz
-        if k == SUBSURFACE:   # QON when thin-walled (its reflection half), else Lambert
+        if k == SUBSURFACE:  # QON when thin-walled (its reflection half), else Lambert
             q = qon_terms(iz, oz, s, p[o + P_QON_AB], p[o + P_QON_AB + 1])
             thin = p[o + P_THIN] > 0.0
             g = q if thin else INV_PI
@@ -483,8 +516,11 @@ def lobe_f(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
         g, h = diffuse_gh(dmodel, p, o, iz, oz, s)
         g = g if up else 0.0
         h = h if up else 0.0
-        return (p[o + P_BASE_COLOR] * g + p[o + P_RHO_MS] * h, p[o + P_BASE_COLOR + 1] * g + p[o + P_RHO_MS + 1] * h,
-                p[o + P_BASE_COLOR + 2] * g + p[o + P_RHO_MS + 2] * h)
+        return (
+            p[o + P_BASE_COLOR] * g + p[o + P_RHO_MS] * h,
+            p[o + P_BASE_COLOR + 1] * g + p[o + P_RHO_MS + 1] * h,
+            p[o + P_BASE_COLOR + 2] * g + p[o + P_RHO_MS + 2] * h,
+        )
     if k == SUBSURFACE_T:
         g = INV_PI if (iz < 0.0) & (oz > 0.0) else 0.0
         return p[o + P_SSS_COLOR] * g, p[o + P_SSS_COLOR + 1] * g, p[o + P_SSS_COLOR + 2] * g
@@ -494,7 +530,7 @@ def lobe_f(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
         v = Ef * sheen_density(lx, ly, iz, oz, p[o + P_FUZZ_R]) / iz
         v = v if up else 0.0
         return v, v, v
-    if k == TRANSMISSION:   # the GGX lobe mirrored below the surface, normalised by E1
+    if k == TRANSMISSION:  # the GGX lobe mirrored below the surface, normalised by E1
         mt, _ = mf.reflection(ix, iy, -iz, ox, oy, oz, p[o + P_ALPHA_S])
         mt = mt / E1s
         return mt * p[o + P_TRANS_TINT], mt * p[o + P_TRANS_TINT + 1], mt * p[o + P_TRANS_TINT + 2]
@@ -509,9 +545,11 @@ def lobe_f(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
         return v, v, v
     # METAL
     F0r, F0g, F0b = p[o + P_METAL_F0], p[o + P_METAL_F0 + 1], p[o + P_METAL_F0 + 2]
-    return (m * fresnel.f82(c, F0r, p[o + P_METAL_A]) * mf.multiscatter(F0r, E1s, ms),
-            m * fresnel.f82(c, F0g, p[o + P_METAL_A + 1]) * mf.multiscatter(F0g, E1s, ms),
-            m * fresnel.f82(c, F0b, p[o + P_METAL_A + 2]) * mf.multiscatter(F0b, E1s, ms))
+    return (
+        m * fresnel.f82(c, F0r, p[o + P_METAL_A]) * mf.multiscatter(F0r, E1s, ms),
+        m * fresnel.f82(c, F0g, p[o + P_METAL_A + 1]) * mf.multiscatter(F0g, E1s, ms),
+        m * fresnel.f82(c, F0b, p[o + P_METAL_A + 2]) * mf.multiscatter(F0b, E1s, ms),
+    )
 
 
 @kernel
@@ -530,7 +568,7 @@ def lobe_pdf(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, vndf, pdf_s):
             q = eon_pdf(lx, ly, iz, min(oz, 1.0), p[o + P_R_DIFF], p[o + P_R_TENTH])
         else:
             q = cosine_pdf(iz)
-        return q if iz > 0.0 else 0.0   # a select: no branch on the direction
+        return q if iz > 0.0 else 0.0  # a select: no branch on the direction
     if k == SUBSURFACE_T:
         return cosine_pdf(-iz)
     if k == FUZZ:

@@ -17,6 +17,7 @@ Parameters: ``ps`` is the parameter stride, a compile-time constant of each driv
 0 for one material (every load of p is then loop-invariant and hoisted), N_PARAMS for a
 material per row (``par``).
 """
+
 import numba
 
 from .._jit import kernel, opaque
@@ -25,36 +26,95 @@ from ..microfacet import kernels as mf
 from ..microfacet.sheen import sheen_albedo_at
 from ..models.qon import qon_albedo
 from ..sampling.simple import U_MAX
-from ._surface_kernels import (COAT, D_EON, DIFFUSE, FUZZ, METAL, N_LOBES, N_SAMPLERS, P_ALPHA_S, P_COAT_W, P_CURVE_C,
-                               P_CURVE_S, P_E1C, P_E1S, P_E5S, P_E6S, P_FUZZ_W, P_K, P_QON_AB, P_SHEEN_FIT,
-                               P_THIN, P_X_C, P_X_S, SPECULAR, SUBSURFACE, SUBSURFACE_T, TRANSMISSION,
-                               diffuse_albedo_terms, layer_albedos,
-                               layer_factor, lobe_albedo, lobe_f, lobe_pdf, lobe_sample, lobe_score, sampler_of,
-                               uses_base_ggx)
+from ._surface_kernels import (
+    COAT,
+    D_EON,
+    DIFFUSE,
+    FUZZ,
+    METAL,
+    N_LOBES,
+    N_SAMPLERS,
+    P_ALPHA_S,
+    P_COAT_W,
+    P_CURVE_C,
+    P_CURVE_S,
+    P_E1C,
+    P_E1S,
+    P_E5S,
+    P_E6S,
+    P_FUZZ_W,
+    P_K,
+    P_QON_AB,
+    P_SHEEN_FIT,
+    P_THIN,
+    P_X_C,
+    P_X_S,
+    SPECULAR,
+    SUBSURFACE,
+    SUBSURFACE_T,
+    TRANSMISSION,
+    diffuse_albedo_terms,
+    layer_albedos,
+    layer_factor,
+    lobe_albedo,
+    lobe_f,
+    lobe_pdf,
+    lobe_sample,
+    lobe_score,
+    sampler_of,
+    uses_base_ggx,
+)
 
 #: Rows per block: a block's scratch (NROWS x B float64, 25 KB) stays in the L1 cache.
 B = 64
 
 # scratch rows of a block
-(OX, OY, OZ,            # wo
- IX, IY, IZ,            # wi (given, or sampled)
- MU,                    # mu_o clamped to [0, 1]
- E1S, E5S, E6S, ES,     # GGX basis albedos and the dielectric albedo of the base specular
- E1C, EC,               # E1 and the dielectric albedo of the coat (1, 0 without coat)
- EF,                    # fuzz albedo (0 without fuzz)
- EG, EH,                # diffuse albedo terms, E = rho e_g + rho_ms e_h
- EQ,                    # QON albedo of the thin-walled subsurface reflection (1 otherwise)
- TU, TB, TF,            # layer factors: under the specular layer, the base, under the fuzz
- A0, A1, A2,            # RGB accumulators (eval, albedo)
- GM, GC, GP,            # base specular GGX: f without Fresnel, wo.h; its pdf
- U0, U1, U2,            # u: the lobe choice's, and the chosen lobe's sampler inputs
- OK,                    # 1 where the sampler succeeded
- CH,                    # the chosen lobe slot
- Q,                     # mixture pdf
- MINE,                  # the chosen lobe's own pdf at the sample
- TOX, TOY, TOZ, TU1, TU2, TK,   # one sampler's rows of OX..OZ, U1, U2, CH, gathered (``sample_pass``)
- TX, TY, TZ, TOK,               # its samples, before they are scattered to IX..IZ, OK
- PR) = range(44)        # PR .. PR + 7: the selection probabilities P_k
+(
+    OX,
+    OY,
+    OZ,  # wo
+    IX,
+    IY,
+    IZ,  # wi (given, or sampled)
+    MU,  # mu_o clamped to [0, 1]
+    E1S,
+    E5S,
+    E6S,
+    ES,  # GGX basis albedos and the dielectric albedo of the base specular
+    E1C,
+    EC,  # E1 and the dielectric albedo of the coat (1, 0 without coat)
+    EF,  # fuzz albedo (0 without fuzz)
+    EG,
+    EH,  # diffuse albedo terms, E = rho e_g + rho_ms e_h
+    EQ,  # QON albedo of the thin-walled subsurface reflection (1 otherwise)
+    TU,
+    TB,
+    TF,  # layer factors: under the specular layer, the base, under the fuzz
+    A0,
+    A1,
+    A2,  # RGB accumulators (eval, albedo)
+    GM,
+    GC,
+    GP,  # base specular GGX: f without Fresnel, wo.h; its pdf
+    U0,
+    U1,
+    U2,  # u: the lobe choice's, and the chosen lobe's sampler inputs
+    OK,  # 1 where the sampler succeeded
+    CH,  # the chosen lobe slot
+    Q,  # mixture pdf
+    MINE,  # the chosen lobe's own pdf at the sample
+    TOX,
+    TOY,
+    TOZ,
+    TU1,
+    TU2,
+    TK,  # one sampler's rows of OX..OZ, U1, U2, CH, gathered (``sample_pass``)
+    TX,
+    TY,
+    TZ,
+    TOK,  # its samples, before they are scattered to IX..IZ, OK
+    PR,
+) = range(44)  # PR .. PR + 7: the selection probabilities P_k
 NROWS = PR + N_LOBES
 
 
@@ -98,6 +158,7 @@ def is_on(active, k):
 
 
 # --------------------------------------------------------------------------- state of mu_o
+
 
 @kernel
 def load_pass(d, s0, m, f, row):
@@ -185,7 +246,7 @@ def state_passes(active, dmodel, ms, albedos, basis, p, ps, s0, m, f):
         diffuse_albedo_pass(D_EON, p, ps, s0, m, f)
     else:
         diffuse_albedo_pass(dmodel, p, ps, s0, m, f)
-    if is_on(active, SUBSURFACE) and p[P_THIN] > 0.0:   # thin-walled is one value per surface
+    if is_on(active, SUBSURFACE) and p[P_THIN] > 0.0:  # thin-walled is one value per surface
         for r in range(m):
             o = par(ps, s0, r)
             f[at(EQ, r)] = qon_albedo(f[at(MU, r)], p[o + P_QON_AB], p[o + P_QON_AB + 1])
@@ -205,8 +266,23 @@ def diffuse_albedo_pass(dmodel, p, ps, s0, m, f):
 def albedo_of(k, c, p, o, f, r, ms):
     """E_k in channel c at row r (``lobe_albedo`` on the state rows).  The diffuse albedo uses
     EON's form rho e_g + rho_ms e_h for every model: e_h = 0 for QON and Lambert."""
-    return lobe_albedo(k, c, p, o, D_EON, ms, f[at(E1S, r)], f[at(E5S, r)], f[at(E6S, r)], f[at(ES, r)],
-                       f[at(EC, r)], f[at(EF, r)], f[at(EG, r)], f[at(EH, r)], f[at(EQ, r)])
+    return lobe_albedo(
+        k,
+        c,
+        p,
+        o,
+        D_EON,
+        ms,
+        f[at(E1S, r)],
+        f[at(E5S, r)],
+        f[at(E6S, r)],
+        f[at(ES, r)],
+        f[at(EC, r)],
+        f[at(EF, r)],
+        f[at(EG, r)],
+        f[at(EH, r)],
+        f[at(EQ, r)],
+    )
 
 
 @kernel
@@ -220,9 +296,23 @@ def score_pass(k, sel, p, ps, s0, m, f, ms):
     """PR + k = s_k, the selection score of lobe slot k (``lobe_score``), at every row."""
     for r in range(m):
         o = par(ps, s0, r)
-        f[at(PR + k, r)] = lobe_score(k, sel, p, o, ms, factor_of(k, f, r), f[at(E1S, r)], f[at(E5S, r)],
-                                      f[at(E6S, r)], f[at(ES, r)], f[at(EC, r)], f[at(EF, r)], f[at(EG, r)],
-                                      f[at(EH, r)], f[at(EQ, r)])
+        f[at(PR + k, r)] = lobe_score(
+            k,
+            sel,
+            p,
+            o,
+            ms,
+            factor_of(k, f, r),
+            f[at(E1S, r)],
+            f[at(E5S, r)],
+            f[at(E6S, r)],
+            f[at(ES, r)],
+            f[at(EC, r)],
+            f[at(EF, r)],
+            f[at(EG, r)],
+            f[at(EH, r)],
+            f[at(EQ, r)],
+        )
 
 
 @kernel
@@ -262,6 +352,7 @@ def probability_pass(active, sel, p, ps, s0, m, f, ms):
 
 # --------------------------------------------------------------------------- lobes
 
+
 @kernel
 def ggx_pass(active, p, ps, s0, m, f):
     """GM, GC: the base specular's GGX reflection (without Fresnel) and wo.h, shared by the
@@ -270,8 +361,9 @@ def ggx_pass(active, p, ps, s0, m, f):
         return
     for r in range(m):
         o = par(ps, s0, r)
-        g, c = mf.reflection(f[at(IX, r)], f[at(IY, r)], f[at(IZ, r)], f[at(OX, r)], f[at(OY, r)], f[at(OZ, r)],
-                             p[o + P_ALPHA_S])
+        g, c = mf.reflection(
+            f[at(IX, r)], f[at(IY, r)], f[at(IZ, r)], f[at(OX, r)], f[at(OY, r)], f[at(OZ, r)], p[o + P_ALPHA_S]
+        )
         f[at(GM, r)] = g
         f[at(GC, r)] = c
 
@@ -283,8 +375,9 @@ def ggx_pdf_pass(active, vndf, p, ps, s0, m, f):
         return
     for r in range(m):
         o = par(ps, s0, r)
-        f[at(GP, r)] = mf.reflection_pdf(f[at(IX, r)], f[at(IY, r)], f[at(IZ, r)], f[at(OX, r)], f[at(OY, r)],
-                                         f[at(OZ, r)], p[o + P_ALPHA_S], vndf)
+        f[at(GP, r)] = mf.reflection_pdf(
+            f[at(IX, r)], f[at(IY, r)], f[at(IZ, r)], f[at(OX, r)], f[at(OY, r)], f[at(OZ, r)], p[o + P_ALPHA_S], vndf
+        )
 
 
 @kernel
@@ -293,9 +386,24 @@ def eval_lobe_pass(k, dmodel, weighted, ms, p, ps, s0, m, f):
     to zeros), at every row of the block."""
     for r in range(m):
         o = par(ps, s0, r)
-        f0, f1, f2 = lobe_f(opaque(k), p, o, f[at(IX, r)], f[at(IY, r)], f[at(IZ, r)], f[at(OX, r)], f[at(OY, r)],
-                            f[at(OZ, r)], opaque(dmodel), ms, f[at(GM, r)], f[at(GC, r)], f[at(E1S, r)],
-                            f[at(E1C, r)], f[at(EF, r)])
+        f0, f1, f2 = lobe_f(
+            opaque(k),
+            p,
+            o,
+            f[at(IX, r)],
+            f[at(IY, r)],
+            f[at(IZ, r)],
+            f[at(OX, r)],
+            f[at(OY, r)],
+            f[at(OZ, r)],
+            opaque(dmodel),
+            ms,
+            f[at(GM, r)],
+            f[at(GC, r)],
+            f[at(E1S, r)],
+            f[at(E1C, r)],
+            f[at(EF, r)],
+        )
         L = factor_of(opaque(k), f, r)
         q = o + P_K + 3 * k
         f[at(A0, r)] += (L * p[q] if weighted else 1.0) * f0
@@ -309,8 +417,20 @@ def pdf_lobe_pass(k, dmodel, track, vndf, p, ps, s0, m, f):
     ``track``, MINE = pdf_k on the rows that chose lobe k."""
     for r in range(m):
         o = par(ps, s0, r)
-        pk = lobe_pdf(k, p, o, f[at(IX, r)], f[at(IY, r)], f[at(IZ, r)], f[at(OX, r)], f[at(OY, r)], f[at(OZ, r)],
-                      dmodel, vndf, f[at(GP, r)])
+        pk = lobe_pdf(
+            k,
+            p,
+            o,
+            f[at(IX, r)],
+            f[at(IY, r)],
+            f[at(IZ, r)],
+            f[at(OX, r)],
+            f[at(OY, r)],
+            f[at(OZ, r)],
+            dmodel,
+            vndf,
+            f[at(GP, r)],
+        )
         P = f[at(PR + k, r)]
         f[at(Q, r)] += P * pk if P > 0.0 else 0.0
         if track:
@@ -331,7 +451,7 @@ def choose_pass(ud, m, f):
         last = 0.0
         Plast = 0.0
         lolast = 0.0
-        for k in range(N_LOBES):   # a constant bound: unrolled, branch-free
+        for k in range(N_LOBES):  # a constant bound: unrolled, branch-free
             Pk = f[at(PR + k, r)]
             hit = (chosen < 0.0) & (u0 < lo + Pk)
             pos = Pk > 0.0
@@ -379,8 +499,9 @@ def sample_pass(sampler, vndf, p, ps, s0, f, idx, cnt):
         f[at(TK, t)] = f[at(CH, r)]
     for t in range(c):
         o = par(ps, s0, idx[lst + _U(t)])
-        x, y, z, ok = lobe_sample(sampler, f[at(TK, t)], p, o, f[at(TOX, t)], f[at(TOY, t)], f[at(TOZ, t)],
-                                  f[at(TU1, t)], f[at(TU2, t)], vndf)
+        x, y, z, ok = lobe_sample(
+            sampler, f[at(TK, t)], p, o, f[at(TOX, t)], f[at(TOY, t)], f[at(TOZ, t)], f[at(TU1, t)], f[at(TU2, t)], vndf
+        )
         f[at(TX, t)] = x
         f[at(TY, t)] = y
         f[at(TZ, t)] = z
@@ -431,4 +552,3 @@ def rgb_out_pass(s0, m, f, out):
         out[j] = f[at(A0, r)] if up else 0.0
         out[j + _U(1)] = f[at(A1, r)] if up else 0.0
         out[j + _U(2)] = f[at(A2, r)] if up else 0.0
-

@@ -8,6 +8,7 @@ value -- only the azimuth of the local coordinates -- and the branchless constru
 Duff et al. 2017 ("Building an orthonormal basis, revisited", JCGT 6(1), Listing 3) is
 used: continuous except across n.z = 0 and exact in floating point up to rounding.
 """
+
 import numpy as np
 
 
@@ -40,9 +41,14 @@ class Frame:
         """World directions (..., 3) -> local (..., 3) = (w.t, w.b, w.n)."""
         if self.normal is None:
             return w
-        return np.stack([np.einsum("...k,...k->...", w, self.t),
-                         np.einsum("...k,...k->...", w, self.b),
-                         np.einsum("...k,...k->...", w, self.normal)], axis=-1)
+        return np.stack(
+            [
+                np.einsum("...k,...k->...", w, self.t),
+                np.einsum("...k,...k->...", w, self.b),
+                np.einsum("...k,...k->...", w, self.normal),
+            ],
+            axis=-1,
+        )
 
     def to_world(self, w):
         """Local directions (..., 3) -> world: x t + y b + z n."""

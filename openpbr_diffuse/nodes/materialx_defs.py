@@ -8,6 +8,7 @@ folders), imported lazily.  If MaterialX is not importable the same information 
 ``tools/make_nodedef_snapshot.py`` (its header records the MaterialX version).  Both
 sources go through the same parser of MaterialX value strings.
 """
+
 import functools
 import json
 import os
@@ -16,8 +17,9 @@ from dataclasses import dataclass
 #: The nodedefs the shading nodes mirror (the snapshot holds exactly these).
 NODEDEFS = ("ND_oren_nayar_diffuse_bsdf", "ND_open_pbr_surface_surfaceshader")
 
-SNAPSHOT_FILE = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
-                             "data", "materialx_nodedefs.json")
+SNAPSHOT_FILE = os.path.join(
+    os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "data", "materialx_nodedefs.json"
+)
 
 _ATTRS = ("uimin", "uimax", "uisoftmin", "uisoftmax")
 
@@ -30,6 +32,7 @@ class InputDef:
     colorN/vectorN) or None when the input has no value but a ``defaultgeomprop``
     (e.g. ``Nworld``: the geometric normal supplied by the renderer).
     """
+
     name: str
     type: str
     default: object
@@ -76,10 +79,14 @@ def _records_from_materialx():
             "node": nd.getNodeString(),
             "version": nd.getVersionString(),
             "inputs": [
-                {"name": i.getName(), "type": i.getType(), "value": i.getValueString(),
-                 "defaultgeomprop": i.getDefaultGeomPropString(),
-                 "uniform": i.getAttribute("uniform") == "true",
-                 **{a: i.getAttribute(a) for a in _ATTRS}}
+                {
+                    "name": i.getName(),
+                    "type": i.getType(),
+                    "value": i.getValueString(),
+                    "defaultgeomprop": i.getDefaultGeomPropString(),
+                    "uniform": i.getAttribute("uniform") == "true",
+                    **{a: i.getAttribute(a) for a in _ATTRS},
+                }
                 for i in nd.getActiveInputs()
             ],
         }
@@ -92,7 +99,7 @@ def _records_from_snapshot():
     return snap["nodedefs"], f"snapshot {os.path.basename(SNAPSHOT_FILE)} ({snap['source']})"
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _records(prefer_materialx=True):
     if prefer_materialx:
         try:
@@ -104,9 +111,14 @@ def _records(prefer_materialx=True):
 
 def _to_def(rec):
     t = rec["type"]
-    return InputDef(rec["name"], t, parse_value(t, rec["value"]), rec["defaultgeomprop"],
-                    bool(rec["uniform"]),
-                    *(parse_value(t, rec[a]) if rec[a] else None for a in _ATTRS))
+    return InputDef(
+        rec["name"],
+        t,
+        parse_value(t, rec["value"]),
+        rec["defaultgeomprop"],
+        bool(rec["uniform"]),
+        *(parse_value(t, rec[a]) if rec[a] else None for a in _ATTRS),
+    )
 
 
 def nodedef_inputs(name, *, source="auto"):

@@ -70,6 +70,7 @@ material.  Building a surface from plain
 Python numbers and 3-tuples skips NumPy's input conversion (same checks, same values), and
 ``lobes`` at one direction of one material calls the serial driver directly.
 """
+
 import dataclasses
 import functools
 import math
@@ -87,13 +88,31 @@ from .frame import Frame
 from .materialx_defs import nodedef_inputs
 
 #: The inputs this model uses; every other input of the nodedef is reported when set.
-MODELLED = ("base_weight", "base_color", "base_diffuse_roughness", "base_metalness",
-            "specular_weight", "specular_color", "specular_roughness", "specular_ior",
-            "transmission_weight", "transmission_color",
-            "subsurface_weight", "subsurface_color", "subsurface_scatter_anisotropy",
-            "coat_weight", "coat_color", "coat_roughness", "coat_ior", "coat_darkening",
-            "fuzz_weight", "fuzz_color", "fuzz_roughness",
-            "geometry_thin_walled", "geometry_normal")
+MODELLED = (
+    "base_weight",
+    "base_color",
+    "base_diffuse_roughness",
+    "base_metalness",
+    "specular_weight",
+    "specular_color",
+    "specular_roughness",
+    "specular_ior",
+    "transmission_weight",
+    "transmission_color",
+    "subsurface_weight",
+    "subsurface_color",
+    "subsurface_scatter_anisotropy",
+    "coat_weight",
+    "coat_color",
+    "coat_roughness",
+    "coat_ior",
+    "coat_darkening",
+    "fuzz_weight",
+    "fuzz_color",
+    "fuzz_roughness",
+    "geometry_thin_walled",
+    "geometry_normal",
+)
 
 #: Inputs whose nodedef ui maximum is a UI range, not a validity bound: OpenPBR's own example
 #: metals use an F82 tint above 1 (cesium 1.394, rubidium 1.096) and subsurface radius
@@ -104,8 +123,7 @@ SELECTIONS = ("length", "max", "uniform")
 LOBE_NAMES = sk.LOBE_NAMES
 #: diffuse_model -> kernel model id
 DIFFUSE_MODELS = {"eon": sk.D_EON, "qon": sk.D_QON, "lambert": sk.D_LAMBERT}
-_OPTIONS = (("selection", "length"), ("specular_sampling", "vndf"), ("multiscatter", True),
-            ("diffuse_model", "eon"))
+_OPTIONS = (("selection", "length"), ("specular_sampling", "vndf"), ("multiscatter", True), ("diffuse_model", "eon"))
 _OPTION_NAMES = tuple(n for n, _ in _OPTIONS)
 _MODELLED = frozenset(MODELLED)
 
@@ -121,6 +139,7 @@ class Lobe(NamedTuple):
     albedo : (..., 3) directional albedo E_k(wo) of the lobe's own BSDF
     probability : (...) selection probability P_k
     """
+
     name: str
     weight: np.ndarray
     albedo: np.ndarray
@@ -145,8 +164,13 @@ def pack_parameters(p, changed=None):
     if raw is None:
         vals = [p[n] if n != "geometry_thin_walled" else np.float64(bool(p[n])) for n, _ in sk.RAW]
         lead = np.broadcast_shapes(*(np.shape(v)[:-1] if w == 3 else np.shape(v) for v, (_, w) in zip(vals, sk.RAW)))
-        raw = np.concatenate([np.broadcast_to(v if w == 3 else np.asarray(v)[..., None], lead + (w,))
-                              for v, (_, w) in zip(vals, sk.RAW)], axis=-1)
+        raw = np.concatenate(
+            [
+                np.broadcast_to(v if w == 3 else np.asarray(v)[..., None], lead + (w,))
+                for v, (_, w) in zip(vals, sk.RAW)
+            ],
+            axis=-1,
+        )
         raw = np.ascontiguousarray(raw, dtype=np.float64).reshape(-1)
     out = np.empty(lead + (sk.N_PARAMS,))
     mask, warn = sk.pack_drive(raw, out.reshape(-1) if lead else out, *sd.tables())
@@ -156,7 +180,7 @@ def pack_parameters(p, changed=None):
 #: offset and width of each RAW input in the flat row
 _RAW_AT = {}
 for _n, _w in sk.RAW:
-    _RAW_AT[_n] = (sum(w for _, w in sk.RAW[:len(_RAW_AT)]), _w)
+    _RAW_AT[_n] = (sum(w for _, w in sk.RAW[: len(_RAW_AT)]), _w)
 
 
 def _one_material(p, changed):
@@ -168,18 +192,18 @@ def _one_material(p, changed):
         flat, names = _interface(OpenPBRSurface.NODEDEF).raw.copy(), changed
     for n in names:
         at = _RAW_AT.get(n)
-        if at is None:   # not an input of the compiled path
+        if at is None:  # not an input of the compiled path
             continue
         a, w = at
         v = p[n]
-        if type(v) is np.float64:   # what ``_convert`` gives a plain float input
+        if type(v) is np.float64:  # what ``_convert`` gives a plain float input
             flat[a] = v
         elif n == "geometry_thin_walled":
             flat[a] = float(bool(v))
         elif w == 1 and np.ndim(v) == 0:
             flat[a] = float(v)
         elif w == 3 and np.shape(v) == (3,):
-            flat[a:a + 3] = v
+            flat[a : a + 3] = v
         else:
             return None
     return flat
@@ -187,12 +211,12 @@ def _one_material(p, changed):
 
 _WARNINGS = {
     sk.W_SPEC_TIR: "specular_ior < 1: total internal reflection is not modelled; the Fresnel factor of the "
-                   "reciprocal index (same F0) is used",
+    "reciprocal index (same F0) is used",
     sk.W_COAT_TIR: "coat_ior < 1: total internal reflection is not modelled; the Fresnel factor of the "
-                   "reciprocal index (same F0) is used",
+    "reciprocal index (same F0) is used",
     sk.W_F82_NEGATIVE: "the F82-tint Fresnel of this metal is negative at some angles (dark base_color with a "
-                       "dark specular_color): the published formula is used unclamped, so the metal lobe and "
-                       "its albedo can be negative",
+    "dark specular_color): the published formula is used unclamped, so the metal lobe and "
+    "its albedo can be negative",
 }
 
 
@@ -215,16 +239,18 @@ def _bounds(idef):
         if width == 1:
             return unbounded if b is None else b
         return (unbounded,) * 3 if b is None else b if isinstance(b, tuple) else (b,) * 3
+
     return width, bound(idef.uimin, -math.inf), bound(idef.uimax, math.inf)
 
 
 class _Interface(NamedTuple):
     """What every construction reads, built once per nodedef and process (``_interface``)."""
-    checked: dict        # name -> InputDef, with the range the input is checked against
-    defaults: dict       # name -> converted default (arrays read-only)
+
+    checked: dict  # name -> InputDef, with the range the input is checked against
+    defaults: dict  # name -> converted default (arrays read-only)
     accepted: frozenset  # the input and option names
-    bounds: dict         # name -> ``_bounds`` of the float and color3 inputs (``_convert``)
-    raw: np.ndarray      # the defaults' RAW row (``_one_material``), read-only
+    bounds: dict  # name -> ``_bounds`` of the float and color3 inputs (``_convert``)
+    raw: np.ndarray  # the defaults' RAW row (``_one_material``), read-only
 
 
 @functools.cache
@@ -265,8 +291,14 @@ def _convert(iface, name, v):
                 return np.float64(v)
         elif (type(v) is tuple or type(v) is list) and len(v) == 3:
             a, b, c = v
-            if (type(a) in _PLAIN and type(b) in _PLAIN and type(c) in _PLAIN
-                    and _in(lo[0], hi[0], a) and _in(lo[1], hi[1], b) and _in(lo[2], hi[2], c)):
+            if (
+                type(a) in _PLAIN
+                and type(b) in _PLAIN
+                and type(c) in _PLAIN
+                and _in(lo[0], hi[0], a)
+                and _in(lo[1], hi[1], b)
+                and _in(lo[2], hi[2], c)
+            ):
                 return np.array(v, dtype=np.float64)
     return convert_input(iface.checked[name], v)
 
@@ -286,8 +318,13 @@ _new_lobe = functools.partial(tuple.__new__, Lobe)
 @functools.cache
 def _flags(mask, diffuse_model, selection, multiscatter, specular_sampling):
     """The kernels' ``_Flags`` of an active-lobe mask and the (checked) options."""
-    return _Flags(mask, DIFFUSE_MODELS[diffuse_model], SELECTIONS.index(selection), bool(multiscatter),
-                  specular_sampling == "vndf")
+    return _Flags(
+        mask,
+        DIFFUSE_MODELS[diffuse_model],
+        SELECTIONS.index(selection),
+        bool(multiscatter),
+        specular_sampling == "vndf",
+    )
 
 
 class OpenPBRSurface(metaclass=NodeMeta):
@@ -344,17 +381,21 @@ class OpenPBRSurface(metaclass=NodeMeta):
     def __init__(self, **kwargs):
         iface = _interface(self.NODEDEF)
         if not iface.accepted.issuperset(kwargs):
-            bind_inputs(type(self), (), kwargs)   # raises, naming the unknown names
+            bind_inputs(type(self), (), kwargs)  # raises, naming the unknown names
         self._set_options(kwargs)
         self.inputs = dict(iface.defaults)
         self._given = tuple(kwargs)
         for n, v in kwargs.items():
             self.inputs[n] = _convert(iface, n, v)
-        self._ignored = {n: self.inputs[n] for n in kwargs
-                         if n not in _MODELLED and not is_default(iface.checked[n], self.inputs[n])}
+        self._ignored = {
+            n: self.inputs[n] for n in kwargs if n not in _MODELLED and not is_default(iface.checked[n], self.inputs[n])
+        }
         if self._ignored:
-            warnings.warn(f"OpenPBRSurface does not model these inputs; they have no effect: "
-                          f"{', '.join(self._ignored)}", IgnoredInputWarning, stacklevel=2)
+            warnings.warn(
+                f"OpenPBRSurface does not model these inputs; they have no effect: {', '.join(self._ignored)}",
+                IgnoredInputWarning,
+                stacklevel=2,
+            )
         self._setup()
 
     def _set_options(self, kwargs):
@@ -364,8 +405,9 @@ class OpenPBRSurface(metaclass=NodeMeta):
         if self.selection not in SELECTIONS:
             raise ValueError(f"selection must be one of {', '.join(SELECTIONS)}; got {self.selection!r}")
         if self.specular_sampling not in ggx.SAMPLING_METHODS:
-            raise ValueError(f"specular_sampling must be one of {', '.join(ggx.SAMPLING_METHODS)}; "
-                             f"got {self.specular_sampling!r}")
+            raise ValueError(
+                f"specular_sampling must be one of {', '.join(ggx.SAMPLING_METHODS)}; got {self.specular_sampling!r}"
+            )
         if not isinstance(self.multiscatter, (bool, np.bool_)):
             raise TypeError(f"multiscatter must be a bool, got {type(self.multiscatter).__name__}")
         if self.diffuse_model not in DIFFUSE_MODELS:
@@ -381,7 +423,7 @@ class OpenPBRSurface(metaclass=NodeMeta):
                 if warn & bit:
                     warnings.warn(text, UserWarning, stacklevel=3)
         if not mask:
-            mask = 1 << sk.DIFFUSE      # a black surface: keep one lobe (f = 0 everywhere)
+            mask = 1 << sk.DIFFUSE  # a black surface: keep one lobe (f = 0 everywhere)
         self._slots, self.active = _slots(mask)
         self._flags = _flags(mask, self.diffuse_model, self.selection, self.multiscatter, self.specular_sampling)
 
@@ -400,7 +442,7 @@ class OpenPBRSurface(metaclass=NodeMeta):
         return self.frame.to_local(ar.directions(name, w, np.float64))
 
     def _lead(self, **shapes):
-        if self.params.ndim == 1 and not any(shapes.values()):   # one material, one row
+        if self.params.ndim == 1 and not any(shapes.values()):  # one material, one row
             return ()
         return ar.broadcast_leading(material=self.params.shape[:-1], **shapes)
 
@@ -414,7 +456,7 @@ class OpenPBRSurface(metaclass=NodeMeta):
         lead = self._lead(wo=wo.shape[:-1])
         W, E, P = sd.lobes_rows(self._flags, self.params, wo, lead)
         if lead:
-            W, E, P = np.moveaxis(W, -2, 0), np.moveaxis(E, -2, 0), np.moveaxis(P, -1, 0)   # lobe axis first
+            W, E, P = np.moveaxis(W, -2, 0), np.moveaxis(E, -2, 0), np.moveaxis(P, -1, 0)  # lobe axis first
         return [_new_lobe((LOBE_NAMES[k], W[k], E[k], P[k, ...])) for k in self._slots]
 
     def lobe_eval(self, name, wi, wo):
@@ -423,8 +465,7 @@ class OpenPBRSurface(metaclass=NodeMeta):
         ``eval`` is sum_k w_k f_k over ``lobes``; ``Lobe.albedo`` is the albedo of f_k.
         """
         if name not in self.active:
-            raise ValueError(f"name: {name!r} is not an active lobe of this surface; "
-                             f"active: {', '.join(self.active)}")
+            raise ValueError(f"name: {name!r} is not an active lobe of this surface; active: {', '.join(self.active)}")
         dtype = ar.result_dtype(wi, wo)
         wi, wo = self._local("wi", wi), self._local("wo", wo)
         lead = self._lead(wi=wi.shape[:-1], wo=wo.shape[:-1])
@@ -487,6 +528,5 @@ class OpenPBRSurface(metaclass=NodeMeta):
         return self.frame.to_world(wi).astype(dtype, copy=False), pdf.astype(dtype, copy=False)
 
     def __repr__(self):
-        set_ = {n: v for n, v in self.inputs.items()
-                if not is_default(nodedef_inputs(self.NODEDEF)[n], v)}
+        set_ = {n: v for n, v in self.inputs.items() if not is_default(nodedef_inputs(self.NODEDEF)[n], v)}
         return f"OpenPBRSurface({', '.join(f'{n}={np.asarray(v).tolist()}' for n, v in set_.items())})"

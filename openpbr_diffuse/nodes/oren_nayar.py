@@ -11,6 +11,7 @@ Inputs (read from the MaterialX library, see ``materialx_defs``): ``weight``, ``
 The node's BSDF is weight * f(color) (RGB).  Directions are world-space when a ``normal``
 is given (the local frame is built from it, ``frame.Frame``), else local (normal +z).
 """
+
 import numpy as np
 
 from .. import _arrays as ar
@@ -64,9 +65,14 @@ class OrenNayarDiffuseBSDF(metaclass=NodeMeta):
         self.color = conv["color"]
         info = INFO[self.model]
         unit = "r" if info.roughness_name == "r" else "sigma, radians"
-        self.roughness = ar.in_range("roughness", conv["roughness"], np.float64, 0.0, info.roughness_max,
-                                     f" for energy_compensation={str(self.energy_compensation).lower()} "
-                                     f"({self.model.upper()}, {unit})")
+        self.roughness = ar.in_range(
+            "roughness",
+            conv["roughness"],
+            np.float64,
+            0.0,
+            info.roughness_max,
+            f" for energy_compensation={str(self.energy_compensation).lower()} ({self.model.upper()}, {unit})",
+        )
         ar.rho_array("color", self.color, np.float64)  # albedo per channel in [0, 1]
         self.normal = conv["normal"]
         self.frame = Frame(self.normal)
@@ -74,8 +80,13 @@ class OrenNayarDiffuseBSDF(metaclass=NodeMeta):
     @property
     def inputs(self):
         """The node's input values by MaterialX name."""
-        return {"weight": self.weight, "color": self.color, "roughness": self.roughness,
-                "normal": self.normal, "energy_compensation": self.energy_compensation}
+        return {
+            "weight": self.weight,
+            "color": self.color,
+            "roughness": self.roughness,
+            "normal": self.normal,
+            "energy_compensation": self.energy_compensation,
+        }
 
     @property
     def model(self):
@@ -121,8 +132,9 @@ class OrenNayarDiffuseBSDF(metaclass=NodeMeta):
         the horizon).
         """
         dtype = ar.result_dtype(wo, u)
-        wi, p = sampling.sample(self.strategy, self._local("wo", wo), self._sampling_roughness(),
-                                ar.as_float("u", u, np.float64))
+        wi, p = sampling.sample(
+            self.strategy, self._local("wo", wo), self._sampling_roughness(), ar.as_float("u", u, np.float64)
+        )
         return self.frame.to_world(wi).astype(dtype, copy=False), p.astype(dtype, copy=False)
 
     def pdf(self, wo, wi):
@@ -132,6 +144,9 @@ class OrenNayarDiffuseBSDF(metaclass=NodeMeta):
         return p.astype(dtype, copy=False)
 
     def __repr__(self):
-        return (f"OrenNayarDiffuseBSDF(weight={self.weight.tolist()}, color={self.color.tolist()}, "
-                f"roughness={self.roughness.tolist()}, energy_compensation={self.energy_compensation}"
-                + (", normal=..." if self.normal is not None else "") + ")")
+        return (
+            f"OrenNayarDiffuseBSDF(weight={self.weight.tolist()}, color={self.color.tolist()}, "
+            f"roughness={self.roughness.tolist()}, energy_compensation={self.energy_compensation}"
+            + (", normal=..." if self.normal is not None else "")
+            + ")"
+        )

@@ -5,9 +5,17 @@
 returns a list of ``Material`` (resolved parameters with provenance, the library node).
 ``BUNDLED_MATERIALS`` is the folder of the project's own material library.
 """
+
 from .api import BUNDLED_MATERIALS, MATERIAL_SUFFIXES, find_material_files, load_materials
 from .colorspace import WORKING_SPACE
 from .material import Material, Parameter
 
-__all__ = ["load_materials", "BUNDLED_MATERIALS", "Material", "Parameter", "WORKING_SPACE",
-           "MATERIAL_SUFFIXES", "find_material_files"]
+__all__ = [
+    "load_materials",
+    "BUNDLED_MATERIALS",
+    "Material",
+    "Parameter",
+    "WORKING_SPACE",
+    "MATERIAL_SUFFIXES",
+    "find_material_files",
+]

@@ -1,4 +1,5 @@
 """``load_materials`` and ``BUNDLED_MATERIALS``: the readers' public entry points."""
+
 import os
 import stat
 from pathlib import Path
@@ -62,8 +63,15 @@ def _check_variants(variants):
     return dict(items)
 
 
-def load_materials(path: "str | os.PathLike", *, time: float | None = None, variants: "dict | list | None" = None,
-                   uv: tuple = (0.5, 0.5), material: str | None = None, purpose: str = "full") -> list:
+def load_materials(
+    path: "str | os.PathLike",
+    *,
+    time: float | None = None,
+    variants: "dict | list | None" = None,
+    uv: tuple = (0.5, 0.5),
+    material: str | None = None,
+    purpose: str = "full",
+) -> list:
     """Read the materials of a USD stage or MaterialX document.
 
     Parameters
@@ -120,8 +128,17 @@ def load_materials(path: "str | os.PathLike", *, time: float | None = None, vari
     mode = os.stat(path).st_mode
     if not stat.S_ISREG(mode):
         # a FIFO or device would block or never end: refused by its type, before any open
-        kind = "a FIFO" if stat.S_ISFIFO(mode) else ("a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode)
-                                                     else "a socket" if stat.S_ISSOCK(mode) else "not a regular file")
+        kind = (
+            "a FIFO"
+            if stat.S_ISFIFO(mode)
+            else (
+                "a device"
+                if stat.S_ISCHR(mode) or stat.S_ISBLK(mode)
+                else "a socket"
+                if stat.S_ISSOCK(mode)
+                else "not a regular file"
+            )
+        )
         raise ValueError(f"{path}: is {kind}, expected a regular .usd* or .mtlx file")
     if suffix in MTLX_SUFFIXES:
         if variants:
@@ -134,7 +151,9 @@ def load_materials(path: "str | os.PathLike", *, time: float | None = None, vari
 
         mats = usd.load(path, time=time, variants=variants, uv=uv, material=material, purpose=purpose)
     else:
-        raise ValueError(f"{path}: unknown file type {suffix or '(none)'}; expected one of {', '.join(MATERIAL_SUFFIXES)}")
+        raise ValueError(
+            f"{path}: unknown file type {suffix or '(none)'}; expected one of {', '.join(MATERIAL_SUFFIXES)}"
+        )
     if material is not None and not mats:
         raise ValueError(f"{path}: no material or prim {material!r}")
     return mats

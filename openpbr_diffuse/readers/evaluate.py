@@ -9,6 +9,7 @@ phi is the azimuth of wi relative to wo (180 = the plane of incidence, forward s
 diffuse model are stacked into one node with array-valued inputs (the nodes broadcast their
 inputs), so the cost is one vectorised call per group, not per material.
 """
+
 import warnings
 
 import numpy as np
@@ -44,10 +45,18 @@ def evaluate(material, theta_i=(30.0,), theta_o=(30.0,), phi=(180.0,)):
         probability (n,), contribution (n, 3) = weight * albedo}, lobes: [{name,
         probability (n,)}].
     """
-    ti, to, ph = np.broadcast_arrays(*(np.atleast_1d(check_angles(n, v))
-                                       for n, v in (("theta_i", theta_i), ("theta_o", theta_o), ("phi", phi))))
-    out = {"theta_i": ti.tolist(), "theta_o": to.tolist(), "phi": ph.tolist(),
-           "brdf": None, "albedo": None, "diffuse": None, "lobes": []}
+    ti, to, ph = np.broadcast_arrays(
+        *(np.atleast_1d(check_angles(n, v)) for n, v in (("theta_i", theta_i), ("theta_o", theta_o), ("phi", phi)))
+    )
+    out = {
+        "theta_i": ti.tolist(),
+        "theta_o": to.tolist(),
+        "phi": ph.tolist(),
+        "brdf": None,
+        "albedo": None,
+        "diffuse": None,
+        "lobes": [],
+    }
     node = material.node()
     if node is None:
         return out
@@ -67,19 +76,35 @@ def diffuse_lobe(node, wo):
         d = next((lb for lb in lobes if lb.name == "diffuse"), None)
         if d is None:
             zero = np.zeros((n, 3))
-            return ({"weight": zero.tolist(), "albedo": zero.tolist(), "probability": [0.0] * n,
-                     "contribution": zero.tolist()}, listing)
+            return (
+                {
+                    "weight": zero.tolist(),
+                    "albedo": zero.tolist(),
+                    "probability": [0.0] * n,
+                    "contribution": zero.tolist(),
+                },
+                listing,
+            )
         w = np.broadcast_to(d.weight, (n, 3))
         E = np.broadcast_to(d.albedo, (n, 3))
-        return ({"weight": w.tolist(), "albedo": E.tolist(), "probability": np.broadcast_to(d.probability, (n,)).tolist(),
-                 "contribution": (w * E).tolist()}, listing)
+        return (
+            {
+                "weight": w.tolist(),
+                "albedo": E.tolist(),
+                "probability": np.broadcast_to(d.probability, (n,)).tolist(),
+                "contribution": (w * E).tolist(),
+            },
+            listing,
+        )
     # OrenNayarDiffuseBSDF: one lobe, weight * f(color)
     E = np.broadcast_to(node.albedo(wo), (n, 3))
     w = np.broadcast_to(np.asarray(node.weight, dtype=np.float64)[..., None] * np.ones(3), (n, 3))
     with np.errstate(invalid="ignore", divide="ignore"):
         own = np.where(w > 0, E / np.where(w > 0, w, 1.0), 0.0)
-    return ({"weight": w.tolist(), "albedo": own.tolist(), "probability": [1.0] * n, "contribution": E.tolist()},
-            [{"name": "diffuse", "probability": [1.0] * n}])
+    return (
+        {"weight": w.tolist(), "albedo": own.tolist(), "probability": [1.0] * n, "contribution": E.tolist()},
+        [{"name": "diffuse", "probability": [1.0] * n}],
+    )
 
 
 def _group_key(m):
@@ -98,14 +123,22 @@ def stacked_node(materials):
     first = materials[0]
     if first.node_class == "OpenPBRSurface":
         names = [n for n in first.node_inputs if n in MODELLED]
-        kw = {n: (first.node_inputs[n].value if isinstance(first.node_inputs[n].value, bool)
-                  else np.array([m.node_inputs[n].value for m in materials], dtype=np.float64)) for n in names}
+        kw = {
+            n: (
+                first.node_inputs[n].value
+                if isinstance(first.node_inputs[n].value, bool)
+                else np.array([m.node_inputs[n].value for m in materials], dtype=np.float64)
+            )
+            for n in names
+        }
         kw.update(surface_options(first.diffuse_model))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             return OpenPBRSurface(**kw)
-    kw = {n: np.array([m.node_inputs[n].value for m in materials], dtype=np.float64)
-          for n in ("weight", "color", "roughness")}
+    kw = {
+        n: np.array([m.node_inputs[n].value for m in materials], dtype=np.float64)
+        for n in ("weight", "color", "roughness")
+    }
     return OrenNayarDiffuseBSDF(**kw, energy_compensation=bool(first.node_inputs["energy_compensation"].value))
 
 

@@ -18,6 +18,7 @@ The same evaluator runs MaterialX's own translation graph for Standard Surface
 (``ND_standard_surface_to_open_pbr_surface``, see ``mapping``) and the library graphs of
 ``ND_`` nodes met in USD stages.
 """
+
 import contextlib
 import os
 import sys
@@ -29,8 +30,7 @@ from .material import Parameter
 from .mxlib import mx_value
 
 #: Node output types the evaluator can produce (closures are not values).
-VALUE_TYPES = ("float", "integer", "boolean", "string", "filename", "color3", "color4",
-               "vector2", "vector3", "vector4")
+VALUE_TYPES = ("float", "integer", "boolean", "string", "filename", "color3", "color4", "vector2", "vector3", "vector4")
 _COLORS = ("color3", "color4")
 
 
@@ -103,10 +103,11 @@ class Resolver:
 
     def _cycle(self, key: str, trail: tuple) -> tuple:
         if len(trail) > 2 * MAX_CHAIN:
-            raise ValueError(f"{self.file}: the shading graph is deeper than {MAX_CHAIN} connected nodes "
-                             f"(at {key}); not evaluated")
+            raise ValueError(
+                f"{self.file}: the shading graph is deeper than {MAX_CHAIN} connected nodes (at {key}); not evaluated"
+            )
         if key in trail:
-            loop = list(trail[trail.index(key):]) + [key]
+            loop = list(trail[trail.index(key) :]) + [key]
             raise ValueError(f"{self.file}: connection cycle: {' -> '.join(loop)}")
         return trail + (key,)
 
@@ -139,8 +140,9 @@ class Resolver:
         if t in _COLORS and not library:
             space = self._space(port)
             value = convert_color(raw, t, space)
-            prov = f"authored at {port.getNamePath()}" + ("" if space == colorspace.WORKING_SPACE
-                                                           else f" ({space} -> {colorspace.WORKING_SPACE})")
+            prov = f"authored at {port.getNamePath()}" + (
+                "" if space == colorspace.WORKING_SPACE else f" ({space} -> {colorspace.WORKING_SPACE})"
+            )
             return Parameter(value, prov, "authored", authored=raw)
         prov = f"authored at {port.getNamePath()}"
         if port.hasUnit() and t in ("float", "vector2", "vector3", "vector4"):
@@ -195,8 +197,9 @@ class Resolver:
         return None
 
     # ----------------------------------------------------------------- nodes
-    def node_value(self, node, outname: str, trail: tuple = (), iface: dict | None = None,
-                   library: bool = False) -> Parameter | None:
+    def node_value(
+        self, node, outname: str, trail: tuple = (), iface: dict | None = None, library: bool = False
+    ) -> Parameter | None:
         """The value of output ``outname`` of ``node`` (None if the node is not evaluated)."""
         key = (node.getNamePath(), outname, id(iface), library)
         hit = self._memo.get(key)
@@ -211,13 +214,17 @@ class Resolver:
         nd = node.getNodeDef()
         cat = node.getCategory()
         if nd is None:
-            self._note(f"node {node.getNamePath()} ({cat}, type {node.getType()}) has no nodedef in the "
-                       f"MaterialX library: not evaluated, default used", True)
+            self._note(
+                f"node {node.getNamePath()} ({cat}, type {node.getType()}) has no nodedef in the "
+                f"MaterialX library: not evaluated, default used",
+                True,
+            )
             return None
         ndname = nd.getName()
         if cat == "texcoord" and node.getType() == "vector2":
-            return Parameter(self.uv.copy(), f"texcoord {node.getNamePath()} = uv ({self.uv[0]:g}, {self.uv[1]:g})",
-                             "uv")
+            return Parameter(
+                self.uv.copy(), f"texcoord {node.getNamePath()} = uv ({self.uv[0]:g}, {self.uv[1]:g})", "uv"
+            )
         outs = mxlib.outputs(ndname, nd)
         out_type = outs.get(outname) if outname else None
         if out_type is None:
@@ -237,8 +244,11 @@ class Resolver:
                 if geomprop in ("UV0", "UV1"):
                     p = Parameter(self.uv.copy(), f"uv ({self.uv[0]:g}, {self.uv[1]:g})", "uv")
                 elif geomprop:
-                    self._note(f"node {node.getNamePath()} ({ndname}): input {name} needs geometry "
-                               f"({geomprop}); not evaluated", True)
+                    self._note(
+                        f"node {node.getNamePath()} ({ndname}): input {name} needs geometry "
+                        f"({geomprop}); not evaluated",
+                        True,
+                    )
                     return None
                 else:
                     p = Parameter(default, f"default of {ndname}", "default")
@@ -256,8 +266,12 @@ class Resolver:
         p = self.port(out, trail, resolved, True)
         if p is None:
             return None
-        return Parameter(p.value, f"{cat} {node.getNamePath()} ({ndname} via {graph.getName()}) <- {p.provenance}",
-                         _kind(p), p.authored)
+        return Parameter(
+            p.value,
+            f"{cat} {node.getNamePath()} ({ndname} via {graph.getName()}) <- {p.provenance}",
+            _kind(p),
+            p.authored,
+        )
 
     def texture(self, where, ndname, resolved, out_type):
         """An ``image`` node: sample its file at its texcoord with OpenImageIO."""
@@ -277,8 +291,9 @@ class Resolver:
                 textures.wrap_name(mode)
             outside = [m == "constant" and not 0.0 <= c <= 1.0 for m, c in zip(modes, uv)]
             if any(outside):
-                return Parameter(fallback.value, f"{label}: outside [0, 1] with address mode constant: "
-                                 f"default of {where}", "texture")
+                return Parameter(
+                    fallback.value, f"{label}: outside [0, 1] with address mode constant: default of {where}", "texture"
+                )
             texel = textures.sample(path, uv, modes[0], modes[1])
         except textures.TextureError as exc:
             self._note(f"{where}: {exc}; the node's default is used")
@@ -288,8 +303,12 @@ class Resolver:
         value = _channels(texel, out_type)
         value = convert_color(value, out_type, space) if out_type in _COLORS else value
         cs = "" if space in ("raw", colorspace.WORKING_SPACE) else f", {space} -> {colorspace.WORKING_SPACE}"
-        return Parameter(value, f"{label}, wrap {modes[0]}/{modes[1]}{cs} ({path})", "texture",
-                         authored=to_python(_channels(texel, out_type)))
+        return Parameter(
+            value,
+            f"{label}, wrap {modes[0]}/{modes[1]}{cs} ({path})",
+            "texture",
+            authored=to_python(_channels(texel, out_type)),
+        )
 
 
 def _array(v):
@@ -334,7 +353,6 @@ def _short(text: str, limit: int = PROVENANCE_LIMIT) -> str:
 def _describe(head: str, resolved: dict) -> str:
     set_ = [f"{n}: {_short(p.provenance)}" for n, p in resolved.items() if p.kind not in ("default",)]
     return f"{head}({'; '.join(set_)})" if set_ else head
-
 
 
 __all__ = ["MAX_CHAIN", "deep_stack", "Resolver", "to_python", "convert_color", "VALUE_TYPES"]

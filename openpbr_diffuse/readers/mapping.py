@@ -24,10 +24,11 @@ nodedef range are clamped to it with a warning (OpenPBR's reference graph clamps
 with max(base_color, 0) and the scaled specular F0 to [0, 0.99999]; the library's nodes
 accept only the nodedef's [uimin, uimax]).
 """
+
 import functools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
@@ -76,9 +77,14 @@ def _fmt(v):
 
 
 #: An OpenPBR lobe's inputs matter only when its weight is non-zero (prefix -> weight input).
-_GATES = {"coat_": "coat_weight", "fuzz_": "fuzz_weight", "subsurface_": "subsurface_weight",
-          "transmission_": "transmission_weight", "thin_film_": "thin_film_weight",
-          "emission_": "emission_luminance"}
+_GATES = {
+    "coat_": "coat_weight",
+    "fuzz_": "fuzz_weight",
+    "subsurface_": "subsurface_weight",
+    "transmission_": "transmission_weight",
+    "thin_film_": "thin_film_weight",
+    "emission_": "emission_luminance",
+}
 
 
 def _gated_off(name, inputs):
@@ -96,7 +102,7 @@ def _openpbr_inputs(inputs, m):
     defaults = mxlib.default_parameters(OPENPBR)
     if inputs.keys() >= defaults.keys():
         out = {n: inputs[n] for n in defaults}
-    else:   # a mapped shader without some inputs: OpenPBR's defaults
+    else:  # a mapped shader without some inputs: OpenPBR's defaults
         prov = f"default of {OPENPBR} (no counterpart in {m.shader_id})"
         out = {n: inputs[n] if n in inputs else Parameter(p.value, prov, "default") for n, p in defaults.items()}
     for name, p in out.items():
@@ -136,9 +142,15 @@ def _translate(outputs, params, m):
     from .graph import Resolver, to_python
 
     graph = mxlib.implementation_graph(TRANSLATION)
-    iface = {n: Parameter(np.asarray(p.value, dtype=np.float64) if isinstance(p.value, tuple) else p.value,
-                          p.provenance, p.kind) for n, p in params.items()}
-    ev = Resolver(m.file if m is not None else "", (0.5, 0.5), "raw", m if m is not None else Material("", "", "", "", False))
+    iface = {
+        n: Parameter(
+            np.asarray(p.value, dtype=np.float64) if isinstance(p.value, tuple) else p.value, p.provenance, p.kind
+        )
+        for n, p in params.items()
+    }
+    ev = Resolver(
+        m.file if m is not None else "", (0.5, 0.5), "raw", m if m is not None else Material("", "", "", "", False)
+    )
     out = {}
     for name in outputs:
         p = ev.port(graph.getOutput(name), (), iface, True)
@@ -150,8 +162,7 @@ def _translate(outputs, params, m):
 @functools.lru_cache(maxsize=1)
 def _translated_defaults():
     """The translation graph's outputs for a Standard Surface with every input at its default."""
-    params = {n: Parameter(v, "default", "default") for n, (t, v, g) in mxlib.inputs(STANDARD_SURFACE).items()
-              if not g}
+    params = {n: Parameter(v, "default", "default") for n, (t, v, g) in mxlib.inputs(STANDARD_SURFACE).items() if not g}
     return _translate(list(_translation_dependencies()), params, None)
 
 
@@ -185,9 +196,15 @@ def _map_standard_surface(m):
     return _openpbr_inputs(mapped, m)
 
 
-_PREVIEW_MAP = {"diffuseColor": "base_color", "metallic": "base_metalness", "roughness": "specular_roughness",
-                "ior": "specular_ior", "clearcoat": "coat_weight", "clearcoatRoughness": "coat_roughness",
-                "opacity": "geometry_opacity"}
+_PREVIEW_MAP = {
+    "diffuseColor": "base_color",
+    "metallic": "base_metalness",
+    "roughness": "specular_roughness",
+    "ior": "specular_ior",
+    "clearcoat": "coat_weight",
+    "clearcoatRoughness": "coat_roughness",
+    "opacity": "geometry_opacity",
+}
 
 
 def _map_preview(m):
@@ -199,10 +216,16 @@ def _map_preview(m):
     spec_workflow = int(m.parameters["useSpecularWorkflow"].value) == 1
     if spec_workflow:
         p = m.parameters["specularColor"]
-        mapped["specular_color"] = Parameter(p.value, f"UsdPreviewSurface specularColor -> specular_color "
-                                             f"(specular workflow): {p.provenance}", "mapped", p.authored)
-        m.approximations.append("useSpecularWorkflow = 1: specularColor (the preview surface's F0 colour) is used "
-                                "as OpenPBR's specular_color tint; F0 still comes from ior; metallic is ignored")
+        mapped["specular_color"] = Parameter(
+            p.value,
+            f"UsdPreviewSurface specularColor -> specular_color (specular workflow): {p.provenance}",
+            "mapped",
+            p.authored,
+        )
+        m.approximations.append(
+            "useSpecularWorkflow = 1: specularColor (the preview surface's F0 colour) is used "
+            "as OpenPBR's specular_color tint; F0 still comes from ior; metallic is ignored"
+        )
         mapped["base_metalness"] = Parameter(0.0, "specular workflow: metallic ignored", "mapped")
     for name in ("emissiveColor", "normal", "displacement", "occlusion", "opacityThreshold"):
         t, default, _ = defs[name]
@@ -219,14 +242,31 @@ def _map_preview(m):
 
 #: glTF PBR input -> OpenPBR input (MaterialX's ``gltf_pbr`` graph / the glTF 2.0 specification and
 #: its KHR_materials_{specular,ior,transmission,clearcoat,sheen,iridescence} extensions).
-_GLTF_MAP = {"base_color": "base_color", "metallic": "base_metalness", "roughness": "specular_roughness",
-             "ior": "specular_ior", "specular": "specular_weight", "specular_color": "specular_color",
-             "transmission": "transmission_weight", "clearcoat": "coat_weight",
-             "clearcoat_roughness": "coat_roughness", "sheen_color": "fuzz_color",
-             "sheen_roughness": "fuzz_roughness", "iridescence": "thin_film_weight",
-             "iridescence_ior": "thin_film_ior"}
-_GLTF_UNMODELLED = ("occlusion", "emissive", "thickness", "attenuation_color", "attenuation_distance",
-                    "anisotropy_strength", "anisotropy_rotation", "dispersion")
+_GLTF_MAP = {
+    "base_color": "base_color",
+    "metallic": "base_metalness",
+    "roughness": "specular_roughness",
+    "ior": "specular_ior",
+    "specular": "specular_weight",
+    "specular_color": "specular_color",
+    "transmission": "transmission_weight",
+    "clearcoat": "coat_weight",
+    "clearcoat_roughness": "coat_roughness",
+    "sheen_color": "fuzz_color",
+    "sheen_roughness": "fuzz_roughness",
+    "iridescence": "thin_film_weight",
+    "iridescence_ior": "thin_film_ior",
+}
+_GLTF_UNMODELLED = (
+    "occlusion",
+    "emissive",
+    "thickness",
+    "attenuation_color",
+    "attenuation_distance",
+    "anisotropy_strength",
+    "anisotropy_rotation",
+    "dispersion",
+)
 
 
 def _gltf_opacity(params):
@@ -257,8 +297,12 @@ def _map_gltf(m):
     on = any(float(x) != 0.0 for x in (sheen if isinstance(sheen, tuple) else (sheen,)))
     mapped["fuzz_weight"] = Parameter(1.0 if on else 0.0, "glTF PBR sheen_color != 0 -> fuzz_weight 1", "mapped")
     t = p["iridescence_thickness"]
-    mapped["thin_film_thickness"] = Parameter(float(t.value) / 1000.0, f"glTF PBR iridescence_thickness nm -> "
-                                              f"thin_film_thickness um: {t.provenance}", "mapped", t.authored)
+    mapped["thin_film_thickness"] = Parameter(
+        float(t.value) / 1000.0,
+        f"glTF PBR iridescence_thickness nm -> thin_film_thickness um: {t.provenance}",
+        "mapped",
+        t.authored,
+    )
     mapped["coat_ior"] = Parameter(1.5, "glTF clearcoat IOR 1.5 (KHR_materials_clearcoat)", "mapped")
     opacity, how = _gltf_opacity(p)
     mapped["geometry_opacity"] = Parameter(opacity, f"glTF PBR {how}", "mapped")
@@ -296,14 +340,15 @@ def family(shader_id):
 
 
 # ----------------------------------------------------------------------- clamping
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _ranges(node_class, diffuse_model):
     """{input: (lo, hi)} of the node's numeric inputs (the nodedef's uimin / uimax)."""
     from ..nodes.materialx_defs import nodedef_inputs
 
     nd = OPENPBR if node_class == "OpenPBRSurface" else OREN_NAYAR
-    r = {n: (d.uimin, d.uimax) for n, d in nodedef_inputs(nd).items()
-         if d.type == "float" or d.type.startswith("color")}
+    r = {
+        n: (d.uimin, d.uimax) for n, d in nodedef_inputs(nd).items() if d.type == "float" or d.type.startswith("color")
+    }
     if node_class == "OrenNayarDiffuseBSDF":
         # sigma in radians for QON (energy_compensation false), r in [0, 1] for EON
         r["roughness"] = (0.0, 1.0 if diffuse_model == "eon" else math.pi / 2)
@@ -315,8 +360,14 @@ def _inside(v, lo, hi):
     vals = v if isinstance(v, tuple) else (v,)
     los = lo if isinstance(lo, tuple) else (lo,) * len(vals)
     his = hi if isinstance(hi, tuple) else (hi,) * len(vals)
-    return all(isinstance(x, float) and x == x and (a is None or x >= a) and (b is None or x <= b)
-               and x not in (math.inf, -math.inf) for x, a, b in zip(vals, los, his))
+    return all(
+        isinstance(x, float)
+        and x == x
+        and (a is None or x >= a)
+        and (b is None or x <= b)
+        and x not in (math.inf, -math.inf)
+        for x, a, b in zip(vals, los, his)
+    )
 
 
 #: Relative distance outside a range that is taken for round-off (of a colour-space
@@ -349,8 +400,9 @@ def clamp_inputs(m: Material) -> None:
             m.node_inputs[name] = Parameter(value, p.provenance + " (round-off clamped)", p.kind, p.value)
             continue
         rng = f"[{_fmt(lo) if lo is not None else '-inf'}, {_fmt(hi) if hi is not None else 'inf'}]"
-        m.warnings.append(f"{name} = {_fmt(p.value)} is outside {rng}, the range of the "
-                          f"{m.node_class} node: clamped to {_fmt(value)}")
+        m.warnings.append(
+            f"{name} = {_fmt(p.value)} is outside {rng}, the range of the {m.node_class} node: clamped to {_fmt(value)}"
+        )
         m.node_inputs[name] = Parameter(value, p.provenance + " (clamped)", p.kind, p.value)
 
 
@@ -359,24 +411,38 @@ def _unmapped(sid: str, inner) -> str:
     """Why a shader maps onto no node (for a ``surface`` node: the BSDF it wraps)."""
     if sid == "ND_surface":
         what = f"{inner.path} ({inner.shader_id()})" if inner is not None else "nothing connected"
-        return (f"shader ND_surface maps onto no node of the library: its bsdf is {what}; only a bare "
-                f"oren_nayar_diffuse_bsdf is a library node (OrenNayarDiffuseBSDF), other BSDF graphs are not "
-                f"evaluated")
+        return (
+            f"shader ND_surface maps onto no node of the library: its bsdf is {what}; only a bare "
+            f"oren_nayar_diffuse_bsdf is a library node (OrenNayarDiffuseBSDF), other BSDF graphs are not "
+            f"evaluated"
+        )
     return f"shader {sid or '(none)'} maps onto no node of the library"
 
 
 def build_material(shader, *, name, path, file, uv, variants=None, time=None):
     """A Material from a shader adapter (MaterialX node or USD shader prim)."""
-    m = Material(name=name, path=path, file=str(file), shader_id="", supported=False,
-                 uv=tuple(float(x) for x in uv), variants=dict(variants or {}), time=time)
+    m = Material(
+        name=name,
+        path=path,
+        file=str(file),
+        shader_id="",
+        supported=False,
+        uv=tuple(float(x) for x in uv),
+        variants=dict(variants or {}),
+        time=time,
+    )
     if shader is None or shader.node is None:
         m.unsupported.append("no surface shader is connected to the material")
         return m
     inner = shader.unwrap_surface()
-    if inner is not None and family(inner.shader_id()) is not None \
-            and family(inner.shader_id()).node_class == "OrenNayarDiffuseBSDF":
-        m.approximations.append(f"surface node {shader.path}: its bsdf {inner.path} is evaluated; "
-                                "the surface's edf and opacity are not")
+    if (
+        inner is not None
+        and family(inner.shader_id()) is not None
+        and family(inner.shader_id()).node_class == "OrenNayarDiffuseBSDF"
+    ):
+        m.approximations.append(
+            f"surface node {shader.path}: its bsdf {inner.path} is evaluated; the surface's edf and opacity are not"
+        )
         shader = inner
     sid = shader.shader_id()
     m.shader_id = sid
@@ -391,8 +457,10 @@ def build_material(shader, *, name, path, file, uv, variants=None, time=None):
     m.diffuse_model = fam.diffuse_model
     m.node_inputs = fam.map(m)
     if m.node_class == "OpenPBRSurface" and m.diffuse_model != "eon" and not diffuse_model_available():
-        m.warnings.append(f"this OpenPBRSurface has no diffuse_model keyword: the {m.diffuse_model} diffuse of "
-                          f"{sid} cannot be built (EON would be used); marked unsupported")
+        m.warnings.append(
+            f"this OpenPBRSurface has no diffuse_model keyword: the {m.diffuse_model} diffuse of "
+            f"{sid} cannot be built (EON would be used); marked unsupported"
+        )
         m.unsupported.append(f"diffuse_model {m.diffuse_model!r} (needs OpenPBRSurface(diffuse_model=...))")
         return m
     clamp_inputs(m)

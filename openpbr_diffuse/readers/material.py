@@ -7,6 +7,7 @@ onto (``OpenPBRSurface`` or ``OrenNayarDiffuseBSDF``), after the mapping (``mapp
 the clamping to the nodedef's range; ``node()`` builds that node.  Colours are in the
 working space, ACEScg (``colorspace.WORKING_SPACE``).
 """
+
 import functools
 import warnings
 from dataclasses import dataclass, field
@@ -128,20 +129,36 @@ class Material:
     def to_dict(self):
         """A JSON-ready dict (the ``materials[]`` entry of ``eval --json``)."""
         return {
-            "name": self.name, "path": self.path, "file": self.file, "shader_id": self.shader_id,
-            "shader_path": self.shader_path, "supported": self.supported,
-            "node": self.node_class or None, "diffuse_model": self.diffuse_model or None,
+            "name": self.name,
+            "path": self.path,
+            "file": self.file,
+            "shader_id": self.shader_id,
+            "shader_path": self.shader_path,
+            "supported": self.supported,
+            "node": self.node_class or None,
+            "diffuse_model": self.diffuse_model or None,
             "parameters": {n: p.to_dict() for n, p in self.parameters.items()},
             "node_inputs": {n: p.to_dict() for n, p in self.node_inputs.items()},
-            "unsupported": list(self.unsupported), "approximations": list(self.approximations),
+            "unsupported": list(self.unsupported),
+            "approximations": list(self.approximations),
             "warnings": list(self.warnings),
-            "time": self.time, "variants": dict(self.variants), "uv": list(self.uv),
+            "time": self.time,
+            "variants": dict(self.variants),
+            "uv": list(self.uv),
             "error": self.error or None,
         }
 
 
-def failed_material(exc: BaseException, *, name: str, path: str, file: str, uv: tuple = (0.5, 0.5),
-                    variants: dict | None = None, time: object = None) -> Material:
+def failed_material(
+    exc: BaseException,
+    *,
+    name: str,
+    path: str,
+    file: str,
+    uv: tuple = (0.5, 0.5),
+    variants: dict | None = None,
+    time: object = None,
+) -> Material:
     """A Material that could not be evaluated: ``error`` says why (one line), nothing else set.
 
     Examples
@@ -159,8 +176,17 @@ def failed_material(exc: BaseException, *, name: str, path: str, file: str, uv: 
             text = f"{type(exc).__name__}: {text}" if text else type(exc).__name__
     if file and not text.startswith(str(file)):
         text = f"{file}: {text}"
-    return Material(name=name, path=path, file=str(file), shader_id="", supported=False,
-                    uv=tuple(float(x) for x in uv), variants=dict(variants or {}), time=time, error=text)
+    return Material(
+        name=name,
+        path=path,
+        file=str(file),
+        shader_id="",
+        supported=False,
+        uv=tuple(float(x) for x in uv),
+        variants=dict(variants or {}),
+        time=time,
+        error=text,
+    )
 
 
 def surface_options(diffuse_model):

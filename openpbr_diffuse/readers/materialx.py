@@ -6,12 +6,14 @@ shader or BSDF node (e.g. a bare ``oren_nayar_diffuse_bsdf``).  Inputs are resol
 graph evaluator (``graph.Resolver``) and mapped onto the library's nodes (``mapping``).
 The file is only read.
 """
+
 import os
 
 from . import mxlib
 from .graph import Resolver, deep_stack, to_python
 from .mapping import build_material
 from .material import Material, Parameter, failed_material
+
 
 # ----------------------------------------------------------------------- documents
 def read_document(path):
@@ -35,8 +37,14 @@ def read_document(path):
 
 
 #: Node categories that are surface shaders (or bare BSDFs) the readers look at.
-SHADER_CATEGORIES = ("open_pbr_surface", "standard_surface", "UsdPreviewSurface", "gltf_pbr",
-                     "oren_nayar_diffuse_bsdf", "surface")
+SHADER_CATEGORIES = (
+    "open_pbr_surface",
+    "standard_surface",
+    "UsdPreviewSurface",
+    "gltf_pbr",
+    "oren_nayar_diffuse_bsdf",
+    "surface",
+)
 
 
 def shader_of(node):
@@ -92,14 +100,27 @@ def _not_a_shader(output, *, name, path, file, uv, variants):
     """The Material listed for a renderable output that is not a surface shader."""
     node = output.getConnectedNode()
     nd = node.getNodeDef() if node is not None else None
-    return Material(name=name, path=path, file=file, shader_id=nd.getName() if nd is not None else "",
-                    supported=False, uv=tuple(float(x) for x in uv), variants=dict(variants or {}),
-                    shader_path=node.getNamePath() if node is not None else "",
-                    unsupported=[f"{output.getNamePath()}: a {output.getType()} output, {NOT_A_SHADER}"])
+    return Material(
+        name=name,
+        path=path,
+        file=file,
+        shader_id=nd.getName() if nd is not None else "",
+        supported=False,
+        uv=tuple(float(x) for x in uv),
+        variants=dict(variants or {}),
+        shader_path=node.getNamePath() if node is not None else "",
+        unsupported=[f"{output.getNamePath()}: a {output.getType()} output, {NOT_A_SHADER}"],
+    )
 
 
-def load(path: "str | os.PathLike", *, uv: tuple = (0.5, 0.5), material: str | None = None,
-         path_prefix: str | None = None, variants: dict | None = None) -> list:
+def load(
+    path: "str | os.PathLike",
+    *,
+    uv: tuple = (0.5, 0.5),
+    material: str | None = None,
+    path_prefix: str | None = None,
+    variants: dict | None = None,
+) -> list:
     """Materials of a MaterialX document.
 
     Parameters
@@ -130,8 +151,11 @@ def load(path: "str | os.PathLike", *, uv: tuple = (0.5, 0.5), material: str | N
             for i in n.getInputs():
                 if i.getNodeName():
                     used.add(i.getNodeName())
-        pairs = [(n.getName(), n.getNamePath(), n) for n in doc.getNodes()
-                 if n.getCategory() in SHADER_CATEGORIES and n.getName() not in used]
+        pairs = [
+            (n.getName(), n.getNamePath(), n)
+            for n in doc.getNodes()
+            if n.getCategory() in SHADER_CATEGORIES and n.getName() not in used
+        ]
     outputs = graph_shaders(doc, {(id_of(sh), "") for _, _, sh in pairs if sh is not None} if material_nodes else set())
     if not material_nodes:  # a bare shader that a renderable output reaches is listed by that output
         reached = {id_of(sh) for _, _, sh in outputs if sh is not None and not sh.isA(mx.Output)}
@@ -147,8 +171,9 @@ def load(path: "str | os.PathLike", *, uv: tuple = (0.5, 0.5), material: str | N
             continue
         try:
             with deep_stack():
-                m = build_material(_MxShader(shader, file, doc_space), name=name, path=full, file=file, uv=uv,
-                                   variants=variants)
+                m = build_material(
+                    _MxShader(shader, file, doc_space), name=name, path=full, file=file, uv=uv, variants=variants
+                )
         except Exception as exc:  # one bad value fails its own material, never the document
             m = failed_material(exc, name=name, path=full, file=file, uv=uv, variants=variants)
         out.append(m)
@@ -202,15 +227,17 @@ class _MxShader:
             p = None
             if inp is not None:
                 if inp.getType() != t:
-                    raise ValueError(f"{self.file}: {inp.getNamePath()}: type {inp.getType()}, but input "
-                                     f"{name} of {sid} is {t}")
+                    raise ValueError(
+                        f"{self.file}: {inp.getNamePath()}: type {inp.getType()}, but input {name} of {sid} is {t}"
+                    )
                 p = ev.port(inp)
             if p is None:
                 if geomprop:
                     continue
                 p = Parameter(default, f"default of {sid}", "default")
-            params[name] = p if p.kind == "default" else Parameter(to_python(p.value), p.provenance, p.kind,
-                                                                    to_python(p.authored))
+            params[name] = (
+                p if p.kind == "default" else Parameter(to_python(p.value), p.provenance, p.kind, to_python(p.authored))
+            )
         return params
 
 

@@ -4,6 +4,7 @@ usd-core has no shader registry for MaterialX ``ND_`` nodes, so defaults of ever
 (``ND_open_pbr_surface_surfaceshader``, ``ND_standard_surface_surfaceshader``,
 ``ND_UsdPreviewSurface_surfaceshader``, ``ND_image_color3``, ...) come from here.
 """
+
 import functools
 import os
 import re
@@ -47,7 +48,7 @@ def inputs(name: str, nd=None) -> dict:
     return _library_inputs(name)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _library_inputs(name: str) -> dict:
     nd = nodedef(name)
     if nd is None:
@@ -69,7 +70,7 @@ def _inputs_of(nd) -> dict:
     return out
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def default_parameters(name):
     """{input name: Parameter(default, "default of <nodedef>", "default")} of the non-geometry
     inputs of nodedef ``name`` (shared, immutable)."""
@@ -94,7 +95,7 @@ def outputs(name: str, nd=None) -> dict:
     return _library_outputs(name)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _library_outputs(name: str) -> dict:
     nd = nodedef(name)
     if nd is None:
@@ -107,7 +108,7 @@ def _outputs_of(nd) -> dict:
     return outs or {"out": nd.getType()}
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def category(name: str):
     """The node category (e.g. "multiply") of nodedef ``name``, or None if unknown."""
     nd = nodedef(name)
@@ -122,7 +123,7 @@ def implementation_graph(name: str, nd=None):
     return _library_graph(name)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _library_graph(name: str):
     nd = nodedef(name)
     if nd is None:
@@ -143,7 +144,7 @@ def _graph_of(nd, doc):
     return None
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _unit_converter(unittype: str):
     """MaterialX's own ``LinearUnitConverter`` of a unit type of the data library (None if unknown)."""
     import MaterialX as mx
@@ -152,7 +153,7 @@ def _unit_converter(unittype: str):
     return mx.LinearUnitConverter.create(typedef) if typedef is not None else None
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def base_unit(unittype: str) -> str:
     """The unit of scale 1 of a unit type of the data library ("meter", "degree"), or "".
 
@@ -311,5 +312,16 @@ def mx_value(elem, type_name: str):
     return vals
 
 
-__all__ = ["library", "nodedef", "inputs", "outputs", "category", "implementation_graph", "mx_value",
-           "source_folder", "convert_unit", "target_unit", "base_unit"]
+__all__ = [
+    "library",
+    "nodedef",
+    "inputs",
+    "outputs",
+    "category",
+    "implementation_graph",
+    "mx_value",
+    "source_folder",
+    "convert_unit",
+    "target_unit",
+    "base_unit",
+]

@@ -6,6 +6,7 @@ colorN/vectorN) and ``out_type`` is the node's output type.  The semantics are t
 MaterialX 1.39 specification (Standard Nodes); nodes not in the table (noise, closures,
 geometric nodes other than texcoord) are reported as unsupported by the readers.
 """
+
 import numpy as np
 
 
@@ -37,8 +38,9 @@ def _divide(a, b):
 
 
 def _if(cmp):
-    return lambda i, t: _as(i["in1"] if cmp(float(_as(i["value1"], "float")), float(_as(i["value2"], "float")))
-                            else i["in2"], t)
+    return lambda i, t: _as(
+        i["in1"] if cmp(float(_as(i["value1"], "float")), float(_as(i["value2"], "float"))) else i["in2"], t
+    )
 
 
 def _rotate2d(i, t):

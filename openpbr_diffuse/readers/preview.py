@@ -8,6 +8,7 @@ along -z, 2x2 supersampling, black background, alpha = coverage. EXR: linear ACE
 readers' working space), float. PNG: converted to sRGB with OpenImageIO's colorconvert
 (ACEScg -> srgb_rec709_scene), 8 bit. Vectorised: the whole image is one call of the node.
 """
+
 import os
 
 import numpy as np
@@ -90,7 +91,6 @@ def write_image(img, path):
         raise ValueError(f"--out must end in .exr or .png (also .jpg, .tif), got {path!r}")
     if not ok:
         raise OSError(f"render: cannot write {path}: {buf.geterror() or oiio.geterror()}")
-
 
 
 __all__ = ["render_image", "write_image", "local_directions", "LIGHT", "VIEW"]

@@ -16,6 +16,7 @@ the file system.  OpenImageIO's Python bindings have no IOProxy (no reading from
 the member's bytes are written once to a private temporary folder this module creates (never
 next to the package) and removed when the interpreter exits.
 """
+
 import atexit
 import functools
 import os
@@ -25,8 +26,14 @@ import tempfile
 import numpy as np
 
 _WRAPS = {
-    "repeat": "Periodic", "periodic": "Periodic", "mirror": "Mirror", "clamp": "Clamp",
-    "black": "Black", "constant": "Black", "usemetadata": "Default", "": "Periodic",
+    "repeat": "Periodic",
+    "periodic": "Periodic",
+    "mirror": "Mirror",
+    "clamp": "Clamp",
+    "black": "Black",
+    "constant": "Black",
+    "usemetadata": "Default",
+    "": "Periodic",
 }
 
 
@@ -37,8 +44,10 @@ class TextureError(OSError):
 def wrap_name(mode):
     """Validate a wrap / address mode name; returns its lower-case form."""
     if not isinstance(mode, str) or mode.lower() not in _WRAPS:
-        raise ValueError(f"wrap mode {mode!r} is not known; expected one of "
-                         "repeat, periodic, mirror, clamp, black, constant, useMetadata")
+        raise ValueError(
+            f"wrap mode {mode!r} is not known; expected one of "
+            "repeat, periodic, mirror, clamp, black, constant, useMetadata"
+        )
     return mode.lower()
 
 
@@ -70,9 +79,11 @@ def file_info(path, mtime):
     try:
         spec = inp.spec()
         if spec.tile_width == 0 and spec.width * spec.height > MAX_UNTILED_PIXELS:
-            raise TextureError(f"texture {path!r} declares {spec.width} x {spec.height} pixels, untiled: "
-                               f"above the limit of {MAX_UNTILED_PIXELS} pixels read whole (tile it, e.g. "
-                               f"with maketx)")
+            raise TextureError(
+                f"texture {path!r} declares {spec.width} x {spec.height} pixels, untiled: "
+                f"above the limit of {MAX_UNTILED_PIXELS} pixels read whole (tile it, e.g. "
+                f"with maketx)"
+            )
         return spec.nchannels, spec.format.size() * 8, spec.get_string_attribute("oiio:ColorSpace", "")
     finally:
         inp.close()
@@ -98,7 +109,7 @@ def display_name(path: str) -> str:
     ('c.png', 'c.png')
     """
     if is_packaged(path):
-        path = path[path.rindex("[") + 1:-1]
+        path = path[path.rindex("[") + 1 : -1]
     return os.path.basename(path)
 
 
@@ -107,7 +118,7 @@ _PRIVATE = []
 
 def _private_dir() -> str:
     """A temporary folder of this process (made on first use, removed at exit)."""
-    if not _PRIVATE or _PRIVATE[1] != os.getpid():   # a forked child makes (and removes) its own
+    if not _PRIVATE or _PRIVATE[1] != os.getpid():  # a forked child makes (and removes) its own
         d = tempfile.mkdtemp(prefix="openpbr_diffuse_packaged_")
         atexit.register(_remove, d, os.getpid())
         _PRIVATE[:] = [d, os.getpid()]
@@ -219,5 +230,4 @@ def outside_unit(uv):
     return bool(np.any((np.asarray(uv, dtype=np.float64) < 0.0) | (np.asarray(uv, dtype=np.float64) > 1.0)))
 
 
-__all__ = ["TextureError", "sample", "info", "wrap_name", "outside_unit", "local_file", "is_packaged",
-           "display_name"]
+__all__ = ["TextureError", "sample", "info", "wrap_name", "outside_unit", "local_file", "is_packaged", "display_name"]

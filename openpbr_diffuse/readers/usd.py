@@ -27,6 +27,7 @@ Resolution as USD defines it:
 - ``material=`` a geometry prim: its bound material (``ComputeBoundMaterial(purpose)``; a
   binding to a material read from a .mtlx reference is matched by path).
 """
+
 import contextlib
 import os
 import struct
@@ -35,16 +36,32 @@ import tempfile
 import numpy as np
 
 from . import colorspace, mxlib, ops, textures
+from .graph import MAX_CHAIN, Resolver, _short, convert_color, deep_stack, to_python
 from .mapping import build_material
 from .material import Material, Parameter, failed_material
-from .graph import MAX_CHAIN, Resolver, _short, convert_color, deep_stack, to_python
 
 _MX_TYPES = {
-    "color3f": "color3", "color3d": "color3", "color3h": "color3", "color4f": "color4", "color4d": "color4",
-    "float": "float", "double": "float", "half": "float", "bool": "boolean", "int": "integer",
-    "float2": "vector2", "texCoord2f": "vector2", "double2": "vector2", "float3": "vector3",
-    "vector3f": "vector3", "normal3f": "vector3", "point3f": "vector3", "float4": "vector4",
-    "string": "string", "token": "string", "asset": "filename",
+    "color3f": "color3",
+    "color3d": "color3",
+    "color3h": "color3",
+    "color4f": "color4",
+    "color4d": "color4",
+    "float": "float",
+    "double": "float",
+    "half": "float",
+    "bool": "boolean",
+    "int": "integer",
+    "float2": "vector2",
+    "texCoord2f": "vector2",
+    "double2": "vector2",
+    "float3": "vector3",
+    "vector3f": "vector3",
+    "normal3f": "vector3",
+    "point3f": "vector3",
+    "float4": "vector4",
+    "string": "string",
+    "token": "string",
+    "asset": "filename",
 }
 
 
@@ -96,8 +113,10 @@ def open_stage(path, diagnostics):
 
     depth = _nesting(path)
     if depth > MAX_NESTING:
-        raise ValueError(f"{path}: nested {depth} levels deep, more than the {MAX_NESTING} this reader "
-                         f"accepts (usd-core cannot open such a layer safely)")
+        raise ValueError(
+            f"{path}: nested {depth} levels deep, more than the {MAX_NESTING} this reader "
+            f"accepts (usd-core cannot open such a layer safely)"
+        )
 
     try:
         with captured_stderr(diagnostics):
@@ -129,8 +148,10 @@ def apply_variants(stage, variants, diagnostics):
                     vs = vsets.GetVariantSet(name)
                     want = pending[name]
                     if want not in vs.GetVariantNames():
-                        raise ValueError(f"variant {name}={want}: no such variant on {prim.GetPath()}; "
-                                         f"variants of {name}: {', '.join(vs.GetVariantNames())}")
+                        raise ValueError(
+                            f"variant {name}={want}: no such variant on {prim.GetPath()}; "
+                            f"variants of {name}: {', '.join(vs.GetVariantNames())}"
+                        )
                     if vs.GetVariantSelection() != want:
                         with captured_stderr(diagnostics):
                             vs.SetVariantSelection(want)
@@ -243,10 +264,12 @@ class _UsdResolver:
 
     def _cycle(self, key: object, trail: tuple) -> tuple:
         if len(trail) > 2 * MAX_CHAIN:
-            raise ValueError(f"{self.file}: the shading network is deeper than {MAX_CHAIN} connected shaders "
-                             f"(at {key}); not evaluated")
+            raise ValueError(
+                f"{self.file}: the shading network is deeper than {MAX_CHAIN} connected shaders "
+                f"(at {key}); not evaluated"
+            )
         if key in trail:
-            loop = list(trail[trail.index(key):]) + [key]
+            loop = list(trail[trail.index(key) :]) + [key]
             raise ValueError(f"{self.file}: connection cycle: {' -> '.join(str(k) for k in loop)}")
         return trail + (key,)
 
@@ -289,8 +312,11 @@ class _UsdResolver:
             if s.sourceType == UsdShade.AttributeType.Output and src_prim.IsA(UsdShade.Shader):
                 p = self.shader_value(UsdShade.Shader(src_prim), s.sourceName, mx_type, trail)
                 return p and Parameter(p.value, f"{attr.GetPath()} <- {p.provenance}", _kind(p), p.authored)
-            nxt = (s.source.GetOutput(s.sourceName) if s.sourceType == UsdShade.AttributeType.Output
-                   else s.source.GetInput(s.sourceName))
+            nxt = (
+                s.source.GetOutput(s.sourceName)
+                if s.sourceType == UsdShade.AttributeType.Output
+                else s.source.GetInput(s.sourceName)
+            )
             if not nxt:
                 self._note(f"{attr.GetPath()}: connected to a missing {s.sourceName!r}; default used")
                 return None
@@ -345,8 +371,7 @@ class _UsdResolver:
             # (exporters write connected inputs as token)
             connected = inp.GetAttr().HasAuthoredConnections()
             if got != t and not as_colour and not connected and not (t == "string" and got == "filename"):
-                raise ValueError(f"{self.file}: {inp.GetAttr().GetPath()}: type {tn}, but "
-                                 f"input {name} of {sid} is {t}")
+                raise ValueError(f"{self.file}: {inp.GetAttr().GetPath()}: type {tn}, but input {name} of {sid} is {t}")
             p = self.port(inp, t, trail)
             if p is not None:
                 out[name] = p
@@ -374,8 +399,7 @@ class _UsdResolver:
             return self.uv_texture(shader, sid, output, mx_type, trail)
         if sid.startswith("UsdPrimvarReader"):
             if sid.endswith("float2") or output == "result" and mx_type == "vector2":
-                return Parameter(self.uv.copy(), f"{path} (primvar reader) = uv ({self.uv[0]:g}, {self.uv[1]:g})",
-                                 "uv")
+                return Parameter(self.uv.copy(), f"{path} (primvar reader) = uv ({self.uv[0]:g}, {self.uv[1]:g})", "uv")
             return self.primvar_fallback(shader, sid, trail)
         sid = _USD_NODES.get(sid, sid)
         nd = mxlib.nodedef(sid) if sid.startswith("ND_") else None
@@ -407,8 +431,9 @@ class _UsdResolver:
         graph = mxlib.implementation_graph(sid)
         out = graph.getOutput(output) or graph.getOutputs()[0]
         p = self.mx.port(out, (), resolved, True)
-        return p and Parameter(p.value, f"{cat} {path} ({sid} via {graph.getName()}) <- {p.provenance}",
-                               _kind(p), p.authored)
+        return p and Parameter(
+            p.value, f"{cat} {path} ({sid} via {graph.getName()}) <- {p.provenance}", _kind(p), p.authored
+        )
 
     def primvar_fallback(self, shader, sid: str, trail: tuple) -> "Parameter | None":
         """A primvar reader other than the uv one: the reader has no geometry, so the
@@ -428,8 +453,7 @@ class _UsdResolver:
         value = p.value if p is not None else default
         shown = _fmt4(value) if isinstance(value, (tuple, np.ndarray)) else f"{value}"
         self._note(f"{path} ({sid}) reads primvar {name!r}: no geometry is read, its fallback {shown} is used")
-        return Parameter(value, f"{path} ({sid}) primvar {name!r}: fallback {shown} (no geometry)",
-                         "connection")
+        return Parameter(value, f"{path} ({sid}) primvar {name!r}: fallback {shown} (no geometry)", "connection")
 
     def uv_texture(self, shader, sid, output, mx_type, trail):
         """UsdUVTexture: file, st, wrapS/T, fallback, scale, bias, sourceColorSpace."""
@@ -486,8 +510,10 @@ class _UsdResolver:
                 rgba[:3] = _srgb_decode(rgba[:3])
             rgba = rgba * scale + bias
             decoded_space = self.space_of(shader.GetInput("file").GetAttr()) if file_p else self.default_space
-            prov = (f"{label}, wrap {wrap_s}/{wrap_t}, scale {_fmt4(scale)}, bias {_fmt4(bias)}, "
-                    f"sourceColorSpace {source_cs}{' (sRGB decoded)' if srgb else ''} ({file})")
+            prov = (
+                f"{label}, wrap {wrap_s}/{wrap_t}, scale {_fmt4(scale)}, bias {_fmt4(bias)}, "
+                f"sourceColorSpace {source_cs}{' (sRGB decoded)' if srgb else ''} ({file})"
+            )
         channel = {"r": 0, "g": 1, "b": 2, "a": 3}
         if output in channel:
             return Parameter(float(rgba[channel[output]]), f"{path}.outputs:{output} <- {prov}", "texture")
@@ -499,8 +525,9 @@ class _UsdResolver:
             rgb = colorspace.to_working(rgb, decoded_space)
             if decoded_space != colorspace.WORKING_SPACE:
                 prov += f" ({decoded_space} -> {colorspace.WORKING_SPACE})"
-        return Parameter(ops._as(rgb, mx_type) if mx_type != "float" else float(rgb[0]),
-                         f"{path}.outputs:rgb <- {prov}", "texture")
+        return Parameter(
+            ops._as(rgb, mx_type) if mx_type != "float" else float(rgb[0]), f"{path}.outputs:rgb <- {prov}", "texture"
+        )
 
 
 #: USD shader ids of UsdPreviewSurface nodes that MaterialX's data library defines (the
@@ -509,10 +536,14 @@ _USD_NODES = {"UsdTransform2d": "ND_UsdTransform2d"}
 
 #: Primvar readers (UsdPreviewSurface specification) -> the MaterialX nodedef of their type.
 _PRIMVAR_READERS = {
-    "UsdPrimvarReader_float": "ND_UsdPrimvarReader_float", "UsdPrimvarReader_float3": "ND_UsdPrimvarReader_vector3",
-    "UsdPrimvarReader_float4": "ND_UsdPrimvarReader_vector4", "UsdPrimvarReader_int": "ND_UsdPrimvarReader_integer",
-    "UsdPrimvarReader_string": "ND_UsdPrimvarReader_string", "UsdPrimvarReader_normal": "ND_UsdPrimvarReader_vector3",
-    "UsdPrimvarReader_point": "ND_UsdPrimvarReader_vector3", "UsdPrimvarReader_vector": "ND_UsdPrimvarReader_vector3",
+    "UsdPrimvarReader_float": "ND_UsdPrimvarReader_float",
+    "UsdPrimvarReader_float3": "ND_UsdPrimvarReader_vector3",
+    "UsdPrimvarReader_float4": "ND_UsdPrimvarReader_vector4",
+    "UsdPrimvarReader_int": "ND_UsdPrimvarReader_integer",
+    "UsdPrimvarReader_string": "ND_UsdPrimvarReader_string",
+    "UsdPrimvarReader_normal": "ND_UsdPrimvarReader_vector3",
+    "UsdPrimvarReader_point": "ND_UsdPrimvarReader_vector3",
+    "UsdPrimvarReader_vector": "ND_UsdPrimvarReader_vector3",
     "UsdPrimvarReader_matrix": None,
 }
 _PRIMVAR_READERS = {k: v for k, v in _PRIMVAR_READERS.items() if v is not None}
@@ -528,7 +559,7 @@ def _anchored(attr, path: str) -> str:
     stack = attr.GetPropertyStack()
     layer = stack[0].layer if stack else attr.GetStage().GetRootLayer()
     real = layer.realPath or layer.identifier
-    if Ar.IsPackageRelativePath(real):   # a layer inside a package: relative to its member folder
+    if Ar.IsPackageRelativePath(real):  # a layer inside a package: relative to its member folder
         outer, inner = Ar.SplitPackageRelativePathInner(real)
         return Ar.JoinPackageRelativePath([outer, os.path.normpath(os.path.join(os.path.dirname(inner), path))])
     if os.path.splitext(real)[1].lower() == ".usdz":
@@ -598,9 +629,10 @@ class _UsdShader:
             if name not in defs:
                 sink.warnings.append(f"{inp.GetAttr().GetPath()}: not an input of {sid}; ignored")
         params = res.inputs(self.shader, sid, (self.shader.GetPath(),), authored)
-        return {n: p if p.kind == "default" else
-                Parameter(to_python(p.value), p.provenance, p.kind, to_python(p.authored))
-                for n, p in params.items()}
+        return {
+            n: p if p.kind == "default" else Parameter(to_python(p.value), p.provenance, p.kind, to_python(p.authored))
+            for n, p in params.items()
+        }
 
 
 # ----------------------------------------------------------------------- stage
@@ -611,8 +643,7 @@ def _mtlx_references(prim):
         return out
     for spec in prim.GetPrimStack():
         for lst in (spec.referenceList, spec.payloadList):
-            items = (list(lst.explicitItems) + list(lst.prependedItems) + list(lst.appendedItems)
-                     + list(lst.addedItems))
+            items = list(lst.explicitItems) + list(lst.prependedItems) + list(lst.appendedItems) + list(lst.addedItems)
             for r in items:
                 if r.assetPath.lower().endswith(".mtlx"):
                     out.append((spec.layer.ComputeAbsolutePath(r.assetPath), str(r.primPath)))
@@ -640,12 +671,21 @@ def _entries(stage, file, time, uv, variants, diagnostics):
     space_cache = {}
     for prim in stage.TraverseAll():
         if prim.IsA(UsdShade.Material):
+
             def build(prim=prim):
                 mat = UsdShade.Material(prim)
                 shader, _, _ = mat.ComputeSurfaceSource("mtlx")
                 adapter = _UsdShader(shader if shader else None, file, time, space_cache)
-                return build_material(adapter, name=prim.GetName(), path=str(prim.GetPath()), file=file, uv=uv,
-                                      variants=variants, time=time)
+                return build_material(
+                    adapter,
+                    name=prim.GetName(),
+                    path=str(prim.GetPath()),
+                    file=file,
+                    uv=uv,
+                    variants=variants,
+                    time=time,
+                )
+
             entries.append(_Entry(str(prim.GetPath()), prim.GetName(), build))
         for mtlx, target in _mtlx_references(prim):
             prefix = str(prim.GetPath())
@@ -670,9 +710,13 @@ def _entries(stage, file, time, uv, variants, diagnostics):
                     m = got[0]
                     m.path = path
                     m.variants = dict(variants or {})
-                    m.warnings.insert(0, f"read with MaterialX from {mtlx}, referenced by {prim_path} "
-                                         f"(usd-core cannot compose .mtlx references)")
+                    m.warnings.insert(
+                        0,
+                        f"read with MaterialX from {mtlx}, referenced by {prim_path} "
+                        f"(usd-core cannot compose .mtlx references)",
+                    )
                     return m
+
                 entries.append(_Entry(path, name, build))
     return entries
 
@@ -683,8 +727,7 @@ def _build(entry: "_Entry", file: str, uv: tuple, variants: dict | None, time: o
         with deep_stack():
             return entry.build()
     except Exception as exc:  # one bad value fails its own material, never the stage
-        return failed_material(exc, name=entry.name, path=entry.path, file=file, uv=uv, variants=variants,
-                               time=time)
+        return failed_material(exc, name=entry.name, path=entry.path, file=file, uv=uv, variants=variants, time=time)
 
 
 def _mtlx_names(path):
@@ -737,8 +780,7 @@ def load(path, *, time=None, variants=None, uv=(0.5, 0.5), material=None, purpos
             gc.enable()
 
 
-def _load(path, *, time: float | None, variants: dict, uv: tuple, material: str | None,
-          purpose: str) -> list[Material]:
+def _load(path, *, time: float | None, variants: dict, uv: tuple, material: str | None, purpose: str) -> list[Material]:
     from pxr import Sdf, UsdShade
 
     file = os.fspath(path)
@@ -763,8 +805,9 @@ def _load(path, *, time: float | None, variants: dict, uv: tuple, material: str 
                 if e is None:
                     if prim.IsA(UsdShade.Material):
                         continue
-                    raise ValueError(f"{file}: prim {prim.GetPath()} has no bound material (purpose "
-                                     f"{purpose or 'all'})")
+                    raise ValueError(
+                        f"{file}: prim {prim.GetPath()} has no bound material (purpose {purpose or 'all'})"
+                    )
                 chosen.append(e)
     mats = [_build(e, file, uv, variants, time) for e in chosen]
     useful = [d for d in diagnostics if "Cannot determine file format" not in d and ".mtlx" not in d]

@@ -1,4 +1,5 @@
 """Matplotlib helpers for the report sections (Agg backend, imported lazily)."""
+
 from pathlib import Path
 
 

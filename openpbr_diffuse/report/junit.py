@@ -6,6 +6,7 @@ test), one ``<testcase>`` per check, named by its stable id: a failing check car
 (and a section that ran nothing) is ``<skipped message=...>`` with the reason.  An
 implementation that could not run is an ``<error>``.
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -60,9 +61,14 @@ def junit_xml(doc: dict) -> str:
             case = _case(suite, s["key"], c["id"])
             status = c.get("status") or ("pass" if c.get("passed") else "fail")
             if status == "fail":
-                ET.SubElement(case, "failure", message=(
-                    f"{c['name']}: measured {c.get('measured')} {c.get('comparison')} {c.get('threshold')}"
-                    + (f" (expected {c['expected']})" if c.get("expected") is not None else ""))).text = c.get("detail", "")
+                ET.SubElement(
+                    case,
+                    "failure",
+                    message=(
+                        f"{c['name']}: measured {c.get('measured')} {c.get('comparison')} {c.get('threshold')}"
+                        + (f" (expected {c['expected']})" if c.get("expected") is not None else "")
+                    ),
+                ).text = c.get("detail", "")
             elif status == "not run":
                 ET.SubElement(case, "skipped", message=f"not run: {c.get('not_run')}")
     for suite in root:

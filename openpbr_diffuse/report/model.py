@@ -6,12 +6,14 @@ its images into ``ctx.image_dir`` (file names prefixed with the section key) and
 plain data; the runner turns that into ``report.json`` and ``index.html`` (escaping every
 string), so a section never writes HTML itself.
 """
+
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 
 @dataclass
@@ -41,7 +43,7 @@ class Check:
 
     @property
     def status(self) -> str:
-        """"pass", "fail" or "not run"."""
+        """ "pass", "fail" or "not run"."""
         if self.not_run:
             return "not run"
         return "pass" if self.passed else "fail"

@@ -28,6 +28,7 @@ Traceback (most recent call last):
 ...
 openpbr_diffuse.report.output.UnsafeOutputError: --out ... holds files this tool did not write (mine.txt, rep); choose a new or empty folder
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -122,8 +123,9 @@ def check_target(out: os.PathLike | str, inputs: Iterable[os.PathLike | str] = (
             foreign = sorted(e for e in entries - manifest - {MARKER} if "/" not in e)
             foreign = foreign or sorted(entries - manifest - {MARKER})
             shown = ", ".join(foreign[:5]) + (", ..." if len(foreign) > 5 else "")
-            raise UnsafeOutputError(f"--out {path} holds files this tool did not write ({shown}); "
-                                    f"choose a new or empty folder")
+            raise UnsafeOutputError(
+                f"--out {path} holds files this tool did not write ({shown}); choose a new or empty folder"
+            )
     return path
 
 
@@ -198,8 +200,7 @@ def _remove_report(folder: Path, manifest: set[str]) -> None:
         folder.rmdir()
 
 
-def publish(tmp: os.PathLike | str, out: os.PathLike | str,
-            inputs: Iterable[os.PathLike | str] = ()) -> None:
+def publish(tmp: os.PathLike | str, out: os.PathLike | str, inputs: Iterable[os.PathLike | str] = ()) -> None:
     """Put the complete report ``tmp`` at ``out`` in one step and remove the previous one.
 
     Writes the marker into ``tmp``, then under an exclusive lock on the parent folder checks
@@ -230,8 +231,7 @@ def publish(tmp: os.PathLike | str, out: os.PathLike | str,
                     _remove_report(old, manifest)
                     return
                 _exchange(tmp, target)  # something was added meanwhile: put it back
-                raise UnsafeOutputError(f"--out {target} changed while the report was written; "
-                                        f"left as it was")
+                raise UnsafeOutputError(f"--out {target} changed while the report was written; left as it was")
             old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old-", dir=target.parent))
             old.rmdir()
             os.rename(target, old)

@@ -5,6 +5,7 @@ documentation strings and any other text that can come from a user's file reach 
 only escaped.  The page loads nothing from the network (inline CSS, no scripts; the images
 are files in ``images/`` beside it) and forbids scripts by its Content-Security-Policy.
 """
+
 from __future__ import annotations
 
 import math
@@ -166,8 +167,7 @@ def render_html(doc: dict, image_dir: Path | None = None) -> str:
     env.filters["num"] = _num
     env.filters["vec"] = _vec
     doc.setdefault("implementation", None)
-    doc.setdefault("evidence", {"n_checks": doc.get("n_checks", 0), "n_failed": doc.get("n_failed", 0),
-                                "n_not_run": 0})
+    doc.setdefault("evidence", {"n_checks": doc.get("n_checks", 0), "n_failed": doc.get("n_failed", 0), "n_not_run": 0})
     template = env.from_string(_TEMPLATE)
     return template.render(doc=doc, status_class=_status_class)
 

@@ -37,6 +37,7 @@ and section statuses "pass"|"fail"|"error"|"not available" only (a section with 
 
 Non-finite numbers are written as null (JSON has no NaN).
 """
+
 from __future__ import annotations
 
 import datetime
@@ -80,8 +81,9 @@ class ReportRun:
     @property
     def passed(self) -> bool:
         """The library's own evidence: every check that ran passes and no section crashed."""
-        return (all(c.passed for c in self.checks if c.status != "not run")
-                and not any(s.status == "error" for s in self.sections))
+        return all(c.passed for c in self.checks if c.status != "not run") and not any(
+            s.status == "error" for s in self.sections
+        )
 
     @property
     def exit_status(self) -> int:
@@ -118,8 +120,10 @@ def _check_paths(paths):
         if not p.exists():
             raise FileNotFoundError(f"report: no such file or directory: {p}")
         if p.is_file() and p.suffix.lower() not in MATERIAL_SUFFIXES:
-            raise ValueError(f"report: {p} is not a USD or MaterialX file "
-                             f"(expected one of {', '.join(MATERIAL_SUFFIXES)}, or a folder)")
+            raise ValueError(
+                f"report: {p} is not a USD or MaterialX file "
+                f"(expected one of {', '.join(MATERIAL_SUFFIXES)}, or a folder)"
+            )
         if p.is_file():
             try:
                 with open(p, "rb") as fh:
@@ -164,7 +168,8 @@ def _status(res: SectionResult) -> str:
         if res.tables and not res.not_run:
             return "findings"
         res.not_run = res.not_run or (
-            "; ".join(sorted({c.not_run for c in res.checks if c.not_run})) or "the section made no checks")
+            "; ".join(sorted({c.not_run for c in res.checks if c.not_run})) or "the section made no checks"
+        )
         return "not run"
     return "pass" if all(c.passed for c in ran) else "fail"
 
@@ -183,8 +188,7 @@ def run_section(key: str, ctx: Context, select=None) -> SectionRun:
         module = importlib.import_module(modname)
     except ModuleNotFoundError as exc:
         if exc.name == modname:
-            res = SectionResult(key, _section_title(key),
-                                notes=["This section is not available in this installation."])
+            res = SectionResult(key, _section_title(key), notes=["This section is not available in this installation."])
             return SectionRun(res, "not available")
         res = SectionResult(key, _section_title(key))
         return _error(res, key, f"import failed: {exc}", t0)
@@ -207,8 +211,18 @@ def run_section(key: str, ctx: Context, select=None) -> SectionRun:
 
 
 def _error(res, key, message, t0):
-    res.checks.append(Check(name="section ran", measured=math.nan, threshold=0.0, comparison="==",
-                            expected=0.0, detail=message, reference="the section's build()", section=key))
+    res.checks.append(
+        Check(
+            name="section ran",
+            measured=math.nan,
+            threshold=0.0,
+            comparison="==",
+            expected=0.0,
+            detail=message,
+            reference="the section's build()",
+            section=key,
+        )
+    )
     assign_ids(res)
     return SectionRun(res, "error", time.perf_counter() - t0, message)
 
@@ -234,13 +248,21 @@ def build_document(run: ReportRun, *, paths, quick: bool, elapsed_s: float, sele
     sections = []
     for s in run.sections:
         r = s.result
-        sections.append({
-            "key": r.key, "title": r.title, "status": s.status, "not_run": r.not_run,
-            "elapsed_s": round(s.elapsed_s, 3),
-            "error": s.error, "notes": list(r.notes), "warnings": list(r.warnings),
-            "checks": [c.to_dict() for c in r.checks],
-            "tables": [asdict(t) for t in r.tables],
-            "figures": [{"file": f"{IMAGE_DIR}/{f.file}", "caption": f.caption} for f in r.figures]})
+        sections.append(
+            {
+                "key": r.key,
+                "title": r.title,
+                "status": s.status,
+                "not_run": r.not_run,
+                "elapsed_s": round(s.elapsed_s, 3),
+                "error": s.error,
+                "notes": list(r.notes),
+                "warnings": list(r.warnings),
+                "checks": [c.to_dict() for c in r.checks],
+                "tables": [asdict(t) for t in r.tables],
+                "figures": [{"file": f"{IMAGE_DIR}/{f.file}", "caption": f.caption} for f in r.figures],
+            }
+        )
     checks = [c.to_dict() for c in run.checks]
     n_failed = sum(c["status"] == "fail" for c in checks)
     n_not_run = sum(c["status"] == "not run" for c in checks)
@@ -248,27 +270,55 @@ def build_document(run: ReportRun, *, paths, quick: bool, elapsed_s: float, sele
     if run.under_test is not None:
         under = run.under_test.to_dict()
         under["figures"] = [{"file": f"{IMAGE_DIR}/{f}", "caption": c} for f, c in figures]
-    return _clean({
-        "schema": SCHEMA, "version": __version__,
-        "generated": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-        "quick": bool(quick), "paths": [str(p) for p in paths], "select": list(select or ()),
-        "implementation": under,
-        "evidence": {"passed": run.passed, "n_checks": len(checks) - n_not_run, "n_failed": n_failed,
-                     "n_not_run": n_not_run},
-        "passed": run.passed, "n_checks": len(checks), "n_failed": n_failed,
-        "elapsed_s": round(elapsed_s, 3), "sections": sections, "checks": checks})
+    return _clean(
+        {
+            "schema": SCHEMA,
+            "version": __version__,
+            "generated": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+            "quick": bool(quick),
+            "paths": [str(p) for p in paths],
+            "select": list(select or ()),
+            "implementation": under,
+            "evidence": {
+                "passed": run.passed,
+                "n_checks": len(checks) - n_not_run,
+                "n_failed": n_failed,
+                "n_not_run": n_not_run,
+            },
+            "passed": run.passed,
+            "n_checks": len(checks),
+            "n_failed": n_failed,
+            "elapsed_s": round(elapsed_s, 3),
+            "sections": sections,
+            "checks": checks,
+        }
+    )
 
 
 def _progress_bar(total, enabled):
     """A tqdm bar on stderr (disabled when not wanted)."""
     from tqdm.auto import tqdm
 
-    return tqdm(total=total, unit="section", disable=not enabled, dynamic_ncols=True,
-                bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} [{elapsed}] {postfix}")
+    return tqdm(
+        total=total,
+        unit="section",
+        disable=not enabled,
+        dynamic_ncols=True,
+        bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} [{elapsed}] {postfix}",
+    )
 
 
-def run_report(paths: list | None = None, out: str | Path = "report", *, quick: bool = False, progress: bool = True, sections=None,
-               select=None, under_test=None, subject=None) -> ReportRun:
+def run_report(
+    paths: list | None = None,
+    out: str | Path = "report",
+    *,
+    quick: bool = False,
+    progress: bool = True,
+    sections=None,
+    select=None,
+    under_test=None,
+    subject=None,
+) -> ReportRun:
     """Run the report and write ``out/index.html``, ``out/report.json`` and ``out/images/``.
 
     Parameters
@@ -303,13 +353,16 @@ def run_report(paths: list | None = None, out: str | Path = "report", *, quick: 
     keys = tuple(section_pkg.SECTIONS if sections is None else sections)
     unknown = [k for k in keys if k not in section_pkg.SECTIONS]
     if unknown:
-        raise ValueError(f"sections: unknown section(s) {', '.join(unknown)}; "
-                         f"expected some of {', '.join(section_pkg.SECTIONS)}")
+        raise ValueError(
+            f"sections: unknown section(s) {', '.join(unknown)}; expected some of {', '.join(section_pkg.SECTIONS)}"
+        )
     select = [str(p) for p in (select or ())]
     keys = tuple(k for k in keys if section_selected(k, select))
     if select and not keys and not (under_test is not None and matches(select, "implementation.x")):
-        raise ValueError(f"--select: no section or check id matches {' '.join(select)} "
-                         f"(sections: {', '.join(section_pkg.SECTIONS)}; see --list-checks)")
+        raise ValueError(
+            f"--select: no section or check id matches {' '.join(select)} "
+            f"(sections: {', '.join(section_pkg.SECTIONS)}; see --list-checks)"
+        )
     out = output.check_target(out, paths)  # before any work: never replace what this tool did not write
     tmp = output.staging_dir(out)
     t0 = time.perf_counter()
@@ -320,16 +373,21 @@ def run_report(paths: list | None = None, out: str | Path = "report", *, quick: 
         figures = _subject_figures(under_test, subject, image_dir, quick)
         bar = _progress_bar(len(keys), progress)
         try:
-            ctx = Context(image_dir=image_dir, paths=list(paths), quick=quick,
-                          progress=lambda message: bar.set_postfix_str(str(message)[:60], refresh=True))
+            ctx = Context(
+                image_dir=image_dir,
+                paths=list(paths),
+                quick=quick,
+                progress=lambda message: bar.set_postfix_str(str(message)[:60], refresh=True),
+            )
             for key in keys:
                 bar.set_description(key)
                 run.sections.append(run_section(key, ctx, select))
                 bar.update(1)
         finally:
             bar.close()
-        doc = build_document(run, paths=paths, quick=quick, elapsed_s=time.perf_counter() - t0,
-                             select=select, figures=figures)
+        doc = build_document(
+            run, paths=paths, quick=quick, elapsed_s=time.perf_counter() - t0, select=select, figures=figures
+        )
         run.document = doc
         (tmp / "report.json").write_text(json.dumps(doc, indent=1, allow_nan=False) + "\n")
         (tmp / "index.html").write_text(render_html(doc, image_dir), encoding="utf-8")
@@ -354,4 +412,14 @@ def _subject_figures(under_test, subject, image_dir, quick):
         return []
 
 
-__all__ = ["run_report", "run_section", "matches", "section_selected", "assign_ids", "ReportRun", "SectionRun", "SCHEMA", "default_paths"]
+__all__ = [
+    "run_report",
+    "run_section",
+    "matches",
+    "section_selected",
+    "assign_ids",
+    "ReportRun",
+    "SectionRun",
+    "SCHEMA",
+    "default_paths",
+]

@@ -12,6 +12,7 @@ its pdf (matplotlib, Agg).
 
 These verdicts are never mixed with the library's own evidence (the report's sections).
 """
+
 from __future__ import annotations
 
 import math
@@ -54,12 +55,23 @@ class Verdict:
         return "implementation." + self.quantity.replace(" ", "_")
 
     def to_dict(self) -> dict[str, Any]:
-        return {"id": self.id, "quantity": self.quantity, "label": _QUANTITY_LABEL.get(self.quantity, self.quantity),
-                "status": self.status, "diagnosis": self.diagnosis, "sentence": self.sentence,
-                "max_abs_error": self.max_abs_error, "where": self.where, "n": self.n, "n_failed": self.n_failed,
-                "detail": self.detail, "worst": self.worst, "regions": _regions_rows(self.regions),
-                "checks": [_json_safe({**c, "id": "implementation." + c["id"]}) for c in self.checks],
-                "warnings": list(self.warnings)}
+        return {
+            "id": self.id,
+            "quantity": self.quantity,
+            "label": _QUANTITY_LABEL.get(self.quantity, self.quantity),
+            "status": self.status,
+            "diagnosis": self.diagnosis,
+            "sentence": self.sentence,
+            "max_abs_error": self.max_abs_error,
+            "where": self.where,
+            "n": self.n,
+            "n_failed": self.n_failed,
+            "detail": self.detail,
+            "worst": self.worst,
+            "regions": _regions_rows(self.regions),
+            "checks": [_json_safe({**c, "id": "implementation." + c["id"]}) for c in self.checks],
+            "warnings": list(self.warnings),
+        }
 
 
 @dataclass
@@ -75,7 +87,7 @@ class UnderTest:
 
     @property
     def status(self) -> str:
-        """"could not run" if nothing ran, "does not conform" if any graded quantity fails, else "conforms"."""
+        """ "could not run" if nothing ran, "does not conform" if any graded quantity fails, else "conforms"."""
         ran = [v for v in self.verdicts if v.status != COULD_NOT_RUN]
         if self.error or not ran:
             return COULD_NOT_RUN
@@ -91,13 +103,23 @@ class UnderTest:
         if s == COULD_NOT_RUN:
             why = self.error or "; ".join(v.detail for v in self.verdicts if v.detail) or "nothing to grade"
             return f"{self.name} could not run: {why}"
-        return f"{self.name} conforms (" + ", ".join(
-            _QUANTITY_LABEL.get(v.quantity, v.quantity) for v in self.verdicts if v.status == CONFORMS) + ")"
+        return (
+            f"{self.name} conforms ("
+            + ", ".join(_QUANTITY_LABEL.get(v.quantity, v.quantity) for v in self.verdicts if v.status == CONFORMS)
+            + ")"
+        )
 
     def to_dict(self) -> dict[str, Any]:
-        return {"name": self.name, "kind": self.kind, "status": self.status, "headline": self.headline,
-                "error": self.error, "version": {k: str(v) for k, v in self.version.items()},
-                "notes": list(self.notes), "verdicts": [v.to_dict() for v in self.verdicts]}
+        return {
+            "name": self.name,
+            "kind": self.kind,
+            "status": self.status,
+            "headline": self.headline,
+            "error": self.error,
+            "version": {k: str(v) for k, v in self.version.items()},
+            "notes": list(self.notes),
+            "verdicts": [v.to_dict() for v in self.verdicts],
+        }
 
 
 def _json_safe(x):
@@ -111,13 +133,19 @@ def _regions_rows(regions) -> list | None:
     [[region, text]] rows for the page, whatever mapping / list form the grader gives."""
     if not regions:
         return None
-    items = regions.items() if isinstance(regions, dict) else (
-        (r.get("region", r.get("name", "?")), r) if isinstance(r, dict) else (str(r), "") for r in regions)
+    items = (
+        regions.items()
+        if isinstance(regions, dict)
+        else ((r.get("region", r.get("name", "?")), r) if isinstance(r, dict) else (str(r), "") for r in regions)
+    )
     rows = []
     for name, val in items:
         if isinstance(val, dict):
-            val = ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
-                            for k, v in val.items() if k not in ("region", "name"))
+            val = ", ".join(
+                f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
+                for k, v in val.items()
+                if k not in ("region", "name")
+            )
         rows.append([str(name), str(val)])
     return rows
 
@@ -194,10 +222,19 @@ def verdict_from_grade(quantity: str, g: dict) -> Verdict:
     detail = f"{g.get('n_failed_rows', 0)} of {g.get('n_rows', 0)} rows outside the tolerance"
     if extra:
         detail += " (" + ", ".join(extra) + ")"
-    return Verdict(quantity, CONFORMS if passed else DOES_NOT_CONFORM, diag,
-                   "every value within the tolerance" if passed else _deviation_sentence(diag),
-                   max_abs, _where(worst[0] if worst else None), int(g.get("n_rows", 0) or 0),
-                   int(g.get("n_failed_rows", 0) or 0), detail, worst[:10], g.get("regions"))
+    return Verdict(
+        quantity,
+        CONFORMS if passed else DOES_NOT_CONFORM,
+        diag,
+        "every value within the tolerance" if passed else _deviation_sentence(diag),
+        max_abs,
+        _where(worst[0] if worst else None),
+        int(g.get("n_rows", 0) or 0),
+        int(g.get("n_failed_rows", 0) or 0),
+        detail,
+        worst[:10],
+        g.get("regions"),
+    )
 
 
 def verdict_from_quantity(q) -> Verdict:
@@ -211,14 +248,39 @@ def verdict_from_quantity(q) -> Verdict:
     passed = bool(q.passed)
     if getattr(q, "sentence", None) is not None:
         failed = [c for c in q.checks if c.get("status") == "fail"]
-        return Verdict(q.quantity, CONFORMS if passed else DOES_NOT_CONFORM, None if passed else q.diagnosis,
-                       q.sentence, _finite(q.max_abs_error), getattr(q, "where", ""),
-                       len(q.checks), len(failed), q.detail, [], q.regions, list(q.checks), list(q.warnings),
-                       q.plot)
-    return Verdict(q.quantity, CONFORMS if passed else DOES_NOT_CONFORM, None if passed else q.diagnosis,
-                   q.detail if passed else (_deviation_sentence(q.diagnosis) if q.diagnosis in _known()
-                                            else (q.diagnosis or NO_KNOWN).replace("_", " ") + f" ({q.detail})"),
-                   _finite(q.max_abs_error), q.detail, int(q.n or 0), 0 if passed else 1, q.detail)
+        return Verdict(
+            q.quantity,
+            CONFORMS if passed else DOES_NOT_CONFORM,
+            None if passed else q.diagnosis,
+            q.sentence,
+            _finite(q.max_abs_error),
+            getattr(q, "where", ""),
+            len(q.checks),
+            len(failed),
+            q.detail,
+            [],
+            q.regions,
+            list(q.checks),
+            list(q.warnings),
+            q.plot,
+        )
+    return Verdict(
+        q.quantity,
+        CONFORMS if passed else DOES_NOT_CONFORM,
+        None if passed else q.diagnosis,
+        q.detail
+        if passed
+        else (
+            _deviation_sentence(q.diagnosis)
+            if q.diagnosis in _known()
+            else (q.diagnosis or NO_KNOWN).replace("_", " ") + f" ({q.detail})"
+        ),
+        _finite(q.max_abs_error),
+        q.detail,
+        int(q.n or 0),
+        0 if passed else 1,
+        q.detail,
+    )
 
 
 def _known() -> set:
@@ -257,8 +319,9 @@ def grade_subject_under_test(subject, *, quick: bool = True, sampler_model: str 
 
     ut = UnderTest(name=subject.name, kind="code", version=dict(subject.version), notes=list(subject.notes))
     try:
-        result = grade_subject(subject, quick=quick, quantities=("brdf", "albedo", "sampler"),
-                               sampler_model=sampler_model)
+        result = grade_subject(
+            subject, quick=quick, quantities=("brdf", "albedo", "sampler"), sampler_model=sampler_model
+        )
     except GraderUnavailable as exc:
         ut.error = " ".join(str(exc).split())
         return ut
@@ -303,8 +366,9 @@ def figures(subject, ut: UnderTest, image_dir, *, quick: bool = True) -> list:
         n = 14 if quick else _MAP_N
         mu, mi, mo = _grid(n)
         fig, axes = plt.subplots(2, len(_MAP_ROUGHNESS), figsize=(3.2 * len(_MAP_ROUGHNESS), 5.6), squeeze=False)
-        for row, (dphi, label) in enumerate(((0.0, "azimuths equal (L.V >= 0)"),
-                                             (math.pi, "azimuths opposite (L.V < 0 where mu_i mu_o < sin sin)"))):
+        for row, (dphi, label) in enumerate(
+            ((0.0, "azimuths equal (L.V >= 0)"), (math.pi, "azimuths opposite (L.V < 0 where mu_i mu_o < sin sin)"))
+        ):
             for col, r in enumerate(_MAP_ROUGHNESS):
                 wi, wo = _dirs(mi, 0.0), _dirs(mo, dphi)
                 rr = np.full(mi.shape, r)
@@ -314,17 +378,30 @@ def figures(subject, ut: UnderTest, image_dir, *, quick: bool = True) -> list:
                 with np.errstate(invalid="ignore", divide="ignore"):
                     err = np.abs(got - ref) / np.maximum(np.abs(ref), 1e-6)
                 ax = axes[row, col]
-                im = ax.imshow(np.log10(np.maximum(err, 1e-8)).reshape(n, n).T, origin="lower",
-                               extent=(mu[0], mu[-1], mu[0], mu[-1]), vmin=-8, vmax=0, cmap="magma")
+                im = ax.imshow(
+                    np.log10(np.maximum(err, 1e-8)).reshape(n, n).T,
+                    origin="lower",
+                    extent=(mu[0], mu[-1], mu[0], mu[-1]),
+                    vmin=-8,
+                    vmax=0,
+                    cmap="magma",
+                )
                 ax.set_title(f"r = {r:g}, {'dphi = 0' if row == 0 else 'dphi = pi'}", fontsize=8)
                 ax.set_xlabel("mu_i", fontsize=8)
                 ax.set_ylabel("mu_o", fontsize=8)
                 ax.tick_params(labelsize=7)
         fig.colorbar(im, ax=axes, shrink=0.7, label="log10 relative error")
-        out.append(("subject_error_maps.png", fig,
-                    (f"log10 of |theirs - reference| / reference over (mu_i, mu_o), rho = 0.8, at roughness "
+        out.append(
+            (
+                "subject_error_maps.png",
+                fig,
+                (
+                    f"log10 of |theirs - reference| / reference over (mu_i, mu_o), rho = 0.8, at roughness "
                     f"{', '.join(map(str, _MAP_ROUGHNESS))}; top: equal azimuths (L.V >= 0), bottom: opposite "
-                    "azimuths (L.V < 0 where mu_i mu_o < sin theta_i sin theta_o)")))
+                    "azimuths (L.V < 0 where mu_i mu_o < sin theta_i sin theta_o)"
+                ),
+            )
+        )
         # in-plane lobe slices
         th = np.linspace(-89.0, 89.0, 90 if quick else 179)
         fig, axes = plt.subplots(1, len(_SLICE_MU_O), figsize=(3.4 * len(_SLICE_MU_O), 3.0), squeeze=False)
@@ -346,18 +423,25 @@ def figures(subject, ut: UnderTest, image_dir, *, quick: bool = True) -> list:
         axes[0, 0].set_ylabel("f cos theta_i", fontsize=8)
         axes[0, 0].legend(fontsize=6)
         fig.tight_layout()
-        out.append(("subject_lobe_slices.png", fig,
-                    "In-plane slices of f cos theta_i: theirs (dashed) drawn over the reference (wide, pale), rho = 0.8"))
+        out.append(
+            (
+                "subject_lobe_slices.png",
+                fig,
+                "In-plane slices of f cos theta_i: theirs (dashed) drawn over the reference (wide, pale), rho = 0.8",
+            )
+        )
     if subject.albedo is not None:
         mu = np.linspace(0.01, 1.0, 60)
         fig, ax = plt.subplots(figsize=(4.5, 3.2))
         for r, c in zip((0.25, 0.5, 1.0), ("C0", "C1", "C3")):
             rr = np.full(mu.size, r)
             rh = np.broadcast_to(np.array([0.5, 0.5, 0.5]), (mu.size, 3))
-            ax.plot(mu, directional_albedo(model, mu, rr, rh)[:, 0], color=c, lw=3, alpha=0.35,
-                    label=f"reference r={r:g}")
-            ax.plot(mu, np.asarray(subject.albedo(mu, rr, rh), float)[:, 0], color=c, lw=1, ls="--",
-                    label=f"theirs r={r:g}")
+            ax.plot(
+                mu, directional_albedo(model, mu, rr, rh)[:, 0], color=c, lw=3, alpha=0.35, label=f"reference r={r:g}"
+            )
+            ax.plot(
+                mu, np.asarray(subject.albedo(mu, rr, rh), float)[:, 0], color=c, lw=1, ls="--", label=f"theirs r={r:g}"
+            )
         ax.set_xlabel("mu")
         ax.set_ylabel("E(mu), rho = 0.5")
         ax.legend(fontsize=6)
@@ -382,8 +466,7 @@ def _sampler_figures(plt, plot) -> list:
     z, ph = plot["z_edges"], plot["phi_edges"]
     out = []
     for axis, edges, label, name in ((1, z, "cos theta_i", "cos"), (0, ph, "phi_i (rad)", "phi")):
-        fig, axes = plt.subplots(2, (len(cases) + 1) // 2, figsize=(3.2 * ((len(cases) + 1) // 2), 5.4),
-                                 squeeze=False)
+        fig, axes = plt.subplots(2, (len(cases) + 1) // 2, figsize=(3.2 * ((len(cases) + 1) // 2), 5.4), squeeze=False)
         for ax, c in zip(axes.T.ravel(), cases):
             obs, exp = c["observed"].sum(axis=axis), c["expected"].sum(axis=axis)
             mids = 0.5 * (edges[1:] + edges[:-1])
@@ -395,22 +478,41 @@ def _sampler_figures(plt, plot) -> list:
         axes[0, 0].set_ylabel("samples per bin", fontsize=8)
         axes[0, 0].legend(fontsize=6)
         fig.tight_layout()
-        out.append((f"subject_sampler_{name}.png", fig,
-                    (f"Their sampler: sample counts over {label} (bars) against the counts their pdf expects "
-                     "(dots: n times its integral over each bin, Gauss-Legendre), per (mu_o, roughness) case")))
+        out.append(
+            (
+                f"subject_sampler_{name}.png",
+                fig,
+                (
+                    f"Their sampler: sample counts over {label} (bars) against the counts their pdf expects "
+                    "(dots: n times its integral over each bin, Gauss-Legendre), per (mu_o, roughness) case"
+                ),
+            )
+        )
     worst = min(cases, key=lambda c: c["p"])
     with np.errstate(invalid="ignore", divide="ignore"):
         res = (worst["observed"] - worst["expected"]) / np.sqrt(np.maximum(worst["expected"], 1e-12))
     fig, ax = plt.subplots(figsize=(5.0, 3.2))
-    im = ax.imshow(np.clip(res, -6, 6), origin="lower", aspect="auto", cmap="coolwarm", vmin=-6, vmax=6,
-                   extent=(ph[0], ph[-1], z[0], z[-1]))
+    im = ax.imshow(
+        np.clip(res, -6, 6),
+        origin="lower",
+        aspect="auto",
+        cmap="coolwarm",
+        vmin=-6,
+        vmax=6,
+        extent=(ph[0], ph[-1], z[0], z[-1]),
+    )
     fig.colorbar(im, ax=ax, label="(observed - expected) / sqrt(expected)")
     ax.set_xlabel("phi_i (rad)")
     ax.set_ylabel("cos theta_i")
     ax.set_title(f"worst case mu_o {worst['mu_o']:g}, r {worst['roughness']:g} (p = {worst['p']:.2g})", fontsize=8)
     fig.tight_layout()
-    out.append(("subject_sampler_residuals.png", fig,
-                "Their sampler's worst case: standardised residuals of the sample counts per (cos theta, phi) bin"))
+    out.append(
+        (
+            "subject_sampler_residuals.png",
+            fig,
+            "Their sampler's worst case: standardised residuals of the sample counts per (cos theta, phi) bin",
+        )
+    )
     return out
 
 

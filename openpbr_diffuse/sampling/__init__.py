@@ -8,6 +8,7 @@ the solid-angle density; ``sample_rng`` draws u from a seeded numpy Generator.
 Modules: ``simple`` (cosine, uniform), ``ltc`` (LTC fit, frame, (clipped) LTC sampler and
 pdf), ``mis`` (the EON MIS sampler), ``_kernels`` (compiled batch drivers), ``api``.
 """
+
 from .api import pdf, sample, sample_rng
 from .registry import INFO, STRATEGIES, strategy_info
 

@@ -7,6 +7,7 @@ constant, over flat C-contiguous buffers; the scalar functions are branch-free (
 and call no libm function, so LLVM vectorises the loop (AVX2/AVX-512).  Arithmetic is
 float64 for both dtypes (float32 results are the float64 ones rounded).
 """
+
 import functools
 
 import numpy as np
@@ -115,8 +116,16 @@ def pdf_driver(strategy):
     def drive(wo, wi, r, out):
         for i in range(r.shape[0]):
             j = _U(i) * _U(3)
-            out[i] = strategy_pdf(strategy, _F(wo[j]), _F(wo[j + _U(1)]), _F(wo[j + _U(2)]),
-                                  _F(wi[j]), _F(wi[j + _U(1)]), _F(wi[j + _U(2)]), _F(r[i]))
+            out[i] = strategy_pdf(
+                strategy,
+                _F(wo[j]),
+                _F(wo[j + _U(1)]),
+                _F(wo[j + _U(2)]),
+                _F(wi[j]),
+                _F(wi[j + _U(1)]),
+                _F(wi[j + _U(2)]),
+                _F(r[i]),
+            )
 
     return drive
 
@@ -130,8 +139,13 @@ def sample_rows(strategy, wo, r, u, lead, dtype):
     r, tr = rows(r, lead)
     u, tu = rows(u, lead, 2)
     z_min = float(np.finfo(dtype).tiny)
-    launch(sample_driver(strategy), (z_min,), [(wo, 3, two), (r, 1, tr), (u, 2, tu)],
-           [(wi.reshape(-1), 3), (p.reshape(-1), 1)], n)
+    launch(
+        sample_driver(strategy),
+        (z_min,),
+        [(wo, 3, two), (r, 1, tr), (u, 2, tu)],
+        [(wi.reshape(-1), 3), (p.reshape(-1), 1)],
+        n,
+    )
     return wi, p
 
 

@@ -1,4 +1,5 @@
 """Public sampling verbs: ``sample``, ``pdf`` and ``sample_rng``."""
+
 import numbers
 
 import numpy as np
@@ -141,10 +142,15 @@ def sample_rng(strategy, wo, roughness, rng=None, shape=None):
     >>> wi.shape, p.shape, bool((p > 0).all())
     ((4, 3), (4,), True)
     """
-    if not (rng is None or isinstance(rng, (np.random.Generator, np.random.SeedSequence, np.random.BitGenerator))
-            or (isinstance(rng, numbers.Integral) and not isinstance(rng, bool))):
-        raise TypeError("rng must be a numpy.random.Generator, a SeedSequence, a BitGenerator, "
-                        f"a non-negative int seed or None; got {type(rng).__name__}")
+    if not (
+        rng is None
+        or isinstance(rng, (np.random.Generator, np.random.SeedSequence, np.random.BitGenerator))
+        or (isinstance(rng, numbers.Integral) and not isinstance(rng, bool))
+    ):
+        raise TypeError(
+            "rng must be a numpy.random.Generator, a SeedSequence, a BitGenerator, "
+            f"a non-negative int seed or None; got {type(rng).__name__}"
+        )
     if isinstance(rng, numbers.Integral) and rng < 0:
         raise ValueError(f"rng: an int seed must be non-negative, got {rng}")
     gen = np.random.default_rng(rng)

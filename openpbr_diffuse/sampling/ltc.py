@@ -28,6 +28,7 @@ Listing 3 always keeps the half ellipse on the +x side (x <- -(...)), correct fo
 only; here the side follows the sign of d, so CLTC never samples below the horizon.  For
 d <= 0 (every mu_o < 0.9999) the mapping is exactly Listing 3's.
 """
+
 import math
 
 from .._jit import PI, kernel
@@ -50,7 +51,7 @@ def _ltc_parts(mu, r):
 def ltc_coeffs(mu, r):
     """Return (a, b, c, d) of the LTC matrix M (Eq. 25) for mu = mu_o, roughness r (Listing 2)."""
     a, bn, bd, c, dn, dd = _ltc_parts(mu, r)
-    inv = 1.0 / (bd * dd)   # both denominators are < 0 on [0, 1]: one division for b and d
+    inv = 1.0 / (bd * dd)  # both denominators are < 0 on [0, 1]: one division for b and d
     return a, bn * dd * inv, c, dn * bd * inv
 
 
@@ -61,7 +62,7 @@ def cltc_coeffs(mu, r):
     sampler's chain of square roots and divisions is a row's latency in the surface's scalar
     drivers)."""
     a, b, c, d = ltc_coeffs(mu, r)
-    _, _, _, _, dn, dd = _ltc_parts(mu, r)   # the same values: inlined, computed once
+    _, _, _, _, dn, dd = _ltc_parts(mu, r)  # the same values: inlined, computed once
     return a, b, c, d, clip_fraction_of(dn, dd)
 
 
@@ -70,7 +71,7 @@ def ltc_frame(ox, oy):
     """Return X = (X.x, X.y) of the LTC frame of wo (Y = (-X.y, X.x), Z = +z)."""
     l2 = ox * ox + oy * oy
     il = 1.0 / math.sqrt(l2)  # inf at the normal, discarded below (selects, not branches)
-    normal = not l2 > 0.0     # wo at the normal: any azimuth will do, the lobe is isotropic there
+    normal = not l2 > 0.0  # wo at the normal: any azimuth will do, the lobe is isotropic there
     return (1.0 if normal else ox * il), (0.0 if normal else oy * il)
 
 

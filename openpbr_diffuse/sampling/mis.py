@@ -5,6 +5,7 @@ of the combined strategy is the mixture P_u/(2 pi) + P_c pdf_CLTC (P_c = 1 - P_u
 makes the estimator unbiased where CLTC misses a lune and bounds the throughput weight.
 At r = 0, P_u = 0 and M = I: the sampler is cosine sampling.
 """
+
 from .._jit import kernel
 from .ltc import cltc_coeffs, from_frame, ltc_pdf_local, ltc_sample_local, to_frame
 from .simple import INV_2PI, U_MAX, uniform_sample
@@ -24,11 +25,12 @@ _B0, _B1, _B2, _B3, _B4, _B5, _B6, _B7, _B8, _B9, _B10, _B11, _B12, _B13 = _bino
 
 def _stage(k):
     """(2^-k, 2^k, 2^(-k/10)): one step of the range reduction of ``pow_tenth``."""
-    return 2.0 ** -k, 2.0 ** k, 2.0 ** (-0.1 * k)
+    return 2.0**-k, 2.0**k, 2.0 ** (-0.1 * k)
 
 
-_STAGES = tuple(_stage(k) for k in (1000.0, 512.0, 256.0, 128.0, 64.0, 32.0, 16.0, 8.0, 4.0, 2.0, 1.0,
-                                    0.5, 0.25, 0.125))
+_STAGES = tuple(
+    _stage(k) for k in (1000.0, 512.0, 256.0, 128.0, 64.0, 32.0, 16.0, 8.0, 4.0, 2.0, 1.0, 0.5, 0.25, 0.125)
+)
 (_S0, _S1, _S2, _S3, _S4, _S5, _S6, _S7, _S8, _S9, _S10, _S11, _S12, _S13) = _STAGES
 
 

@@ -22,6 +22,7 @@ Examples
 >>> round(mean, 6), round(var, 4)
 (1.0, 1.2055)
 """
+
 from __future__ import annotations
 
 import math
@@ -68,6 +69,7 @@ def exact_weight_moments(strategy, mu_o, r, n=16):
             if not second:
                 return np.where(ok, f, 0.0)
             return np.where(ok, f * f * wi[..., 2] / np.where(ok, p, 1.0), 0.0)
+
         return g
 
     mu = float(mu_o)

@@ -4,6 +4,7 @@ Every strategy samples ``wi`` given ``wo`` in the local frame (normal +z) and re
 solid-angle pdf.  ``roughness`` is EON's r in [0, 1] for all of them (cosine and uniform
 ignore it).
 """
+
 from dataclasses import dataclass
 
 
@@ -11,8 +12,8 @@ from dataclasses import dataclass
 class StrategyInfo:
     name: str
     id: int
-    covers_hemisphere: bool    # pdf > 0 wherever f_EON > 0 (unbiased for EON)
-    below_horizon: bool        # may return directions with z < 0 (their weight is 0)
+    covers_hemisphere: bool  # pdf > 0 wherever f_EON > 0 (unbiased for EON)
+    below_horizon: bool  # may return directions with z < 0 (their weight is 0)
     description: str
 
 
@@ -36,10 +37,10 @@ COSINE, UNIFORM, LTC, LTC_NONNEG, CLTC, EON = (INFO[n].id for n in STRATEGIES)
 def strategy_info(strategy):
     """Look a strategy up by name; ValueError/TypeError naming ``strategy`` otherwise."""
     if not isinstance(strategy, str):
-        raise TypeError(f"strategy must be a string, one of {', '.join(STRATEGIES)}; "
-                        f"got {type(strategy).__name__}")
+        raise TypeError(f"strategy must be a string, one of {', '.join(STRATEGIES)}; got {type(strategy).__name__}")
     try:
         return INFO[strategy]
     except KeyError:
-        raise ValueError(f"strategy: unknown sampling strategy {strategy!r}; "
-                         f"expected one of {', '.join(STRATEGIES)}") from None
+        raise ValueError(
+            f"strategy: unknown sampling strategy {strategy!r}; expected one of {', '.join(STRATEGIES)}"
+        ) from None

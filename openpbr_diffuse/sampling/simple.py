@@ -6,6 +6,7 @@ the EON sampler at r = 0 (where M = I and P_u = 0) returns the same direction fo
 same ``u``.  Uniform sampling is in the local (world) frame, as the uniform branch of
 Listing 4.
 """
+
 import math
 
 import numpy as np
@@ -14,7 +15,7 @@ from .._jit import INV_PI, kernel
 
 INV_2PI = 0.5 / math.pi
 #: The largest float64 below 1: the top of the u range [0, 1).
-U_MAX = 1.0 - 2.0 ** -53
+U_MAX = 1.0 - 2.0**-53
 _SQRT_HALF = math.sqrt(0.5)
 
 
@@ -35,10 +36,28 @@ def cos_sin_2pi(u):
     q = np.floor(t)
     x = (t - q - 0.5) * (0.5 * math.pi)
     x2 = x * x
-    s = x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0 * (1.0 - x2 / 72.0 * (
-        1.0 - x2 / 110.0 * (1.0 - x2 / 156.0 * (1.0 - x2 / 210.0)))))))
-    c = 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0 * (1.0 - x2 / 90.0 * (
-        1.0 - x2 / 132.0 * (1.0 - x2 / 182.0 * (1.0 - x2 / 240.0)))))))
+    s = x * (
+        1.0
+        - x2
+        / 6.0
+        * (
+            1.0
+            - x2
+            / 20.0
+            * (1.0 - x2 / 42.0 * (1.0 - x2 / 72.0 * (1.0 - x2 / 110.0 * (1.0 - x2 / 156.0 * (1.0 - x2 / 210.0)))))
+        )
+    )
+    c = 1.0 - x2 / 2.0 * (
+        1.0
+        - x2
+        / 12.0
+        * (
+            1.0
+            - x2
+            / 30.0
+            * (1.0 - x2 / 56.0 * (1.0 - x2 / 90.0 * (1.0 - x2 / 132.0 * (1.0 - x2 / 182.0 * (1.0 - x2 / 240.0)))))
+        )
+    )
     C = (c - s) * _SQRT_HALF
     S = (c + s) * _SQRT_HALF
     # quarter turns q = 1, 2, 3: (-S, C), (-C, -S), (S, -C); selects keep the loop vectorisable

@@ -5,8 +5,25 @@
 - ``api``: ``simulate_albedo``, ``simulate_average_albedo``, ``simulate_brdf``
 - ``grading``: the shipped grading tables of the library's models against the simulation
 """
-from .api import (CHUNK_PATHS, GEOMETRIES, MAX_BOUNCES, AlbedoEstimate, BRDFEstimate, simulate_albedo,
-                  simulate_average_albedo, simulate_brdf)
 
-__all__ = ["GEOMETRIES", "CHUNK_PATHS", "MAX_BOUNCES", "AlbedoEstimate", "BRDFEstimate", "simulate_albedo",
-           "simulate_average_albedo", "simulate_brdf"]
+from .api import (
+    CHUNK_PATHS,
+    GEOMETRIES,
+    MAX_BOUNCES,
+    AlbedoEstimate,
+    BRDFEstimate,
+    simulate_albedo,
+    simulate_average_albedo,
+    simulate_brdf,
+)
+
+__all__ = [
+    "GEOMETRIES",
+    "CHUNK_PATHS",
+    "MAX_BOUNCES",
+    "AlbedoEstimate",
+    "BRDFEstimate",
+    "simulate_albedo",
+    "simulate_average_albedo",
+    "simulate_brdf",
+]

@@ -10,6 +10,7 @@ Random numbers come from numba's generator (Mersenne Twister, state per thread),
 the start of each chunk with a 32-bit key derived from (seed, stream, chunk): a chunk's
 result depends only on that key, never on which worker or thread ran it.
 """
+
 import math
 
 import numba
@@ -40,8 +41,7 @@ def onb(nx, ny, nz):
     sign = 1.0 if nz >= 0.0 else -1.0
     a = -1.0 / (sign + nz)
     b = nx * ny * a
-    return (1.0 + sign * nx * nx * a, sign * b, -sign * nx,
-            b, sign + ny * ny * a, -ny)
+    return (1.0 + sign * nx * nx * a, sign * b, -sign * nx, b, sign + ny * ny * a, -ny)
 
 
 @inline

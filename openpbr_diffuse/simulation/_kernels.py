@@ -1,6 +1,7 @@
 """The chunk kernels: trace ``n_paths`` paths of one query and return their sums.
 
 One compiled kernel per microgeometry (so that using one compiles only its own walk)."""
+
 import numpy as np
 
 from . import smith, vcavity
@@ -22,8 +23,15 @@ _DOC = """Trace ``n_paths`` paths from ``wi`` (or cosine-distributed wi if ``ran
 
 @jit
 def _buffers(m, C):
-    return (np.zeros((N_ORDERS, C)), np.zeros((N_ORDERS, C)), np.zeros((m, N_ORDERS + 1, C)),
-            np.zeros((m, N_ORDERS + 1, C)), np.zeros((m, N_ORDERS, C)), np.empty(C), np.zeros(3, dtype=np.int64))
+    return (
+        np.zeros((N_ORDERS, C)),
+        np.zeros((N_ORDERS, C)),
+        np.zeros((m, N_ORDERS + 1, C)),
+        np.zeros((m, N_ORDERS + 1, C)),
+        np.zeros((m, N_ORDERS, C)),
+        np.empty(C),
+        np.zeros(3, dtype=np.int64),
+    )
 
 
 @jit

@@ -28,6 +28,7 @@ crossing is weighted by its transmittance.
   leaves the denser medium);
 - Russian roulette on the largest channel weight below ``RR_WEIGHT`` (unbiased).
 """
+
 import math
 
 import numpy as np
@@ -220,8 +221,9 @@ def run_chunk_layered(alpha, eta, tau, base, r, rho, wi, random_wi, wo, n_paths,
                     w[c] *= rho[c] ** kb
             else:
                 Xx, Xy = ltc_frame(vx, vy)
-                ux, uy, uz, p = eon_sample(Xx, Xy, min(max(vz, 0.0), 1.0), r, r10,
-                                           np.random.random(), np.random.random())
+                ux, uy, uz, p = eon_sample(
+                    Xx, Xy, min(max(vz, 0.0), 1.0), r, r10, np.random.random(), np.random.random()
+                )
                 if uz <= 0.0 or p <= 0.0:
                     break
                 for c in range(C):

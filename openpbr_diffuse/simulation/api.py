@@ -11,6 +11,7 @@ geometry, the query's own values (mu or wi), i).  Chunks are summed in their own
 result depends on (geometry, roughness, query, rho, paths, seed) only: not on the other
 queries of the call, the number of workers, or whether a Dask cluster ran it.
 """
+
 from __future__ import annotations
 
 import math
@@ -95,8 +96,9 @@ def _client(client, scheduler):
     try:
         from dask.distributed import Client
     except ImportError as exc:  # optional dependency
-        raise ImportError("running on a cluster needs dask.distributed: "
-                          "pip install 'dask[distributed]' (or openpbr-diffuse[dask])") from exc
+        raise ImportError(
+            "running on a cluster needs dask.distributed: pip install 'dask[distributed]' (or openpbr-diffuse[dask])"
+        ) from exc
     if client is not None:
         return client, False
     try:
@@ -123,8 +125,9 @@ def _client(client, scheduler):
     except (OSError, TimeoutError, MemoryError, ValueError, TypeError) as exc:
         # a silent port times out; a service that is not a Dask scheduler may answer garbage
         # (read as an absurd frame length: MemoryError) or close the connection
-        raise ConnectionError(f"scheduler {scheduler}: no Dask scheduler answered within "
-                              f"{SCHEDULER_TIMEOUT_S:g} s ({type(exc).__name__})") from None
+        raise ConnectionError(
+            f"scheduler {scheduler}: no Dask scheduler answered within {SCHEDULER_TIMEOUT_S:g} s ({type(exc).__name__})"
+        ) from None
 
 
 def _bar(iterable, progress, total=None):
@@ -160,15 +163,14 @@ def _plan(kind, geometry, roughness, queries, random_wi, rho, paths, seed):
         start = len(tasks)
         for i in range(n_chunks):
             n = min(CHUNK_PATHS, paths - i * CHUNK_PATHS)
-            tasks.append((geometry, roughness, wi, random_wi, wo, rho, n,
-                          _chunk_seed(seed, kind, geometry, key, i)))
+            tasks.append((geometry, roughness, wi, random_wi, wo, rho, n, _chunk_seed(seed, kind, geometry, key, i)))
         spans.append((start, len(tasks)))
     return tasks, spans
 
 
 def _sum(results, span, index):
     out = results[span[0]][index].copy()
-    for r in results[span[0] + 1:span[1]]:
+    for r in results[span[0] + 1 : span[1]]:
         out += r[index]
     return out
 
@@ -207,23 +209,36 @@ class AlbedoEstimate:
         """JSON-ready form: ``rows`` with mu, albedo, albedo_by_order, stderr per query."""
         rows = []
         for i in range(self.albedo.shape[0]):
-            rows.append({
-                "mu": None if self.mu is None else float(self.mu[i]),
-                "albedo": self.albedo[i].tolist(),
-                "albedo_by_order": {"1": self.albedo_by_order[i, 0].tolist(),
-                                    "2": self.albedo_by_order[i, 1].tolist(),
-                                    ">=3": self.albedo_by_order[i, 2].tolist()},
-                "stderr": self.stderr[i].tolist(),
-                "stderr_by_order": {"1": self.stderr_by_order[i, 0].tolist(),
-                                    "2": self.stderr_by_order[i, 1].tolist(),
-                                    ">=3": self.stderr_by_order[i, 2].tolist()},
-                "bounces_per_path": float(self.bounces[i]),
-                "truncated": int(self.truncated[i]),
-            })
+            rows.append(
+                {
+                    "mu": None if self.mu is None else float(self.mu[i]),
+                    "albedo": self.albedo[i].tolist(),
+                    "albedo_by_order": {
+                        "1": self.albedo_by_order[i, 0].tolist(),
+                        "2": self.albedo_by_order[i, 1].tolist(),
+                        ">=3": self.albedo_by_order[i, 2].tolist(),
+                    },
+                    "stderr": self.stderr[i].tolist(),
+                    "stderr_by_order": {
+                        "1": self.stderr_by_order[i, 0].tolist(),
+                        "2": self.stderr_by_order[i, 1].tolist(),
+                        ">=3": self.stderr_by_order[i, 2].tolist(),
+                    },
+                    "bounces_per_path": float(self.bounces[i]),
+                    "truncated": int(self.truncated[i]),
+                }
+            )
         name = GEOMETRIES[self.geometry][0]
-        return {"geometry": self.geometry, name: self.roughness, "roughness": self.roughness,
-                "rho": self.rho.tolist(), "paths": self.paths, "seed": self.seed,
-                "average": self.mu is None, "rows": rows}
+        return {
+            "geometry": self.geometry,
+            name: self.roughness,
+            "roughness": self.roughness,
+            "rho": self.rho.tolist(),
+            "paths": self.paths,
+            "seed": self.seed,
+            "average": self.mu is None,
+            "rows": rows,
+        }
 
 
 @dataclass
@@ -248,9 +263,12 @@ class BRDFEstimate:
 
 def _albedo_result(geometry, roughness, mu, rho, paths, seed, results, spans):
     n, C = len(spans), rho.shape[0]
-    E = np.empty((n, C)); se = np.empty((n, C))
-    Eo = np.empty((n, N_ORDERS, C)); seo = np.empty((n, N_ORDERS, C))
-    bounces = np.empty(n); trunc = np.empty(n, dtype=np.int64)
+    E = np.empty((n, C))
+    se = np.empty((n, C))
+    Eo = np.empty((n, N_ORDERS, C))
+    seo = np.empty((n, N_ORDERS, C))
+    bounces = np.empty(n)
+    trunc = np.empty(n, dtype=np.int64)
     for q, span in enumerate(spans):
         s1, s2, stats = _sum(results, span, 0), _sum(results, span, 1), _sum(results, span, 4)
         N = int(stats[0])
@@ -261,8 +279,19 @@ def _albedo_result(geometry, roughness, mu, rho, paths, seed, results, spans):
     return AlbedoEstimate(geometry, roughness, mu, rho, paths, seed, E, se, Eo, seo, bounces, trunc)
 
 
-def simulate_albedo(geometry, roughness, mu, rho=1.0, paths=1_000_000, seed=0, *, workers=None,
-                    client=None, scheduler=None, progress=False):
+def simulate_albedo(
+    geometry,
+    roughness,
+    mu,
+    rho=1.0,
+    paths=1_000_000,
+    seed=0,
+    *,
+    workers=None,
+    client=None,
+    scheduler=None,
+    progress=False,
+):
     """Directional albedo E(mu) of a rough Lambertian microsurface, by Monte Carlo.
 
     Parameters
@@ -307,7 +336,9 @@ def simulate_albedo(geometry, roughness, mu, rho=1.0, paths=1_000_000, seed=0, *
         raise ValueError(f"mu must be a scalar or a 1-D list of cosines, got shape {mu.shape}")
     bad = ~((mu >= MU_MIN) & (mu <= 1.0))
     if bad.any():
-        raise ValueError(f"mu must be in [1e-100, 1] (cosine of the incident angle; MU_MIN = 1e-100), got {mu[bad][0]!r}")
+        raise ValueError(
+            f"mu must be in [1e-100, 1] (cosine of the incident angle; MU_MIN = 1e-100), got {mu[bad][0]!r}"
+        )
     rho = _rho(rho)
     paths = _check_count("paths", paths, 1)
     seed = _check_count("seed", seed, 0)
@@ -319,8 +350,9 @@ def simulate_albedo(geometry, roughness, mu, rho=1.0, paths=1_000_000, seed=0, *
     return _albedo_result(geometry, roughness, mu, rho, paths, seed, results, spans)
 
 
-def simulate_average_albedo(geometry, roughness, rho=1.0, paths=1_000_000, seed=0, *, workers=None,
-                            client=None, scheduler=None, progress=False):
+def simulate_average_albedo(
+    geometry, roughness, rho=1.0, paths=1_000_000, seed=0, *, workers=None, client=None, scheduler=None, progress=False
+):
     """Average albedo <E> = 2 int_0^1 E(mu) mu dmu (incident directions cosine-distributed).
 
     Same parameters as ``simulate_albedo`` without ``mu``; the result's arrays have a
@@ -343,8 +375,20 @@ def simulate_average_albedo(geometry, roughness, rho=1.0, paths=1_000_000, seed=
     return _albedo_result(geometry, roughness, None, rho, paths, seed, results, spans)
 
 
-def simulate_brdf(geometry, roughness, wi, wo, rho=1.0, paths=1_000_000, seed=0, *, workers=None,
-                  client=None, scheduler=None, progress=False):
+def simulate_brdf(
+    geometry,
+    roughness,
+    wi,
+    wo,
+    rho=1.0,
+    paths=1_000_000,
+    seed=0,
+    *,
+    workers=None,
+    client=None,
+    scheduler=None,
+    progress=False,
+):
     """BRDF f(wi, wo) (without the cosine) of the microsurface, by next-event estimation.
 
     Light paths start from ``wi``; every bounce adds its exact contribution towards ``wo``
@@ -380,7 +424,8 @@ def simulate_brdf(geometry, roughness, wi, wo, rho=1.0, paths=1_000_000, seed=0,
     if wi.ndim != 2 or wo.ndim != 2:
         raise ValueError("wi and wo must have shape (3,) or (n, 3)")
     n = max(len(wi), len(wo))
-    wi = np.broadcast_to(wi, (n, 3)); wo = np.broadcast_to(wo, (n, 3))
+    wi = np.broadcast_to(wi, (n, 3))
+    wo = np.broadcast_to(wo, (n, 3))
     for name, w in (("wi", wi), ("wo", wo)):
         if (w[:, 2] <= 0.0).any():
             raise ValueError(f"{name} must be above the horizon (z > 0)")
@@ -398,8 +443,10 @@ def simulate_brdf(geometry, roughness, wi, wo, rho=1.0, paths=1_000_000, seed=0,
     tasks, spans = _plan("brdf", geometry, roughness, queries, False, rho, paths, seed)
     results = _execute(tasks, workers, client, scheduler, progress)
     C = rho.shape[0]
-    f = np.empty((n, C)); se = np.empty((n, C))
-    fo = np.empty((n, N_ORDERS, C)); seo = np.empty((n, N_ORDERS, C))
+    f = np.empty((n, C))
+    se = np.empty((n, C))
+    fo = np.empty((n, N_ORDERS, C))
+    seo = np.empty((n, N_ORDERS, C))
     for idx, span in zip(rows, spans):
         s1, s2, N = _sum(results, span, 2), _sum(results, span, 3), int(_sum(results, span, 4)[0])
         mean, err = _mean_err(s1, s2, N)
@@ -408,5 +455,13 @@ def simulate_brdf(geometry, roughness, wi, wo, rho=1.0, paths=1_000_000, seed=0,
     return BRDFEstimate(geometry, roughness, np.array(wi), np.array(wo), rho, paths, seed, f, se, fo, seo)
 
 
-__all__ = ["GEOMETRIES", "CHUNK_PATHS", "MAX_BOUNCES", "AlbedoEstimate", "BRDFEstimate",
-           "simulate_albedo", "simulate_average_albedo", "simulate_brdf"]
+__all__ = [
+    "GEOMETRIES",
+    "CHUNK_PATHS",
+    "MAX_BOUNCES",
+    "AlbedoEstimate",
+    "BRDFEstimate",
+    "simulate_albedo",
+    "simulate_average_albedo",
+    "simulate_brdf",
+]

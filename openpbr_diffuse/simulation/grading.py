@@ -14,6 +14,7 @@ the RMS of E_model(mu; rho) - E_sim(mu; rho) over the table's mu and ``FIT_RHO``
 at rho = 1 every energy-conserving model and both surfaces give 1, so the fit uses coloured
 albedos), or the RMS relative error of the in-plane BRDF slices at ``BRDF_RHO`` ("brdf").
 """
+
 from __future__ import annotations
 
 import csv
@@ -24,8 +25,12 @@ import numpy as np
 from .._csv import read_headed_csv
 
 DATA = Path(__file__).resolve().parents[1] / "data"
-TABLES = {"albedo": "simulation_albedo.csv", "brdf": "simulation_brdf.csv",
-          "grading": "simulation_grading.csv", "colorshift": "simulation_colorshift.csv"}
+TABLES = {
+    "albedo": "simulation_albedo.csv",
+    "brdf": "simulation_brdf.csv",
+    "grading": "simulation_grading.csv",
+    "colorshift": "simulation_colorshift.csv",
+}
 #: the graded models (roughness: sigma for the first three, r for the others)
 GRADED_MODELS = ("full_on", "qon", "qon_fujii", "fon", "eon", "eon_approx")
 #: albedos used to fit the model roughness
@@ -120,7 +125,8 @@ def sim_albedo(albedo_cols, geometry, roughness, rho, column="E"):
     """(mu, E (n_mu, n_rho), stderr) of a simulated surface's directional albedo."""
     sel = _select(albedo_cols, geometry=geometry, roughness=roughness, kind="directional")
     mu = np.unique(albedo_cols["mu"][sel])
-    E = np.empty((mu.size, len(rho))); se = np.empty_like(E)
+    E = np.empty((mu.size, len(rho)))
+    se = np.empty_like(E)
     for j, r in enumerate(rho):
         for i, m in enumerate(mu):
             k = np.flatnonzero(sel & np.isclose(albedo_cols["mu"], m) & np.isclose(albedo_cols["rho"], r))[0]
@@ -140,7 +146,8 @@ def sim_average(albedo_cols, geometry, roughness, column="E"):
 def slice_directions(theta_i, theta_o):
     """In-plane directions: wi at azimuth 0, wo at signed angle theta_o (negative: the
     light's side, i.e. back-scattering; positive: forward)."""
-    theta_i = np.asarray(theta_i, float); theta_o = np.asarray(theta_o, float)
+    theta_i = np.asarray(theta_i, float)
+    theta_o = np.asarray(theta_o, float)
     wi = np.stack([np.sin(theta_i), np.zeros_like(theta_i), np.cos(theta_i)], axis=-1)
     wo = np.stack([-np.sin(theta_o), np.zeros_like(theta_o), np.cos(np.abs(theta_o))], axis=-1)
     return wi, wo
@@ -164,8 +171,9 @@ def fit_roughness_brdf(model, wi, wo, f_sim):
     grid = np.linspace(lo, hi, 41)
     vals = [rel(s) for s in grid]
     k = int(np.argmin(vals))
-    res = minimize_scalar(rel, bounds=(grid[max(k - 1, 0)], grid[min(k + 1, 40)]), method="bounded",
-                          options={"xatol": 1e-5})
+    res = minimize_scalar(
+        rel, bounds=(grid[max(k - 1, 0)], grid[min(k + 1, 40)]), method="bounded", options={"xatol": 1e-5}
+    )
     return (float(res.x), float(res.fun)) if res.fun <= vals[k] else (float(grid[k]), float(vals[k]))
 
 
@@ -203,13 +211,22 @@ def grade_surface(model, albedo_cols, brdf_cols, geometry, roughness, fit="albed
     ss_err = m1 - E1[:, 0]
     f_mod = evaluate(model, wi, wo, s, [BRDF_RHO])[:, 0]
     rel = (f_mod - f_sim) / f_sim
-    return {"model": model, "geometry": geometry, "roughness": roughness, "fit": fit,
-            "roughness_name": info.roughness_name, "model_roughness": s,
-            "albedo_rms": float(np.sqrt(np.mean(err**2))), "albedo_max": float(np.max(np.abs(err))),
-            "albedo_stderr": float(np.sqrt(np.mean(se**2))),
-            "single_rms": float(np.sqrt(np.mean(ss_err**2))), "single_max": float(np.max(np.abs(ss_err))),
-            "brdf_rel_rms": float(np.sqrt(np.mean(rel**2))), "brdf_rel_max": float(np.max(np.abs(rel))),
-            "n_slices": int(len(f_sim))}
+    return {
+        "model": model,
+        "geometry": geometry,
+        "roughness": roughness,
+        "fit": fit,
+        "roughness_name": info.roughness_name,
+        "model_roughness": s,
+        "albedo_rms": float(np.sqrt(np.mean(err**2))),
+        "albedo_max": float(np.max(np.abs(err))),
+        "albedo_stderr": float(np.sqrt(np.mean(se**2))),
+        "single_rms": float(np.sqrt(np.mean(ss_err**2))),
+        "single_max": float(np.max(np.abs(ss_err))),
+        "brdf_rel_rms": float(np.sqrt(np.mean(rel**2))),
+        "brdf_rel_max": float(np.max(np.abs(rel))),
+        "n_slices": int(len(f_sim)),
+    }
 
 
 def grade_all(albedo_cols, brdf_cols, models=GRADED_MODELS, progress=lambda msg: None):
@@ -246,11 +263,36 @@ def eon_colorshift(albedo_cols, geometry, roughness, r, model="eon"):
     ms1 = ms[np.argmin(np.abs(rho - 1.0))]
     avg = float(E_F_avg(r))
     E_eon = np.asarray(average_albedo(model, r, rho)).reshape(-1)
-    return {"rho": rho, "ms_sim": ms / ms1, "ms_eon": np.array([rho_ms(x, avg) for x in rho]),
-            "ratio_sim": E / rho, "ratio_eon": E_eon / rho, "E_sim": E, "E_se": E_se, "E_eon": E_eon,
-            "ms_fraction_sim": ms1, "ms_fraction_eon": 1.0 - avg}
+    return {
+        "rho": rho,
+        "ms_sim": ms / ms1,
+        "ms_eon": np.array([rho_ms(x, avg) for x in rho]),
+        "ratio_sim": E / rho,
+        "ratio_eon": E_eon / rho,
+        "E_sim": E,
+        "E_se": E_se,
+        "E_eon": E_eon,
+        "ms_fraction_sim": ms1,
+        "ms_fraction_eon": 1.0 - avg,
+    }
 
 
-__all__ = ["GRADED_MODELS", "FIT_RHO", "BRDF_RHO", "TABLES", "load", "read_csv", "write_csv",
-           "fit_roughness", "fit_roughness_brdf", "FITS", "grade_surface", "grade_all", "eon_colorshift", "sim_albedo", "sim_average",
-           "slice_directions", "surfaces"]
+__all__ = [
+    "GRADED_MODELS",
+    "FIT_RHO",
+    "BRDF_RHO",
+    "TABLES",
+    "load",
+    "read_csv",
+    "write_csv",
+    "fit_roughness",
+    "fit_roughness_brdf",
+    "FITS",
+    "grade_surface",
+    "grade_all",
+    "eon_colorshift",
+    "sim_albedo",
+    "sim_average",
+    "slice_directions",
+    "surfaces",
+]

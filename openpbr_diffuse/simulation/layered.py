@@ -24,6 +24,7 @@ Example
 >>> bool(abs(e.total[0, 0] - smooth_lambert_albedo(1.5, 0.8, 1.0)) < 4 * e.total_stderr[0, 0])
 True
 """
+
 from __future__ import annotations
 
 import math
@@ -103,8 +104,9 @@ class LayeredSurface:
         object.__setattr__(self, "ior", _number("ior", self.ior, 1.0, 4.0))
         a = _number("interface_alpha", self.interface_alpha, 0.0, 1.0)
         object.__setattr__(self, "interface_alpha", a if self.interface == "ggx" else 0.0)
-        object.__setattr__(self, "roughness", _number("roughness", self.roughness, 0.0,
-                                                      2.0 if self.base == "smith-ggx" else 1.0))
+        object.__setattr__(
+            self, "roughness", _number("roughness", self.roughness, 0.0, 2.0 if self.base == "smith-ggx" else 1.0)
+        )
         object.__setattr__(self, "thickness", _number("thickness", self.thickness, 0.0, 1e6))
         absorbing = np.any(np.asarray(self.absorption, dtype=float) != 0.0) or self.thickness != 0.0
         if self.coat_color is not None and absorbing:
@@ -194,8 +196,21 @@ def _plan(kind, surface, queries, random_wi, rho, tau, paths, seed):
         start = len(tasks)
         for i in range(n_chunks):
             n = min(CHUNK_PATHS, paths - i * CHUNK_PATHS)
-            tasks.append((surface.interface_alpha, surface.ior, tau, surface.base, surface.roughness, rho,
-                          wi, random_wi, wo, n, _chunk_seed(seed, kind, surface, key, i)))
+            tasks.append(
+                (
+                    surface.interface_alpha,
+                    surface.ior,
+                    tau,
+                    surface.base,
+                    surface.roughness,
+                    rho,
+                    wi,
+                    random_wi,
+                    wo,
+                    n,
+                    _chunk_seed(seed, kind, surface, key, i),
+                )
+            )
         spans.append((start, len(tasks)))
     return tasks, spans
 
@@ -226,15 +241,33 @@ class LayeredAlbedo:
     def to_dict(self) -> dict:
         """JSON-ready form: the surface, and one row per mu."""
         s = self.surface
-        rows = [{"mu": None if self.mu is None else float(self.mu[i]),
-                 "specular": self.specular[i].tolist(), "specular_stderr": self.specular_stderr[i].tolist(),
-                 "diffuse": self.diffuse[i].tolist(), "diffuse_stderr": self.diffuse_stderr[i].tolist(),
-                 "total": self.total[i].tolist(), "total_stderr": self.total_stderr[i].tolist(),
-                 "base_events_per_path": float(self.base_events[i]), "truncated": int(self.truncated[i])}
-                for i in range(self.total.shape[0])]
-        return {"interface": s.interface, "ior": s.ior, "interface_alpha": s.interface_alpha,
-                "tau": s.tau.tolist(), "base": s.base, "roughness": s.roughness, "rho": self.rho.tolist(),
-                "paths": self.paths, "seed": self.seed, "average": self.mu is None, "rows": rows}
+        rows = [
+            {
+                "mu": None if self.mu is None else float(self.mu[i]),
+                "specular": self.specular[i].tolist(),
+                "specular_stderr": self.specular_stderr[i].tolist(),
+                "diffuse": self.diffuse[i].tolist(),
+                "diffuse_stderr": self.diffuse_stderr[i].tolist(),
+                "total": self.total[i].tolist(),
+                "total_stderr": self.total_stderr[i].tolist(),
+                "base_events_per_path": float(self.base_events[i]),
+                "truncated": int(self.truncated[i]),
+            }
+            for i in range(self.total.shape[0])
+        ]
+        return {
+            "interface": s.interface,
+            "ior": s.ior,
+            "interface_alpha": s.interface_alpha,
+            "tau": s.tau.tolist(),
+            "base": s.base,
+            "roughness": s.roughness,
+            "rho": self.rho.tolist(),
+            "paths": self.paths,
+            "seed": self.seed,
+            "average": self.mu is None,
+            "rows": rows,
+        }
 
 
 @dataclass
@@ -266,7 +299,8 @@ def _albedo(kind, surface, mu, rho, paths, seed, workers, client, scheduler):
     results = _execute(tasks, workers, client, scheduler)
     n, C = len(spans), r.size
     out = {k: np.empty((n, C)) for k in ("s", "se", "d", "de", "t", "te")}
-    ev = np.empty(n); tr = np.empty(n, dtype=np.int64)
+    ev = np.empty(n)
+    tr = np.empty(n, dtype=np.int64)
     for q, (a, b) in enumerate(spans):
         s1 = sum(results[i][0] for i in range(a, b))
         s2 = sum(results[i][1] for i in range(a, b))
@@ -276,12 +310,34 @@ def _albedo(kind, surface, mu, rho, paths, seed, workers, client, scheduler):
             out[m_][q], out[e_][q] = _mean_err(s1[row], s2[row], N)
         ev[q] = st[1] / N
         tr[q] = st[2]
-    return LayeredAlbedo(surface, None if kind == "average" else mu, r, paths, seed, out["s"], out["se"],
-                         out["d"], out["de"], out["t"], out["te"], ev, tr)
+    return LayeredAlbedo(
+        surface,
+        None if kind == "average" else mu,
+        r,
+        paths,
+        seed,
+        out["s"],
+        out["se"],
+        out["d"],
+        out["de"],
+        out["t"],
+        out["te"],
+        ev,
+        tr,
+    )
 
 
-def simulate_layered_albedo(surface: LayeredSurface, mu, rho=1.0, paths: int = 1_000_000, seed: int = 0, *,
-                            workers: int | None = None, client=None, scheduler=None) -> LayeredAlbedo:
+def simulate_layered_albedo(
+    surface: LayeredSurface,
+    mu,
+    rho=1.0,
+    paths: int = 1_000_000,
+    seed: int = 0,
+    *,
+    workers: int | None = None,
+    client=None,
+    scheduler=None,
+) -> LayeredAlbedo:
     """Directional albedo E(mu) of a layered surface, split into specular and diffuse parts.
 
     Parameters
@@ -310,8 +366,16 @@ def simulate_layered_albedo(surface: LayeredSurface, mu, rho=1.0, paths: int = 1
     return _albedo("albedo", surface, _mu(mu), rho, paths, seed, workers, client, scheduler)
 
 
-def simulate_layered_average_albedo(surface: LayeredSurface, rho=1.0, paths: int = 1_000_000, seed: int = 0, *,
-                                    workers: int | None = None, client=None, scheduler=None) -> LayeredAlbedo:
+def simulate_layered_average_albedo(
+    surface: LayeredSurface,
+    rho=1.0,
+    paths: int = 1_000_000,
+    seed: int = 0,
+    *,
+    workers: int | None = None,
+    client=None,
+    scheduler=None,
+) -> LayeredAlbedo:
     """Cosine-weighted average albedo <E> = 2 int E(mu) mu dmu (paths from cosine-distributed wi).
 
     Example
@@ -335,8 +399,18 @@ def _dirs(name, v):
     return np.ascontiguousarray(a / nrm[:, None])
 
 
-def simulate_layered_brdf(surface: LayeredSurface, wi, wo, rho=1.0, paths: int = 1_000_000, seed: int = 0, *,
-                          workers: int | None = None, client=None, scheduler=None) -> LayeredBRDF:
+def simulate_layered_brdf(
+    surface: LayeredSurface,
+    wi,
+    wo,
+    rho=1.0,
+    paths: int = 1_000_000,
+    seed: int = 0,
+    *,
+    workers: int | None = None,
+    client=None,
+    scheduler=None,
+) -> LayeredBRDF:
     """Diffuse part of the BRDF f(wi, wo) of a smooth-interface layered surface, by NEE.
 
     (The specular part of a smooth interface is a Dirac delta.)  wi, wo: unit vectors (n, 3)
@@ -350,19 +424,24 @@ def simulate_layered_brdf(surface: LayeredSurface, wi, wo, rho=1.0, paths: int =
     True
     """
     if surface.interface != "smooth":
-        raise ValueError("simulate_layered_brdf needs interface='smooth' (NEE through a rough interface is not implemented)")
+        raise ValueError(
+            "simulate_layered_brdf needs interface='smooth' (NEE through a rough interface is not implemented)"
+        )
     if surface.base == "smith-ggx":
-        raise ValueError("simulate_layered_brdf needs base 'lambert' or 'eon' (the microsurface base has no closed-form BRDF)")
+        raise ValueError(
+            "simulate_layered_brdf needs base 'lambert' or 'eon' (the microsurface base has no closed-form BRDF)"
+        )
     paths = _check_count("paths", paths, 2)
     seed = _check_count("seed", seed, 0)
     wi, wo = _dirs("wi", wi), _dirs("wo", wo)
     if wi.shape != wo.shape:
         raise ValueError(f"wi and wo must have the same shape, got {wi.shape} and {wo.shape}")
     r, tau = _channels(surface, rho)
-    queries = [(wi[i], wo[i:i + 1].copy(), [*wi[i], *wo[i]]) for i in range(wi.shape[0])]
+    queries = [(wi[i], wo[i : i + 1].copy(), [*wi[i], *wo[i]]) for i in range(wi.shape[0])]
     tasks, spans = _plan("brdf", surface, queries, False, r, tau, paths, seed)
     results = _execute(tasks, workers, client, scheduler)
-    f = np.empty((len(spans), r.size)); se = np.empty_like(f)
+    f = np.empty((len(spans), r.size))
+    se = np.empty_like(f)
     for q, (a, b) in enumerate(spans):
         s1 = sum(results[i][2][0] for i in range(a, b))
         s2 = sum(results[i][3][0] for i in range(a, b))
@@ -375,6 +454,7 @@ def simulate_layered_brdf(surface: LayeredSurface, wi, wo, rho=1.0, paths: int =
 # closed form: smooth interface over a Lambertian base (any absorption)
 # ---------------------------------------------------------------------------------------
 
+
 def _gauss_legendre(n: int = 256):
     x, w = np.polynomial.legendre.leggauss(n)
     return 0.5 * (x + 1.0), 0.5 * w
@@ -382,6 +462,7 @@ def _gauss_legendre(n: int = 256):
 
 def _fresnel(c, eta):
     from ..microfacet.fresnel import fresnel_dielectric
+
     return np.asarray(fresnel_dielectric(np.asarray(c, dtype=float), float(eta)), dtype=float)
 
 
@@ -403,12 +484,13 @@ def smooth_lambert_terms(ior: float, tau=0.0, n: int = 400) -> tuple[np.ndarray,
     """
     tau = np.atleast_1d(np.asarray(tau, dtype=float))
     x, w = _gauss_legendre(n)
-    mc = math.sqrt(max(0.0, 1.0 - 1.0 / ior ** 2))  # cosine of the critical angle inside
+    mc = math.sqrt(max(0.0, 1.0 - 1.0 / ior**2))  # cosine of the critical angle inside
     # [0, mc]: total internal reflection; [mc, 1]: partial
     mu1, w1 = mc * x, mc * w
     # mu = mc + (1 - mc) t^2: F_int has a square-root edge at the critical angle
     mu2, w2 = mc + (1.0 - mc) * x * x, 2.0 * (1.0 - mc) * x * w
-    mu = np.concatenate([mu1, mu2]); ww = np.concatenate([w1, w2])
+    mu = np.concatenate([mu1, mu2])
+    ww = np.concatenate([w1, w2])
     F = _fresnel(mu, 1.0 / ior)
     with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
         T = np.where(mu[None] > 0.0, np.exp(-tau[:, None] / mu[None]), 0.0)
@@ -439,7 +521,7 @@ def smooth_lambert_albedo(ior: float, rho, mu, tau=0.0) -> np.ndarray:
     if tau_a.size == 1:
         e_out, r_in, tau_a = e_out[0], r_in[0], tau_a[0]
     F = _fresnel(mu, ior)
-    mut = np.sqrt(1.0 - (1.0 - mu * mu) / ior ** 2)
+    mut = np.sqrt(1.0 - (1.0 - mu * mu) / ior**2)
     T = np.exp(-tau_a / mut)
     return F + (1.0 - F) * T * rho * e_out / (1.0 - rho * r_in)
 
@@ -457,7 +539,13 @@ def smooth_lambert_brdf(ior: float, rho, mu_i, mu_o, tau=0.0) -> np.ndarray:
     tau = float(np.asarray(tau, dtype=float).reshape(-1)[0]) if np.ndim(tau) else float(tau)
     _, r_in = smooth_lambert_terms(ior, tau)
     mi, mo = np.asarray(mu_i, dtype=float), np.asarray(mu_o, dtype=float)
-    ti = np.sqrt(1 - (1 - mi * mi) / ior ** 2); to = np.sqrt(1 - (1 - mo * mo) / ior ** 2)
+    ti = np.sqrt(1 - (1 - mi * mi) / ior**2)
+    to = np.sqrt(1 - (1 - mo * mo) / ior**2)
     T = np.exp(-tau / ti) * np.exp(-tau / to)
-    return (np.asarray(rho) * (1 - _fresnel(mi, ior)) * (1 - _fresnel(mo, ior)) * T
-            / (math.pi * ior ** 2 * (1 - np.asarray(rho) * r_in[0])))
+    return (
+        np.asarray(rho)
+        * (1 - _fresnel(mi, ior))
+        * (1 - _fresnel(mo, ior))
+        * T
+        / (math.pi * ior**2 * (1 - np.asarray(rho) * r_in[0]))
+    )

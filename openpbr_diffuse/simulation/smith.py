@@ -27,12 +27,13 @@ Visible normals: GGX by Heitz 2018 ("Sampling the GGX distribution of visible no
 visible-slope CDF in the stretched (alpha = 1) configuration (Newton with bisection
 safeguard, to 1e-10 in the slope), with an exact rejection sampler for the far tail.
 """
+
 import math
 
 import numpy as np
 
 from ..microfacet.kernels import ggx_visible_normal
-from ._common import INV_PI, PI, cosine_about, inline, order_class
+from ._common import INV_PI, cosine_about, inline, order_class
 
 BECKMANN = 0
 GGX = 1
@@ -72,7 +73,7 @@ def G1(wz, h, alpha, dist):
     c = C1(h)
     if c <= 0.0:
         return 0.0
-    return c ** L
+    return c**L
 
 
 @inline

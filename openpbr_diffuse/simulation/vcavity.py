@@ -29,6 +29,7 @@ leaves through the opening.  (Radiance of the macro surface per unit irradiance:
 Lambertian facet element reflects rho/pi (n . wo) of the power it receives per unit solid
 angle, and the macro area sees it foreshortened by mu_o.)
 """
+
 import math
 
 import numpy as np

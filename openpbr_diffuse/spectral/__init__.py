@@ -8,11 +8,26 @@ Pipeline: reflectance spectrum -> EON directional albedo per wavelength
 (CIE 1931 2 degree observer) -> working-space RGB (Bradford adaptation); RGB colours are
 upsampled to spectra by a ``colour.recovery`` method (``recovery.RECOVERY_METHODS``).
 """
+
 from .colorimetry import DEFAULT_ILLUMINANT, DEFAULT_WORKING_SPACE, WORKING_SPACES, Colorimetry, colorimetry
 from .colorsets import ColourSet, checker, from_materials, from_rgb, from_spectra, from_spectra_csv
 from .recovery import RECOVERY_METHODS, rgb_to_spectra
 from .validation import ColourShift, colour_shift
 
-__all__ = ["WORKING_SPACES", "DEFAULT_WORKING_SPACE", "DEFAULT_ILLUMINANT", "Colorimetry", "colorimetry",
-           "RECOVERY_METHODS", "rgb_to_spectra", "ColourSet", "checker", "from_rgb", "from_spectra", "from_spectra_csv",
-           "from_materials", "ColourShift", "colour_shift"]
+__all__ = [
+    "WORKING_SPACES",
+    "DEFAULT_WORKING_SPACE",
+    "DEFAULT_ILLUMINANT",
+    "Colorimetry",
+    "colorimetry",
+    "RECOVERY_METHODS",
+    "rgb_to_spectra",
+    "ColourSet",
+    "checker",
+    "from_rgb",
+    "from_spectra",
+    "from_spectra_csv",
+    "from_materials",
+    "ColourShift",
+    "colour_shift",
+]

@@ -15,6 +15,7 @@ is only imported when a spectral feature runs):
 Working spaces are a table (``WORKING_SPACES``: name -> colour-science colourspace), not an
 if-chain; so are illuminants (any name of ``colour.SDS_ILLUMINANTS``).
 """
+
 from __future__ import annotations
 
 import sys
@@ -34,11 +35,22 @@ WORKING_SPACES = {
 }
 #: other spellings (case-insensitive: MaterialX / OCIO / USD names) -> working-space name.
 WORKING_SPACE_ALIASES = {
-    "rec709": "lin_rec709", "lin_srgb": "lin_rec709", "srgb_linear": "lin_rec709", "linear": "lin_rec709",
-    "lin_rec709_scene": "lin_rec709", "linear rec.709 (srgb)": "lin_rec709",
-    "aces_cg": "acescg", "lin_ap1": "acescg", "lin_ap1_scene": "acescg", "ap1": "acescg",
-    "rec2020": "lin_rec2020", "lin_rec2020_scene": "lin_rec2020", "linear rec.2020": "lin_rec2020",
-    "p3d65": "lin_p3d65", "lin_p3d65_scene": "lin_p3d65", "linear p3-d65": "lin_p3d65",
+    "rec709": "lin_rec709",
+    "lin_srgb": "lin_rec709",
+    "srgb_linear": "lin_rec709",
+    "linear": "lin_rec709",
+    "lin_rec709_scene": "lin_rec709",
+    "linear rec.709 (srgb)": "lin_rec709",
+    "aces_cg": "acescg",
+    "lin_ap1": "acescg",
+    "lin_ap1_scene": "acescg",
+    "ap1": "acescg",
+    "rec2020": "lin_rec2020",
+    "lin_rec2020_scene": "lin_rec2020",
+    "linear rec.2020": "lin_rec2020",
+    "p3d65": "lin_p3d65",
+    "lin_p3d65_scene": "lin_p3d65",
+    "linear p3-d65": "lin_p3d65",
 }
 DEFAULT_WORKING_SPACE = "lin_rec709"
 DEFAULT_ILLUMINANT = "D65"
@@ -68,8 +80,9 @@ def _import_colour_without_plotting():
     try:
         import colour
     except ImportError as exc:
-        raise ImportError(f"the spectral features need colour-science ({exc}): "
-                          f"pip install 'colour-science>=0.4.4'") from exc
+        raise ImportError(
+            f"the spectral features need colour-science ({exc}): pip install 'colour-science>=0.4.4'"
+        ) from exc
     finally:
         np.set_printoptions(**print_options)
         if sys.modules.get("colour.plotting") is placeholder:
@@ -138,8 +151,12 @@ class Colorimetry:
             "working_space_colour_science": self._space.name,
             "working_space_white_xy": [float(v) for v in self._space.whitepoint],
             "chromatic_adaptation": f"{CAT} (illuminant white -> working-space white)",
-            "spectral_shape": {"start_nm": start, "end_nm": end, "interval_nm": interval,
-                               "samples": int(self.wavelengths.size)},
+            "spectral_shape": {
+                "start_nm": start,
+                "end_nm": end,
+                "interval_nm": interval,
+                "samples": int(self.wavelengths.size),
+            },
             "xyz_integration": "colour.msds_to_XYZ method 'Integration', perfect reflector Y = 100",
             "lab_reference_white_XYZ": [float(v) for v in self.white_XYZ],
             "delta_e": "CIE 2000",
@@ -159,24 +176,32 @@ class Colorimetry:
         """
         spectra = np.asarray(spectra, dtype=np.float64)
         if spectra.shape[-1] != self.wavelengths.size:
-            raise ValueError(f"spectra must have {self.wavelengths.size} samples on the last axis "
-                             f"({self.shape[0]:g}-{self.shape[1]:g} nm every {self.shape[2]:g} nm), "
-                             f"got shape {spectra.shape}")
+            raise ValueError(
+                f"spectra must have {self.wavelengths.size} samples on the last axis "
+                f"({self.shape[0]:g}-{self.shape[1]:g} nm every {self.shape[2]:g} nm), "
+                f"got shape {spectra.shape}"
+            )
         colour = _colour()
-        return colour.msds_to_XYZ(spectra, self._cmfs, self._illuminant_sd, method="Integration",
-                                  shape=self.colour_shape)
+        return colour.msds_to_XYZ(
+            spectra, self._cmfs, self._illuminant_sd, method="Integration", shape=self.colour_shape
+        )
 
     def XYZ_to_RGB(self, XYZ):
         """Working-space linear RGB (reflectance scale, white = 1) of XYZ (Y = 100)."""
         colour = _colour()
-        return colour.XYZ_to_RGB(np.asarray(XYZ, np.float64) / 100.0, self._space,
-                                 illuminant=self.white_xy, chromatic_adaptation_transform=CAT)
+        return colour.XYZ_to_RGB(
+            np.asarray(XYZ, np.float64) / 100.0,
+            self._space,
+            illuminant=self.white_xy,
+            chromatic_adaptation_transform=CAT,
+        )
 
     def RGB_to_XYZ(self, RGB):
         """XYZ (Y = 100, illuminant white) of working-space linear RGB (white = 1)."""
         colour = _colour()
-        return 100.0 * colour.RGB_to_XYZ(np.asarray(RGB, np.float64), self._space,
-                                         illuminant=self.white_xy, chromatic_adaptation_transform=CAT)
+        return 100.0 * colour.RGB_to_XYZ(
+            np.asarray(RGB, np.float64), self._space, illuminant=self.white_xy, chromatic_adaptation_transform=CAT
+        )
 
     def XYZ_to_Lab(self, XYZ):
         """CIELAB of XYZ (Y = 100) with the illuminant's white as reference white."""
@@ -201,8 +226,10 @@ def working_space_name(name):
     key = name.strip().lower()
     key = WORKING_SPACE_ALIASES.get(key, key)
     if key not in WORKING_SPACES:
-        raise ValueError(f"working_space must be one of {', '.join(WORKING_SPACES)} (or an alias such as "
-                         f"lin_ap1_scene, rec709); got {name!r}")
+        raise ValueError(
+            f"working_space must be one of {', '.join(WORKING_SPACES)} (or an alias such as "
+            f"lin_ap1_scene, rec709); got {name!r}"
+        )
     return key
 
 
@@ -243,15 +270,27 @@ def colorimetry(illuminant=DEFAULT_ILLUMINANT, working_space=DEFAULT_WORKING_SPA
 def _colorimetry(illuminant, working_space, shape):
     colour = _colour()
     if illuminant not in colour.SDS_ILLUMINANTS:  # a CanonicalMapping: case-insensitive lookup
-        raise ValueError(f"illuminant must be a name of colour.SDS_ILLUMINANTS "
-                         f"(e.g. D65, D50, A, FL2, LED-B1); got {illuminant!r}")
-    illuminant = next((k for k in colour.SDS_ILLUMINANTS.keys() if k.lower() == illuminant.lower()),
-                      colour.SDS_ILLUMINANTS[illuminant].name)
+        raise ValueError(
+            f"illuminant must be a name of colour.SDS_ILLUMINANTS (e.g. D65, D50, A, FL2, LED-B1); got {illuminant!r}"
+        )
+    illuminant = next(
+        (k for k in colour.SDS_ILLUMINANTS.keys() if k.lower() == illuminant.lower()),
+        colour.SDS_ILLUMINANTS[illuminant].name,
+    )
     cshape = colour.SpectralShape(*shape)
     cmfs = colour.MSDS_CMFS[OBSERVER].copy().align(cshape)
     sd = colour.SDS_ILLUMINANTS[illuminant].copy().align(cshape)
     wavelengths = np.asarray(cshape.wavelengths, np.float64)
     white = colour.msds_to_XYZ(np.ones(wavelengths.size), cmfs, sd, method="Integration", shape=cshape)
     space = colour.RGB_COLOURSPACES[WORKING_SPACES[working_space]]
-    return Colorimetry(illuminant, working_space, shape, wavelengths, np.asarray(white, np.float64),
-                       np.asarray(colour.XYZ_to_xy(white / 100.0), np.float64), cmfs, sd, space)
+    return Colorimetry(
+        illuminant,
+        working_space,
+        shape,
+        wavelengths,
+        np.asarray(white, np.float64),
+        np.asarray(colour.XYZ_to_xy(white / 100.0), np.float64),
+        cmfs,
+        sd,
+        space,
+    )

@@ -15,6 +15,7 @@ its working-space RGB (``rho_rgb``) and where both came from:
   USD / MaterialX files, read by ``openpbr_diffuse.readers.load_materials`` (colours in
   ACEScg, converted to the working space), upsampled.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -72,9 +73,14 @@ class ColourSet:
         sets = [s for s in sets if len(s)]
         if not sets:
             raise ValueError("colors: no colours to evaluate")
-        return ColourSet(sum((s.names for s in sets), []), np.concatenate([s.spectra for s in sets]),
-                         np.concatenate([s.rho_rgb for s in sets]), sum((s.source for s in sets), []),
-                         np.concatenate([s.roundtrip_delta_e for s in sets]), sum((s.extra for s in sets), []))
+        return ColourSet(
+            sum((s.names for s in sets), []),
+            np.concatenate([s.spectra for s in sets]),
+            np.concatenate([s.rho_rgb for s in sets]),
+            sum((s.source for s in sets), []),
+            np.concatenate([s.roundtrip_delta_e for s in sets]),
+            sum((s.extra for s in sets), []),
+        )
 
 
 def _measured(names, spectra, cm, source):
@@ -82,11 +88,11 @@ def _measured(names, spectra, cm, source):
     bad = ~np.isfinite(spectra) | (spectra < 0.0) | (spectra > 1.0)
     if np.any(bad):
         i = int(np.argmax(bad.any(axis=1)))
-        raise ValueError(f"spectrum {names[i]!r} ({source}) must be a reflectance in [0, 1] on "
-                         f"{cm.shape[0]:g}-{cm.shape[1]:g} nm")
+        raise ValueError(
+            f"spectrum {names[i]!r} ({source}) must be a reflectance in [0, 1] on {cm.shape[0]:g}-{cm.shape[1]:g} nm"
+        )
     rgb = cm.XYZ_to_RGB(cm.spectra_to_XYZ(spectra))
-    return ColourSet(list(names), spectra, rgb, [f"measured: {source}"] * len(names),
-                     np.full(len(names), np.nan))
+    return ColourSet(list(names), spectra, rgb, [f"measured: {source}"] * len(names), np.full(len(names), np.nan))
 
 
 def from_spectra(spectra, cm, names=None, source="spectra"):
@@ -102,8 +108,10 @@ def from_spectra(spectra, cm, names=None, source="spectra"):
     """
     spectra = np.atleast_2d(np.asarray(spectra, np.float64))
     if spectra.ndim != 2 or spectra.shape[1] != cm.wavelengths.size:
-        raise ValueError(f"spectra must have shape (P, {cm.wavelengths.size}) on {cm.shape[0]:g}-{cm.shape[1]:g} nm "
-                         f"every {cm.shape[2]:g} nm; got {spectra.shape}")
+        raise ValueError(
+            f"spectra must have shape (P, {cm.wavelengths.size}) on {cm.shape[0]:g}-{cm.shape[1]:g} nm "
+            f"every {cm.shape[2]:g} nm; got {spectra.shape}"
+        )
     names = [f"spectrum {i}" for i in range(len(spectra))] if names is None else list(names)
     if len(names) != len(spectra):
         raise ValueError(f"names must have one entry per spectrum ({len(spectra)}), got {len(names)}")
@@ -165,8 +173,14 @@ def from_spectra_csv(path, cm):
     if not np.all(np.isfinite(values)) or np.any((values < 0) | (values > 1)):
         raise ValueError(f"{path}: reflectances must lie in [0, 1]")
     # interpolation (Sprague for uniform data) may overshoot [0, 1] slightly near 0 or 1: clipped
-    spectra = [np.clip(colour.SpectralDistribution(dict(zip(wl, values[:, j])), name=header[j + 1])
-                       .align(cm.colour_shape).values, 0.0, 1.0) for j in range(values.shape[1])]
+    spectra = [
+        np.clip(
+            colour.SpectralDistribution(dict(zip(wl, values[:, j])), name=header[j + 1]).align(cm.colour_shape).values,
+            0.0,
+            1.0,
+        )
+        for j in range(values.shape[1])
+    ]
     return _measured(header[1:], spectra, cm, str(path))
 
 
@@ -226,15 +240,21 @@ def from_materials(paths, cm, method="auto"):
             rgb = _to_working_space(rgb, source_space, cm)
             clipped = np.clip(rgb, 0.0, 1.0)
             if np.any(abs(clipped - rgb) > 1e-9):
-                warnings.append(f"{m.file}:{m.path}: {key} {np.round(rgb, 6).tolist()} ({cm.working_space}) "
-                                f"clipped to [0, 1]")
+                warnings.append(
+                    f"{m.file}:{m.path}: {key} {np.round(rgb, 6).tolist()} ({cm.working_space}) clipped to [0, 1]"
+                )
             names.append(m.name)
             rgbs.append(clipped)
             sources.append(f"material {m.file}:{m.path} {key}")
-            extra.append({"material_file": str(m.file), "material_path": str(m.path),
-                          "material_shader": str(m.shader_id),
-                          "material_diffuse_model": getattr(m, "diffuse_model", "") or None,
-                          "material_diffuse_roughness": _material_roughness(m)})
+            extra.append(
+                {
+                    "material_file": str(m.file),
+                    "material_path": str(m.path),
+                    "material_shader": str(m.shader_id),
+                    "material_diffuse_model": getattr(m, "diffuse_model", "") or None,
+                    "material_diffuse_roughness": _material_roughness(m),
+                }
+            )
     if not names:
         return ColourSet([], np.zeros((0, cm.wavelengths.size)), np.zeros((0, 3)), [], np.zeros(0)), warnings
     name = resolve_method(method, cm)
@@ -254,6 +274,10 @@ def _to_working_space(rgb, source_space, cm):
     names = {"acescg": "ACEScg", **WORKING_SPACES}
     if source_space not in names:
         raise ValueError(f"material colours in {source_space!r}: no conversion to {cm.working_space}")
-    XYZ = 100.0 * colour.RGB_to_XYZ(rgb, colour.RGB_COLOURSPACES[names[source_space]], illuminant=cm.white_xy,
-                                    chromatic_adaptation_transform="Bradford")
+    XYZ = 100.0 * colour.RGB_to_XYZ(
+        rgb,
+        colour.RGB_COLOURSPACES[names[source_space]],
+        illuminant=cm.white_xy,
+        chromatic_adaptation_transform="Bradford",
+    )
     return cm.XYZ_to_RGB(XYZ)

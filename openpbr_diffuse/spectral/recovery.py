@@ -23,6 +23,7 @@ Methods (``RECOVERY_METHODS``; cost measured on the 2-core development VM):
 ``"auto"`` (the default) picks Mallett 2019 for the lin_rec709 working space and Otsu 2018
 otherwise.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -33,15 +34,18 @@ from .colorimetry import _colour
 def _mallett2019(rgb, cm):
     colour = _colour()
     space = colour.RGB_COLOURSPACES["ITU-R BT.709"]
-    rgb709 = colour.XYZ_to_RGB(cm.RGB_to_XYZ(rgb) / 100.0, space, illuminant=cm.white_xy,
-                               chromatic_adaptation_transform="Bradford")
+    rgb709 = colour.XYZ_to_RGB(
+        cm.RGB_to_XYZ(rgb) / 100.0, space, illuminant=cm.white_xy, chromatic_adaptation_transform="Bradford"
+    )
     eps = 1e-9
     bad = np.any((rgb709 < -eps) | (rgb709 > 1.0 + eps), axis=-1)
     if np.any(bad):
         i = int(np.argmax(bad))
-        raise ValueError(f"colour {np.round(rgb[i], 6).tolist()} ({cm.working_space}) is outside the "
-                         f"linear Rec.709 gamut [0, 1] (Rec.709 RGB {np.round(rgb709[i], 6).tolist()}): "
-                         f"method 'Mallett 2019' cannot upsample it; use 'Otsu 2018' or 'Jakob 2019'")
+        raise ValueError(
+            f"colour {np.round(rgb[i], 6).tolist()} ({cm.working_space}) is outside the "
+            f"linear Rec.709 gamut [0, 1] (Rec.709 RGB {np.round(rgb709[i], 6).tolist()}): "
+            f"method 'Mallett 2019' cannot upsample it; use 'Otsu 2018' or 'Jakob 2019'"
+        )
     basis = colour.recovery.MSDS_BASIS_FUNCTIONS_sRGB_MALLETT2019.copy().align(cm.colour_shape)
     # the spectrum is linear in RGB: rgb709 @ basis^T, evaluated by colour-science per colour
     # would be the same product; one matrix product keeps it vectorised

@@ -6,6 +6,7 @@ measured 'BabelColor Average' spectra x ``TABLE_ROUGHNESS`` x ``TABLE_MU``, ever
 states method, grid, rounding, the check against the quadrature albedo tables, the library and
 colour-science versions and the regeneration command ``python tools/make_colorshift_table.py``.
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -22,8 +23,11 @@ TABLE_ROUGHNESS = tuple(k / 8 for k in range(9))
 TABLE_THETA_DEG = (0.0, 30.0, 60.0, 75.0, 84.0)
 TABLE_MU = tuple(float(np.round(np.cos(np.radians(t)), 12)) for t in TABLE_THETA_DEG)
 DECIMALS = 10
-COLUMNS = (["patch", "roughness", "theta_deg", "mu", "rho_rgb_clipped"]
-           + [f"{f}_{c}" for f in RGB_FIELDS for c in "rgb"] + list(SCALAR_FIELDS))
+COLUMNS = (
+    ["patch", "roughness", "theta_deg", "mu", "rho_rgb_clipped"]
+    + [f"{f}_{c}" for f in RGB_FIELDS for c in "rgb"]
+    + list(SCALAR_FIELDS)
+)
 
 
 def table_path(working_space):
@@ -38,8 +42,13 @@ def table_lines(result):
     theta = dict(zip(TABLE_MU, TABLE_THETA_DEG))
     out = [",".join(COLUMNS)]
     for row in result.rows():
-        vals = [row["patch"], f"{row['roughness']:.6f}", f"{theta.get(row['mu'], float('nan')):g}",
-                f"{row['mu']:.12f}", str(int(row["rho_rgb_clipped"]))]
+        vals = [
+            row["patch"],
+            f"{row['roughness']:.6f}",
+            f"{theta.get(row['mu'], float('nan')):g}",
+            f"{row['mu']:.12f}",
+            str(int(row["rho_rgb_clipped"])),
+        ]
         for f in RGB_FIELDS:
             vals += [_fmt(v) for v in row[f]]
         vals += [_fmt(row[f]) for f in SCALAR_FIELDS]

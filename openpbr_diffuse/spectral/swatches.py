@@ -8,6 +8,7 @@ are working-space linear RGB; for display formats (PNG, JPEG, TIFF, ...) OpenIma
 built-in OCIO configuration converts them to sRGB-encoded Rec.709 (values outside that gamut
 clip); ``.exr`` keeps the linear working-space values (colour space in the metadata).
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -15,8 +16,12 @@ from pathlib import Path
 import numpy as np
 
 #: working space -> OpenImageIO (built-in OCIO config) colour-space name.
-OIIO_SPACES = {"lin_rec709": "Linear Rec.709 (sRGB)", "acescg": "ACEScg",
-               "lin_rec2020": "Linear Rec.2020", "lin_p3d65": "Linear P3-D65"}
+OIIO_SPACES = {
+    "lin_rec709": "Linear Rec.709 (sRGB)",
+    "acescg": "ACEScg",
+    "lin_rec2020": "Linear Rec.2020",
+    "lin_p3d65": "Linear P3-D65",
+}
 DISPLAY = "sRGB Encoded Rec.709 (sRGB)"
 LINEAR_SUFFIXES = (".exr",)
 SWATCH, GAP, LABEL_W, HEAD_H, FONT = 28, 10, 200, 46, 13
@@ -40,7 +45,7 @@ def swatch_array(result):
             y0 = HEAD_H + p * (SWATCH + 4)
             for j, (_, name) in enumerate(KINDS):
                 v = result.rho_rgb[p] if name == "rho_rgb" else getattr(result, name)[p, k, m]
-                img[y0:y0 + SWATCH, x0 + j * SWATCH:x0 + (j + 1) * SWATCH - 2] = v  # 2 px apart
+                img[y0 : y0 + SWATCH, x0 + j * SWATCH : x0 + (j + 1) * SWATCH - 2] = v  # 2 px apart
     for p, name in enumerate(result.colours.names):
         labels.append((6, HEAD_H + p * (SWATCH + 4) + SWATCH // 2 + 5, name[:26]))
     return img, labels
@@ -68,9 +73,10 @@ def write_swatches(result, path):
     for x, y, s in labels:
         oiio.ImageBufAlgo.render_text(buf, int(x), int(y), s, FONT, "", text)
     buf.specmod().attribute("oiio:ColorSpace", space if linear else DISPLAY)
-    buf.specmod().attribute("ImageDescription",
-                            "openpbr-diffuse colorshift: L Lambert, R RGB-evaluated EON, S spectral EON, "
-                            "W white then tint")
+    buf.specmod().attribute(
+        "ImageDescription",
+        "openpbr-diffuse colorshift: L Lambert, R RGB-evaluated EON, S spectral EON, W white then tint",
+    )
     if not buf.write(str(path), "half" if linear else "uint8"):
         raise OSError(f"--image: cannot write {path}: {buf.geterror()}")
     return path

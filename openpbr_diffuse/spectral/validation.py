@@ -21,6 +21,7 @@ colour x roughness x mu this module computes (names as in the JSON output):
 The albedos come from ``openpbr_diffuse.directional_albedo("eon", ...)`` with the spectral
 samples (or RGB channels) as its channel axis; colorimetry from ``colorimetry.Colorimetry``.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -35,8 +36,14 @@ MODEL = "eon"
 DEFAULT_ROUGHNESS = (0.0, 0.25, 0.5, 0.75, 1.0)
 DEFAULT_MU = (0.2, 0.5, 1.0)
 #: the per-row scalar fields, in output order.
-SCALAR_FIELDS = ("delta_e_rgb_vs_spectral", "rel_luminance_diff_rgb_vs_spectral", "chroma_diff_rgb_vs_spectral",
-                 "delta_e_shift", "rel_luminance_diff_shift", "chroma_diff_shift")
+SCALAR_FIELDS = (
+    "delta_e_rgb_vs_spectral",
+    "rel_luminance_diff_rgb_vs_spectral",
+    "chroma_diff_rgb_vs_spectral",
+    "delta_e_shift",
+    "rel_luminance_diff_shift",
+    "chroma_diff_shift",
+)
 RGB_FIELDS = ("rho_rgb", "albedo_spectral", "albedo_rgb", "albedo_white_tint")
 
 
@@ -68,8 +75,13 @@ class ColourShift:
 
     def settings(self):
         """The settings used, as plain data."""
-        d = {"model": MODEL, "color_mode_spectral": "reference", "color_mode_white_tint": "white_tint",
-             "roughness": self.roughness.tolist(), "mu": self.mu.tolist()}
+        d = {
+            "model": MODEL,
+            "color_mode_spectral": "reference",
+            "color_mode_white_tint": "white_tint",
+            "roughness": self.roughness.tolist(),
+            "mu": self.mu.tolist(),
+        }
         d.update(self.colorimetry.describe())
         d["fields"] = {
             "rho_rgb": "the colour's reflectance (Lambertian albedo), working-space linear RGB",
@@ -92,9 +104,14 @@ class ColourShift:
         out = []
         for p, k, m in np.ndindex(self.delta_e_shift.shape):
             de = cs.roundtrip_delta_e[p]
-            row = {"patch": cs.names[p], "source": cs.source[p], "roughness": float(self.roughness[k]),
-                   "mu": float(self.mu[m]), "rho_rgb": _r(self.rho_rgb[p]),
-                   "rho_rgb_clipped": bool(self.rho_rgb_clipped[p])}
+            row = {
+                "patch": cs.names[p],
+                "source": cs.source[p],
+                "roughness": float(self.roughness[k]),
+                "mu": float(self.mu[m]),
+                "rho_rgb": _r(self.rho_rgb[p]),
+                "rho_rgb_clipped": bool(self.rho_rgb_clipped[p]),
+            }
             for name in RGB_FIELDS[1:]:
                 row[name] = _r(getattr(self, name)[p, k, m])
             for name in SCALAR_FIELDS:
@@ -128,7 +145,8 @@ class ColourShift:
                 out[float(mu)][name] = {
                     "max": (float(v[order[-1]]), names[order[-1]]),
                     "max_in_gamut": (None, None) if best_in is None else (float(v[best_in]), names[best_in]),
-                    "median": (float(np.median(v)), " / ".join(names[i] for i in mid))}
+                    "median": (float(np.median(v)), " / ".join(names[i] for i in mid)),
+                }
         return out
 
 
@@ -199,15 +217,28 @@ def colour_shift(colours, roughness=DEFAULT_ROUGHNESS, mu=DEFAULT_MU, cm=None):
     n = S.shape[-1]
     channels = np.concatenate([S, rgb_eval, np.ones((len(S), 1))], axis=-1)
     E = directional_albedo(MODEL, mm, rr, channels[lead], color_mode="reference")
-    E_spec, E_rgb, E_tint = E[..., :n], E[..., n:n + 3], S[lead] * E[..., n + 3:]
-    XYZ = {"spectral": cm.spectra_to_XYZ(E_spec), "white_tint": cm.spectra_to_XYZ(E_tint),
-           "rgb": cm.RGB_to_XYZ(E_rgb)}
+    E_spec, E_rgb, E_tint = E[..., :n], E[..., n : n + 3], S[lead] * E[..., n + 3 :]
+    XYZ = {"spectral": cm.spectra_to_XYZ(E_spec), "white_tint": cm.spectra_to_XYZ(E_tint), "rgb": cm.RGB_to_XYZ(E_rgb)}
     Lab = {k: cm.XYZ_to_Lab(v) for k, v in XYZ.items()}
     C = {k: cm.chroma(v) for k, v in Lab.items()}
     Y = {k: v[..., 1] for k, v in XYZ.items()}
     rel_rgb, rel_shift = _relative(Y["rgb"], Y["spectral"]), _relative(Y["spectral"], Y["white_tint"])
     return ColourShift(
-        colours, r, mu, cm, rgb, clipped,
-        cm.XYZ_to_RGB(XYZ["spectral"]), E_rgb, cm.XYZ_to_RGB(XYZ["white_tint"]), XYZ, Lab,
-        cm.delta_E(Lab["rgb"], Lab["spectral"]), rel_rgb, C["rgb"] - C["spectral"],
-        cm.delta_E(Lab["spectral"], Lab["white_tint"]), rel_shift, C["spectral"] - C["white_tint"])
+        colours,
+        r,
+        mu,
+        cm,
+        rgb,
+        clipped,
+        cm.XYZ_to_RGB(XYZ["spectral"]),
+        E_rgb,
+        cm.XYZ_to_RGB(XYZ["white_tint"]),
+        XYZ,
+        Lab,
+        cm.delta_E(Lab["rgb"], Lab["spectral"]),
+        rel_rgb,
+        C["rgb"] - C["spectral"],
+        cm.delta_E(Lab["spectral"], Lab["white_tint"]),
+        rel_shift,
+        C["spectral"] - C["white_tint"],
+    )

@@ -12,5 +12,17 @@
 - layered: the diffuse lobe under a dielectric layer against the layered-surface simulation
 - timings: the paper's Table 1 on this machine
 """
-SECTIONS = ("models", "albedo", "sampling", "colorshift", "materials", "implementations", "graders",
-            "approximations", "simulation", "layered", "timings")
+
+SECTIONS = (
+    "models",
+    "albedo",
+    "sampling",
+    "colorshift",
+    "materials",
+    "implementations",
+    "graders",
+    "approximations",
+    "simulation",
+    "layered",
+    "timings",
+)

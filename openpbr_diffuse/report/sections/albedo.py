@@ -5,6 +5,7 @@ of ``evaluate``, never from a closed form (their headers give method, resolution
 held-out interpolation error); ``directional_albedo`` / ``average_albedo`` are the closed
 forms (Eq. 8-9, 12-15, 20).  The Eq. 14 fit of E_F is compared with the FON table.
 """
+
 import math
 
 import numpy as np
@@ -26,6 +27,7 @@ def _rmax(info):
 def _fit_error(ctx, n_mu, n_r):
     """(mu, r, exact table E_F, Eq. 14 fit) on a grid."""
     import openpbr_diffuse as od
+
     from ...models.fon import E_F_approx
 
     mu = np.linspace(0.0, 1.0, n_mu)
@@ -52,6 +54,7 @@ STATED = (
 def _stated(ctx, res):
     """The library's quadrature of ``evaluate`` against the stated values."""
     import openpbr_diffuse as od
+
     from ...albedo.quadrature import hemisphere_albedo, hemisphere_average_albedo
 
     rows = []
@@ -64,17 +67,31 @@ def _stated(ctx, res):
             return od.evaluate(m, wi, wo, rough, 1.0)[..., 0]
 
         q = float(hemisphere_albedo(brdf, mu, 12) if kind == "E" else hemisphere_average_albedo(brdf, 8, n_mu=8))
-        tol = 0.5 * 10.0 ** -dec + 1e-9
+        tol = 0.5 * 10.0**-dec + 1e-9
         rows.append([label, value, q, q - value])
-        res.checks.append(Check(f"stated value {label}", q, tol, "==", expected=value,
-                                reference="spec/models.md 'Values checked here' (EON paper values)",
-                                detail="quadrature of evaluate; tolerance: half a unit of the last stated digit"))
-    res.tables.append(Table("Stated values against quadrature of evaluate (rho = 1)",
-                            ["quantity", "stated", "quadrature", "difference"], rows))
+        res.checks.append(
+            Check(
+                f"stated value {label}",
+                q,
+                tol,
+                "==",
+                expected=value,
+                reference="spec/models.md 'Values checked here' (EON paper values)",
+                detail="quadrature of evaluate; tolerance: half a unit of the last stated digit",
+            )
+        )
+    res.tables.append(
+        Table(
+            "Stated values against quadrature of evaluate (rho = 1)",
+            ["quantity", "stated", "quadrature", "difference"],
+            rows,
+        )
+    )
 
 
 def build(ctx):
     import openpbr_diffuse as od
+
     from ...albedo.tables import load_table, table_path
     from ...models.registry import INFO
 
@@ -100,25 +117,48 @@ def build(ctx):
             Ra = od.reference_average_albedo(m, rough, rho)
             worst_avg = max(worst_avg, float(np.abs(Ea - Ra).max()))
         ref = f"data/{table_path(m).name} (quadrature of evaluate; interpolation error {table.interpolation_error:.1e})"
-        res.checks.append(Check(f"{m}: directional albedo, closed form vs table", worst, TABLE_TOL, "<=",
-                                reference=ref, detail=f"mu in [0.01, 1], {len(rough)} roughness values, 3 colours"))
-        res.checks.append(Check(f"{m}: average albedo, closed form vs table", worst_avg, TABLE_TOL, "<=",
-                                reference=ref))
+        res.checks.append(
+            Check(
+                f"{m}: directional albedo, closed form vs table",
+                worst,
+                TABLE_TOL,
+                "<=",
+                reference=ref,
+                detail=f"mu in [0.01, 1], {len(rough)} roughness values, 3 colours",
+            )
+        )
+        res.checks.append(
+            Check(f"{m}: average albedo, closed form vs table", worst_avg, TABLE_TOL, "<=", reference=ref)
+        )
         rows.append([m, worst, worst_avg, float(table.interpolation_error)])
-    res.tables.append(Table("Largest |closed form - reference table| (rho = 1, (0.8, 0.5, 0.2), (0.05, 0.3, 0.9))",
-                            ["model", "directional albedo", "average albedo", "table interpolation error"], rows))
+    res.tables.append(
+        Table(
+            "Largest |closed form - reference table| (rho = 1, (0.8, 0.5, 0.2), (0.05, 0.3, 0.9))",
+            ["model", "directional albedo", "average albedo", "table interpolation error"],
+            rows,
+        )
+    )
     _stated(ctx, res)
     ctx.progress("Eq. 14 fit")
     mu_g, r_g, exact, fit = _fit_error(ctx, 101 if ctx.quick else 401, 11 if ctx.quick else 21)
     err = fit - exact
     frac = np.abs(err) / exact
     k = np.unravel_index(np.argmax(np.abs(err)), err.shape)
-    res.checks.append(Check("Eq. 14 fit of E_F: max fractional error", float(frac.max()), FIT_TOL, "<=",
-                            reference="data/albedo_fon.csv; paper: < 0.1 % over all directions",
-                            detail=f"max |error| {abs(err[k]):.3e} at r = {r_g[k[0]]:.3g}, mu = {mu_g[k[1]]:.3g}"))
-    res.notes.append(f"The Eq. 14 fit's largest error against the exact E_F (reference table): "
-                     f"{abs(err[k]):.3e} at r = {r_g[k[0]]:.3g}, mu = {mu_g[k[1]]:.3g}; at mu = 0 it reaches "
-                     f"E_F = {fit[-1, 0]:.6f} at r = 1 (exact: 1).")
+    res.checks.append(
+        Check(
+            "Eq. 14 fit of E_F: max fractional error",
+            float(frac.max()),
+            FIT_TOL,
+            "<=",
+            reference="data/albedo_fon.csv; paper: < 0.1 % over all directions",
+            detail=f"max |error| {abs(err[k]):.3e} at r = {r_g[k[0]]:.3g}, mu = {mu_g[k[1]]:.3g}",
+        )
+    )
+    res.notes.append(
+        f"The Eq. 14 fit's largest error against the exact E_F (reference table): "
+        f"{abs(err[k]):.3e} at r = {r_g[k[0]]:.3g}, mu = {mu_g[k[1]]:.3g}; at mu = 0 it reaches "
+        f"E_F = {fit[-1, 0]:.6f} at r = 1 (exact: 1)."
+    )
     plt = pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(13, 4.2))
     for i in range(0, len(r_g), max(1, len(r_g) // 5)):

@@ -6,6 +6,7 @@ references (colour-science's own ``sd_to_XYZ``, the quadrature albedo tables, th
 colour-shift table), the r = 1 summary per working space, the round trip of the recovery
 methods and how much the recovered spectrum changes the answer, a plot and a swatch image.
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -34,47 +35,107 @@ def _checks(res, cm, colour):
     checks = []
     inside = ~res.rho_rgb_clipped
     k0 = int(np.argmin(res.roughness))
-    checks.append(Check("r = 0: RGB and spectral evaluation agree (EON is Lambert)",
-                        float(res.delta_e_rgb_vs_spectral[inside, k0].max()), 1e-6, "<=",
-                        "Lambert limit (E = rho, linear in rho)", unit="dE2000",
-                        detail=f"{int(inside.sum())} in-gamut patches; clipped: "
-                               + (", ".join(n for n, c in zip(res.colours.names, res.rho_rgb_clipped) if c) or "none")))
-    checks.append(Check("r = 0: no colour shift", float(res.delta_e_shift[:, k0].max()), 1e-6, "<=",
-                        "Lambert limit", unit="dE2000"))
+    checks.append(
+        Check(
+            "r = 0: RGB and spectral evaluation agree (EON is Lambert)",
+            float(res.delta_e_rgb_vs_spectral[inside, k0].max()),
+            1e-6,
+            "<=",
+            "Lambert limit (E = rho, linear in rho)",
+            unit="dE2000",
+            detail=f"{int(inside.sum())} in-gamut patches; clipped: "
+            + (", ".join(n for n, c in zip(res.colours.names, res.rho_rgb_clipped) if c) or "none"),
+        )
+    )
+    checks.append(
+        Check(
+            "r = 0: no colour shift", float(res.delta_e_shift[:, k0].max()), 1e-6, "<=", "Lambert limit", unit="dE2000"
+        )
+    )
     flat = np.linspace(0.05, 1.0, 8)[:, None] * np.ones((1, cm.wavelengths.size))
-    fs = ColourSet([f"flat {v:.2f}" for v in flat[:, 0]], flat, cm.XYZ_to_RGB(cm.spectra_to_XYZ(flat)),
-                   ["flat"] * len(flat), np.full(len(flat), np.nan))
+    fs = ColourSet(
+        [f"flat {v:.2f}" for v in flat[:, 0]],
+        flat,
+        cm.XYZ_to_RGB(cm.spectra_to_XYZ(flat)),
+        ["flat"] * len(flat),
+        np.full(len(flat), np.nan),
+    )
     fr = colour_shift(fs, res.roughness, res.mu, cm)
-    checks.append(Check("spectrally flat reflectance: RGB = spectral", float(fr.delta_e_rgb_vs_spectral.max()),
-                        1e-6, "<=", "grey spectra 0.05-1", unit="dE2000"))
+    checks.append(
+        Check(
+            "spectrally flat reflectance: RGB = spectral",
+            float(fr.delta_e_rgb_vs_spectral.max()),
+            1e-6,
+            "<=",
+            "grey spectra 0.05-1",
+            unit="dE2000",
+        )
+    )
     E_ref = od.reference_albedo("eon", res.mu[None, None, :], res.roughness[None, :, None], flat[:, None, None, :1])
-    checks.append(Check("flat reflectance: albedo = quadrature table", float(abs(
-        fr.albedo_spectral - E_ref).max()), 1e-5, "<=", "data/albedo_eon.csv (reference_albedo)"))
+    checks.append(
+        Check(
+            "flat reflectance: albedo = quadrature table",
+            float(abs(fr.albedo_spectral - E_ref).max()),
+            1e-5,
+            "<=",
+            "data/albedo_eon.csv (reference_albedo)",
+        )
+    )
     sds = colour.SDS_COLOURCHECKERS["BabelColor Average"]
-    XYZ_ref = np.array([colour.sd_to_XYZ(sds[n], cm.cmfs, cm.illuminant_sd, method="Integration")
-                        for n in res.colours.names])
-    checks.append(Check("pipeline XYZ of the patches = colour.sd_to_XYZ", float(abs(
-        res.XYZ["spectral"][:, k0] - XYZ_ref[:, None]).max()), 1e-9, "<=",
-        "colour.sd_to_XYZ (Integration), measured spectra", unit="XYZ (Y = 100)"))
+    XYZ_ref = np.array(
+        [colour.sd_to_XYZ(sds[n], cm.cmfs, cm.illuminant_sd, method="Integration") for n in res.colours.names]
+    )
+    checks.append(
+        Check(
+            "pipeline XYZ of the patches = colour.sd_to_XYZ",
+            float(abs(res.XYZ["spectral"][:, k0] - XYZ_ref[:, None]).max()),
+            1e-9,
+            "<=",
+            "colour.sd_to_XYZ (Integration), measured spectra",
+            unit="XYZ (Y = 100)",
+        )
+    )
 
     def xy(X):
         return X[..., :2] / X.sum(-1, keepdims=True)
 
-    checks.append(Check("white then tint keeps the chromaticity of rho", float(abs(
-        xy(res.XYZ["white_tint"]) - xy(XYZ_ref)[:, None, None]).max()), 1e-10, "<=",
-        "xy of colour.sd_to_XYZ of the patch", unit="xy"))
+    checks.append(
+        Check(
+            "white then tint keeps the chromaticity of rho",
+            float(abs(xy(res.XYZ["white_tint"]) - xy(XYZ_ref)[:, None, None]).max()),
+            1e-10,
+            "<=",
+            "xy of colour.sd_to_XYZ of the patch",
+            unit="xy",
+        )
+    )
     Lab = res.Lab["spectral"]
     C = np.hypot(Lab[..., 1], Lab[..., 2])
     chrom = C[:, k0, 0] > 2.0
     pos = res.mu > 0
     sat = (C / Lab[..., 0])[chrom][:, :, pos]
     bad = int((np.diff(sat, axis=1) <= 0).sum()) if len(res.roughness) > 1 else 0
-    checks.append(Check("saturation C*/L* grows strictly with r (chromatic patches, mu > 0)", bad, 0, "<=",
-                        "monotonicity over the roughness grid", unit="non-increasing steps",
-                        detail=f"{int(chrom.sum())} chromatic patches (C*ab > 2 at r = 0)"))
+    checks.append(
+        Check(
+            "saturation C*/L* grows strictly with r (chromatic patches, mu > 0)",
+            bad,
+            0,
+            "<=",
+            "monotonicity over the roughness grid",
+            unit="non-increasing steps",
+            detail=f"{int(chrom.sum())} chromatic patches (C*ab > 2 at r = 0)",
+        )
+    )
     E1 = od.directional_albedo("eon", res.mu[None, :], res.roughness[:, None], np.ones(cm.wavelengths.size))
-    checks.append(Check("white furnace per wavelength (rho = 1 at 81 wavelengths)", float(abs(E1 - 1).max()),
-                        1e-6, "<=", "energy conservation of EON"))
+    checks.append(
+        Check(
+            "white furnace per wavelength (rho = 1 at 81 wavelengths)",
+            float(abs(E1 - 1).max()),
+            1e-6,
+            "<=",
+            "energy conservation of EON",
+        )
+    )
     return checks
 
 
@@ -91,18 +152,33 @@ def _table_check(quick):
         fresh.setdefault("v", []).append([float(v) for v in vals[1:]])
     new = np.array(fresh["v"])
     old = np.stack([cols[c] for c in ref.COLUMNS[1:]], axis=-1)
-    return Check("shipped ColorChecker colour-shift table reproduced", float(abs(new - old).max()), 1e-8, "<=",
-                 "openpbr_diffuse/data/colorshift_checker_lin_rec709.csv", detail=header.get("library", ""))
+    return Check(
+        "shipped ColorChecker colour-shift table reproduced",
+        float(abs(new - old).max()),
+        1e-8,
+        "<=",
+        "openpbr_diffuse/data/colorshift_checker_lin_rec709.csv",
+        detail=header.get("library", ""),
+    )
 
 
 def _summary_rows(name_ws, res):
     rows = []
     for mu, s in res.summary(1.0).items():
         a, b = s["delta_e_rgb_vs_spectral"], s["delta_e_shift"]
-        rows.append([name_ws, round(mu, 4), round(a["max"][0], 4), a["max"][1],
-                     "-" if a["max_in_gamut"][1] is None else f"{a['max_in_gamut'][0]:.4f} ({a['max_in_gamut'][1]})",
-                     f"{a['median'][0]:.4f} ({a['median'][1]})", round(b["max"][0], 4), b["max"][1],
-                     f"{b['median'][0]:.4f} ({b['median'][1]})"])
+        rows.append(
+            [
+                name_ws,
+                round(mu, 4),
+                round(a["max"][0], 4),
+                a["max"][1],
+                "-" if a["max_in_gamut"][1] is None else f"{a['max_in_gamut'][0]:.4f} ({a['max_in_gamut'][1]})",
+                f"{a['median'][0]:.4f} ({a['median'][1]})",
+                round(b["max"][0], 4),
+                b["max"][1],
+                f"{b['median'][0]:.4f} ({b['median'][1]})",
+            ]
+        )
     return rows
 
 
@@ -121,14 +197,21 @@ def _recovery_table(cm, measured, quick):
         if method == "Jakob 2019":
             if quick:
                 continue
-            idx = idx[::6]        # ~0.1-1 s per colour: a subset
+            idx = idx[::6]  # ~0.1-1 s per colour: a subset
         cs = from_rgb(rgb[idx], cm, method, names=[names[i] for i in idx])
         res = colour_shift(cs, [1.0], [1.0], cm)
         meas = ref.Lab["spectral"][inside][idx, 0, 0]
         d_alb = cm.delta_E(res.Lab["spectral"][:, 0, 0], meas)
-        rows.append([method, len(idx), round(float(cs.roundtrip_delta_e.max()), 4),
-                     round(float(np.median(cs.roundtrip_delta_e)), 4), round(float(d_alb.max()), 4),
-                     names[idx[int(np.argmax(d_alb))]]])
+        rows.append(
+            [
+                method,
+                len(idx),
+                round(float(cs.roundtrip_delta_e.max()), 4),
+                round(float(np.median(cs.roundtrip_delta_e)), 4),
+                round(float(d_alb.max()), 4),
+                names[idx[int(np.argmax(d_alb))]],
+            ]
+        )
     return rows
 
 
@@ -143,10 +226,19 @@ def _figure(ctx, res):
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
     for p, name in enumerate(res.colours.names):
         axes[0].plot(res.roughness, res.delta_e_shift[p, :, m], color=srgb[p], lw=1.5)
-        axes[1].plot(res.roughness, res.delta_e_rgb_vs_spectral[p, :, m], color=srgb[p], lw=1.5,
-                     ls="--" if res.rho_rgb_clipped[p] else "-", label=name if res.rho_rgb_clipped[p] else None)
-    axes[0].set(title=f"colour shift: spectral vs white then tint (mu = {res.mu[m]:g})", xlabel="roughness r",
-                ylabel="CIEDE2000")
+        axes[1].plot(
+            res.roughness,
+            res.delta_e_rgb_vs_spectral[p, :, m],
+            color=srgb[p],
+            lw=1.5,
+            ls="--" if res.rho_rgb_clipped[p] else "-",
+            label=name if res.rho_rgb_clipped[p] else None,
+        )
+    axes[0].set(
+        title=f"colour shift: spectral vs white then tint (mu = {res.mu[m]:g})",
+        xlabel="roughness r",
+        ylabel="CIEDE2000",
+    )
     axes[1].set(title="per RGB channel vs per wavelength", xlabel="roughness r", ylabel="CIEDE2000")
     if res.rho_rgb_clipped.any():
         axes[1].legend(title="clipped to Rec.709 (dashed)", fontsize=8)
@@ -156,8 +248,11 @@ def _figure(ctx, res):
     path = ctx.image_dir / f"{KEY}_delta_e.png"
     fig.savefig(path, dpi=110)
     plt.close(fig)
-    return Figure(path.name, "ColorChecker (measured spectra, D65, lin_rec709): dE2000 of the colour shift and "
-                             "of RGB vs spectral evaluation against roughness, one line per patch in its colour")
+    return Figure(
+        path.name,
+        "ColorChecker (measured spectra, D65, lin_rec709): dE2000 of the colour shift and "
+        "of RGB vs spectral evaluation against roughness, one line per patch in its colour",
+    )
 
 
 def _materials_table(ctx, cm):
@@ -189,19 +284,48 @@ def _materials_table(ctx, cm):
     rows = []
     for p, name in enumerate(cs.names):
         r_own = cs.extra[p].get("material_diffuse_roughness")
-        own = colour_shift(ColourSet([name], cs.spectra[p:p + 1], cs.rho_rgb[p:p + 1], cs.source[p:p + 1],
-                                     cs.roundtrip_delta_e[p:p + 1]), [r_own or 0.0], [1.0], cm)
-        rows.append([name, Path(cs.extra[p].get("material_file", "")).name,
-                     cs.extra[p].get("material_diffuse_model") or "",
-                     "-" if r_own is None else round(r_own, 4),
-                     round(float(own.delta_e_rgb_vs_spectral[0, 0, 0]), 4), round(float(own.delta_e_shift[0, 0, 0]), 4),
-                     round(float(res.delta_e_rgb_vs_spectral[p, 0, 0]), 4), round(float(res.delta_e_shift[p, 0, 0]), 4),
-                     round(float(cs.roundtrip_delta_e[p]), 4)])
-    table = Table("Materials (diffuse colour read by openpbr_diffuse.readers, ACEScg -> lin_rec709, upsampled by "
-                  "Mallett 2019), mu = 1: EON at the material's own diffuse roughness (as r, whatever its diffuse "
-                  "model) and at r = 1",
-                  ["material", "file", "diffuse model", "own r", "dE rgb vs spectral (own r)", "dE shift (own r)",
-                   "dE rgb vs spectral (r = 1)", "dE shift (r = 1)", "upsampling round trip dE"], rows)
+        own = colour_shift(
+            ColourSet(
+                [name],
+                cs.spectra[p : p + 1],
+                cs.rho_rgb[p : p + 1],
+                cs.source[p : p + 1],
+                cs.roundtrip_delta_e[p : p + 1],
+            ),
+            [r_own or 0.0],
+            [1.0],
+            cm,
+        )
+        rows.append(
+            [
+                name,
+                Path(cs.extra[p].get("material_file", "")).name,
+                cs.extra[p].get("material_diffuse_model") or "",
+                "-" if r_own is None else round(r_own, 4),
+                round(float(own.delta_e_rgb_vs_spectral[0, 0, 0]), 4),
+                round(float(own.delta_e_shift[0, 0, 0]), 4),
+                round(float(res.delta_e_rgb_vs_spectral[p, 0, 0]), 4),
+                round(float(res.delta_e_shift[p, 0, 0]), 4),
+                round(float(cs.roundtrip_delta_e[p]), 4),
+            ]
+        )
+    table = Table(
+        "Materials (diffuse colour read by openpbr_diffuse.readers, ACEScg -> lin_rec709, upsampled by "
+        "Mallett 2019), mu = 1: EON at the material's own diffuse roughness (as r, whatever its diffuse "
+        "model) and at r = 1",
+        [
+            "material",
+            "file",
+            "diffuse model",
+            "own r",
+            "dE rgb vs spectral (own r)",
+            "dE shift (own r)",
+            "dE rgb vs spectral (r = 1)",
+            "dE shift (r = 1)",
+            "upsampling round trip dE",
+        ],
+        rows,
+    )
     return table, warnings
 
 
@@ -221,26 +345,60 @@ def build(ctx):
     ctx.progress("colorshift: ACEScg")
     cm_aces = colorimetry("D65", "acescg")
     res_aces = colour_shift(checker(cm_aces), [0.0, 1.0], [0.2, 0.5, 1.0], cm_aces)
-    summary = Table("ColorChecker at r = 1 (D65): largest and median dE2000 with patch names",
-                    ["working space", "mu", "max dE rgb vs spectral", "patch", "max in gamut (patch)",
-                     "median (patches)", "max dE shift", "patch", "median (patches)"],
-                    _summary_rows("lin_rec709", res) + _summary_rows("acescg", res_aces))
+    summary = Table(
+        "ColorChecker at r = 1 (D65): largest and median dE2000 with patch names",
+        [
+            "working space",
+            "mu",
+            "max dE rgb vs spectral",
+            "patch",
+            "max in gamut (patch)",
+            "median (patches)",
+            "max dE shift",
+            "patch",
+            "median (patches)",
+        ],
+        _summary_rows("lin_rec709", res) + _summary_rows("acescg", res_aces),
+    )
     k1, m1 = int(np.argmax(res.roughness)), int(np.argmax(res.mu))
     per_patch = Table(
         f"Each patch at r = {res.roughness[k1]:g}, mu = {res.mu[m1]:g} (D65, lin_rec709; * = outside Rec.709, clipped)",
-        ["patch", "dE rgb vs spectral", "rel. luminance diff rgb vs spectral", "chroma diff rgb vs spectral",
-         "dE shift", "rel. luminance diff shift", "chroma diff shift"],
-        [[n + ("*" if res.rho_rgb_clipped[p] else ""), round(float(res.delta_e_rgb_vs_spectral[p, k1, m1]), 4),
-          round(float(res.rel_luminance_diff_rgb_vs_spectral[p, k1, m1]), 5),
-          round(float(res.chroma_diff_rgb_vs_spectral[p, k1, m1]), 4), round(float(res.delta_e_shift[p, k1, m1]), 4),
-          round(float(res.rel_luminance_diff_shift[p, k1, m1]), 5), round(float(res.chroma_diff_shift[p, k1, m1]), 4)]
-         for p, n in enumerate(res.colours.names)])
+        [
+            "patch",
+            "dE rgb vs spectral",
+            "rel. luminance diff rgb vs spectral",
+            "chroma diff rgb vs spectral",
+            "dE shift",
+            "rel. luminance diff shift",
+            "chroma diff shift",
+        ],
+        [
+            [
+                n + ("*" if res.rho_rgb_clipped[p] else ""),
+                round(float(res.delta_e_rgb_vs_spectral[p, k1, m1]), 4),
+                round(float(res.rel_luminance_diff_rgb_vs_spectral[p, k1, m1]), 5),
+                round(float(res.chroma_diff_rgb_vs_spectral[p, k1, m1]), 4),
+                round(float(res.delta_e_shift[p, k1, m1]), 4),
+                round(float(res.rel_luminance_diff_shift[p, k1, m1]), 5),
+                round(float(res.chroma_diff_shift[p, k1, m1]), 4),
+            ]
+            for p, n in enumerate(res.colours.names)
+        ],
+    )
     ctx.progress("colorshift: recovery methods")
-    recovery = Table("RGB -> spectrum upsampling (colour.recovery) on the in-gamut patches' rho_rgb: round trip, "
-                     "and dE2000 of the r = 1, mu = 1 spectral albedo from the recovered vs the measured spectrum",
-                     ["method", "colours", "max round trip dE", "median round trip dE",
-                      "max dE albedo (recovered vs measured)", "patch"],
-                     _recovery_table(cm, colour_shift(checker(cm), [1.0], [1.0], cm), ctx.quick))
+    recovery = Table(
+        "RGB -> spectrum upsampling (colour.recovery) on the in-gamut patches' rho_rgb: round trip, "
+        "and dE2000 of the r = 1, mu = 1 spectral albedo from the recovered vs the measured spectrum",
+        [
+            "method",
+            "colours",
+            "max round trip dE",
+            "median round trip dE",
+            "max dE albedo (recovered vs measured)",
+            "patch",
+        ],
+        _recovery_table(cm, colour_shift(checker(cm), [1.0], [1.0], cm), ctx.quick),
+    )
     ctx.progress("colorshift: materials")
     mat_table, warnings = _materials_table(ctx, cm)
     figures = [_figure(ctx, res)]
@@ -249,8 +407,13 @@ def build(ctx):
 
     sw = colour_shift(checker(cm), [0.0, 1.0], [1.0], cm)
     path = write_swatches(sw, ctx.image_dir / f"{KEY}_swatches.png")
-    figures.append(Figure(path.name, "Swatches at r = 0 and r = 1, mu = 1: L Lambert (rho), R RGB-evaluated, "
-                                     "S spectral, W white then tint (sRGB display encoding)"))
+    figures.append(
+        Figure(
+            path.name,
+            "Swatches at r = 0 and r = 1, mu = 1: L Lambert (rho), R RGB-evaluated, "
+            "S spectral, W white then tint (sRGB display encoding)",
+        )
+    )
     notes = [
         "Pipeline: measured reflectance (colour-science 'BabelColor Average', 380-730 nm / 10 nm aligned to "
         "380-780 nm / 5 nm) -> EON directional albedo per wavelength (Eq. 20) -> XYZ under D65, CIE 1931 2 degree "

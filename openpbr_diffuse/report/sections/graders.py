@@ -13,6 +13,7 @@ Which implementations run: every registered one, whose code comes with an instal
 80 s).  ``ctx.quick``: MaterialX only.  Code that no package installs (a checkout, the user's
 own) is graded as the implementation under test (``report --glsl/--cpp``), not here.
 """
+
 from __future__ import annotations
 
 import math
@@ -71,21 +72,47 @@ def build(ctx) -> SectionResult:
             continue
         run.append(g.to_dict())
         for q in g.quantities:
-            rows.append([name, _version(g.version), q.quantity, _fmt(q.max_abs_error), _fmt(q.rms_error),
-                         q.tolerance, "pass" if q.passed else "FAIL", q.diagnosis or "—"])
-        result.notes.append(f"{name}: " + "; ".join(f"{k} = {v}" for k, v in g.version.items() if v)
-                            + (". " + " ".join(g.notes) if g.notes else ""))
-    result.tables.append(Table(
-        caption="Implementations run on this machine and graded against the reference (conformance.grade on "
-                "the default vectors for BRDF and albedo; sampler: reported pdf against the reference "
-                "strategies and chi-square of its samples against its own pdf; surface: diffuse weight x "
-                "albedo and selection probability against OpenPBRSurface)",
-        columns=["implementation", "version", "quantity", "max abs error", "RMS error", "tolerance", "verdict",
-                 "diagnosis"],
-        rows=rows))
+            rows.append(
+                [
+                    name,
+                    _version(g.version),
+                    q.quantity,
+                    _fmt(q.max_abs_error),
+                    _fmt(q.rms_error),
+                    q.tolerance,
+                    "pass" if q.passed else "FAIL",
+                    q.diagnosis or "—",
+                ]
+            )
+        result.notes.append(
+            f"{name}: "
+            + "; ".join(f"{k} = {v}" for k, v in g.version.items() if v)
+            + (". " + " ".join(g.notes) if g.notes else "")
+        )
+    result.tables.append(
+        Table(
+            caption="Implementations run on this machine and graded against the reference (conformance.grade on "
+            "the default vectors for BRDF and albedo; sampler: reported pdf against the reference "
+            "strategies and chi-square of its samples against its own pdf; surface: diffuse weight x "
+            "albedo and selection probability against OpenPBRSurface)",
+            columns=[
+                "implementation",
+                "version",
+                "quantity",
+                "max abs error",
+                "RMS error",
+                "tolerance",
+                "verdict",
+                "diagnosis",
+            ],
+            rows=rows,
+        )
+    )
     ctx.extra.setdefault("graders", run)
     if not rows:
         result.not_run = "no implementation could run here: " + ("; ".join(result.warnings) or "none planned")
-    result.notes.append("Code no package installs (a checkout of another renderer, your own) is graded as the "
-                        "implementation under test: report --glsl FILE --function F, or --cpp FILE.")
+    result.notes.append(
+        "Code no package installs (a checkout of another renderer, your own) is graded as the "
+        "implementation under test: report --glsl FILE --function F, or --cpp FILE."
+    )
     return result

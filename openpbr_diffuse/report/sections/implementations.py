@@ -5,6 +5,7 @@ The reference rounded to float32 must pass; an implementation with each known de
 shader's output) must fail and be diagnosed as that deviation.  Real implementations run by
 their own code are graded in the next section ("graders").
 """
+
 import numpy as np
 
 from ..model import Check, SectionResult, Table
@@ -14,7 +15,7 @@ TITLE = "Grader self-test: test vectors and known deviations"
 
 def build(ctx):
     from ...conformance.deviations import DEVIATIONS, reference
-    from ...conformance.grade import REL_TOL, ABS_TOL, TOLERANCE_REASON, grade
+    from ...conformance.grade import ABS_TOL, REL_TOL, TOLERANCE_REASON, grade
     from ...conformance.vectors import default_vectors
 
     v = default_vectors()
@@ -26,13 +27,21 @@ def build(ctx):
         f"{int((v.kind == 'albedo').sum())} albedo) over {', '.join(sorted(set(v.model)))}, including grazing "
         "(mu = 0.01, 0.001), backscatter, s = 0, L.V < 0, below-horizon directions, r = 0 and 1, mu = 0. "
         "Write them with `openpbr-diffuse vectors --out vectors.csv`, append out_r, out_g, out_b, and grade "
-        "with `openpbr-diffuse check vectors.csv`.")
+        "with `openpbr-diffuse check vectors.csv`."
+    )
     res.notes.append(f"Tolerance: {TOLERANCE_REASON}")
     g32 = grade(v, ref.astype(np.float32))
-    res.checks.append(Check(
-        "reference rounded to float32 conforms", g32.max_normalised_error, 1.0, "<=",
-        reference="openpbr_diffuse.conformance.deviations.reference (float64 evaluate / directional_albedo)",
-        unit="x tolerance", detail=f"max abs error {g32.max_abs_error:.2e} over {g32.n_rows} rows"))
+    res.checks.append(
+        Check(
+            "reference rounded to float32 conforms",
+            g32.max_normalised_error,
+            1.0,
+            "<=",
+            reference="openpbr_diffuse.conformance.deviations.reference (float64 evaluate / directional_albedo)",
+            unit="x tolerance",
+            detail=f"max abs error {g32.max_abs_error:.2e} over {g32.n_rows} rows",
+        )
+    )
     rows = []
     for name, dev in DEVIATIONS.items():
         ctx.progress(f"deviation {name}")
@@ -42,14 +51,45 @@ def build(ctx):
         g = grade(sub, pred[known].astype(np.float32))
         ok = (not g.passed) and g.diagnosis == name
         detail = g.candidate_details.get(name, {})
-        res.checks.append(Check(
-            f"{name}: fails and is diagnosed", 1.0 if ok else 0.0, 0.0, "==", expected=1.0,
-            reference=f"{dev.source}; predicted with the library's models ({dev.variants[0][0]})",
-            detail=f"diagnosis {g.diagnosis}; {g.n_failed_rows} of {g.n_rows} rows outside the tolerance"))
-        rows.append([name, dev.description, dev.source, g.n_failed_rows, g.n_rows, g.max_abs_error,
-                     g.max_normalised_error, g.diagnosis or "none", detail.get("explained_fraction", float("nan"))])
-    res.tables.append(Table(
-        f"Known deviations as float32 implementations, graded at |out - ref| <= {ABS_TOL:g} + {REL_TOL:g} |ref|",
-        ["deviation", "what", "seen in", "rows failing", "rows", "max abs error", "max error / tolerance",
-         "diagnosis", "failing values explained"], rows))
+        res.checks.append(
+            Check(
+                f"{name}: fails and is diagnosed",
+                1.0 if ok else 0.0,
+                0.0,
+                "==",
+                expected=1.0,
+                reference=f"{dev.source}; predicted with the library's models ({dev.variants[0][0]})",
+                detail=f"diagnosis {g.diagnosis}; {g.n_failed_rows} of {g.n_rows} rows outside the tolerance",
+            )
+        )
+        rows.append(
+            [
+                name,
+                dev.description,
+                dev.source,
+                g.n_failed_rows,
+                g.n_rows,
+                g.max_abs_error,
+                g.max_normalised_error,
+                g.diagnosis or "none",
+                detail.get("explained_fraction", float("nan")),
+            ]
+        )
+    res.tables.append(
+        Table(
+            f"Known deviations as float32 implementations, graded at |out - ref| <= {ABS_TOL:g} + {REL_TOL:g} |ref|",
+            [
+                "deviation",
+                "what",
+                "seen in",
+                "rows failing",
+                "rows",
+                "max abs error",
+                "max error / tolerance",
+                "diagnosis",
+                "failing values explained",
+            ],
+            rows,
+        )
+    )
     return res

@@ -6,6 +6,7 @@ runs a small live check: the layered simulator against the exact closed form of 
 interface over a Lambertian base, and a fresh rough-interface estimate against the
 shipped one.
 """
+
 from __future__ import annotations
 
 import shutil
@@ -31,26 +32,48 @@ def _live(quick: bool, rows: list[dict]) -> list[Check]:
     paths = 20_000 if quick else 100_000
     checks = []
     t0 = time.monotonic()
-    e = simulate_layered_albedo(LayeredSurface("smooth", 1.5, coat_color=0.8), [0.3], rho=[0.8, 1.0],
-                                paths=paths, seed=11)
+    e = simulate_layered_albedo(
+        LayeredSurface("smooth", 1.5, coat_color=0.8), [0.3], rho=[0.8, 1.0], paths=paths, seed=11
+    )
     sec = time.monotonic() - t0
     for c, rho in enumerate((0.8, 1.0)):
         ref = float(smooth_lambert_albedo(1.5, rho, 0.3, -np.log(0.8)))
         z = abs(e.total[0, c] - ref) / e.total_stderr[0, c]
-        checks.append(Check(name=f"live simulation vs exact closed form (smooth n 1.5, coat_color 0.8, rho {rho:g}, mu 0.3)",
-                            measured=float(z), threshold=4.0, unit="standard errors",
-                            reference="closed form with internal reflections (Saunderson 1942; Lekner & Dorf 1988)",
-                            detail=f"{e.total[0, c]:.5f} +- {e.total_stderr[0, c]:.1e} vs {ref:.5f} ({paths} paths, {sec:.1f} s)"))
-    row = next(r for r in rows if r["interface_alpha"] == 0.25 and r["n"] == 1.5 and r["tau"] == 0.0
-               and r["mu"] == 0.4 and r["rho"] == 0.8)
+        checks.append(
+            Check(
+                name=f"live simulation vs exact closed form (smooth n 1.5, coat_color 0.8, rho {rho:g}, mu 0.3)",
+                measured=float(z),
+                threshold=4.0,
+                unit="standard errors",
+                reference="closed form with internal reflections (Saunderson 1942; Lekner & Dorf 1988)",
+                detail=f"{e.total[0, c]:.5f} +- {e.total_stderr[0, c]:.1e} vs {ref:.5f} ({paths} paths, {sec:.1f} s)",
+            )
+        )
+    row = next(
+        r
+        for r in rows
+        if r["interface_alpha"] == 0.25 and r["n"] == 1.5 and r["tau"] == 0.0 and r["mu"] == 0.4 and r["rho"] == 0.8
+    )
     e = simulate_layered_albedo(LayeredSurface("ggx", 1.5, 0.25), [0.4], rho=[0.8, 1.0], paths=paths, seed=12)
     z = abs(e.diffuse[0, 0] - row["physics"]) / np.hypot(e.diffuse_stderr[0, 0], row["physics_se"])
-    checks.append(Check(name="live GGX-interface simulation reproduces the shipped diffuse part (alpha 0.25, n 1.5, mu 0.4, rho 0.8)",
-                        measured=float(z), threshold=4.5, unit="standard errors", reference="data/layered_grading.csv",
-                        detail=f"{e.diffuse[0, 0]:.5f} +- {e.diffuse_stderr[0, 0]:.1e} vs {row['physics']:.5f} +- {row['physics_se']:.1e}"))
-    checks.append(Check(name="white furnace of the GGX-interface layer (rho 1, no absorption)",
-                        measured=float(abs(e.total[0, 1] - 1.0)), threshold=1e-12,
-                        reference="energy-conserving microsurface walk: every path leaves"))
+    checks.append(
+        Check(
+            name="live GGX-interface simulation reproduces the shipped diffuse part (alpha 0.25, n 1.5, mu 0.4, rho 0.8)",
+            measured=float(z),
+            threshold=4.5,
+            unit="standard errors",
+            reference="data/layered_grading.csv",
+            detail=f"{e.diffuse[0, 0]:.5f} +- {e.diffuse_stderr[0, 0]:.1e} vs {row['physics']:.5f} +- {row['physics_se']:.1e}",
+        )
+    )
+    checks.append(
+        Check(
+            name="white furnace of the GGX-interface layer (rho 1, no absorption)",
+            measured=float(abs(e.total[0, 1] - 1.0)),
+            threshold=1e-12,
+            reference="energy-conserving microsurface walk: every path leaves",
+        )
+    )
     return checks
 
 
@@ -62,8 +85,11 @@ def build(ctx) -> SectionResult:
     ctx.progress("layered: live check")
     res.checks.extend(_live(ctx.quick, rows))
     # headline
-    sel = [r for r in rows if r["interface_alpha"] == 0.0 and r["n"] == HEADLINE_N and r["rho"] == HEADLINE_RHO
-           and r["tau"] == 0.0]
+    sel = [
+        r
+        for r in rows
+        if r["interface_alpha"] == 0.0 and r["n"] == HEADLINE_N and r["rho"] == HEADLINE_RHO and r["tau"] == 0.0
+    ]
     graz = min(sel, key=lambda r: r["mu"])
     head = graz["openpbr"] / graz["physics"] - 1
     coat = graz["openpbr_coat"] / graz["physics"] - 1
@@ -72,7 +98,8 @@ def build(ctx) -> SectionResult:
         f"{100 * head:+.0f} % off the physics at grazing (mu = {graz['mu']:g}) for n = {HEADLINE_N:g}, rho = "
         f"{HEADLINE_RHO:g}, smooth interface: the physics darkens the base by the light the interface reflects back "
         f"into it (internal reflection, r_i = 1 - (1 - r_e)/n^2), which albedo scaling omits.  OpenPBR's coat "
-        f"darkening formula (1 - K)/(1 - rho K) captures it: the coat rule is {100 * coat:+.1f} % off there.")
+        f"darkening formula (1 - K)/(1 - rho K) captures it: the coat rule is {100 * coat:+.1f} % off there."
+    )
     # error table per rule and interface, no absorption / with absorption
     for tau in (0.0, 0.1, 0.5):
         trows = []
@@ -82,16 +109,25 @@ def build(ctx) -> SectionResult:
                 s = lg.error_summary(rows, rule, interface_alpha=a, tau=tau)
                 cells.append(f"{100 * s['mean']:.1f} / {100 * s['max']:.0f}")
             trows.append(cells)
-        res.tables.append(Table(
-            caption=f"Relative error of the diffuse albedo E_d(mu), mean / max in %, over n 1.3-2, rho 0.2-1, "
-                    f"mu 0.1-1; slab optical depth tau = {tau:g}",
-            columns=["interface", *lg.RULES], rows=trows))
+        res.tables.append(
+            Table(
+                caption=f"Relative error of the diffuse albedo E_d(mu), mean / max in %, over n 1.3-2, rho 0.2-1, "
+                f"mu 0.1-1; slab optical depth tau = {tau:g}",
+                columns=["interface", *lg.RULES],
+                rows=trows,
+            )
+        )
     hrows = []
     for r in sorted(sel, key=lambda r: -r["mu"]):
         hrows.append([r["mu"], round(r["physics"], 4), *(f"{100 * (r[k] / r['physics'] - 1):+.1f}" for k in lg.RULES)])
-    res.tables.append(Table(caption=f"Smooth interface, n {HEADLINE_N:g}, rho {HEADLINE_RHO:g}, no absorption: "
-                                    "physics and each rule's error in %", columns=["mu", "physics E_d", *lg.RULES],
-                            rows=hrows))
+    res.tables.append(
+        Table(
+            caption=f"Smooth interface, n {HEADLINE_N:g}, rho {HEADLINE_RHO:g}, no absorption: "
+            "physics and each rule's error in %",
+            columns=["mu", "physics E_d", *lg.RULES],
+            rows=hrows,
+        )
+    )
     # EON base: OpenPBR's rules against the simulation
     from ..._csv import read_headed_csv
 
@@ -106,9 +142,14 @@ def build(ctx) -> SectionResult:
                 err = np.array([float(x[ec[rule]]) / float(x[ec["physics"]]) - 1 for x in sel_e])
                 cells.append(f"{100 * np.mean(np.abs(err)):.1f} / {100 * np.max(np.abs(err)):.0f}")
             etab.append(cells)
-    res.tables.append(Table(caption="EON base (n 1.5, no absorption): relative error of E_d, mean / max in %, over "
-                                    "rho 0.2-1 and mu 0.1-1 (data/layered_grading_eon.csv)",
-                            columns=["interface", "EON r", "openpbr", "openpbr_coat"], rows=etab))
+    res.tables.append(
+        Table(
+            caption="EON base (n 1.5, no absorption): relative error of E_d, mean / max in %, over "
+            "rho 0.2-1 and mu 0.1-1 (data/layered_grading_eon.csv)",
+            columns=["interface", "EON r", "openpbr", "openpbr_coat"],
+            rows=etab,
+        )
+    )
     # Gotanda's absorption: Eq. 3 vs Eq. 2, Eq. 9 vs the integral of Eq. 2
 
     _, names, grow = read_headed_csv(lg.DATA / "layered_gotanda_absorption.csv")
@@ -119,17 +160,29 @@ def build(ctx) -> SectionResult:
         d3 = max(abs(float(r[col["eq3_minus_eq2"]])) for r in g)
         d9 = max(abs(float(r[col["eq9_minus_exact"]])) for r in g)
         arows.append([tau, f"{d3:.4f}", f"{d9:.4f}"])
-    res.tables.append(Table(caption="Gotanda 2012 absorption, n 1.5: largest |Eq. 3 - Eq. 2| over mu_l, mu_e in "
-                                    "0.1-1, and |Eq. 9 - cosine-weighted Eq. 2| over mu_e (alpha' = alpha d = tau)",
-                            columns=["tau", "Eq. 3 - Eq. 2", "Eq. 9 - exact IBL"], rows=arows))
+    res.tables.append(
+        Table(
+            caption="Gotanda 2012 absorption, n 1.5: largest |Eq. 3 - Eq. 2| over mu_l, mu_e in "
+            "0.1-1, and |Eq. 9 - cosine-weighted Eq. 2| over mu_e (alpha' = alpha d = tau)",
+            columns=["tau", "Eq. 3 - Eq. 2", "Eq. 9 - exact IBL"],
+            rows=arows,
+        )
+    )
     shipped = lg.DATA / "layered_grading.png"
     if shipped.is_file():
         shutil.copy(shipped, Path(ctx.image_dir) / shipped.name)
-        res.figures.append(Figure(file=shipped.name, caption="Relative error of each rule's diffuse albedo against "
-                                  "the physics, n 1.5, rho 0.8, no absorption (left smooth, right GGX alpha 0.25)"))
-    res.notes.append("Physics: exact closed form (smooth) or the position-free random walk of "
-                     "openpbr_diffuse.simulation.layered (GGX: Heitz et al. 2016 dielectric microsurface walk). "
-                     f"Tables regenerate with `{header.get('regenerate', '')}`; {header.get('resolution', '')}")
+        res.figures.append(
+            Figure(
+                file=shipped.name,
+                caption="Relative error of each rule's diffuse albedo against "
+                "the physics, n 1.5, rho 0.8, no absorption (left smooth, right GGX alpha 0.25)",
+            )
+        )
+    res.notes.append(
+        "Physics: exact closed form (smooth) or the position-free random walk of "
+        "openpbr_diffuse.simulation.layered (GGX: Heitz et al. 2016 dielectric microsurface walk). "
+        f"Tables regenerate with `{header.get('regenerate', '')}`; {header.get('resolution', '')}"
+    )
     return res
 
 

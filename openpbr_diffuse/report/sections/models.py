@@ -6,6 +6,7 @@ closed form; reciprocity and the Lambert limit compare ``evaluate`` with itself 
 swapped arguments and with rho/pi.  Plots re-make the EON paper's Fig. 2 (BRDF slices in
 the plane of incidence, all models on one plot) and Fig. 5 (albedo curves).
 """
+
 import math
 
 import numpy as np
@@ -31,6 +32,7 @@ def _random_dirs(rng, n):
 def _slices(ctx, models):
     """Fig. 2: f in the plane of incidence at rho = 0.8, 50 % roughness, several theta_o."""
     import openpbr_diffuse as od
+
     from ...models.registry import INFO
 
     plt = pyplot()
@@ -61,6 +63,7 @@ def _albedo_curves(ctx):
     """Fig. 5: directional albedo against theta_o at rho = 1 for QON, FON, full ON (EON at
     rho = 0.8: at rho = 1 it is 1 everywhere)."""
     import openpbr_diffuse as od
+
     from ...models.registry import INFO
 
     plt = pyplot()
@@ -87,6 +90,7 @@ def _albedo_curves(ctx):
 
 def build(ctx):
     import openpbr_diffuse as od
+
     from ...albedo.quadrature import hemisphere_albedo
     from ...models.registry import INFO
 
@@ -105,47 +109,107 @@ def build(ctx):
         f = od.evaluate(m, wi, wo, r, rho)
         g = od.evaluate(m, wo, wi, r, rho)
         recip = float(np.abs(f - g).max() / np.abs(f).max())
-        res.checks.append(Check(f"{m}: reciprocity f(wi, wo) = f(wo, wi)", recip, 1e-12, "<=",
-                                reference="evaluate with the arguments swapped",
-                                detail=f"max |difference| / max f over {n} random pairs, roughness, rho"))
+        res.checks.append(
+            Check(
+                f"{m}: reciprocity f(wi, wo) = f(wo, wi)",
+                recip,
+                1e-12,
+                "<=",
+                reference="evaluate with the arguments swapped",
+                detail=f"max |difference| / max f over {n} random pairs, roughness, rho",
+            )
+        )
         lam = od.evaluate(m, wi, wo, 0.0, rho)
         with np.errstate(invalid="ignore", divide="ignore"):
             rel = np.where(rho > 0, np.abs(lam * math.pi / np.where(rho > 0, rho, 1.0) - 1.0), 0.0)
-        res.checks.append(Check(f"{m}: Lambert limit at roughness 0", float(rel.max()), 1e-6, "<=",
-                                reference="rho / pi", detail="max |pi f / rho - 1| (EON: the 1e-7 guards of Listing 1)"))
+        res.checks.append(
+            Check(
+                f"{m}: Lambert limit at roughness 0",
+                float(rel.max()),
+                1e-6,
+                "<=",
+                reference="rho / pi",
+                detail="max |pi f / rho - 1| (EON: the 1e-7 guards of Listing 1)",
+            )
+        )
         if m == "lambert":
             roughs = [0.0]
         elif info.roughness_name == "sigma":  # QON-like models peak above 1 near sigma ~ 0.2-0.3
             roughs = [0.2, 0.5 * rmax, rmax] if ctx.quick else [0.1, 0.2, 0.3, 0.25 * rmax, 0.5 * rmax, rmax]
         else:
             roughs = [0.25 * rmax, 0.5 * rmax, rmax]
-        E = np.array([hemisphere_albedo(lambda a, b, rr=rr: od.evaluate(m, a, b, rr, 1.0)[..., 0], mus, order)
-                      for rr in roughs])
+        E = np.array(
+            [hemisphere_albedo(lambda a, b, rr=rr: od.evaluate(m, a, b, rr, 1.0)[..., 0], mus, order) for rr in roughs]
+        )
         k = np.unravel_index(np.argmax(E), E.shape)
-        rows.append([m, info.roughness_name, float(E.min()), float(E.max()), float(mus[k[1]]), float(roughs[k[0]]),
-                     "yes" if info.energy_conserving else "no"])
+        rows.append(
+            [
+                m,
+                info.roughness_name,
+                float(E.min()),
+                float(E.max()),
+                float(mus[k[1]]),
+                float(roughs[k[0]]),
+                "yes" if info.energy_conserving else "no",
+            ]
+        )
         if info.energy_conserving:
-            res.checks.append(Check(f"{m}: energy conservation, max albedo at rho = 1", float(E.max()), 1.0 + 1e-6,
-                                    "<=", reference=QUAD, detail=f"{E.size} (mu, roughness) points"))
+            res.checks.append(
+                Check(
+                    f"{m}: energy conservation, max albedo at rho = 1",
+                    float(E.max()),
+                    1.0 + 1e-6,
+                    "<=",
+                    reference=QUAD,
+                    detail=f"{E.size} (mu, roughness) points",
+                )
+            )
         if m == "eon":
-            res.checks.append(Check("eon: white furnace |E - 1| at rho = 1", float(np.abs(E - 1.0).max()), 1e-6,
-                                    "<=", reference=QUAD, detail=f"mu in {mus.min():g}..{mus.max():g}, r = 0.25, 0.5, 1"))
+            res.checks.append(
+                Check(
+                    "eon: white furnace |E - 1| at rho = 1",
+                    float(np.abs(E - 1.0).max()),
+                    1e-6,
+                    "<=",
+                    reference=QUAD,
+                    detail=f"mu in {mus.min():g}..{mus.max():g}, r = 0.25, 0.5, 1",
+                )
+            )
         if m == "eon_approx":
-            res.checks.append(Check("eon_approx: albedo overshoot above 1 (Eq. 14 fit in f_ms)", float(E.max() - 1.0),
-                                    2e-4, "<=", reference=QUAD,
-                                    detail="documented finding: at most 1.5e-4 (mu ~ 0.13, r = 1)"))
+            res.checks.append(
+                Check(
+                    "eon_approx: albedo overshoot above 1 (Eq. 14 fit in f_ms)",
+                    float(E.max() - 1.0),
+                    2e-4,
+                    "<=",
+                    reference=QUAD,
+                    detail="documented finding: at most 1.5e-4 (mu ~ 0.13, r = 1)",
+                )
+            )
     gain = [r[0] for r in rows if r[3] > 1.0 + 1e-6]
     lose = [r[0] for r in rows if r[2] < 1.0 - 1e-3]
-    res.notes.append(f"At rho = 1 (white furnace) these models exceed unit albedo somewhere on the grid (gain "
-                     f"energy): {', '.join(gain) or 'none'}; these lose more than 0.1 %: {', '.join(lose) or 'none'}. "
-                     "EON passes the white furnace; eon_approx overshoots by the Eq. 14 fit's error.")
-    res.tables.append(Table("Directional albedo at rho = 1 by quadrature of evaluate (sigma models: sigma = 0.1, 0.2, "
-                            "0.3, pi/8, pi/4, pi/2; r models: r = 0.25, 0.5, 1; mu from 0 to 1)",
-                            ["model", "roughness", "min E", "max E", "mu at max", "roughness at max", "energy conserving"],
-                            rows))
+    res.notes.append(
+        f"At rho = 1 (white furnace) these models exceed unit albedo somewhere on the grid (gain "
+        f"energy): {', '.join(gain) or 'none'}; these lose more than 0.1 %: {', '.join(lose) or 'none'}. "
+        "EON passes the white furnace; eon_approx overshoots by the Eq. 14 fit's error."
+    )
+    res.tables.append(
+        Table(
+            "Directional albedo at rho = 1 by quadrature of evaluate (sigma models: sigma = 0.1, 0.2, "
+            "0.3, pi/8, pi/4, pi/2; r models: r = 0.25, 0.5, 1; mu from 0 to 1)",
+            ["model", "roughness", "min E", "max E", "mu at max", "roughness at max", "energy conserving"],
+            rows,
+        )
+    )
     ctx.progress("plots")
-    res.figures.append(Figure(_slices(ctx, tuple(INFO)),
-                              "BRDF slices in the plane of incidence, all models (EON paper Fig. 2): rho = 0.8, "
-                              "r = 0.5 for FON/EON, sigma = pi/4 for the sigma models"))
-    res.figures.append(Figure(_albedo_curves(ctx), "Directional albedo curves (EON paper Fig. 5): rho = 1, EON at rho = 0.8"))
+    res.figures.append(
+        Figure(
+            _slices(ctx, tuple(INFO)),
+            "BRDF slices in the plane of incidence, all models (EON paper Fig. 2): rho = 0.8, "
+            "r = 0.5 for FON/EON, sigma = pi/4 for the sigma models",
+        )
+    )
+    res.figures.append(
+        Figure(_albedo_curves(ctx), "Directional albedo curves (EON paper Fig. 5): rho = 1, EON at rho = 0.8")
+    )
     return res

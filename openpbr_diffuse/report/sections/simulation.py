@@ -5,6 +5,7 @@ and the figures it draws from them with ``plot_all``) and re-runs a small live s
 are Monte Carlo estimates with standard errors, and a fresh estimate with another seed must
 agree with them within its error.
 """
+
 from __future__ import annotations
 
 import time
@@ -16,8 +17,11 @@ from ..model import Check, Figure, SectionResult, Table
 
 TITLE = "Physical ground truth: simulated rough Lambertian microsurfaces"
 KEY = "simulation"
-GEOMETRY_LABEL = {"vcavity": "V-cavities (Oren-Nayar), sigma", "smith-beckmann": "Smith Beckmann, alpha",
-                  "smith-ggx": "Smith GGX, alpha"}
+GEOMETRY_LABEL = {
+    "vcavity": "V-cavities (Oren-Nayar), sigma",
+    "smith-beckmann": "Smith Beckmann, alpha",
+    "smith-ggx": "Smith GGX, alpha",
+}
 FIGURES = ("albedo_error", "colorshift", "brdf_slices")
 MODEL_STYLE = {"full_on": "C0", "qon": "C1", "qon_fujii": "C2", "fon": "C3", "eon": "C4", "eon_approx": "C5"}
 
@@ -35,7 +39,8 @@ def _grading_rows(g, fit="albedo"):
 
 def fit_power_law(x, y):
     """r = (x / x0)^p by least squares in log space over 0 < r < 0.98; returns (x0, p) or None."""
-    x = np.asarray(x, float); y = np.asarray(y, float)
+    x = np.asarray(x, float)
+    y = np.asarray(y, float)
     ok = (y > 0.005) & (y < 0.98)
     if ok.sum() < 2:
         return None
@@ -78,7 +83,9 @@ def plot_all(table_dir, image_dir, prefix="simulation"):
         axes[2, j].set_xlabel("simulated roughness")
     axes[0, 0].legend(fontsize=8)
     p = image_dir / f"{prefix}_albedo_error.png"
-    fig.savefig(p, dpi=90); plt.close(fig); paths.append(p)
+    fig.savefig(p, dpi=90)
+    plt.close(fig)
+    paths.append(p)
     # 2. colour shift: multi-bounce colour and albedo nonlinearity, EON vs simulation
     _, cs = t["colorshift"]
     fig, axes = plt.subplots(2, 3, figsize=(13, 7), constrained_layout=True)
@@ -99,7 +106,9 @@ def plot_all(table_dir, image_dir, prefix="simulation"):
         axes[1, j].set_xlabel("microfacet albedo rho")
         axes[0, j].legend(fontsize=7)
     p = image_dir / f"{prefix}_colorshift.png"
-    fig.savefig(p, dpi=90); plt.close(fig); paths.append(p)
+    fig.savefig(p, dpi=90)
+    plt.close(fig)
+    paths.append(p)
     # 3. BRDF slices at one roughness per geometry, theta_i = 60 deg, rho = 0.8
     from ...models import evaluate
 
@@ -107,8 +116,12 @@ def plot_all(table_dir, image_dir, prefix="simulation"):
     fig, axes = plt.subplots(1, 3, figsize=(13, 4), constrained_layout=True)
     for j, geom in enumerate(geoms):
         target = {"vcavity": 0.4, "smith-beckmann": 0.5, "smith-ggx": 0.3}[geom]
-        sel = (b["geometry"] == geom) & np.isclose(b["roughness"], target) & np.isclose(b["theta_i"], 60.0) \
+        sel = (
+            (b["geometry"] == geom)
+            & np.isclose(b["roughness"], target)
+            & np.isclose(b["theta_i"], 60.0)
             & np.isclose(b["rho"], gr.BRDF_RHO)
+        )
         to = b["theta_o"][sel]
         axes[j].errorbar(to, b["f"][sel], yerr=b["f_se"][sel], fmt="ko", ms=3, label="simulation")
         axes[j].plot(to, b["f1"][sel], "k:", label="simulation, 1 bounce")
@@ -116,25 +129,34 @@ def plot_all(table_dir, image_dir, prefix="simulation"):
         for r in brows:
             if r["geometry"] == geom and np.isclose(r["roughness"], target):
                 f = evaluate(r["model"], wi, wo, r["model_roughness"], [gr.BRDF_RHO])[:, 0]
-                axes[j].plot(np.linspace(-89, 89, 200), f, color=MODEL_STYLE[r["model"]],
-                             label=f"{r['model']} ({r['model_roughness']:.2f})")
+                axes[j].plot(
+                    np.linspace(-89, 89, 200),
+                    f,
+                    color=MODEL_STYLE[r["model"]],
+                    label=f"{r['model']} ({r['model_roughness']:.2f})",
+                )
         axes[j].set_title(f"{GEOMETRY_LABEL[geom]} = {target:g}; theta_i 60, rho {gr.BRDF_RHO:g}", fontsize=8)
         axes[j].set_xlabel("theta_o (deg; < 0: towards the light)")
         axes[j].set_ylabel("f")
         axes[j].legend(fontsize=7)
     p = image_dir / f"{prefix}_brdf_slices.png"
-    fig.savefig(p, dpi=90); plt.close(fig); paths.append(p)
+    fig.savefig(p, dpi=90)
+    plt.close(fig)
+    paths.append(p)
     return paths
 
 
 def _live_check(albedo_cols, quick):
     """A fresh simulation (another seed) against the shipped table."""
     from ...simulation import simulate_albedo
-    from ...simulation import grading as gr
 
     paths = 20_000 if quick else 100_000
-    sel = (albedo_cols["geometry"] == "vcavity") & np.isclose(albedo_cols["roughness"], 0.4) \
-        & (albedo_cols["kind"] == "directional") & np.isclose(albedo_cols["rho"], 0.8)
+    sel = (
+        (albedo_cols["geometry"] == "vcavity")
+        & np.isclose(albedo_cols["roughness"], 0.4)
+        & (albedo_cols["kind"] == "directional")
+        & np.isclose(albedo_cols["rho"], 0.8)
+    )
     k = np.flatnonzero(sel)
     k = k[np.argmin(np.abs(albedo_cols["mu"][k] - 0.5))]
     mu = float(albedo_cols["mu"][k])
@@ -161,32 +183,57 @@ def build(ctx) -> SectionResult:
     mu, paths, seconds, live, est = _live_check(alb, ctx.quick)
     for col, (v, s, ref, ref_se) in live.items():
         z = abs(v - ref) / np.hypot(s, ref_se)
-        res.checks.append(Check(
-            name=f"live V-cavity simulation reproduces the shipped {col} (sigma 0.4, mu {mu:.3f}, rho 0.8)",
-            measured=float(z), threshold=4.5, unit="standard errors", reference=gr.TABLES["albedo"],
-            detail=f"live {v:.5f} +- {s:.1e} ({paths} paths, seed 7, {seconds:.1f} s) vs shipped {ref:.5f} +- {ref_se:.1e}"))
-    res.checks.append(Check(name="simulator white furnace: V-cavity albedo at rho = 1",
-                            measured=float(abs(est.albedo[0, 1] - 1.0)), threshold=1e-12,
-                            reference="every path leaves an open cavity"))
+        res.checks.append(
+            Check(
+                name=f"live V-cavity simulation reproduces the shipped {col} (sigma 0.4, mu {mu:.3f}, rho 0.8)",
+                measured=float(z),
+                threshold=4.5,
+                unit="standard errors",
+                reference=gr.TABLES["albedo"],
+                detail=f"live {v:.5f} +- {s:.1e} ({paths} paths, seed 7, {seconds:.1f} s) vs shipped {ref:.5f} +- {ref_se:.1e}",
+            )
+        )
+    res.checks.append(
+        Check(
+            name="simulator white furnace: V-cavity albedo at rho = 1",
+            measured=float(abs(est.albedo[0, 1] - 1.0)),
+            threshold=1e-12,
+            reference="every path leaves an open cavity",
+        )
+    )
     # EON against the microsurfaces where its roughness range reaches them (fitted r < 1)
     for geom in GEOMETRY_LABEL:
         rr = [r for r in rows if r["model"] == "eon" and r["geometry"] == geom and r["model_roughness"] < 0.99]
         if rr:
             worst = max(rr, key=lambda r: r["albedo_rms"])
-            res.checks.append(Check(
-                name=f"EON albedo vs {geom} within EON's roughness range (fitted r < 1)",
-                measured=float(worst["albedo_rms"]), threshold=0.02, reference=gr.TABLES["grading"],
-                detail=f"worst at roughness {worst['roughness']:g} (r = {worst['model_roughness']:.3f}); "
-                       "threshold: the documented agreement, not a physical law"))
+            res.checks.append(
+                Check(
+                    name=f"EON albedo vs {geom} within EON's roughness range (fitted r < 1)",
+                    measured=float(worst["albedo_rms"]),
+                    threshold=0.02,
+                    reference=gr.TABLES["grading"],
+                    detail=f"worst at roughness {worst['roughness']:g} (r = {worst['model_roughness']:.3f}); "
+                    "threshold: the documented agreement, not a physical law",
+                )
+            )
     # tables: per geometry, roughness x model: albedo RMS at the albedo fit, BRDF error at the BRDF fit
     brows = _grading_rows(g, "brdf")
     for geom in GEOMETRY_LABEL:
         rough = sorted({r["roughness"] for r in rows if r["geometry"] == geom})
         name = GEOMETRY_LABEL[geom].split(", ")[-1]
-        for label, rr, key in (("RMS error of the directional albedo (rho = 0.2, 0.5, 0.8; 10 mu) at the "
-                                "roughness fitted to it", rows, "albedo_rms"),
-                               (f"RMS relative error of the in-plane BRDF slices (rho = {gr.BRDF_RHO:g}, theta_i = "
-                                "30/60/80 deg, 18 theta_o) at the roughness fitted to them", brows, "brdf_rel_rms")):
+        for label, rr, key in (
+            (
+                "RMS error of the directional albedo (rho = 0.2, 0.5, 0.8; 10 mu) at the roughness fitted to it",
+                rows,
+                "albedo_rms",
+            ),
+            (
+                f"RMS relative error of the in-plane BRDF slices (rho = {gr.BRDF_RHO:g}, theta_i = "
+                "30/60/80 deg, 18 theta_o) at the roughness fitted to them",
+                brows,
+                "brdf_rel_rms",
+            ),
+        ):
             table_rows = []
             for sv in rough:
                 cells = [float(sv)]
@@ -194,8 +241,13 @@ def build(ctx) -> SectionResult:
                     r = next(r for r in rr if r["geometry"] == geom and r["model"] == model and r["roughness"] == sv)
                     cells.append(f"{r[key]:.4f} ({r['model_roughness']:.3f})")
                 table_rows.append(cells)
-            res.tables.append(Table(caption=f"{GEOMETRY_LABEL[geom]}: {label} (fitted roughness in brackets)",
-                                    columns=[name] + list(gr.GRADED_MODELS), rows=table_rows))
+            res.tables.append(
+                Table(
+                    caption=f"{GEOMETRY_LABEL[geom]}: {label} (fitted roughness in brackets)",
+                    columns=[name] + list(gr.GRADED_MODELS),
+                    rows=table_rows,
+                )
+            )
     # sigma <-> r correspondence
     fit_rows = []
     for geom in GEOMETRY_LABEL:
@@ -205,28 +257,62 @@ def build(ctx) -> SectionResult:
                 rr = [r for r in rr_all if r["geometry"] == geom and r["model"] == model]
                 law = fit_power_law([r["roughness"] for r in rr], [r["model_roughness"] for r in rr])
                 sat = [r["roughness"] for r in rr if r["model_roughness"] >= 0.99]
-                fit_rows.append([geom, model, fit,
-                                 ", ".join(f"{r['roughness']:g}->{r['model_roughness']:.3f}" for r in rr),
-                                 "" if law is None else f"r = ({name}/{law[0]:.3f})^{law[1]:.2f}",
-                                 f">= {min(sat):g}" if sat else "none"])
-    res.tables.append(Table(caption="Best-fitting r for each simulated surface (fitted to the albedo or to the BRDF "
-                                    "slices) and a power law through the unsaturated points",
-                            columns=["geometry", "model", "fit", "simulated -> fitted r", "power-law fit",
-                                     "saturates (r = 1) from"], rows=fit_rows))
+                fit_rows.append(
+                    [
+                        geom,
+                        model,
+                        fit,
+                        ", ".join(f"{r['roughness']:g}->{r['model_roughness']:.3f}" for r in rr),
+                        "" if law is None else f"r = ({name}/{law[0]:.3f})^{law[1]:.2f}",
+                        f">= {min(sat):g}" if sat else "none",
+                    ]
+                )
+    res.tables.append(
+        Table(
+            caption="Best-fitting r for each simulated surface (fitted to the albedo or to the BRDF "
+            "slices) and a power law through the unsaturated points",
+            columns=["geometry", "model", "fit", "simulated -> fitted r", "power-law fit", "saturates (r = 1) from"],
+            rows=fit_rows,
+        )
+    )
     # colour shift
     _, cs = t["colorshift"]
     cs_rows = []
     for i in range(len(cs["rho"])):
         if np.isclose(cs["rho"][i], [0.2, 0.5, 0.8]).any():
-            cs_rows.append([str(cs["geometry"][i]), float(cs["roughness"][i]), round(float(cs["r_eon"][i]), 3),
-                            float(cs["rho"][i]), round(float(cs["ms_sim"][i]), 4), round(float(cs["ms_eon"][i]), 4),
-                            round(float(cs["E_sim"][i]), 4), round(float(cs["E_eon"][i]), 4),
-                            round(float(cs["ms_fraction_sim"][i]), 4), round(float(cs["ms_fraction_eon"][i]), 4)])
-    res.tables.append(Table(
-        caption="EON's multiple-scattering colour against the simulation (average albedo): ms = E_>=2(rho)/E_>=2(1) "
-                "(EON: rho_ms, Eq. 18); E = <E>(rho); ms fraction = share of multiple scattering at rho = 1",
-        columns=["geometry", "roughness", "EON r", "rho", "ms sim", "ms EON", "<E> sim", "<E> EON",
-                 "ms fraction sim", "ms fraction EON"], rows=cs_rows))
+            cs_rows.append(
+                [
+                    str(cs["geometry"][i]),
+                    float(cs["roughness"][i]),
+                    round(float(cs["r_eon"][i]), 3),
+                    float(cs["rho"][i]),
+                    round(float(cs["ms_sim"][i]), 4),
+                    round(float(cs["ms_eon"][i]), 4),
+                    round(float(cs["E_sim"][i]), 4),
+                    round(float(cs["E_eon"][i]), 4),
+                    round(float(cs["ms_fraction_sim"][i]), 4),
+                    round(float(cs["ms_fraction_eon"][i]), 4),
+                ]
+            )
+    res.tables.append(
+        Table(
+            caption="EON's multiple-scattering colour against the simulation (average albedo): ms = E_>=2(rho)/E_>=2(1) "
+            "(EON: rho_ms, Eq. 18); E = <E>(rho); ms fraction = share of multiple scattering at rho = 1",
+            columns=[
+                "geometry",
+                "roughness",
+                "EON r",
+                "rho",
+                "ms sim",
+                "ms EON",
+                "<E> sim",
+                "<E> EON",
+                "ms fraction sim",
+                "ms fraction EON",
+            ],
+            rows=cs_rows,
+        )
+    )
     ctx.progress("simulation: figures")
     from ...simulation.grading import DATA
 
@@ -240,17 +326,20 @@ def build(ctx) -> SectionResult:
     else:
         figures = plot_all(DATA, ctx.image_dir)
     for p in figures:
-        caption = {"albedo_error": "RMS albedo error (top) and best-fitting model roughness (bottom) against the "
-                                   "simulated roughness",
-                   "colorshift": "Colour of multiply scattered light (top) and albedo nonlinearity <E>/rho (bottom): "
-                                 "simulation (solid) vs EON at its fitted r (dashed)",
-                   "brdf_slices": "In-plane BRDF slices: simulation (points, +- 1 standard error) vs the models at "
-                                  "the roughness fitted to the slices"}[p.stem.replace("simulation_", "")]
+        caption = {
+            "albedo_error": "RMS albedo error (top) and best-fitting model roughness (bottom) against the "
+            "simulated roughness",
+            "colorshift": "Colour of multiply scattered light (top) and albedo nonlinearity <E>/rho (bottom): "
+            "simulation (solid) vs EON at its fitted r (dashed)",
+            "brdf_slices": "In-plane BRDF slices: simulation (points, +- 1 standard error) vs the models at "
+            "the roughness fitted to the slices",
+        }[p.stem.replace("simulation_", "")]
         res.figures.append(Figure(file=p.name, caption=caption))
     res.notes.append(
         "Simulated by openpbr_diffuse.simulation (Monte Carlo with every interreflection; V-cavities after Oren & "
         "Nayar 1994 with their Gaussian slope-area distribution, Smith random walk after Heitz et al. 2016). "
-        f"Tables regenerate with `python tools/make_simulation_tables.py`; provenance: {alb_header.get('resolution', '')}")
+        f"Tables regenerate with `python tools/make_simulation_tables.py`; provenance: {alb_header.get('resolution', '')}"
+    )
     return res
 
 

@@ -11,6 +11,7 @@ The paper's numbers are scalar C++/glm calls on one thread of an AMD 3970X; thes
 vectorised batch calls on numba's thread count -- a different measurement, shown side by
 side for the shape of the table (relative costs), not as a pass/fail comparison.
 """
+
 import math
 import time
 
@@ -29,8 +30,14 @@ PAPER = {
     "eon_approx": (20.8, 105.8, 217.0),
     "eon": (108.7, 193.5, 297.0),
 }
-LABELS = {"lambert": "Lambert", "fon": "FON", "qon": "QON", "full_on": "fullON", "eon_approx": "EON (approx)",
-          "eon": "EON (exact)"}
+LABELS = {
+    "lambert": "Lambert",
+    "fon": "FON",
+    "qon": "QON",
+    "full_on": "fullON",
+    "eon_approx": "EON (approx)",
+    "eon": "EON (exact)",
+}
 
 
 def _best(fn, reps):
@@ -52,7 +59,7 @@ def build(ctx):
     n = 20_000 if ctx.quick else 200_000
     reps = 2 if ctx.quick else 4
     rng = np.random.default_rng(1)
-    dt = np.float64   # the dtype every other section uses: no extra compilation
+    dt = np.float64  # the dtype every other section uses: no extra compilation
 
     def dirs():
         z = rng.uniform(0.01, 1.0, n)
@@ -77,26 +84,57 @@ def build(ctx):
         t_cos = _best(cos_sample, reps) / n * 1e9
         t_cltc = None
         if p_cltc is not None:
+
             def cltc_sample():
                 w, _ = od.sample("eon", wo, r01, u)
                 return od.evaluate(m, w, wo, r01, rho)
 
             t_cltc = _best(cltc_sample, reps) / n * 1e9
         measured += [t for t in (t_eval, t_cos, t_cltc) if t is not None]
-        rows.append([LABELS[m], t_eval, p_eval, t_cos, p_cos, t_cltc if t_cltc is not None else "—",
-                     p_cltc if p_cltc is not None else "—"])
-    res.tables.append(Table(
-        f"ns per row, float64, batches of {n}, best of {reps}, {numba.get_num_threads()} numba thread(s); "
-        "paper: ns per scalar call, C++/glm, one thread of an AMD 3970X",
-        ["BRDF", "eval (here)", "eval (paper)", "cosine sample (here)", "cosine sample (paper)",
-         "CLTC sample (here)", "CLTC sample (paper)"], rows))
+        rows.append(
+            [
+                LABELS[m],
+                t_eval,
+                p_eval,
+                t_cos,
+                p_cos,
+                t_cltc if t_cltc is not None else "—",
+                p_cltc if p_cltc is not None else "—",
+            ]
+        )
+    res.tables.append(
+        Table(
+            f"ns per row, float64, batches of {n}, best of {reps}, {numba.get_num_threads()} numba thread(s); "
+            "paper: ns per scalar call, C++/glm, one thread of an AMD 3970X",
+            [
+                "BRDF",
+                "eval (here)",
+                "eval (paper)",
+                "cosine sample (here)",
+                "cosine sample (paper)",
+                "CLTC sample (here)",
+                "CLTC sample (paper)",
+            ],
+            rows,
+        )
+    )
     ok = sum(1 for t in measured if math.isfinite(t) and t > 0)
-    res.checks.append(Check("every Table 1 entry measured", float(ok), 0.0, "==", expected=float(len(measured)),
-                            reference="EON paper Table 1 (the entries it lists)"))
-    res.notes.append("The paper times scalar calls of the GLSL listings ported to C++; here the library's "
-                     "vectorised, compiled batch calls are timed per row. Compare the ratios between rows "
-                     "(e.g. exact vs approximate EON, CLTC vs cosine sampling), not the absolute numbers. "
-                     "tools/bench.py compares against a scalar C port of the listings on this machine.")
+    res.checks.append(
+        Check(
+            "every Table 1 entry measured",
+            float(ok),
+            0.0,
+            "==",
+            expected=float(len(measured)),
+            reference="EON paper Table 1 (the entries it lists)",
+        )
+    )
+    res.notes.append(
+        "The paper times scalar calls of the GLSL listings ported to C++; here the library's "
+        "vectorised, compiled batch calls are timed per row. Compare the ratios between rows "
+        "(e.g. exact vs approximate EON, CLTC vs cosine sampling), not the absolute numbers. "
+        "tools/bench.py compares against a scalar C port of the listings on this machine."
+    )
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(10, 3.8))
     x = np.arange(len(rows))
