@@ -156,7 +156,7 @@ MIXED = """<?xml version="1.0"?>
 </materialx>"""
 
 
-@pytest.mark.parametrize("space, rc_want", [("lin_rec709", 0), ("gamma22", 1)])
+@pytest.mark.parametrize("space, rc_want", [("lin_rec709", 0), ("gamma99", 1)])
 def test_eval_exit_codes_per_material(tmp_path, capfd, space, rc_want):
     """0: every material read (an unsupported shader is listed as unsupported); 1: some
     material could not be evaluated, named with its reason; the others still evaluated."""
@@ -166,7 +166,7 @@ def test_eval_exit_codes_per_material(tmp_path, capfd, space, rc_want):
     out, err = capfd.readouterr()
     assert "Traceback" not in err and "# Gltf  [ND_disney_principled]" in out and "not supported" in out
     if rc_want:
-        assert "# A  [not evaluated]" in out and "gamma22" in out and "could not be evaluated: A" in err
+        assert "# A  [not evaluated]" in out and "gamma99" in out and "could not be evaluated: A" in err
     else:
         assert "# A  [ND_open_pbr_surface_surfaceshader]" in out and err == ""
     assert main(["eval", str(f), "--json"]) == rc_want

@@ -235,7 +235,7 @@ TWO = """
 @pytest.mark.parametrize(
     "bad, words",
     [
-        ('<input name="base_color" type="color3" value="0.5, 0.5, 0.5" colorspace="gamma22" />', "gamma22"),
+        ('<input name="base_color" type="color3" value="0.5, 0.5, 0.5" colorspace="gamma99" />', "gamma99"),
         ('<input name="base_diffuse_roughness" type="float" value="rough" />', "rough"),
     ],
 )
@@ -250,10 +250,10 @@ def test_one_bad_value_fails_only_its_material(tmp_path, bad, words):
 
 def test_usd_unknown_colour_space_fails_only_its_material(tmp_path):
     text = PREVIEW.format(decl="color3f").replace(
-        "inputs:diffuseColor = (0.2, 0.4, 0.6)", 'inputs:diffuseColor = (0.2, 0.4, 0.6) ( colorSpace = "gamma22" )'
+        "inputs:diffuseColor = (0.2, 0.4, 0.6)", 'inputs:diffuseColor = (0.2, 0.4, 0.6) ( colorSpace = "gamma99" )'
     )
     mats = _by_name(load_materials(_write(tmp_path, "cs.usda", text)))
-    assert "gamma22" in mats["M"].error and not mats["M"].supported
+    assert "gamma99" in mats["M"].error and not mats["M"].supported
     assert mats["Other"].error == "" and mats["Other"].supported
 
 

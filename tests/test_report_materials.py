@@ -46,7 +46,7 @@ def test_materials_section_fails_on_a_material_that_cannot_be_evaluated(tmp_path
     (src / "two.mtlx").write_text("""<?xml version="1.0"?>
 <materialx version="1.39">
   <open_pbr_surface name="Sa" type="surfaceshader">
-    <input name="base_color" type="color3" value="0.5, 0.5, 0.5" colorspace="gamma22" />
+    <input name="base_color" type="color3" value="0.5, 0.5, 0.5" colorspace="gamma99" />
   </open_pbr_surface>
   <surfacematerial name="Bad" type="material"><input name="surfaceshader" type="surfaceshader" nodename="Sa" /></surfacematerial>
   <open_pbr_surface name="Sb" type="surfaceshader" />
@@ -56,7 +56,7 @@ def test_materials_section_fails_on_a_material_that_cannot_be_evaluated(tmp_path
     images.mkdir()
     res = materials.build(Context(image_dir=images, paths=[src], quick=True))
     ev = next(c for c in res.checks if c.name == "every material found is evaluated")
-    assert not ev.passed and ev.measured == 1 and "Bad" in ev.detail and "gamma22" in ev.detail
+    assert not ev.passed and ev.measured == 1 and "Bad" in ev.detail and "gamma99" in ev.detail
     rows = {r[1]: r for r in res.tables[0].rows}
-    assert set(rows) == {"Bad", "Good"} and "gamma22" in rows["Bad"][9]
+    assert set(rows) == {"Bad", "Good"} and "gamma99" in rows["Bad"][9]
     assert sum(f.file.endswith("_render.png") for f in res.figures) == 1

@@ -5,109 +5,256 @@ point; ``lin_ap1_scene`` in USD, ``acescg`` in MaterialX): OpenPBR's default col
 OpenPBR documents in ``acescg`` pass through unchanged.  The library's nodes take the colour
 as it is given (they are colour-space agnostic).
 
-Conversions use OpenImageIO's OpenColorIO configuration (its built-in CG config, which knows
-the MaterialX names -- lin_rec709, srgb_texture, acescg, ... -- and USD's ``*_scene`` names
-as aliases), never hand-typed matrices: a linear space's 3x3 matrix to ACEScg is obtained once
-by converting the unit primaries with ``ImageBufAlgo.colorconvert`` and cached; encoded spaces
-(sRGB, gamma) are converted value by value with the same call.  OpenImageIO imports in
-~0.1 s, where colour-science takes 1-2 s, which matters when thousands of materials are read.
+The colour spaces are those MaterialX knows -- its colour-management library (``cmlib``:
+``lin_rec709``, ``srgb_texture``, ``g18_rec709``, ``g22_rec709``, ``rec709_display``,
+``acescg``, ``g22_ap1``, ``lin_adobergb``, ``adobergb``, ``lin_displayp3``,
+``srgb_displayp3``) with the names its default colour-management system remaps
+(``gamma18``, ``gamma22``, ``gamma24``, ``lin_ap1``) -- and every scene-referred space of the
+OpenColorIO ACES configuration MaterialX's OCIO colour management reads (``ACES2065-1``,
+``ACEScc``, ``ACEScct``, ``lin_rec2020``, ``CIE XYZ-D65 - Scene-referred``, ...) under all
+their OpenColorIO aliases (``Utility - Linear - sRGB``, ``sRGB - Texture``, ``lin_srgb``,
+...), USD's ``Gf.ColorSpaceNames`` tokens (``lin_rec709_scene``, ...) and colour-science's
+names.  Display-referred OpenColorIO spaces (``sRGB - Display``) are refused with that reason.
+
+The conversions are colour-science's (``colour.RGB_COLOURSPACES``, ``matrix_RGB_to_RGB`` with
+the Bradford adaptation the ACES configuration uses, matrices derived from the primaries and white point as
+OpenColorIO derives them, ``XYZ_to_RGB``, the colour spaces'
+``cctf_decoding``), never typed by hand.  colour-science takes about a second to import, which
+an ``eval`` of one file cannot afford, so its results are held in ``_colorspace_table``,
+written by ``build_table()`` (``python -m openpbr_diffuse.readers.colorspace --write``); a test
+checks the table against colour-science.  The decoding curves there are colour-science's own
+kinds: the sRGB curve (``eotf_sRGB``) and pure powers (``gamma_function``), evaluated in
+closed form in double precision (negative values: sRGB's linear segment, 0 for powers, as
+MaterialX's ``cmlib`` graphs clamp them); any other curve (ACEScc, ACEScct) is
+colour-science's ``cctf_decoding``, imported on first use.
 """
 
 import functools
+import sys
 
 import numpy as np
+
+from . import _colorspace_table as _table
 
 #: The working colour space of every resolved colour (MaterialX / USD names).
 WORKING_SPACE = "acescg"
 WORKING_SPACE_USD = "lin_ap1_scene"
 
-# short (MaterialX) name -> OpenColorIO colour space of OpenImageIO's built-in config
-_OCIO = {
-    "lin_rec709": "Linear Rec.709 (sRGB)",
-    "srgb_texture": "sRGB Encoded Rec.709 (sRGB)",
-    "g22_rec709": "Gamma 2.2 Encoded Rec.709",
-    "g18_rec709": "Gamma 1.8 Encoded Rec.709",
-    "g24_rec709": "Gamma 2.4 Encoded Rec.709",
-    "acescg": "ACEScg",
-    "aces2065-1": "ACES2065-1",
-    "g22_ap1": "Gamma 2.2 Encoded AP1",
-    "srgb_ap1": "sRGB Encoded AP1",
-    "lin_adobergb": "Linear AdobeRGB",
-    "adobergb": "Gamma 2.2 Encoded AdobeRGB",
-    "lin_displayp3": "Linear P3-D65",
-    "srgb_displayp3": "sRGB Encoded P3-D65",
-    "lin_rec2020": "Linear Rec.2020",
+#: canonical name -> (OpenColorIO name, colour-science colour space giving the primaries and
+#: white point, colour-science decoding: None = that colour space's own ``cctf_decoding``, else
+#: a name of ``colour.CCTF_DECODINGS``).  The only hand-written part: names.
+SPECS = {
+    "lin_rec709": ("Linear Rec.709 (sRGB)", "Linear Rec.709 (sRGB)", None),
+    "srgb_texture": ("sRGB Encoded Rec.709 (sRGB)", "sRGB Encoded Rec.709 (sRGB)", None),
+    "g18_rec709": ("Gamma 1.8 Encoded Rec.709", "Gamma 1.8 Encoded Rec.709", None),
+    "g22_rec709": ("Gamma 2.2 Encoded Rec.709", "Gamma 2.2 Encoded Rec.709", None),
+    "g24_rec709": ("Gamma 2.4 Encoded Rec.709", "Linear Rec.709 (sRGB)", "Gamma 2.4"),
+    "acescg": ("ACEScg", "ACEScg", None),
+    "aces2065-1": ("ACES2065-1", "ACES2065-1", None),
+    "acescc": ("ACEScc", "ACEScc", None),
+    "acescct": ("ACEScct", "ACEScct", None),
+    "g22_ap1": ("Gamma 2.2 Encoded AP1", "Gamma 2.2 Encoded AP1", None),
+    "srgb_ap1": ("sRGB Encoded AP1", "sRGB Encoded AP1", None),
+    "lin_adobergb": ("Linear AdobeRGB", "Linear AdobeRGB", None),
+    # Adobe RGB (1998)'s exponent 563/256, as MaterialX's cmlib, OpenColorIO and Gf.ColorSpace use
+    "adobergb": ("Gamma 2.2 Encoded AdobeRGB", "Adobe RGB (1998)", None),
+    "lin_displayp3": ("Linear P3-D65", "Linear P3-D65", None),
+    "srgb_displayp3": ("sRGB Encoded P3-D65", "sRGB Encoded P3-D65", None),
+    "lin_rec2020": ("Linear Rec.2020", "Linear Rec.2020", None),
+    "lin_ciexyzd65": ("CIE XYZ-D65 - Scene-referred", "CIE XYZ-D65 - Scene-referred", None),
 }
-_SHORT = {v: k for k, v in _OCIO.items()}
-# encoded space -> the linear space with the same primaries (what ``decode`` returns)
-_LINEAR_OF = {
-    "srgb_texture": "lin_rec709",
-    "g22_rec709": "lin_rec709",
-    "g18_rec709": "lin_rec709",
-    "g24_rec709": "lin_rec709",
-    "g22_ap1": "acescg",
-    "srgb_ap1": "acescg",
-    "adobergb": "lin_adobergb",
-    "srgb_displayp3": "lin_displayp3",
+#: Names MaterialX's default colour-management system remaps (DefaultColorManagementSystem),
+#: UsdUVTexture's ``sRGB`` and the raw / data spellings.
+EXTRA_ALIASES = {
+    "gamma18": "g18_rec709",
+    "gamma22": "g22_rec709",
+    "gamma24": "g24_rec709",
+    "rec709_display": "g24_rec709",
+    "lin_ap1": "acescg",
+    "lin_ap0": "aces2065-1",
+    "srgb": "srgb_texture",
+    "raw": "raw",
+    "data": "raw",
+    "identity": "raw",
+    "none": "raw",
+    "utility - raw": "raw",
+    "": "raw",
 }
-_RAW = {"raw", "data", "identity", "none", "utility - raw", ""}
 
 
-@functools.lru_cache(maxsize=1)
-def _config():
-    import OpenImageIO as oiio
+def _colour():
+    """colour-science (imported without its plotting sub-package; see ``spectral.colorimetry``)."""
+    colour = sys.modules.get("colour")
+    if colour is not None:
+        return colour
+    from ..spectral.colorimetry import _colour as load
 
-    return oiio.ColorConfig()
+    return load()
 
 
-@functools.cache
-def canonical(name):
-    """The short (MaterialX) spelling of a colour-space name, or "raw".
+def _decoding_kind(fn) -> tuple:
+    """A colour-science decoding function as ("linear",), ("srgb",), ("gamma", exponent) or
+    ("colour", None) -- the last evaluated by colour-science itself at run time."""
+    colour = _colour()
+    base = fn.func if isinstance(fn, functools.partial) else fn
+    gamma = colour.models.rgb.transfer_functions.gamma_function
+    if base is colour.models.rgb.transfer_functions.linear_function:
+        return ("linear",)
+    if base is colour.models.rgb.transfer_functions.eotf_sRGB:
+        return ("srgb",)
+    if base is gamma and isinstance(fn, functools.partial) and set(fn.keywords) == {"exponent"} and not fn.args:
+        return ("gamma", float(fn.keywords["exponent"]))
+    return ("colour", None)
 
-    Accepts MaterialX names, USD ``Gf.ColorSpaceNames`` tokens (``lin_rec709_scene``, ...),
-    OpenColorIO names and UsdUVTexture's ``sRGB`` / ``raw``; unknown names raise ValueError.
+
+def _derived(cs):
+    """A copy of colour-science's colour space ``cs`` whose RGB <-> XYZ matrices are derived from
+    its primaries and white point, as OpenColorIO's and Gf.ColorSpace's are (some published
+    matrices, Adobe RGB (1998)'s, are rounded: white would not map to white)."""
+    cs = cs.copy()
+    cs.use_derived_transformation_matrices(True)
+    return cs
+
+
+def build_table() -> dict:
+    """The colour-space table computed with colour-science and OpenColorIO's names.
+
+    Returns ``{"spaces": {canonical: {"ocio", "colour", "decoding", "matrix"}}, "aliases":
+    {lower-case name: canonical}, "display": [display-referred OpenColorIO names]}``:
+    ``matrix`` takes the space's linear values to ACEScg (rows: output channels; Bradford
+    adaptation to the ACES white point); ``decoding`` is ``_decoding_kind`` of the space's
+    decoding, with the colour-science name for ("colour", ...).  The aliases are the
+    OpenColorIO aliases of OpenImageIO's built-in ACES configuration, colour-science's keys of
+    the same colour space, and ``EXTRA_ALIASES``.
 
     Examples
     --------
-    >>> canonical("lin_ap1_scene"), canonical("sRGB"), canonical("raw")
-    ('acescg', 'srgb_texture', 'raw')
+    >>> t = build_table()                                   # doctest: +SKIP
+    >>> t["aliases"]["utility - linear - srgb"]             # doctest: +SKIP
+    'lin_rec709'
     """
-    if not isinstance(name, str):
-        raise TypeError(f"colour space must be a string, got {type(name).__name__}")
-    key = name.strip()
-    if key.lower() in _RAW:
-        return "raw"
-    if key.lower() in _OCIO:
-        return key.lower()
-    if key.lower() == "srgb":
-        return "srgb_texture"
-    resolved = _config().resolve(key)
-    if resolved in _SHORT:
-        return _SHORT[resolved]
-    if _config().isData(resolved) if resolved in _config().getColorSpaceNames() else False:
-        return "raw"
-    raise ValueError(
-        f"colour space {name!r} is not known; known: {', '.join(sorted(_OCIO))}, raw "
-        "(and their USD *_scene / OpenColorIO names)"
-    )
-
-
-def _convert(values, src, dst):
-    """OpenImageIO colorconvert of values (n, 3) from OCIO space src to dst (float64 out)."""
     import OpenImageIO as oiio
 
-    a = np.ascontiguousarray(np.asarray(values, dtype=np.float32).reshape(-1, 1, 3))
-    out = oiio.ImageBufAlgo.colorconvert(oiio.ImageBuf(a), src, dst)
-    if out.has_error:
-        raise ValueError(f"colour conversion {src} -> {dst} failed: {out.geterror()}")
-    return np.asarray(out.get_pixels(oiio.FLOAT), dtype=np.float64).reshape(-1, 3)
+    colour = _colour()
+    dst = _derived(colour.RGB_COLOURSPACES["ACEScg"])
+    d65 = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
+    config = oiio.ColorConfig()
+    spaces, aliases = {}, {}
+    for canon, (ocio, cname, cctf) in SPECS.items():
+        cs = _derived(colour.RGB_COLOURSPACES[cname])
+        if canon == "lin_ciexyzd65":  # CIE XYZ of a D65-adapted scene (OpenColorIO's reference)
+            m = colour.XYZ_to_RGB(np.eye(3), dst, d65, "Bradford").T
+        else:
+            m = colour.matrix_RGB_to_RGB(cs, dst, "Bradford")
+        if np.allclose(m, np.eye(3), rtol=0, atol=1e-12):  # AP1 primaries: the identity, without round-off
+            m = np.eye(3)
+        fn = colour.CCTF_DECODINGS[cctf] if cctf else cs.cctf_decoding
+        kind = _decoding_kind(fn)
+        if kind[0] == "colour":
+            kind = ("colour", cctf or cname)
+        spaces[canon] = {
+            "ocio": ocio,
+            "colour": cname,
+            "decoding": list(kind),
+            "matrix": [[float(x) for x in row] for row in np.asarray(m, dtype=np.float64)],
+        }
+        names = {canon, ocio}
+        names |= (
+            {a.removeprefix("ocio:") for a in config.getAliases(ocio)} if ocio in config.getColorSpaceNames() else set()
+        )
+        if cctf is None:
+            same = colour.RGB_COLOURSPACES[cname]
+            names |= {k for k in colour.RGB_COLOURSPACES.keys() if colour.RGB_COLOURSPACES[k] is same}
+        for n in names:
+            aliases[n.strip().lower()] = canon
+    for n in config.getAliases("Raw") + ["Raw"]:
+        aliases[n.strip().lower()] = "raw"
+    aliases.update(EXTRA_ALIASES)
+    display = sorted(
+        n
+        for n in config.getColorSpaceNames()
+        if n.lower() not in aliases and config.getColorSpaceFamilyByName(n) == "Display"
+    )
+    display_aliases = sorted({a.lower() for n in display for a in [n] + list(config.getAliases(n))} - set(aliases))
+    return {"spaces": spaces, "aliases": dict(sorted(aliases.items())), "display": display_aliases}
+
+
+def write_table(path: str | None = None) -> str:
+    """Write ``build_table()`` as the Python module ``_colorspace_table`` (or to ``path``)."""
+    import os
+    import pprint
+
+    path = path or os.path.join(os.path.dirname(__file__), "_colorspace_table.py")
+    t = build_table()
+    text = (
+        '"""Colour-space table of ``colorspace``: GENERATED by ``colorspace.build_table()`` from\n'
+        "colour-science and OpenColorIO's names (``python -m openpbr_diffuse.readers.colorspace --write``);\n"
+        'do not edit by hand (a test checks it against colour-science)."""\n\n'
+        f"SPACES = {pprint.pformat(t['spaces'], width=110, sort_dicts=True)}\n\n"
+        f"ALIASES = {pprint.pformat(t['aliases'], width=110)}\n\n"
+        f"DISPLAY = {pprint.pformat(t['display'], width=110)}\n"
+    )
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write(text)
+    return path
+
+
+def known() -> list:
+    """The canonical names of the supported colour spaces (and "raw").
+
+    Examples
+    --------
+    >>> "g22_rec709" in known() and "lin_ciexyzd65" in known()
+    True
+    """
+    return sorted(_table.SPACES) + ["raw"]
 
 
 @functools.cache
-def matrix(space):
+def canonical(name: str) -> str:
+    """The short (MaterialX) spelling of a colour-space name, or "raw".
+
+    Accepts MaterialX names (also ``gamma18`` / ``gamma22`` / ``gamma24`` / ``lin_ap1``),
+    USD ``Gf.ColorSpaceNames`` tokens (``lin_rec709_scene``, ...), OpenColorIO names and
+    aliases of the ACES configuration, colour-science's names and UsdUVTexture's ``sRGB`` /
+    ``raw``, in any letter case; unknown names raise ValueError.
+
+    Examples
+    --------
+    >>> canonical("lin_ap1_scene"), canonical("sRGB"), canonical("raw"), canonical("gamma24")
+    ('acescg', 'srgb_texture', 'raw', 'g24_rec709')
+    >>> canonical("Utility - Linear - sRGB"), canonical("CIE XYZ-D65 - Scene-referred")
+    ('lin_rec709', 'lin_ciexyzd65')
+    """
+    if not isinstance(name, str):
+        raise TypeError(f"colour space must be a string, got {type(name).__name__}")
+    key = name.strip().lower()
+    hit = _table.ALIASES.get(key)
+    if hit is not None:
+        return hit
+    if key in _table.DISPLAY:
+        raise ValueError(
+            f"colour space {name!r} is display-referred (an OpenColorIO display space); "
+            "authored colours need a scene-referred space"
+        )
+    raise ValueError(
+        f"colour space {name!r} is not known; known: {', '.join(known())} "
+        "(and their OpenColorIO, USD *_scene and colour-science names)"
+    )
+
+
+@functools.cache
+def _matrix(space: str) -> np.ndarray:
+    m = np.array(_table.SPACES[space]["matrix"], dtype=np.float64)
+    m.setflags(write=False)
+    return m
+
+
+def matrix(space: str) -> np.ndarray:
     """The 3x3 matrix from a linear ``space`` to ACEScg (rows: output channels).
 
-    Obtained from OpenColorIO by converting the unit primaries.
+    Computed by colour-science (``matrix_RGB_to_RGB``, Bradford adaptation); ValueError for
+    a space with a transfer function.
 
     Examples
     --------
@@ -115,12 +262,52 @@ def matrix(space):
     [1.0, 1.0, 1.0]
     """
     space = canonical(space)
-    if space not in _OCIO or space in _LINEAR_OF:
+    if space == "raw" or not is_linear(space):
         raise ValueError(f"matrix: {space!r} is not a linear colour space")
-    return _convert(np.eye(3), _OCIO[space], _OCIO[WORKING_SPACE]).T
+    return _matrix(space).copy()
 
 
-def to_working(rgb, space):
+def _srgb_eotf(v: np.ndarray) -> np.ndarray:
+    """The sRGB decoding of IEC 61966-2-1 (colour-science's ``eotf_sRGB``), float64."""
+    with np.errstate(invalid="ignore"):
+        return np.where(v <= 0.04045, v / 12.92, ((np.maximum(v, 0.04045) + 0.055) / 1.055) ** 2.4)
+
+
+def decode(values, space: str) -> np.ndarray:
+    """Remove the transfer function of ``space`` (values keep its primaries).
+
+    Parameters
+    ----------
+    values : array_like
+    space : str
+        A colour-space name (see ``canonical``).
+
+    Returns
+    -------
+    ndarray float64 (the input's shape)
+
+    Examples
+    --------
+    >>> round(float(decode([0.5, 0.5, 0.5], "srgb_texture")[0]), 5)
+    0.21404
+    >>> round(float(decode([0.5], "gamma22")[0]), 6) == round(0.5 ** 2.2, 6)
+    True
+    """
+    space = canonical(space)
+    v = np.asarray(values, dtype=np.float64)
+    if space == "raw":
+        return v.copy()
+    kind = _table.SPACES[space]["decoding"]
+    if kind[0] == "linear":
+        return v.copy()
+    if kind[0] == "srgb":
+        return _srgb_eotf(v)
+    if kind[0] == "gamma":
+        return np.maximum(v, 0.0) ** kind[1]
+    return np.asarray(_colour().cctf_decoding(v, function=kind[1]), dtype=np.float64).reshape(v.shape)
+
+
+def to_working(rgb, space: str) -> np.ndarray:
     """Convert colour(s) ``rgb`` (..., 3) from ``space`` to the working space (ACEScg).
 
     Parameters
@@ -146,46 +333,40 @@ def to_working(rgb, space):
     space = canonical(space)
     if space in ("raw", WORKING_SPACE):
         return rgb.copy()
-    if space in _SRGB_CURVE:
-        return _srgb_eotf(rgb) @ matrix(_LINEAR_OF[space]).T
-    if space in _LINEAR_OF:
-        return _convert(rgb, _OCIO[space], _OCIO[WORKING_SPACE]).reshape(rgb.shape)
-    return rgb @ matrix(space).T
+    return decode(rgb, space) @ _matrix(space).T
 
 
-def decode(values, space):
-    """Remove the transfer function of ``space`` (values keep its primaries).
+def is_linear(space: str) -> bool:
+    """True when ``space`` has no transfer function (raw counts as linear).
 
     Examples
     --------
-    >>> round(float(decode([0.5, 0.5, 0.5], "srgb_texture")[0]), 5)
-    0.21404
+    >>> is_linear("lin_displayp3"), is_linear("gamma18"), is_linear("raw")
+    (True, False, True)
     """
     space = canonical(space)
-    v = np.asarray(values, dtype=np.float64)
-    if space not in _LINEAR_OF:
-        return v.copy()
-    if space in _SRGB_CURVE:
-        return _srgb_eotf(v)
-    return _convert(v, _OCIO[space], _OCIO[_LINEAR_OF[space]]).reshape(v.shape)
+    return space == "raw" or _table.SPACES[space]["decoding"][0] == "linear"
 
 
-#: Spaces whose transfer function is the sRGB piecewise curve: decoded in closed form in
-#: double precision (OpenColorIO's CPU processor approximates the power, 1.0 -> 1.000024,
-#: which would read white as out of range).
-_SRGB_CURVE = ("srgb_texture", "srgb_ap1", "srgb_displayp3")
+__all__ = [
+    "WORKING_SPACE",
+    "WORKING_SPACE_USD",
+    "canonical",
+    "to_working",
+    "decode",
+    "matrix",
+    "is_linear",
+    "known",
+    "build_table",
+    "write_table",
+    "SPECS",
+]
 
 
-def _srgb_eotf(v):
-    """The sRGB decoding of IEC 61966-2-1 (odd-symmetric below 0), float64."""
-    a = np.abs(v)
-    lin = np.where(a <= 0.04045, a / 12.92, ((a + 0.055) / 1.055) ** 2.4)
-    return np.sign(v) * lin
+if __name__ == "__main__":  # pragma: no cover - regenerates the table
+    if "--write" in sys.argv[1:]:
+        print(write_table())
+    else:
+        import json
 
-
-def is_linear(space):
-    """True when ``space`` has no transfer function (raw counts as linear)."""
-    return canonical(space) not in _LINEAR_OF
-
-
-__all__ = ["WORKING_SPACE", "WORKING_SPACE_USD", "canonical", "to_working", "decode", "matrix", "is_linear"]
+        print(json.dumps(build_table(), indent=1))

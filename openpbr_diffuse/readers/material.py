@@ -163,10 +163,10 @@ def failed_material(
 
     Examples
     --------
-    >>> m = failed_material(ValueError("x.mtlx: /M/S.base_color: unknown colour space 'gamma22'"),
+    >>> m = failed_material(ValueError("x.mtlx: /M/S.base_color: unknown colour space 'gamma99'"),
     ...                     name="M", path="/M", file="x.mtlx")
     >>> (m.supported, m.error)
-    (False, "x.mtlx: /M/S.base_color: unknown colour space 'gamma22'")
+    (False, "x.mtlx: /M/S.base_color: unknown colour space 'gamma99'")
     """
     if isinstance(exc, RecursionError):
         text = "the shading graph is nested too deeply to evaluate"

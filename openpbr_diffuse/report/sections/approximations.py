@@ -280,7 +280,7 @@ def build(ctx):
     )
     res.tables.append(
         Table(
-            "Published errata and ambiguities (with the evidence)",
+            "Seed errata and ambiguities (with the evidence)",
             ["where", "as printed", "evidence"],
             [list(e) for e in ERRATA],
         )
