@@ -1,4 +1,4 @@
-"""Metadata and text match the data (issue 13, finding 6)."""
+"""Metadata and text match the data."""
 
 import json
 

@@ -1,4 +1,4 @@
-"""Input checks do what their messages say (issue 13, finding 4)."""
+"""Input checks do what their messages say."""
 
 import math
 

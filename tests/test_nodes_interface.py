@@ -199,7 +199,7 @@ class TestBadInput:
 # ----------------------------------------------------------------------------- ignored inputs
 class TestIgnoredInputs:
     def test_reported_and_warned(self):
-        # coat, fuzz, transmission, subsurface are modelled (issue 9); thin film and emission are not
+        # coat, fuzz, transmission, subsurface are modelled; thin film and emission are not
         with pytest.warns(
             IgnoredInputWarning, match="thin_film_weight.*emission_color|emission_color.*thin_film_weight"
         ):

@@ -45,7 +45,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 C_SOURCE_CANDIDATES = (ROOT.parent / "shared" / "bench" / "eon_scalar.c", ROOT / "shared" / "bench" / "eon_scalar.c")
 
-#: Issue 6 targets.
+#: Targets: the approximation and the sampler against the scalar C reference.
 TARGET_EVAL_RATIO = 0.5  # evaluate("eon_approx"/"eon") <= 0.5 x C (approx/exact)
 TARGET_SAMPLE_RATIO = 0.5  # sample("eon") + eval <= 0.5 x C sample
 TARGET_ALBEDO_APPROX = 100e6  # directional_albedo("eon_approx") queries per second
@@ -326,7 +326,7 @@ print(time.perf_counter() - t0)
 
 # --------------------------------------------------------------------------- the surface
 
-#: Issue 9 targets: time per row relative to OrenNayarDiffuseBSDF's of the same verb.
+#: Targets: time per row relative to OrenNayarDiffuseBSDF's of the same verb.
 TARGET_SURFACE_BASE = 5.0  # diffuse + specular + metal
 TARGET_SURFACE_STACK = 10.0  # + coat + fuzz
 TARGET_SURFACE_BUILD_S = 50e-6  # construct + lobes(wo) at one direction

@@ -43,7 +43,7 @@ def header(quick, seconds):
     return (
         "\n".join(
             [
-                "# title: openpbr-diffuse grading of the seeds' real-time approximations (Gotanda 2012; "
+                "# title: openpbr-diffuse grading of published real-time approximations (Gotanda 2012; "
                 "table-based energy compensation, Kulla-Conty as in patapom's 'Energy Compensation Pt. 2')",
                 "# method: each approximation evaluated on a grid over its domain and compared with an exact "
                 "quantity computed independently: od.evaluate of the exact lobe, Gauss-Legendre quadrature of "

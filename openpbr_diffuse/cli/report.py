@@ -44,21 +44,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     g = p.add_argument_group("the implementation under test")
     g.add_argument("--vectors", metavar="FILE", help="a filled vectors file (CSV / JSON with out_r, out_g, out_b)")
-    added = _grader_arguments(g)
-    if not added:
-        for flag, kw in (
-            ("--implementation", {"metavar": "NAME"}),
-            ("--source", {"metavar": "PATH"}),
-            ("--glsl", {"metavar": "FILE"}),
-            ("--cpp", {"metavar": "FILE"}),
-            ("--function", {"metavar": "NAME"}),
-            ("--albedo-function", {"metavar": "NAME"}),
-            ("--sample-function", {"metavar": "NAME"}),
-            ("--pdf-function", {"metavar": "NAME"}),
-        ):
-            g.add_argument(flag, **kw)
-        g.add_argument("--include", metavar="DIR", action="append", default=[])
-        g.add_argument("--define", metavar="NAME=VALUE", action="append", default=[])
+    _grader_arguments(g)
     g.add_argument("--model", default=None, metavar="MODEL", help="the model it claims (default eon)")
     c = p.add_argument_group("checks")
     c.add_argument(
@@ -109,53 +95,14 @@ def _grader_arguments(group: argparse._ArgumentGroup) -> None:
             kwargs["action"] = "store_true"
             kwargs.pop("metavar", None)
         group.add_argument(*action.option_strings, **kwargs)
-    for flag, dest in (("--sample-function", "sample_function"), ("--pdf-function", "pdf_function")):
-        if dest not in have:
-            group.add_argument(
-                flag,
-                dest=dest,
-                metavar="NAME",
-                default=None,
-                help="sampler / pdf function (graded when the graders support it)",
-            )
-    return True
 
 
 def subject_from_args(args: argparse.Namespace) -> Subject | None:
     """The Subject the options name, or None (``graders.cli.subject_from_args`` on the report's options)."""
     from ..graders import cli as gcli
 
-    gcli = importlib.import_module("openpbr_diffuse.graders.cli")
-    hook = getattr(gcli, "subject_from_args", None)
-    if hook is not None:
-        ns = argparse.Namespace(**{**vars(args), "quick": True, "json": False, "file": None, "model": args.model})
-        return hook(ns)
-    # fallback: the graders' generic adapters (BRDF and albedo)
-    modes = [m for m in ("implementation", "glsl", "cpp") if getattr(args, m, None)]
-    if not modes:
-        return None
-    if len(modes) > 1:
-        raise ValueError("report: give one of --implementation, --glsl, --cpp")
-    if args.implementation:
-        from ..graders import load
-
-        return load(args.implementation, getattr(args, "source", None))
-    from ..graders.generic import cpp_subject, glsl_subject
-
-    make = glsl_subject if args.glsl else cpp_subject
-    subject = make(
-        args.glsl or args.cpp,
-        args.function,
-        args.albedo_function,
-        includes=args.include or (),
-        defines=args.define or (),
-        model=args.model or "eon",
-    )
-    if getattr(args, "sample_function", None) or getattr(args, "pdf_function", None):
-        subject.notes.append(
-            "sampler: not graded: this installation's graders do not run --sample-function / --pdf-function"
-        )
-    return subject
+    ns = argparse.Namespace(**{**vars(args), "quick": True, "json": False, "file": None, "model": args.model})
+    return gcli.subject_from_args(ns)
 
 
 def _under_test(args):
@@ -278,14 +225,11 @@ def run(args) -> int:
     ev = doc["evidence"]
     index = result.out_dir / "index.html" if result.out_dir is not None else "(not written)"
     if ev["n_checks"] == 0:
-        print(
-            f"NOT RUN: no check of the library's evidence ran; report in {result.out_dir / 'index.html'} "
-            f"({doc['elapsed_s']:.1f} s)"
-        )
+        print(f"NOT RUN: no check of the library's evidence ran; report in {index} ({doc['elapsed_s']:.1f} s)")
         return result.exit_status
     print(
         f"{'PASS' if result.passed else 'FAIL'}: {ev['n_checks'] - ev['n_failed']}/{ev['n_checks']} checks "
-        f"of the library's evidence; report in {result.out_dir / 'index.html'} ({doc['elapsed_s']:.1f} s)"
+        f"of the library's evidence; report in {index} ({doc['elapsed_s']:.1f} s)"
     )
     return result.exit_status
 

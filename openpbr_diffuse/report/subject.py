@@ -366,7 +366,7 @@ def figures(subject, ut: UnderTest, image_dir, *, quick: bool = True) -> list:
         n = 14 if quick else _MAP_N
         mu, mi, mo = _grid(n)
         fig, axes = plt.subplots(2, len(_MAP_ROUGHNESS), figsize=(3.2 * len(_MAP_ROUGHNESS), 5.6), squeeze=False)
-        for row, (dphi, label) in enumerate(
+        for row, (dphi, _label) in enumerate(
             ((0.0, "azimuths equal (L.V >= 0)"), (math.pi, "azimuths opposite (L.V < 0 where mu_i mu_o < sin sin)"))
         ):
             for col, r in enumerate(_MAP_ROUGHNESS):

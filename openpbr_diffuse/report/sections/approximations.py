@@ -280,7 +280,7 @@ def build(ctx):
     )
     res.tables.append(
         Table(
-            "Seed errata and ambiguities (with the evidence)",
+            "Published errata and ambiguities (with the evidence)",
             ["where", "as printed", "evidence"],
             [list(e) for e in ERRATA],
         )
