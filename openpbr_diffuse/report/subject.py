@@ -353,6 +353,34 @@ def _dirs(mu, phi):
     return np.stack([s * np.cos(phi), s * np.sin(phi), mu], axis=-1)
 
 
+def _brdf_batch(brdf, mi, mo, th, rho) -> dict:
+    """The subject's first channel on every input the pictures draw, from ONE call of ``brdf``
+    (a GLSL or C++ subject pays a process and a GL context per call): keys ("map", dphi, r)
+    over the (mu_i, mu_o) grid and ("slice", mu_o, r) over the in-plane theta_i."""
+    keys, wis, wos, rs = [], [], [], []
+    for dphi in (0.0, math.pi):
+        for r in _MAP_ROUGHNESS:
+            keys.append((("map", dphi, r), mi.size))
+            wis.append(_dirs(mi, 0.0))
+            wos.append(_dirs(mo, dphi))
+            rs.append(np.full(mi.size, r))
+    t = np.radians(th)
+    wi_slice = np.stack([np.sin(t), np.zeros_like(t), np.cos(t)], axis=-1)
+    for mu_o in _SLICE_MU_O:
+        for r in (0.5, 1.0):
+            keys.append((("slice", mu_o, r), th.size))
+            wis.append(wi_slice)
+            wos.append(np.broadcast_to(_dirs(np.array(mu_o), 0.0), (th.size, 3)))
+            rs.append(np.full(th.size, r))
+    rr = np.concatenate(rs)
+    got = np.asarray(brdf(np.concatenate(wis), np.concatenate(wos), rr, np.broadcast_to(rho, (rr.size, 3))), float)
+    out, start = {}, 0
+    for key, size in keys:
+        out[key] = got[start : start + size, 0]
+        start += size
+    return out
+
+
 def figures(subject, ut: UnderTest, image_dir, *, quick: bool = True) -> list:
     """Write the pictures of the subject's values beside the reference's; [(file, caption)]."""
     from ..models import directional_albedo, evaluate
@@ -365,6 +393,8 @@ def figures(subject, ut: UnderTest, image_dir, *, quick: bool = True) -> list:
     if subject.brdf is not None:
         n = 14 if quick else _MAP_N
         mu, mi, mo = _grid(n)
+        th = np.linspace(-89.0, 89.0, 90 if quick else 179)
+        got_of = _brdf_batch(subject.brdf, mi, mo, th, rho)
         fig, axes = plt.subplots(2, len(_MAP_ROUGHNESS), figsize=(3.2 * len(_MAP_ROUGHNESS), 5.6), squeeze=False)
         for row, (dphi, _label) in enumerate(
             ((0.0, "azimuths equal (L.V >= 0)"), (math.pi, "azimuths opposite (L.V < 0 where mu_i mu_o < sin sin)"))
@@ -373,7 +403,7 @@ def figures(subject, ut: UnderTest, image_dir, *, quick: bool = True) -> list:
                 wi, wo = _dirs(mi, 0.0), _dirs(mo, dphi)
                 rr = np.full(mi.shape, r)
                 rh = np.broadcast_to(rho, (mi.size, 3))
-                got = np.asarray(subject.brdf(wi, wo, rr, rh), float)[:, 0]
+                got = got_of[("map", dphi, r)]
                 ref = evaluate(model, wi, wo, rr, rh)[:, 0]
                 with np.errstate(invalid="ignore", divide="ignore"):
                     err = np.abs(got - ref) / np.maximum(np.abs(ref), 1e-6)
@@ -403,7 +433,6 @@ def figures(subject, ut: UnderTest, image_dir, *, quick: bool = True) -> list:
             )
         )
         # in-plane lobe slices
-        th = np.linspace(-89.0, 89.0, 90 if quick else 179)
         fig, axes = plt.subplots(1, len(_SLICE_MU_O), figsize=(3.4 * len(_SLICE_MU_O), 3.0), squeeze=False)
         for col, mu_o in enumerate(_SLICE_MU_O):
             ax = axes[0, col]
@@ -414,7 +443,7 @@ def figures(subject, ut: UnderTest, image_dir, *, quick: bool = True) -> list:
                 rr = np.full(th.size, r)
                 rh = np.broadcast_to(rho, (th.size, 3))
                 ref = evaluate(model, wi, wo, rr, rh)[:, 0] * wi[:, 2]
-                got = np.asarray(subject.brdf(wi, wo, rr, rh), float)[:, 0] * wi[:, 2]
+                got = got_of[("slice", mu_o, r)] * wi[:, 2]
                 ax.plot(th, ref, color=c, lw=3, alpha=0.35, label=f"reference r={r:g}")
                 ax.plot(th, got, color=c, lw=1, ls="--", label=f"theirs r={r:g}")
             ax.set_title(f"in-plane, mu_o = {mu_o:g}", fontsize=8)
