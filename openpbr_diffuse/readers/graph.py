@@ -233,7 +233,8 @@ class Resolver:
         if out_type not in VALUE_TYPES:
             self._note(f"node {node.getNamePath()} ({ndname}) outputs a {out_type}: not a value", True)
             return None
-        if cat not in ops.OPS and cat != "image" and mxlib.implementation_graph(ndname, nd) is None:
+        graph = mxlib.implementation_graph(ndname, nd)
+        if cat not in ops.OPS and cat != "image" and graph is None:
             self._note(f"node {node.getNamePath()} ({ndname}) is not evaluated by the reader; default used", True)
             return None
         resolved = {}
@@ -255,14 +256,18 @@ class Resolver:
             resolved[name] = p
         if cat == "image":
             return self.texture(node.getNamePath(), ndname, resolved, out_type)
-        if cat in ops.OPS:
+        if graph is None:  # a natively implemented stdlib node (its library graph, if any, defines it)
             try:
                 value = ops.apply(cat, {n: p.value for n, p in resolved.items()}, out_type)
-            except (TypeError, ValueError, IndexError) as exc:
+            except (TypeError, ValueError, IndexError, KeyError) as exc:
                 raise ValueError(f"{self.file}: node {node.getNamePath()} ({ndname}): {exc}") from None
             return Parameter(value, _describe(f"{cat} {node.getNamePath()}", resolved), _combined(resolved))
-        graph = mxlib.implementation_graph(ndname, nd)
-        out = graph.getOutput(outname) or graph.getOutputs()[0]
+        out = graph.getOutput(outname) or (graph.getOutputs() or [None])[0]
+        if out is None:
+            raise ValueError(
+                f"{self.file}: node {node.getNamePath()} ({ndname}): its implementation graph "
+                f"{graph.getName()} has no output"
+            )
         p = self.port(out, trail, resolved, True)
         if p is None:
             return None
@@ -311,6 +316,13 @@ class Resolver:
         )
 
 
+def check_finite(file: str, where: str, p) -> None:
+    """ValueError when a resolved input's value is not finite (an undefined operation upstream:
+    ln of 0, sqrt of a negative number, ...), naming the input and its provenance."""
+    if not ops.finite(p.value):
+        raise ValueError(f"{file}: {where}: the value is not finite ({p.value!r}): {_short(p.provenance)}")
+
+
 def _array(v):
     """Tuples of floats as float64 arrays (the evaluator's vectors); other values unchanged."""
     return np.asarray(v, dtype=np.float64) if isinstance(v, tuple) else v
@@ -355,4 +367,4 @@ def _describe(head: str, resolved: dict) -> str:
     return f"{head}({'; '.join(set_)})" if set_ else head
 
 
-__all__ = ["MAX_CHAIN", "deep_stack", "Resolver", "to_python", "convert_color", "VALUE_TYPES"]
+__all__ = ["MAX_CHAIN", "deep_stack", "Resolver", "to_python", "convert_color", "check_finite", "VALUE_TYPES"]

@@ -10,7 +10,7 @@ The file is only read.
 import os
 
 from . import mxlib
-from .graph import Resolver, deep_stack, to_python
+from .graph import Resolver, check_finite, deep_stack, to_python
 from .mapping import build_material
 from .material import Material, Parameter, failed_material
 
@@ -235,6 +235,7 @@ class _MxShader:
                 if geomprop:
                     continue
                 p = Parameter(default, f"default of {sid}", "default")
+            check_finite(self.file, inp.getNamePath() if inp is not None else f"{self.node.getNamePath()}.{name}", p)
             params[name] = (
                 p if p.kind == "default" else Parameter(to_python(p.value), p.provenance, p.kind, to_python(p.authored))
             )

@@ -36,7 +36,7 @@ import tempfile
 import numpy as np
 
 from . import colorspace, mxlib, ops, textures
-from .graph import MAX_CHAIN, Resolver, _short, convert_color, deep_stack, to_python
+from .graph import MAX_CHAIN, Resolver, _short, check_finite, convert_color, deep_stack, to_python
 from .mapping import build_material
 from .material import Material, Parameter, failed_material
 
@@ -411,7 +411,8 @@ class _UsdResolver:
             return Parameter(self.uv.copy(), f"{path} (texcoord) = uv ({self.uv[0]:g}, {self.uv[1]:g})", "uv")
         outs = mxlib.outputs(sid)
         out_type = outs.get(output) or next(iter(outs.values()))
-        if cat not in ops.OPS and cat != "image" and mxlib.implementation_graph(sid) is None:
+        graph = mxlib.implementation_graph(sid)
+        if cat not in ops.OPS and cat != "image" and graph is None:
             self._note(f"{path} ({sid}) is not evaluated by the reader; default used", True)
             return None
         if out_type not in ("float", "color3", "color4", "vector2", "vector3", "vector4", "integer", "boolean"):
@@ -420,16 +421,17 @@ class _UsdResolver:
         resolved = self.inputs(shader, sid, trail)
         if cat == "image":
             return self.mx.texture(path, sid, resolved, out_type)
-        if cat in ops.OPS:
+        if graph is None:  # a natively implemented stdlib node (its library graph, if any, defines it)
             try:
                 value = ops.apply(cat, {n: p.value for n, p in resolved.items()}, out_type)
-            except (TypeError, ValueError, IndexError) as exc:
+            except (TypeError, ValueError, IndexError, KeyError) as exc:
                 raise ValueError(f"{self.file}: {path} ({sid}): {exc}") from None
             set_ = [f"{n}: {_short(p.provenance)}" for n, p in resolved.items() if p.kind != "default"]
             kind = "texture" if any(p.kind == "texture" for p in resolved.values()) else "connection"
             return Parameter(value, f"{cat} {path}({'; '.join(set_)})", kind)
-        graph = mxlib.implementation_graph(sid)
-        out = graph.getOutput(output) or graph.getOutputs()[0]
+        out = graph.getOutput(output) or (graph.getOutputs() or [None])[0]
+        if out is None:
+            raise ValueError(f"{self.file}: {path} ({sid}): its implementation graph {graph.getName()} has no output")
         p = self.mx.port(out, (), resolved, True)
         return p and Parameter(
             p.value, f"{cat} {path} ({sid} via {graph.getName()}) <- {p.provenance}", _kind(p), p.authored
@@ -629,6 +631,8 @@ class _UsdShader:
             if name not in defs:
                 sink.warnings.append(f"{inp.GetAttr().GetPath()}: not an input of {sid}; ignored")
         params = res.inputs(self.shader, sid, (self.shader.GetPath(),), authored)
+        for n, p in params.items():
+            check_finite(self.file, f"{self.shader.GetPath()}.inputs:{n}", p)
         return {
             n: p if p.kind == "default" else Parameter(to_python(p.value), p.provenance, p.kind, to_python(p.authored))
             for n, p in params.items()
