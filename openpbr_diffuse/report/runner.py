@@ -101,11 +101,10 @@ class ReportRun:
 
 
 def default_paths():
-    """The bundled ``materials/`` folder (read by openpbr_diffuse.readers), or [] when not available."""
-    try:
-        from ..readers import BUNDLED_MATERIALS
-    except ImportError:
-        return []
+    """The bundled ``materials/`` folder (read by openpbr_diffuse.readers), or [] when the
+    installation does not carry it."""
+    from ..readers import BUNDLED_MATERIALS
+
     return [Path(BUNDLED_MATERIALS)] if Path(BUNDLED_MATERIALS).exists() else []
 
 

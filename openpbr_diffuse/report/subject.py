@@ -284,12 +284,9 @@ def verdict_from_quantity(q) -> Verdict:
 
 
 def _known() -> set:
-    try:
-        from ..conformance.deviations import DEVIATIONS
+    from ..conformance.deviations import DEVIATIONS
 
-        return set(DEVIATIONS)
-    except ImportError:
-        return set()
+    return set(DEVIATIONS)
 
 
 def grade_vectors_file(path) -> UnderTest:
