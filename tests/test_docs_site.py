@@ -81,3 +81,37 @@ def test_pages_render_in_chromium_with_search_and_no_console_error(site, page):
     assert title.strip()
     assert "evaluate" in hits.lower()
     assert not errors, errors
+
+
+SUBPACKAGES = (
+    "models",
+    "sampling",
+    "albedo",
+    "nodes",
+    "readers",
+    "spectral",
+    "graders",
+    "simulation",
+    "approximations",
+    "microfacet",
+)
+
+
+def test_every_public_name_of_the_subpackages_is_in_their_api_page(site):
+    """Each sub-package's ``__all__`` (its functions, classes and constants; sub-modules are
+    their own pages' business) has an anchor in the built API page of the sub-packages."""
+    import importlib
+    import importlib.util
+    import types
+
+    html = (site / "reference" / "api" / "subpackages" / "index.html").read_text(encoding="utf-8")
+    missing = []
+    for name in SUBPACKAGES:
+        mod = importlib.import_module(f"openpbr_diffuse.{name}")
+        for attr in mod.__all__:
+            is_module = isinstance(getattr(mod, attr), types.ModuleType) or importlib.util.find_spec(
+                f"{mod.__name__}.{attr}"
+            )  # a name that is also a sub-module (spectral.colorimetry) is documented as the module
+            if not is_module and f'id="{mod.__name__}.{attr}"' not in html:
+                missing.append(f"{mod.__name__}.{attr}")
+    assert not missing, missing

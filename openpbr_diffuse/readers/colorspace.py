@@ -87,7 +87,7 @@ def _colour():
     colour = sys.modules.get("colour")
     if colour is not None:
         return colour
-    from ..spectral.colorimetry import _colour as load
+    from .._colour import _colour as load
 
     return load()
 
