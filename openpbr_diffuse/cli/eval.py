@@ -117,6 +117,7 @@ def run(args: "argparse.Namespace") -> int:
             "materials": [dict(m.to_dict(), evaluation=r) for m, r in results],
         }
         print(json.dumps(doc, allow_nan=False))
+        _name_failed(materials)
         return status
     for m, r in results:
         if m.error:
@@ -192,6 +193,12 @@ def run(args: "argparse.Namespace") -> int:
             print(f"  approximation: {a}")
         for w in m.warnings:
             print(f"  warning: {_safe(w)}")
+    _name_failed(materials)
+    return status
+
+
+def _name_failed(materials: list) -> None:
+    """One line on stderr naming the materials that could not be evaluated (exit status 1)."""
     bad = [m for m in materials if m.error]
     if bad:
         print(
@@ -199,7 +206,6 @@ def run(args: "argparse.Namespace") -> int:
             + ", ".join(_safe(m.path) for m in bad),
             file=sys.stderr,
         )
-    return status
 
 
 __all__ = ["add_parser", "run"]

@@ -83,7 +83,7 @@ EXTRA_ALIASES = {
 
 
 def _colour():
-    """colour-science (imported without its plotting sub-package; see ``spectral.colorimetry``)."""
+    """colour-science (imported without its plotting sub-package; see ``openpbr_diffuse._colour``)."""
     colour = sys.modules.get("colour")
     if colour is not None:
         return colour

@@ -87,12 +87,25 @@ class Resolver:
         # a graph that reads one node many times evaluates it once
         self._memo = {}
         self._folders = {}  # source URI -> folder of that document
+        self.via = []  # document nodes whose library implementation graph is being evaluated
 
     # ----------------------------------------------------------------- helpers
     def _note(self, text, unsupported=False):
+        if self.via:  # met inside a library implementation graph: name the document's node too
+            text = f"{self.via[0]}: {text}"
         lst = self.sink.unsupported if unsupported else self.sink.warnings
         if text not in lst:
             lst.append(text)
+
+    @contextlib.contextmanager
+    def inside(self, what: str):
+        """Notes made while evaluating the implementation graph of ``what`` (a node of the
+        document) name it first."""
+        self.via.append(what)
+        try:
+            yield
+        finally:
+            self.via.pop()
 
     def _space(self, elem):
         space = elem.getActiveColorSpace() or self.default_space
@@ -127,7 +140,10 @@ class Resolver:
     def _authored(self, port, library: bool) -> Parameter:
         t = port.getType()
         text = port.getValueString()
-        raw = mx_value(port, t)
+        try:
+            raw = mx_value(port, t)
+        except ValueError as exc:
+            raise ValueError(f"{self.file}: {port.getNamePath()}: {exc}") from None
         if raw is None and text.strip():
             raise ValueError(f"{self.file}: {port.getNamePath()}: bad {t} value {text!r} (MaterialX cannot parse it)")
         if t == "filename":
@@ -180,6 +196,8 @@ class Resolver:
         if node is not None:
             out = port.getConnectedOutput() if hasattr(port, "getConnectedOutput") else None
             outname = port.getOutputString()
+            if not library:
+                self._check_connection_type(port, node, out)
             via = ""
             if out is not None and out.getParent() is not None and out.getParent().getCategory() == "nodegraph":
                 via = f"{out.getNamePath()} <- "
@@ -189,12 +207,67 @@ class Resolver:
                 return None
             return Parameter(p.value, via + p.provenance, _kind(p), p.authored)
         if port.getNodeName() or port.getNodeGraphString():
-            target = port.getNodeName() or port.getNodeGraphString()
-            self._note(f"{port.getNamePath()}: connected to {target!r}, which does not exist; default used")
+            self._note(self._dangling(port) + "; default used")
             return None
         if port.hasValueString():
+            if not port.getValueString().strip() and port.getType() not in ("string", "filename"):
+                self._note(f"{port.getNamePath()}: empty value; default used")
+                return None
             return self._authored(port, library)
+        if (
+            not library
+            and port.getCategory() == "output"
+            and port.getParent() is not None
+            and port.getParent().getCategory() == "nodegraph"
+        ):
+            self._note(f"{port.getNamePath()} is connected to nothing; default used")
         return None
+
+    def _dangling(self, port) -> str:
+        """What a connection that leads nowhere leads to (a missing node, nodegraph or output)."""
+        where = port.getNamePath()
+        graph_name = port.getNodeGraphString()
+        if graph_name:
+            parent = port.getParent()
+            graph = None
+            while parent is not None and graph is None:
+                graph = parent.getChild(graph_name) if hasattr(parent, "getChild") else None
+                if graph is not None and graph.getCategory() != "nodegraph":
+                    graph = None
+                parent = parent.getParent()
+            if graph is None:
+                return f"{where}: connected to nodegraph {graph_name!r}, which does not exist"
+            outname = port.getOutputString()
+            out = graph.getOutput(outname) if outname else None
+            if out is None:
+                return (
+                    f"{where}: connected to output {outname!r} of nodegraph {graph_name!r}, which has no "
+                    f"output {outname!r}"
+                    if outname
+                    else f"{where}: connected to nodegraph {graph_name!r} without naming an output"
+                )
+            if out.getNodeName():
+                return f"{out.getNamePath()} is connected to {out.getNodeName()!r}, which does not exist"
+            return f"{out.getNamePath()} is connected to nothing"
+        return f"{where}: connected to {port.getNodeName()!r}, which does not exist"
+
+    def _check_connection_type(self, port, node, out) -> None:
+        """A warning when an input is connected to an output of another type (MaterialX's
+        validation reports it; the value is converted as ``convert`` would)."""
+        src = out.getType() if out is not None else node.getType()
+        if src == "multioutput" or not src:
+            nd = node.getNodeDef()
+            name = port.getOutputString()
+            if nd is None or not name:
+                return
+            o = nd.getActiveOutput(name)
+            src = o.getType() if o is not None else ""
+        want = port.getType()
+        if src and want and src != want and src in VALUE_TYPES and want in VALUE_TYPES:
+            self._note(
+                f"{port.getNamePath()} ({want}) is connected to {node.getNamePath()}, a {src} output: "
+                f"the value is converted"
+            )
 
     # ----------------------------------------------------------------- nodes
     def node_value(
@@ -259,7 +332,7 @@ class Resolver:
         if graph is None:  # a natively implemented stdlib node (its library graph, if any, defines it)
             try:
                 value = ops.apply(cat, {n: p.value for n, p in resolved.items()}, out_type)
-            except (TypeError, ValueError, IndexError, KeyError) as exc:
+            except (TypeError, ValueError, IndexError, KeyError, ArithmeticError) as exc:
                 raise ValueError(f"{self.file}: node {node.getNamePath()} ({ndname}): {exc}") from None
             return Parameter(value, _describe(f"{cat} {node.getNamePath()}", resolved), _combined(resolved))
         out = graph.getOutput(outname) or (graph.getOutputs() or [None])[0]
@@ -268,7 +341,8 @@ class Resolver:
                 f"{self.file}: node {node.getNamePath()} ({ndname}): its implementation graph "
                 f"{graph.getName()} has no output"
             )
-        p = self.port(out, trail, resolved, True)
+        with self.inside(f"node {node.getNamePath()} ({ndname})"):
+            p = self.port(out, trail, resolved, True)
         if p is None:
             return None
         return Parameter(

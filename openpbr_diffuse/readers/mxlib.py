@@ -298,15 +298,15 @@ def mx_value(elem, type_name: str):
             return v
         try:  # the decimal text in double precision (MaterialX holds floats in single precision)
             return float(text)
-        except ValueError:
-            return float(v)
+        except ValueError:  # MaterialX reads a leading number ("1.0.0" as 1): malformed all the same
+            raise ValueError(f"float value {text!r} is not a number") from None
     vals = tuple(float(x) for x in v)
     try:  # MaterialX separates components by commas and/or spaces; read them in double precision
         exact = tuple(float(x) for x in re.split(r"[,\s]+", text.strip()))
-        if len(exact) == len(vals):
-            vals = exact
     except ValueError:
-        pass
+        raise ValueError(f"{type_name} value {text!r} has a component that is not a number") from None
+    if len(exact) == len(vals):
+        vals = exact
     if type_name.startswith(("color", "vector")) and len(vals) != int(type_name[-1]):
         raise ValueError(f"{type_name} value {elem.getValueString()!r} has {len(vals)} components")
     return vals

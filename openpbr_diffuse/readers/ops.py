@@ -51,7 +51,7 @@ def _num(v):
         return np.asarray(v, dtype=np.float64)
     if isinstance(v, str):
         raise TypeError(f"a string value {v!r} where a number is needed")
-    return float(v)
+    return np.float64(v)  # numpy scalars: 1 / 0 is inf, as in GLSL, not ZeroDivisionError
 
 
 def _vec(v):

@@ -424,7 +424,7 @@ class _UsdResolver:
         if graph is None:  # a natively implemented stdlib node (its library graph, if any, defines it)
             try:
                 value = ops.apply(cat, {n: p.value for n, p in resolved.items()}, out_type)
-            except (TypeError, ValueError, IndexError, KeyError) as exc:
+            except (TypeError, ValueError, IndexError, KeyError, ArithmeticError) as exc:
                 raise ValueError(f"{self.file}: {path} ({sid}): {exc}") from None
             set_ = [f"{n}: {_short(p.provenance)}" for n, p in resolved.items() if p.kind != "default"]
             kind = "texture" if any(p.kind == "texture" for p in resolved.values()) else "connection"
@@ -432,7 +432,8 @@ class _UsdResolver:
         out = graph.getOutput(output) or (graph.getOutputs() or [None])[0]
         if out is None:
             raise ValueError(f"{self.file}: {path} ({sid}): its implementation graph {graph.getName()} has no output")
-        p = self.mx.port(out, (), resolved, True)
+        with self.mx.inside(f"{path} ({sid})"):
+            p = self.mx.port(out, (), resolved, True)
         return p and Parameter(
             p.value, f"{cat} {path} ({sid} via {graph.getName()}) <- {p.provenance}", _kind(p), p.authored
         )
@@ -589,6 +590,56 @@ def _kind(p):
     return p.kind if p.kind in ("texture", "time", "file") else "connection"
 
 
+def _no_id(shader) -> str:
+    """How a shader without ``info:id`` says what it is: its ``info:implementationSource``
+    (sourceAsset: the asset of each source type; sourceCode) -- an Sdr shader the readers
+    cannot map."""
+    if not shader:
+        return "(no info:id)"
+    source = shader.GetImplementationSource()
+    if source == "sourceAsset":
+        assets = []
+        for attr in shader.GetPrim().GetAttributes():
+            name = attr.GetName()
+            if name.startswith("info:") and name.endswith(":sourceAsset"):
+                v = attr.Get()
+                assets.append(f"{name.split(':')[1]} {getattr(v, 'path', v)}")
+        return f"(no info:id; implementationSource sourceAsset: {', '.join(assets) or 'no asset'})"
+    if source == "sourceCode":
+        kinds = sorted(
+            a.GetName().split(":")[1]
+            for a in shader.GetPrim().GetAttributes()
+            if a.GetName().startswith("info:") and a.GetName().endswith(":sourceCode")
+        )
+        return f"(no info:id; implementationSource sourceCode{': ' + ', '.join(kinds) if kinds else ''})"
+    return "(no info:id)"
+
+
+def _no_surface_reason(mat) -> str:
+    """Why a UsdShade material has no surface shader: where its surface outputs lead, or which
+    outputs it has instead."""
+    from pxr import UsdShade
+
+    said = []
+    for out in mat.GetOutputs():
+        name = out.GetBaseName()
+        targets = out.GetAttr().GetConnections()
+        if not name.split(":")[-1] == "surface":
+            continue
+        for t in targets:
+            prim = mat.GetPrim().GetStage().GetPrimAtPath(t.GetPrimPath())
+            if not prim:
+                said.append(f"outputs:{name} connects to {t}, which does not exist")
+            elif not prim.IsA(UsdShade.Shader) and prim != mat.GetPrim():
+                said.append(f"outputs:{name} connects to {t}, which is not a shader")
+            else:
+                said.append(f"outputs:{name} connects to {t}, which is not a surface shader output")
+    if not said:
+        others = sorted(f"outputs:{o.GetBaseName()}" for o in mat.GetOutputs() if o.GetAttr().GetConnections())
+        said.append(f"it has no surface output{' (only ' + ', '.join(others) + ')' if others else ''}")
+    return "; ".join(said)
+
+
 class _UsdShader:
     """Adapter: a UsdShade shader prim as seen by ``mapping.build_material``."""
 
@@ -607,7 +658,7 @@ class _UsdShader:
     def shader_id(self):
         if self._sid is None:
             sid = self.shader.GetShaderId() if self.shader else ""
-            self._sid = sid or "(no info:id)"
+            self._sid = sid or _no_id(self.shader)
         return self._sid
 
     def unwrap_surface(self):
@@ -680,7 +731,7 @@ def _entries(stage, file, time, uv, variants, diagnostics):
                 mat = UsdShade.Material(prim)
                 shader, _, _ = mat.ComputeSurfaceSource("mtlx")
                 adapter = _UsdShader(shader if shader else None, file, time, space_cache)
-                return build_material(
+                m = build_material(
                     adapter,
                     name=prim.GetName(),
                     path=str(prim.GetPath()),
@@ -689,6 +740,9 @@ def _entries(stage, file, time, uv, variants, diagnostics):
                     variants=variants,
                     time=time,
                 )
+                if not shader and m.unsupported:
+                    m.unsupported[0] += f" ({_no_surface_reason(mat)})"
+                return m
 
             entries.append(_Entry(str(prim.GetPath()), prim.GetName(), build))
         for mtlx, target in _mtlx_references(prim):
