@@ -41,9 +41,11 @@ def test_signal_during_report_leaves_old_or_new(tmp_path, signum, delay):
         p.kill()
         p.stdout.close()
         p.stderr.close()
-    assert code in (0, 128 + signum)
+    # -signum: the signal arrived after the report was written, while Python was tearing the
+    # interpreter down (it restores the default dispositions then): the new report stands
+    assert code in (0, 128 + signum, -signum)
     assert _is_complete_report(out)
-    if code != 0:
+    if code == 128 + signum:
         assert (out / "report.json").read_bytes() == old
     assert _no_leftovers(tmp_path)
 

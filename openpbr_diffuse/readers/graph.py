@@ -392,8 +392,17 @@ class Resolver:
 
 def check_finite(file: str, where: str, p) -> None:
     """ValueError when a resolved input's value is not finite (an undefined operation upstream:
-    ln of 0, sqrt of a negative number, ...), naming the input and its provenance."""
-    if not ops.finite(p.value):
+    ln of 0, sqrt of a negative number, ...), naming the input and its provenance.
+
+    Examples
+    --------
+    >>> check_finite("x.mtlx", "S/base_weight", Parameter(0.5, "authored", "authored"))
+    >>> check_finite("x.mtlx", "S/base_weight", Parameter(float("nan"), "ln l", "connection"))
+    Traceback (most recent call last):
+    ...
+    ValueError: x.mtlx: S/base_weight: the value is not finite (nan): ln l
+    """
+    if p.kind != "default" and not ops.finite(p.value):  # defaults: the data library's, finite
         raise ValueError(f"{file}: {where}: the value is not finite ({p.value!r}): {_short(p.provenance)}")
 
 

@@ -18,6 +18,8 @@ finite (ln of 0, sqrt of -1: undefined in GLSL) is kept, as GLSL keeps it (an un
 branch may compute it); a shader input that ends up not finite fails its material.
 """
 
+import math
+
 import numpy as np
 
 SCALAR_TYPES = ("float", "integer", "boolean", "string", "filename")
@@ -403,6 +405,8 @@ def finite(value) -> bool:
     >>> finite(1.0), finite(float("nan")), finite("a")
     (True, False, True)
     """
+    if isinstance(value, float):
+        return math.isfinite(value)
     if isinstance(value, (np.ndarray, tuple, list)):
         try:
             return bool(np.all(np.isfinite(np.asarray(value, dtype=np.float64))))
