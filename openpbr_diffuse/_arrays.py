@@ -9,9 +9,12 @@ Every error is a ``ValueError`` (or ``TypeError`` for wrong types) whose message
 argument and the allowed range.
 """
 
+from __future__ import annotations
+
 import math
 import numbers
 import os
+from typing import TYPE_CHECKING, Any
 
 # The parallel kernels run on numba's OpenMP layer (GNU libgomp).  Its idle workers spin
 # for ~300k iterations between parallel regions; on a machine with other busy processes
@@ -24,6 +27,10 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 import numba  # noqa: E402
 import numpy as np  # noqa: E402
 from numba import prange  # noqa: E402
+from numpy.typing import ArrayLike, DTypeLike, NDArray  # noqa: E402
+
+if TYPE_CHECKING:
+    from .models.registry import ModelInfo
 
 #: ||w| - 1| allowed for a "unit" direction.  Loose enough for float32-normalised input,
 #: tight enough to catch vectors that were never normalised.  The kernels compare |w|^2
@@ -36,7 +43,7 @@ _N2_HI = (1.0 + UNIT_TOL) ** 2
 UNIT_TOL_FLOAT16 = 2e-3
 
 
-def show(value, dtype=None):
+def show(value: float, dtype: DTypeLike | None = None) -> str:
     """A number as its shortest round-trip text in ``dtype`` (default float64).
 
     Messages print values at full precision, so that an out-of-range value never looks
@@ -49,13 +56,14 @@ def show(value, dtype=None):
         return repr(v)
     # shortest text that reads back to this float32/16; format_float_* ignore NumPy's print
     # options (colour-science sets legacy="1.13" on import, under which str() gives "1.0")
-    x = np.dtype(dtype).type(v)
+    dt: np.dtype[Any] = np.dtype(dtype)
+    x = dt.type(v)
     if 1e-4 <= abs(v) < 1e16:
         return np.format_float_positional(x, unique=True, trim="-")
     return np.format_float_scientific(x, unique=True, trim="-")
 
 
-def result_dtype(*values):
+def result_dtype(*values: object) -> np.dtype[Any]:
     """float64 unless every floating ndarray among ``values`` is float32 (or smaller)."""
     kinds = [v.dtype for v in values if isinstance(v, (np.ndarray, np.generic)) and v.dtype.kind == "f"]
     if kinds and all(d.itemsize <= 4 for d in kinds):
@@ -63,7 +71,7 @@ def result_dtype(*values):
     return np.dtype(np.float64)
 
 
-def as_float(name, value, dtype):
+def as_float(name: str, value: ArrayLike, dtype: DTypeLike) -> NDArray[Any]:
     """``value`` as an ndarray of ``dtype``; TypeError naming ``name`` if it is not numeric.
 
     Masked arrays: a mask with masked entries is refused (ValueError) rather than dropped
@@ -105,7 +113,7 @@ _predicate = numba.njit(cache=True, error_model="numpy", forceinline=True)
 
 
 @_predicate
-def is_unit(x, y, z):
+def is_unit(x: float, y: float, z: float) -> bool:
     """|w| within ``UNIT_TOL`` of 1 (as |w|^2 in [(1 - tol)^2, (1 + tol)^2], float64);
     False for NaN or Inf."""
     x, y, z = 1.0 * x, 1.0 * y, 1.0 * z
@@ -114,7 +122,7 @@ def is_unit(x, y, z):
 
 
 @_predicate
-def is_within(x, lo, hi, lo_open, hi_open):
+def is_within(x: float, lo: float, hi: float, lo_open: bool, hi_open: bool) -> bool:
     """x finite and in [lo, hi] (open ends on request); compares in the type of x, lo, hi.
 
     Callers pass ``lo``, ``hi`` in the array's dtype, so that the comparisons are those of
@@ -153,7 +161,7 @@ def _first_not_unit(name, w, tol, shown_dtype):
     )
 
 
-def directions(name, value, dtype, check=True):
+def directions(name: str, value: ArrayLike, dtype: DTypeLike, check: bool = True) -> NDArray[Any]:
     """A (..., 3) array of finite unit vectors.
 
     ``check=False`` checks type and shape only; the caller then owes the value check,
@@ -191,7 +199,17 @@ def _count_outside(a, lo, hi, lo_open, hi_open):
     return bad
 
 
-def in_range(name, value, dtype, lo, hi, what="", lo_open=False, hi_open=False, check=True):
+def in_range(
+    name: str,
+    value: ArrayLike,
+    dtype: DTypeLike,
+    lo: float,
+    hi: float,
+    what: str = "",
+    lo_open: bool = False,
+    hi_open: bool = False,
+    check: bool = True,
+) -> NDArray[Any]:
     """An array of finite values in [lo, hi] (open ends on request).
 
     ``check=False``: type only; the value check is owed as for ``directions`` (``is_within``).
@@ -222,7 +240,7 @@ def in_range(name, value, dtype, lo, hi, what="", lo_open=False, hi_open=False, 
     return a
 
 
-def model_roughness(info, roughness, dtype, check=True):
+def model_roughness(info: ModelInfo, roughness: ArrayLike, dtype: DTypeLike, check: bool = True) -> NDArray[Any]:
     """Roughness in a lobe model's domain: sigma in [0, max] radians or r in [0, max].
 
     ``info`` is the model's ``models.registry.ModelInfo`` (name, roughness_name, roughness_max).
@@ -237,14 +255,14 @@ def model_roughness(info, roughness, dtype, check=True):
 COLOR_MODES = ("reference", "white_tint")
 
 
-def white_tint(color_mode):
+def white_tint(color_mode: str) -> bool:
     """True for ``color_mode="white_tint"``, False for "reference"; ValueError otherwise."""
     if color_mode not in COLOR_MODES:
         raise ValueError(f"color_mode must be one of {', '.join(COLOR_MODES)}; got {color_mode!r}")
     return color_mode == "white_tint"
 
 
-def rho_array(name, value, dtype, check=True):
+def rho_array(name: str, value: ArrayLike, dtype: DTypeLike, check: bool = True) -> NDArray[Any]:
     """Colour / albedo with the channel axis last, values in [0, 1]; a scalar is grey (C = 1).
 
     ``check=False``: type and shape only (see ``in_range``).
@@ -257,7 +275,7 @@ def rho_array(name, value, dtype, check=True):
     return a
 
 
-def broadcast_leading(**shapes):
+def broadcast_leading(**shapes: tuple[int, ...]) -> tuple[int, ...]:
     """Broadcast the leading shapes of named arguments; ValueError naming them on failure."""
     try:
         return np.broadcast_shapes(*shapes.values())
@@ -268,7 +286,7 @@ def broadcast_leading(**shapes):
         ) from None
 
 
-def unit_samples(name, value, dtype):
+def unit_samples(name: str, value: ArrayLike, dtype: DTypeLike) -> NDArray[Any]:
     """Uniform random numbers u of shape (..., 2) in [0, 1)."""
     u = in_range(name, value, dtype, 0.0, 1.0, " (uniform random numbers)", hi_open=True)
     if u.ndim == 0 or u.shape[-1] != 2:

@@ -19,9 +19,13 @@ f(shi) = 1 - 1/(2 + 0.65 shi) and g(shi) = 1/(2.22222 + 0.1 shi) of Eq. 27 are t
 of Eq. 24-25 (shi = 2/sigma^2).
 """
 
+from __future__ import annotations
+
 import math
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .. import _arrays as ar
 
@@ -29,7 +33,9 @@ HALF_PI = 0.5 * math.pi
 SIGMA_MAX = HALF_PI
 
 
-def _dirs_sigma_rho(wi, wo, sigma, rho):
+def _dirs_sigma_rho(
+    wi: ArrayLike, wo: ArrayLike, sigma: ArrayLike, rho: ArrayLike
+) -> tuple[tuple[int, ...], NDArray[Any], NDArray[Any], NDArray[Any], NDArray[Any], NDArray[Any]]:
     wi = ar.directions("wi", wi, np.float64)
     wo = ar.directions("wo", wo, np.float64)
     sigma = ar.in_range("sigma", sigma, np.float64, 0.0, SIGMA_MAX, " (radians)")
@@ -47,7 +53,7 @@ def _finish(lead, value, mu_i, mu_o, rho):
     return np.broadcast_to(v, lead)[..., None] * rho / math.pi
 
 
-def sigma_from_shininess(shininess):
+def sigma_from_shininess(shininess: ArrayLike) -> NDArray[np.float64]:
     """Eq. 21: sigma = sqrt(2 / shininess).
 
     Parameters
@@ -66,14 +72,14 @@ def sigma_from_shininess(shininess):
     return np.sqrt(2.0 / shi)
 
 
-def shininess_from_sigma(sigma):
+def shininess_from_sigma(sigma: ArrayLike) -> NDArray[np.float64]:
     """Inverse of Eq. 21: shininess = 2 / sigma^2 (inf at sigma = 0)."""
     sigma = ar.in_range("sigma", sigma, np.float64, 0.0, math.inf, " (radians)")
     with np.errstate(divide="ignore"):
         return 2.0 / (sigma * sigma)
 
 
-def simplified_qon(wi, wo, sigma, rho=1.0):
+def simplified_qon(wi: ArrayLike, wo: ArrayLike, sigma: ArrayLike, rho: ArrayLike = 1.0) -> NDArray[np.float64]:
     """Eq. 20: QON in dot products, f = rho/pi [A + B max(0, E.L - (N.E)(N.L)) min(1, N.L/N.E) / N.L].
 
     A = 1 - 0.5 sigma^2/(sigma^2 + 0.33), B = 0.45 sigma^2/(sigma^2 + 0.09).  Identical to
@@ -113,7 +119,7 @@ def _shininess_of(sigma):
         return 2.0 / (sigma * sigma)
 
 
-def shininess_qon(wi, wo, shininess, rho=1.0):
+def shininess_qon(wi: ArrayLike, wo: ArrayLike, shininess: ArrayLike, rho: ArrayLike = 1.0) -> NDArray[np.float64]:
     """Eq. 23: Eq. 20 with sigma = sqrt(2/shininess) substituted (Eq. 21-22).
 
     f = rho/pi [1 - 1/(2 + 0.33 shi) + max(0, s) min(1, N.L/N.E) / (N.L (2.22222 + 0.1 shi))].
@@ -133,7 +139,7 @@ def shininess_qon(wi, wo, shininess, rho=1.0):
     return _finish(lead, value, mu_i, mu_o, rho)
 
 
-def improved_unsigned(wi, wo, sigma, rho=1.0):
+def improved_unsigned(wi: ArrayLike, wo: ArrayLike, sigma: ArrayLike, rho: ArrayLike = 1.0) -> NDArray[np.float64]:
     """Eq. 24: f = rho/pi [1 - 1/(2 + 0.65 shi) + (E.L - (N.E)(N.L)) min(1, N.L/N.E) / (N.L (2.22222 + 0.1 shi))].
 
     The "slightly improved" model: 0.65 in A (A = 1 - 0.5 sigma^2/(sigma^2 + 0.65)) and the
@@ -155,7 +161,7 @@ def improved_unsigned(wi, wo, sigma, rho=1.0):
     return _finish(lead, value, mu_i, mu_o, rho)
 
 
-def improved(wi, wo, sigma, rho=1.0):
+def improved(wi: ArrayLike, wo: ArrayLike, sigma: ArrayLike, rho: ArrayLike = 1.0) -> NDArray[np.float64]:
     """Eq. 25: the improved, sign-dependent model; the library lobe ``od.evaluate("gotanda")``.
 
     f = rho/pi (A + B s/t), A = 1 - 0.5 sigma^2/(sigma^2 + 0.65), B = 0.45 sigma^2/(sigma^2 + 0.09),
@@ -176,14 +182,14 @@ def _fg(sigma):
     return f, g
 
 
-def _mu_sigma(mu_o, sigma):
+def _mu_sigma(mu_o: ArrayLike, sigma: ArrayLike) -> tuple[NDArray[Any], NDArray[Any]]:
     mu_o = ar.in_range("mu_o", mu_o, np.float64, 0.0, 1.0, " (N.E, cosine of the view angle)")
     sigma = ar.in_range("sigma", sigma, np.float64, 0.0, SIGMA_MAX, " (radians)")
     ar.broadcast_leading(mu_o=mu_o.shape, sigma=sigma.shape)
     return mu_o, sigma
 
 
-def dc_scale_eq27(mu_o, sigma):
+def dc_scale_eq27(mu_o: ArrayLike, sigma: ArrayLike) -> NDArray[np.float64]:
     """Eq. 27: SH'_DC / SH_DC = f(shi) + (1/2) g(shi) (1 + 2 arccos(N.E)/pi - N.E).
 
     Approximates the directional albedo E(mu_o) of the Eq. 25 lobe at rho = 1 (Eq. 26, the
@@ -207,14 +213,14 @@ def dc_scale_eq27(mu_o, sigma):
     return f + 0.5 * g * (1.0 + 2.0 * np.arccos(mu_o) / math.pi - mu_o)
 
 
-def dc_scale_eq28(mu_o, sigma):
+def dc_scale_eq28(mu_o: ArrayLike, sigma: ArrayLike) -> NDArray[np.float64]:
     """Eq. 28: SH'_DC / SH_DC = f(shi) + g(shi) (1 - N.E) (the cheaper form of Eq. 27)."""
     mu_o, sigma = _mu_sigma(mu_o, sigma)
     f, g = _fg(sigma)
     return f + g * (1.0 - mu_o)
 
 
-def linear_scale_eq29(mu_o, sigma):
+def linear_scale_eq29(mu_o: ArrayLike, sigma: ArrayLike) -> NDArray[np.float64]:
     """Eq. 29: SH'_linear / SH_linear = S(shi, N.E) = f(shi) + (f(shi) - 1)(1 - N.E).
 
     1 at sigma = 0; at sigma = 1, f = 0.697: S = 0.697 at N.E = 1 and 0.394 at N.E = 0.
@@ -224,7 +230,7 @@ def linear_scale_eq29(mu_o, sigma):
     return f + (f - 1.0) * (1.0 - mu_o)
 
 
-def exact_dc_scale(mu_o, sigma, model="gotanda", *, n=24):
+def exact_dc_scale(mu_o: ArrayLike, sigma: ArrayLike, model: str = "gotanda", *, n: int = 24) -> NDArray[np.float64]:
     """The exact DC scale: T_00 / (Lambert's T_00) = E(mu_o) of the lobe at rho = 1, by quadrature.
 
     ``model`` is "gotanda" (Eq. 25, what Eq. 27 fits) or "full_on" (at rho = 1).
@@ -235,7 +241,9 @@ def exact_dc_scale(mu_o, sigma, model="gotanda", *, n=24):
     return lobe_transfer(model, mu_o, sigma, 1.0, n=n)[..., 0, 0] / C0
 
 
-def exact_linear_scale(mu_o, sigma, model="gotanda", *, n=24, tangential=False):
+def exact_linear_scale(
+    mu_o: ArrayLike, sigma: ArrayLike, model: str = "gotanda", *, n: int = 24, tangential: bool = False
+) -> NDArray[np.float64] | tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The exact linear scale: T_10 / ((2/3) Y_10) (the response to linear light along N relative to
     Lambert's), by quadrature; with ``tangential`` also T_11 / ((2/3) C1), the part along the
     view's tangent that a scale of SH_linear cannot represent (Gotanda's "bent normal").

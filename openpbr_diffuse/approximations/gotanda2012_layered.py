@@ -28,8 +28,10 @@ Eq. 1's F_spec is Schlick's approximation, as printed.  All functions are NumPy-
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from ..microfacet.fresnel import fresnel_dielectric
 
@@ -52,7 +54,7 @@ def _ior(name: str, v) -> np.ndarray:
     return a
 
 
-def fresnel(mu, n) -> np.ndarray:
+def fresnel(mu: ArrayLike, n: ArrayLike) -> np.ndarray:
     """F(n) of Eq. 4: exact Fresnel reflectance at cosine mu for the relative index n.
 
     Example
@@ -63,7 +65,7 @@ def fresnel(mu, n) -> np.ndarray:
     return np.asarray(fresnel_dielectric(np.asarray(mu, dtype=float), np.asarray(n, dtype=float)), dtype=float)
 
 
-def f0(n) -> np.ndarray:
+def f0(n: ArrayLike) -> np.ndarray:
     """F0(n) = ((n - 1)/(n + 1))^2, the Fresnel reflectance at normal incidence (Eq. 5).
 
     Example
@@ -75,7 +77,7 @@ def f0(n) -> np.ndarray:
     return ((n - 1.0) / (n + 1.0)) ** 2
 
 
-def schlick(c, F0) -> np.ndarray:
+def schlick(c: ArrayLike, F0: float | NDArray[np.floating[Any]]) -> np.ndarray:
     """F_spec(F0) of Eq. 1: Schlick's F0 + (1 - F0)(1 - c)^5, c = the cosine to the half vector.
 
     Example
@@ -87,7 +89,7 @@ def schlick(c, F0) -> np.ndarray:
     return F0 + (1.0 - F0) * (1.0 - c) ** 5
 
 
-def normalisation(shininess) -> np.ndarray:
+def normalisation(shininess: ArrayLike) -> np.ndarray:
     """Eq. 1's specular normalisation as printed: 0.0397436 s + 0.0856832.
 
     Example
@@ -98,7 +100,7 @@ def normalisation(shininess) -> np.ndarray:
     return NORM_SLOPE * np.asarray(shininess, dtype=float) + NORM_OFFSET
 
 
-def exact_normalisation(shininess, n: int = 2048) -> np.ndarray:
+def exact_normalisation(shininess: ArrayLike, n: int = 2048) -> np.ndarray:
     """The constant K(s) with K int (n.h)^s / max(n.l, n.v) (n.l) dl = 1 at v = n (the lobe's
     albedo at normal incidence with F = 1): there max(n.l, 1) = 1 and n.h = cos(theta_l/2),
     so 1/K = 2 pi int_0^{pi/2} cos^s(t/2) cos t sin t dt (Gauss-Legendre).  For large s,
@@ -117,7 +119,9 @@ def exact_normalisation(shininess, n: int = 2048) -> np.ndarray:
     return (1.0 / (2.0 * math.pi * (integrand * w).sum(axis=1))).reshape(s.shape)
 
 
-def blinn_phong(wi, wo, shininess, F0, rho) -> np.ndarray:
+def blinn_phong(
+    wi: ArrayLike, wo: ArrayLike, shininess: ArrayLike, F0: float | NDArray[np.floating[Any]], rho: ArrayLike
+) -> np.ndarray:
     """Eq. 1: f = rho/pi (1 - F0) + (0.0397436 s + 0.0856832) F_spec(F0) (n.h)^s / max(n.l, n.v).
 
     wi, wo: unit vectors (..., 3), normal +z; rho (..., C).  Returns f (no cosine), (..., C).
@@ -143,7 +147,7 @@ def blinn_phong(wi, wo, shininess, F0, rho) -> np.ndarray:
     return rho / math.pi * (1.0 - np.asarray(F0, dtype=float))[..., None] + np.asarray(spec)[..., None]
 
 
-def refracted_cos(mu, n) -> np.ndarray:
+def refracted_cos(mu: ArrayLike, n: ArrayLike) -> np.ndarray:
     """Cosine inside a layer of relative index n of a direction at cosine mu outside (Snell).
 
     Example
@@ -155,7 +159,7 @@ def refracted_cos(mu, n) -> np.ndarray:
     return np.sqrt(np.maximum(0.0, 1.0 - (1.0 - mu * mu) / np.asarray(n, dtype=float) ** 2))
 
 
-def beer_lambert(alpha, d, mu_i, mu_o, n) -> np.ndarray:
+def beer_lambert(alpha: ArrayLike, d: ArrayLike, mu_i: ArrayLike, mu_o: ArrayLike, n: ArrayLike) -> np.ndarray:
     """Eq. 2: I/I0 = exp(-alpha l), l = d (1/cos theta_i + 1/cos theta_r) with the refracted
     angles of the light and the view inside the layer of index n.
 
@@ -170,7 +174,7 @@ def beer_lambert(alpha, d, mu_i, mu_o, n) -> np.ndarray:
     return np.exp(-np.asarray(alpha, dtype=float) * l)
 
 
-def linear_absorption(alpha_p, mu_l, mu_e) -> np.ndarray:
+def linear_absorption(alpha_p: ArrayLike, mu_l: ArrayLike, mu_e: ArrayLike) -> np.ndarray:
     """Eq. 3: I/I0 = max(0, 1 - alpha' (1/N.L + 1/N.E)) (non-refracted cosines).
 
     Example
@@ -183,7 +187,7 @@ def linear_absorption(alpha_p, mu_l, mu_e) -> np.ndarray:
     )
 
 
-def bottom_fresnel(mu, n1, n2) -> np.ndarray:
+def bottom_fresnel(mu: ArrayLike, n1: ArrayLike, n2: ArrayLike) -> np.ndarray:
     """Eq. 4: F_bottom(n1, n2) = (1 - F(n1)) F(n2/n1) (1 - F(1/n1)) at the view cosine mu:
     in through the top (cosine mu), reflected by the bottom interface (refracted cosine),
     out through the top from inside (refracted cosine).
@@ -199,7 +203,7 @@ def bottom_fresnel(mu, n1, n2) -> np.ndarray:
     return (1.0 - fresnel(mu, n1)) * fresnel(mt, n2 / n1) * (1.0 - fresnel(mt, 1.0 / n1))
 
 
-def transmittance(mu, n1) -> np.ndarray:
+def transmittance(mu: ArrayLike, n1: ArrayLike) -> np.ndarray:
     """Eq. 5, first line: F_transmittance(n1) = 1 - F(n1) at cosine mu.
 
     Example
@@ -210,7 +214,7 @@ def transmittance(mu, n1) -> np.ndarray:
     return 1.0 - fresnel(_cos("mu", mu), _ior("n1", n1))
 
 
-def bottom_fresnel_constant(n1, n2) -> np.ndarray:
+def bottom_fresnel_constant(n1: ArrayLike, n2: ArrayLike) -> np.ndarray:
     """Eq. 5, second line: F_bottom(n1, n2) = F0(n2/n1) (1 - F0(1/n1)).
 
     Example
@@ -222,7 +226,7 @@ def bottom_fresnel_constant(n1, n2) -> np.ndarray:
     return f0(n2 / n1) * (1.0 - f0(1.0 / n1))
 
 
-def mirror_path_factor(mu_e) -> np.ndarray:
+def mirror_path_factor(mu_e: ArrayLike) -> np.ndarray:
     """Eq. 6: with N.L = N.E (mirror), 1/N.L + 1/N.E = 2/N.E.
 
     Example
@@ -233,7 +237,7 @@ def mirror_path_factor(mu_e) -> np.ndarray:
     return 2.0 / _cos("mu_e", mu_e)
 
 
-def ibl_specular_factor(alpha_p, mu_e, n1, n2) -> np.ndarray:
+def ibl_specular_factor(alpha_p: ArrayLike, mu_e: ArrayLike, n1: ArrayLike, n2: ArrayLike) -> np.ndarray:
     """Eq. 7 without IBL_specular: F_bottom(n1, n2) max(0, 1 - alpha' 2/N.E) (Eq. 5's constant).
 
     Example
@@ -246,7 +250,7 @@ def ibl_specular_factor(alpha_p, mu_e, n1, n2) -> np.ndarray:
     )
 
 
-def hemispherical_path_factor(mu_r) -> np.ndarray:
+def hemispherical_path_factor(mu_r: ArrayLike) -> np.ndarray:
     """Eq. 8: int (1/cos theta_r + 1/cos theta_i) cos theta_i / pi dw_i = 2 + 1/cos theta_r.
 
     Example
@@ -257,7 +261,7 @@ def hemispherical_path_factor(mu_r) -> np.ndarray:
     return 2.0 + 1.0 / _cos("mu_r", mu_r)
 
 
-def ibl_diffuse_factor(alpha_p, mu_e, n1, n2) -> np.ndarray:
+def ibl_diffuse_factor(alpha_p: ArrayLike, mu_e: ArrayLike, n1: ArrayLike, n2: ArrayLike) -> np.ndarray:
     """Eq. 9 without IBL_diffuse: (1 - F_bottom(n1, n2)) max(0, 1 - alpha' (2 + 1/N.E)).
 
     Example
@@ -270,7 +274,7 @@ def ibl_diffuse_factor(alpha_p, mu_e, n1, n2) -> np.ndarray:
     )
 
 
-def layered_diffuse_albedo(mu, n, rho, alpha_p=0.0) -> np.ndarray:
+def layered_diffuse_albedo(mu: ArrayLike, n: ArrayLike, rho: ArrayLike, alpha_p: ArrayLike = 0.0) -> np.ndarray:
     """The diffuse albedo of Gotanda's layered model for a diffuse base under a dielectric
     top layer of index n (no bottom interface: F_bottom(n, n) = 0): Eq. 5's transmittance
     at the view times Eq. 9's absorption, rho (1 - F(mu; n)) max(0, 1 - alpha' (2 + 1/mu)).
@@ -287,7 +291,7 @@ def layered_diffuse_albedo(mu, n, rho, alpha_p=0.0) -> np.ndarray:
     )
 
 
-def blinn_phong_diffuse_albedo(n, rho) -> np.ndarray:
+def blinn_phong_diffuse_albedo(n: ArrayLike, rho: ArrayLike) -> np.ndarray:
     """The diffuse albedo of Eq. 1: rho (1 - F0(n)), the same at every angle.
 
     Example

@@ -18,8 +18,10 @@ import math
 import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .. import _arrays as ar
 from ._common import N_ORDERS
@@ -61,7 +63,7 @@ def _check_count(name, value, minimum):
     return int(value)
 
 
-def _rho(rho):
+def _rho(rho: ArrayLike) -> NDArray[np.float64]:
     r = ar.rho_array("rho", rho, np.dtype(np.float64))
     if r.ndim != 1:
         raise ValueError(f"rho must be a scalar or one value per channel (shape (C,)), got shape {r.shape}")
@@ -205,7 +207,7 @@ class AlbedoEstimate:
     bounces: np.ndarray = field(repr=False)
     truncated: np.ndarray = field(repr=False)
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
         """JSON-ready form: ``rows`` with mu, albedo, albedo_by_order, stderr per query."""
         rows = []
         for i in range(self.albedo.shape[0]):
@@ -280,18 +282,18 @@ def _albedo_result(geometry, roughness, mu, rho, paths, seed, results, spans):
 
 
 def simulate_albedo(
-    geometry,
-    roughness,
-    mu,
-    rho=1.0,
-    paths=1_000_000,
-    seed=0,
+    geometry: str,
+    roughness: float,
+    mu: ArrayLike,
+    rho: ArrayLike = 1.0,
+    paths: int = 1_000_000,
+    seed: int = 0,
     *,
-    workers=None,
-    client=None,
-    scheduler=None,
-    progress=False,
-):
+    workers: int | None = None,
+    client: Any = None,
+    scheduler: str | None = None,
+    progress: bool = False,
+) -> AlbedoEstimate:
     """Directional albedo E(mu) of a rough Lambertian microsurface, by Monte Carlo.
 
     Parameters
@@ -351,8 +353,17 @@ def simulate_albedo(
 
 
 def simulate_average_albedo(
-    geometry, roughness, rho=1.0, paths=1_000_000, seed=0, *, workers=None, client=None, scheduler=None, progress=False
-):
+    geometry: str,
+    roughness: float,
+    rho: ArrayLike = 1.0,
+    paths: int = 1_000_000,
+    seed: int = 0,
+    *,
+    workers: int | None = None,
+    client: Any = None,
+    scheduler: str | None = None,
+    progress: bool = False,
+) -> AlbedoEstimate:
     """Average albedo <E> = 2 int_0^1 E(mu) mu dmu (incident directions cosine-distributed).
 
     Same parameters as ``simulate_albedo`` without ``mu``; the result's arrays have a
@@ -376,19 +387,19 @@ def simulate_average_albedo(
 
 
 def simulate_brdf(
-    geometry,
-    roughness,
-    wi,
-    wo,
-    rho=1.0,
-    paths=1_000_000,
-    seed=0,
+    geometry: str,
+    roughness: float,
+    wi: ArrayLike,
+    wo: ArrayLike,
+    rho: ArrayLike = 1.0,
+    paths: int = 1_000_000,
+    seed: int = 0,
     *,
-    workers=None,
-    client=None,
-    scheduler=None,
-    progress=False,
-):
+    workers: int | None = None,
+    client: Any = None,
+    scheduler: str | None = None,
+    progress: bool = False,
+) -> BRDFEstimate:
     """BRDF f(wi, wo) (without the cosine) of the microsurface, by next-event estimation.
 
     Light paths start from ``wi``; every bounce adds its exact contribution towards ``wo``

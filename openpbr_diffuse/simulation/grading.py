@@ -18,9 +18,13 @@ albedos), or the RMS relative error of the in-plane BRDF slices at ``BRDF_RHO`` 
 from __future__ import annotations
 
 import csv
+import os
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .._csv import read_headed_csv
 
@@ -39,7 +43,9 @@ FIT_RHO = (0.2, 0.5, 0.8)
 BRDF_RHO = 0.8
 
 
-def write_csv(path, header, columns, rows):
+def write_csv(
+    path: str | os.PathLike[str], header: Mapping[str, object], columns: Sequence[str], rows: Iterable[Sequence[object]]
+) -> Path:
     """CSV with a ``# key: value`` provenance header (as the reference albedo tables)."""
     path = Path(path)
     with path.open("w", newline="") as fh:
@@ -52,7 +58,7 @@ def write_csv(path, header, columns, rows):
     return path
 
 
-def read_csv(path):
+def read_csv(path: str | os.PathLike[str]) -> tuple[dict[str, str], dict[str, NDArray[Any]]]:
     """(header dict, {column: ndarray}) of a table written by ``write_csv``."""
     header, names, rows = read_headed_csv(path)
     cols = {}
@@ -65,7 +71,7 @@ def read_csv(path):
     return header, cols
 
 
-def load(name, directory=None):
+def load(name: str, directory: str | os.PathLike[str] | None = None) -> tuple[dict[str, str], dict[str, NDArray[Any]]]:
     """One shipped table by key (``"albedo"``, ``"brdf"``, ``"grading"``, ``"colorshift"``)."""
     if name not in TABLES:
         raise ValueError(f"table must be one of {', '.join(TABLES)}, got {name!r}")
@@ -79,14 +85,14 @@ def _model_roughness_range(model):
     return 0.0, float(info.roughness_max)
 
 
-def model_albedo(model, mu, roughness, rho):
+def model_albedo(model: str, mu: ArrayLike, roughness: float, rho: ArrayLike) -> NDArray[np.float64]:
     """E_model(mu; rho) for each mu (rows) and rho (columns)."""
     from ..models import directional_albedo
 
     return directional_albedo(model, np.asarray(mu, float), float(roughness), np.asarray(rho, float))
 
 
-def fit_roughness(model, mu, rho, E_sim):
+def fit_roughness(model: str, mu: ArrayLike, rho: ArrayLike, E_sim: NDArray[np.floating[Any]]) -> tuple[float, float]:
     """Model roughness minimising the RMS albedo error; returns (roughness, rms).
 
     A bounded scalar search (scipy) after a coarse scan (the objective can have two basins
@@ -112,7 +118,7 @@ def _select(cols, **eq):
     return m
 
 
-def surfaces(albedo_cols):
+def surfaces(albedo_cols: Mapping[str, NDArray[Any]]) -> list[tuple[str, float]]:
     """The simulated (geometry, roughness) pairs, in table order."""
     seen = []
     for g, r in zip(albedo_cols["geometry"], albedo_cols["roughness"]):
@@ -121,7 +127,13 @@ def surfaces(albedo_cols):
     return seen
 
 
-def sim_albedo(albedo_cols, geometry, roughness, rho, column="E"):
+def sim_albedo(
+    albedo_cols: Mapping[str, NDArray[Any]],
+    geometry: str,
+    roughness: float,
+    rho: Sequence[float] | NDArray[np.floating[Any]],
+    column: str = "E",
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """(mu, E (n_mu, n_rho), stderr) of a simulated surface's directional albedo."""
     sel = _select(albedo_cols, geometry=geometry, roughness=roughness, kind="directional")
     mu = np.unique(albedo_cols["mu"][sel])
@@ -135,7 +147,9 @@ def sim_albedo(albedo_cols, geometry, roughness, rho, column="E"):
     return mu, E, se
 
 
-def sim_average(albedo_cols, geometry, roughness, column="E"):
+def sim_average(
+    albedo_cols: Mapping[str, NDArray[Any]], geometry: str, roughness: float, column: str = "E"
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """(rho, <E>(rho), stderr) of a simulated surface."""
     sel = _select(albedo_cols, geometry=geometry, roughness=roughness, kind="average")
     order = np.argsort(albedo_cols["rho"][sel])
@@ -143,7 +157,7 @@ def sim_average(albedo_cols, geometry, roughness, column="E"):
     return albedo_cols["rho"][idx], albedo_cols[column][idx], albedo_cols[column + "_se"][idx]
 
 
-def slice_directions(theta_i, theta_o):
+def slice_directions(theta_i: ArrayLike, theta_o: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """In-plane directions: wi at azimuth 0, wo at signed angle theta_o (negative: the
     light's side, i.e. back-scattering; positive: forward)."""
     theta_i = np.asarray(theta_i, float)
@@ -160,7 +174,9 @@ def _slices(brdf_cols, geometry, roughness):
     return wi, wo, brdf_cols["f"][sel]
 
 
-def fit_roughness_brdf(model, wi, wo, f_sim):
+def fit_roughness_brdf(
+    model: str, wi: ArrayLike, wo: ArrayLike, f_sim: NDArray[np.floating[Any]]
+) -> tuple[float, float]:
     """Model roughness minimising the RMS relative error of the BRDF slices at ``BRDF_RHO``."""
     from scipy.optimize import minimize_scalar
 
@@ -181,7 +197,14 @@ def fit_roughness_brdf(model, wi, wo, f_sim):
 FITS = ("albedo", "brdf", "same sigma")
 
 
-def grade_surface(model, albedo_cols, brdf_cols, geometry, roughness, fit="albedo"):
+def grade_surface(
+    model: str,
+    albedo_cols: Mapping[str, NDArray[Any]],
+    brdf_cols: Mapping[str, NDArray[Any]],
+    geometry: str,
+    roughness: float,
+    fit: str = "albedo",
+) -> dict[str, Any]:
     """Grade one model against one simulated surface; returns a dict (one grading row).
 
     ``fit``: "albedo" (roughness fitted to the coloured directional albedos), "brdf" (fitted
@@ -229,7 +252,12 @@ def grade_surface(model, albedo_cols, brdf_cols, geometry, roughness, fit="albed
     }
 
 
-def grade_all(albedo_cols, brdf_cols, models=GRADED_MODELS, progress=lambda msg: None):
+def grade_all(
+    albedo_cols: Mapping[str, NDArray[Any]],
+    brdf_cols: Mapping[str, NDArray[Any]],
+    models: Sequence[str] = GRADED_MODELS,
+    progress: Callable[[str], object] = lambda msg: None,
+) -> list[dict[str, Any]]:
     """Grading rows: every model against every simulated surface, roughness fitted to the albedo
     and to the BRDF slices, and the sigma models also at the V-cavity's own sigma."""
     rows = []
@@ -242,7 +270,9 @@ def grade_all(albedo_cols, brdf_cols, models=GRADED_MODELS, progress=lambda msg:
     return rows
 
 
-def eon_colorshift(albedo_cols, geometry, roughness, r, model="eon"):
+def eon_colorshift(
+    albedo_cols: Mapping[str, NDArray[Any]], geometry: str, roughness: float, r: float, model: str = "eon"
+) -> dict[str, Any]:
     """EON's multiple-scattering colour against the simulation, as functions of rho.
 
     Returns a dict of arrays over the table's rho:

@@ -31,8 +31,10 @@ import math
 import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .. import _arrays as ar
 from .api import _client, _mean_err
@@ -90,9 +92,9 @@ class LayeredSurface:
     interface: str
     ior: float
     interface_alpha: float = 0.0
-    absorption: object = 0.0
+    absorption: ArrayLike = 0.0
     thickness: float = 0.0
-    coat_color: object = None
+    coat_color: ArrayLike | None = None
     base: str = "lambert"
     roughness: float = 0.0
 
@@ -329,14 +331,14 @@ def _albedo(kind, surface, mu, rho, paths, seed, workers, client, scheduler):
 
 def simulate_layered_albedo(
     surface: LayeredSurface,
-    mu,
-    rho=1.0,
+    mu: ArrayLike,
+    rho: ArrayLike = 1.0,
     paths: int = 1_000_000,
     seed: int = 0,
     *,
     workers: int | None = None,
-    client=None,
-    scheduler=None,
+    client: Any = None,
+    scheduler: str | None = None,
 ) -> LayeredAlbedo:
     """Directional albedo E(mu) of a layered surface, split into specular and diffuse parts.
 
@@ -368,13 +370,13 @@ def simulate_layered_albedo(
 
 def simulate_layered_average_albedo(
     surface: LayeredSurface,
-    rho=1.0,
+    rho: ArrayLike = 1.0,
     paths: int = 1_000_000,
     seed: int = 0,
     *,
     workers: int | None = None,
-    client=None,
-    scheduler=None,
+    client: Any = None,
+    scheduler: str | None = None,
 ) -> LayeredAlbedo:
     """Cosine-weighted average albedo <E> = 2 int E(mu) mu dmu (paths from cosine-distributed wi).
 
@@ -387,7 +389,7 @@ def simulate_layered_average_albedo(
     return _albedo("average", surface, None, rho, paths, seed, workers, client, scheduler)
 
 
-def _dirs(name, v):
+def _dirs(name: str, v: ArrayLike) -> NDArray[np.float64]:
     a = np.asarray(v, dtype=float)
     if a.ndim == 1:
         a = a[None]
@@ -401,15 +403,15 @@ def _dirs(name, v):
 
 def simulate_layered_brdf(
     surface: LayeredSurface,
-    wi,
-    wo,
-    rho=1.0,
+    wi: ArrayLike,
+    wo: ArrayLike,
+    rho: ArrayLike = 1.0,
     paths: int = 1_000_000,
     seed: int = 0,
     *,
     workers: int | None = None,
-    client=None,
-    scheduler=None,
+    client: Any = None,
+    scheduler: str | None = None,
 ) -> LayeredBRDF:
     """Diffuse part of the BRDF f(wi, wo) of a smooth-interface layered surface, by NEE.
 
@@ -466,7 +468,7 @@ def _fresnel(c, eta):
     return np.asarray(fresnel_dielectric(np.asarray(c, dtype=float), float(eta)), dtype=float)
 
 
-def smooth_lambert_terms(ior: float, tau=0.0, n: int = 400) -> tuple[np.ndarray, np.ndarray]:
+def smooth_lambert_terms(ior: float, tau: ArrayLike = 0.0, n: int = 400) -> tuple[np.ndarray, np.ndarray]:
     """(e_out, r_in): of cosine-distributed light leaving the base upwards, the fraction
     that leaves the surface (e_out = int 2 mu T(mu) (1 - F_int(mu)) dmu) and the fraction
     that returns to the base after one internal reflection (r_in = int 2 mu T(mu)^2
@@ -499,7 +501,7 @@ def smooth_lambert_terms(ior: float, tau=0.0, n: int = 400) -> tuple[np.ndarray,
     return e_out, r_in
 
 
-def smooth_lambert_albedo(ior: float, rho, mu, tau=0.0) -> np.ndarray:
+def smooth_lambert_albedo(ior: float, rho: ArrayLike, mu: ArrayLike, tau: ArrayLike = 0.0) -> np.ndarray:
     """Exact directional albedo of a smooth dielectric over an absorbing slab over a
     Lambertian base, all internal reflections included:
 
@@ -526,7 +528,9 @@ def smooth_lambert_albedo(ior: float, rho, mu, tau=0.0) -> np.ndarray:
     return F + (1.0 - F) * T * rho * e_out / (1.0 - rho * r_in)
 
 
-def smooth_lambert_brdf(ior: float, rho, mu_i, mu_o, tau=0.0) -> np.ndarray:
+def smooth_lambert_brdf(
+    ior: float, rho: ArrayLike, mu_i: ArrayLike, mu_o: ArrayLike, tau: ArrayLike = 0.0
+) -> np.ndarray:
     """Exact diffuse BRDF of the same stack (no cosine; the specular part is a delta):
 
         f = rho (1 - F(mu_i)) (1 - F(mu_o)) T(mu_ti) T(mu_to) / (pi n^2 (1 - rho r_in)).
@@ -536,7 +540,7 @@ def smooth_lambert_brdf(ior: float, rho, mu_i, mu_o, tau=0.0) -> np.ndarray:
     >>> round(float(smooth_lambert_brdf(1.0, 0.5, 0.3, 0.9)) * np.pi, 12)
     0.5
     """
-    tau = float(np.asarray(tau, dtype=float).reshape(-1)[0]) if np.ndim(tau) else float(tau)
+    tau = float(np.asarray(tau, dtype=float).reshape(-1)[0])
     _, r_in = smooth_lambert_terms(ior, tau)
     mi, mo = np.asarray(mu_i, dtype=float), np.asarray(mu_o, dtype=float)
     ti = np.sqrt(1 - (1 - mi * mi) / ior**2)
