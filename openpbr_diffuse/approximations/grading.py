@@ -10,10 +10,15 @@ Grids (``quick`` halves them): BRDF rows use Gauss-Legendre nodes in mu_i, mu_o 
 phi in (0, pi) and sigma uniform in [0, pi/2]; RMS is the plain mean over the grid nodes.
 """
 
+from __future__ import annotations
+
 import math
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from . import gotanda2012 as gt
 from . import kulla_conty as kc
@@ -41,7 +46,7 @@ class Row:
     n: int
     note: str = ""
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
         return asdict(self)
 
 
@@ -73,7 +78,15 @@ def _fmt(**kw):
 # --------------------------------------------------------------------------- grids
 
 
-def brdf_grid(quick=False):
+def brdf_grid(
+    quick: bool = False,
+) -> tuple[
+    tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+]:
     """Directions (mu_i, mu_o, phi) on Gauss-Legendre nodes and sigma values; arrays and wi, wo."""
     n_mu, n_phi, n_sig = (8, 12, 7) if quick else (16, 32, 17)
     x, _ = np.polynomial.legendre.leggauss(n_mu)
@@ -101,7 +114,7 @@ def _brdf_where(axes):
 # --------------------------------------------------------------------------- Gotanda
 
 
-def grade_gotanda_brdfs(quick=False):
+def grade_gotanda_brdfs(quick: bool = False) -> list[Row]:
     """Eq. 20, 23 against QON; Eq. 20, 24, 25 against fullON (rho = 0.9)."""
     from ..models import evaluate
 
@@ -182,13 +195,15 @@ def grade_gotanda_brdfs(quick=False):
     return rows
 
 
-def sh_grid(quick=False):
+def sh_grid(quick: bool = False) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     mu = np.linspace(0.0, 1.0, 11 if quick else 41)
     sig = np.linspace(0.0, HALF_PI, 7 if quick else 25)
     return mu, sig
 
 
-def gotanda_exact_sh(quick=False, model="gotanda", n=None):
+def gotanda_exact_sh(
+    quick: bool = False, model: str = "gotanda", n: int | None = None
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Exact DC and linear scales (mu x sigma grid) of ``model`` at rho = 1, by quadrature."""
     mu, sig = sh_grid(quick)
     n = n or (12 if quick else 24)
@@ -196,7 +211,7 @@ def gotanda_exact_sh(quick=False, model="gotanda", n=None):
     return mu, sig, T[..., 0] / sh.C0, T[..., 2] / (2.0 / 3.0 * sh.C1), T[..., 3] / (2.0 / 3.0 * sh.C1)
 
 
-def grade_gotanda_sh(quick=False):
+def grade_gotanda_sh(quick: bool = False) -> list[Row]:
     rows = []
     for model, label in (
         ("gotanda", "Eq. 25 lobe (rho = 1), exact SH projection"),
@@ -252,7 +267,9 @@ def grade_gotanda_sh(quick=False):
 # --------------------------------------------------------------------------- Kulla-Conty
 
 
-def kc_white_furnace(model="qon", quick=False, factor="tau"):
+def kc_white_furnace(
+    model: str = "qon", quick: bool = False, factor: str = "tau"
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Albedo of f_ss + f_ms at rho = 1 by 2-D quadrature (mu x roughness grid)."""
     mu = np.array([0.0, 0.05, 0.2, 0.5, 0.8, 1.0]) if quick else np.linspace(0.0, 1.0, 11)
     rmax = HALF_PI if model != "fon" else 1.0
@@ -265,14 +282,14 @@ def kc_white_furnace(model="qon", quick=False, factor="tau"):
     return mu, r, T[..., 0, 0] / sh.C0
 
 
-def eon_white_furnace(quick=False):
+def eon_white_furnace(quick: bool = False) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     mu = np.array([0.0, 0.05, 0.2, 0.5, 0.8, 1.0]) if quick else np.linspace(0.0, 1.0, 11)
     r = np.linspace(0.0, 1.0, 4 if quick else 7)
     T = sh.lobe_transfer("eon", mu[:, None], r[None, :], 1.0, n=12 if quick else 20)
     return mu, r, T[..., 0, 0] / sh.C0
 
 
-def grade_kc_furnace(quick=False):
+def grade_kc_furnace(quick: bool = False) -> list[Row]:
     rows = []
     mu, r, E = kc_white_furnace("qon", quick)
 
@@ -310,7 +327,7 @@ def grade_kc_furnace(quick=False):
     return rows
 
 
-def grade_kc_vs_eon(quick=False):
+def grade_kc_vs_eon(quick: bool = False) -> list[Row]:
     """K-C on FON's tables with EON's rho_ms factor against od.evaluate('eon'): the same lobe."""
     from ..models import evaluate
 
@@ -341,7 +358,7 @@ def grade_kc_vs_eon(quick=False):
     ]
 
 
-def grade_kc_factor(quick=False):
+def grade_kc_factor(quick: bool = False) -> list[Row]:
     """tau factor against the exact series factor of QON's own <E>, at the albedo level."""
     from ..albedo.tables import reference_albedo, reference_average_albedo
 
@@ -373,11 +390,11 @@ def grade_kc_factor(quick=False):
     return rows
 
 
-def alpha_grid(quick=False):
+def alpha_grid(quick: bool = False) -> NDArray[np.float64]:
     return np.linspace(0.0, 1.0, 21 if quick else 401)
 
 
-def grade_kc_zh(quick=False):
+def grade_kc_zh(quick: bool = False) -> list[Row]:
     a = alpha_grid(quick)
     exact = kc.zh_exact("qon", kc.sigma_of_alpha(a))
     rows = []
@@ -422,7 +439,7 @@ def grade_kc_zh(quick=False):
     return rows
 
 
-def sh_test_environments(k=8, seed=14):
+def sh_test_environments(k: int = 8, seed: int = 14) -> NDArray[np.float64]:
     """Order-2 SH radiance environments (9, 1): a sky-like gradient plus seeded random ones.
 
     Each is made non-negative in the mean (L_00 large enough) so the irradiance is positive.
@@ -435,7 +452,7 @@ def sh_test_environments(k=8, seed=14):
     return envs[..., None]
 
 
-def grade_kc_sh_response(quick=False):
+def grade_kc_sh_response(quick: bool = False) -> list[Row]:
     """MS response to SH environments with the fitted ZH, against brute-force quadrature."""
     a = np.linspace(0.05, 1.0, 5 if quick else 12)
     sig = kc.sigma_of_alpha(a)
@@ -487,10 +504,10 @@ def grade_kc_sh_response(quick=False):
     return rows
 
 
-def rectangles(k=12, seed=1414):
+def rectangles(k: int = 12, seed: int = 1414) -> NDArray[np.float64]:
     """Seeded rectangular lights above the horizon: (k, 4, 3) corners (centre, two half-axes)."""
     rng = np.random.default_rng(seed)
-    out = []
+    out: list[NDArray[np.float64]] = []
     while len(out) < k:
         c = rng.normal(0.0, 1.0, 3)
         c[2] = abs(c[2]) + 0.3
@@ -506,7 +523,7 @@ def rectangles(k=12, seed=1414):
     return np.array(out)
 
 
-def grade_kc_ltc(quick=False):
+def grade_kc_ltc(quick: bool = False) -> list[Row]:
     a = np.linspace(0.05, 1.0, 6 if quick else 20)
     a = np.union1d(a, [0.25])
     sig = kc.sigma_of_alpha(a)
@@ -614,7 +631,7 @@ GRADERS = (
 )
 
 
-def grade_all(quick=False, progress=None):
+def grade_all(quick: bool = False, progress: Callable[[str], object] | None = None) -> list[Row]:
     """Every row, in table order."""
     rows = []
     for g in GRADERS:
@@ -627,7 +644,9 @@ def grade_all(quick=False, progress=None):
 # --------------------------------------------------------------------------- colour shift
 
 
-def colour_shift(rho=(0.8, 0.5, 0.2), mu=0.5):
+def colour_shift(
+    rho: ArrayLike = (0.8, 0.5, 0.2), mu: float = 0.5
+) -> list[tuple[str, NDArray[np.float64], NDArray[np.float64]]]:
     """Albedo per channel at the roughest setting for EON, K-C(QON, tau), K-C(QON, exact factor).
 
     Returns a list of (name, albedo (C,), albedo / rho (C,)) for the reference mode and for

@@ -25,9 +25,13 @@ Roughness: the post's Oren-Nayar roughness alpha in [0, 1] is QON with sigma = a
 the exact ZH coefficients only with this map — see the README errata); beta = sqrt(alpha).
 """
 
+from __future__ import annotations
+
 import math
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .. import _arrays as ar
 from . import sh
@@ -69,16 +73,16 @@ LTC_M33_DEN = (0.008420878564907999, -0.022349996757079705, 0.034343673853208634
 LTC_MAG = (0.2559021427001363, -2.7944531451217687, 8.298513748611509, -4.662218902663712)
 
 
-def _alpha(alpha):
+def _alpha(alpha: ArrayLike) -> NDArray[Any]:
     return ar.in_range("alpha", alpha, np.float64, 0.0, 1.0, " (the post's roughness; beta = sqrt(alpha))")
 
 
-def sigma_of_alpha(alpha):
+def sigma_of_alpha(alpha: ArrayLike) -> NDArray[np.float64]:
     """QON sigma of the post's Oren-Nayar roughness: sigma = alpha pi/2 (alpha in [0, 1])."""
     return 0.5 * math.pi * _alpha(alpha)
 
 
-def rho_factor(rho):
+def rho_factor(rho: ArrayLike) -> NDArray[np.float64]:
     """The post's F(rho) = A1 (tau rho)^2 / (1 - tau rho) (Pt. 1 "varying diffuse reflectance"; Pt. 2 listings).
 
     Parameters
@@ -96,7 +100,7 @@ def rho_factor(rho):
     return A1 * t * t / (1.0 - t)
 
 
-def exact_rho_factor(rho, average_albedo):
+def exact_rho_factor(rho: ArrayLike, average_albedo: ArrayLike) -> NDArray[np.float64]:
     """The multiple-scattering factor implied by the lobe's own <E>: rho^2 <E> / (1 - rho (1 - <E>)).
 
     EON Eq. 18 (the library's ``rho_ms``): the sum over scattering orders n >= 2 of
@@ -126,7 +130,7 @@ def _factor(kind, rho, avg):
     raise ValueError(f"factor must be one of {', '.join(FACTORS)}; got {kind!r}")
 
 
-def _roughness(model, roughness):
+def _roughness(model: str, roughness: ArrayLike) -> NDArray[Any]:
     """Roughness checked in ``model``'s domain (GGX: alpha in [0, 1])."""
     if model == GGX:
         return ar.in_range("roughness", roughness, np.float64, 0.0, 1.0, " for 'ggx' (GGX alpha)")
@@ -135,7 +139,7 @@ def _roughness(model, roughness):
     return ar.model_roughness(model_info(model), roughness, np.float64)
 
 
-def single_scattering_albedo(model, mu, roughness):
+def single_scattering_albedo(model: str, mu: ArrayLike, roughness: ArrayLike) -> NDArray[np.float64]:
     """E(mu) of ``model`` at rho = 1 from the reference tables (``od.reference_albedo``).
 
     ``model="ggx"``: the GGX lobe with F = 1 (height-correlated Smith), from the specular
@@ -151,7 +155,7 @@ def single_scattering_albedo(model, mu, roughness):
     return reference_albedo(model, mu, roughness, 1.0)[..., 0]
 
 
-def average_term(model, roughness):
+def average_term(model: str, roughness: ArrayLike) -> NDArray[np.float64]:
     """E_avg = pi <E> of ``model`` at rho = 1 (the post's convention), from the reference tables.
 
     ``model="ggx"``: 2 pi int E mu dmu by Gauss-Legendre (96 nodes in theta) of the GGX table.
@@ -168,13 +172,22 @@ def average_term(model, roughness):
     return math.pi * reference_average_albedo(model, roughness, 1.0)[..., 0]
 
 
-def view_term(model, mu_o, roughness):
+def view_term(model: str, mu_o: ArrayLike, roughness: ArrayLike) -> NDArray[np.float64]:
     """(1 - E(mu_o)) / max(0.001, pi - E_avg): the view-dependent part (the post's MSBRDF_View)."""
     E = single_scattering_albedo(model, mu_o, roughness)
     return (1.0 - E) / np.maximum(VIEW_GUARD, math.pi - average_term(model, roughness))
 
 
-def ms_lobe(model, wi, wo, roughness, rho=1.0, *, factor="tau", guard=VIEW_GUARD):
+def ms_lobe(
+    model: str,
+    wi: ArrayLike,
+    wo: ArrayLike,
+    roughness: ArrayLike,
+    rho: ArrayLike = 1.0,
+    *,
+    factor: str = "tau",
+    guard: float = VIEW_GUARD,
+) -> NDArray[np.float64]:
     """The multiple-scattering lobe f_ms = F(rho) (1 - E(mu_o)) (1 - E(mu_i)) / (pi - E_avg).
 
     Kulla-Conty 2017 / the post's ``MSBRDF``, with E and E_avg of ``model`` from the project's
@@ -238,7 +251,17 @@ def _table_E(model, mu, r):
     return E[inv.reshape(-1)].reshape(mu.shape)
 
 
-def compensated(model, wi, wo, roughness, rho=1.0, *, factor="tau", guard=VIEW_GUARD, color_mode="reference"):
+def compensated(
+    model: str,
+    wi: ArrayLike,
+    wo: ArrayLike,
+    roughness: ArrayLike,
+    rho: ArrayLike = 1.0,
+    *,
+    factor: str = "tau",
+    guard: float = VIEW_GUARD,
+    color_mode: str = "reference",
+) -> NDArray[np.float64]:
     """f = f_ss + f_ms: the single-scattering lobe (``od.evaluate``) plus ``ms_lobe``."""
     from ..models import evaluate
 
@@ -247,7 +270,9 @@ def compensated(model, wi, wo, roughness, rho=1.0, *, factor="tau", guard=VIEW_G
     )
 
 
-def compensated_albedo(model, mu, roughness, rho=1.0, *, factor="tau"):
+def compensated_albedo(
+    model: str, mu: ArrayLike, roughness: ArrayLike, rho: ArrayLike = 1.0, *, factor: str = "tau"
+) -> NDArray[np.float64]:
     """Directional albedo of ``compensated``: E_ss(mu; rho) + F(rho) (1 - E(mu)), from the tables.
 
     (int f_ms mu_i dwi = F(rho) (1 - E(mu_o)) because int (1 - E) mu dw = pi - E_avg.)
@@ -263,7 +288,7 @@ def compensated_albedo(model, mu, roughness, rho=1.0, *, factor="tau"):
 # --------------------------------------------------------------------------- SH environment
 
 
-def zh_exact(model, roughness, *, n=64):
+def zh_exact(model: str, roughness: ArrayLike, *, n: int = 64) -> NDArray[np.float64]:
     """Exact E_l(roughness) = 2 pi int_0^1 Y_l0(mu) (1 - E(mu)) mu dmu, l = 0, 1, 2 (the post's ZH).
 
     Gauss-Legendre in mu (``sh.zh_project``) of the reference-table E of ``model``.
@@ -286,7 +311,7 @@ def zh_exact(model, roughness, *, n=64):
     return np.moveaxis(sh.zh_project(h, n), 0, -1).reshape(r.shape + (3,))
 
 
-def zh_fit_oren_nayar(alpha, *, form="code"):
+def zh_fit_oren_nayar(alpha: ArrayLike, *, form: str = "code") -> NDArray[np.float64]:
     """The post's fits E0, E1, E2 for Oren-Nayar, clamped to [0, 1] as its listing does.
 
     ``form="code"``: as its HLSL evaluates them, beta (c0 + c1 alpha + c2 alpha^2 + c3 alpha^3)
@@ -313,7 +338,7 @@ def zh_fit_oren_nayar(alpha, *, form="code"):
     return np.clip(powers @ ZH_FIT_OREN_NAYAR.T, 0.0, 1.0)
 
 
-def zh_fit_ggx(alpha, *, form="code"):
+def zh_fit_ggx(alpha: ArrayLike, *, form: str = "code") -> NDArray[np.float64]:
     """The post's fits E0, E1, E2 for GGX, clamped to [0, 1] as its listing does.
 
     ``form="code"``: beta (c0 + c1 alpha + c2 alpha^2) as its HLSL evaluates them;
@@ -330,7 +355,18 @@ def zh_fit_ggx(alpha, *, form="code"):
     return np.clip(powers @ ZH_FIT_GGX.T, 0.0, 1.0)
 
 
-def sh_response(model, env, normal, mu_o, roughness, rho=1.0, *, zh=None, factor="tau", clamp=True):
+def sh_response(
+    model: str,
+    env: ArrayLike,
+    normal: ArrayLike,
+    mu_o: ArrayLike,
+    roughness: ArrayLike,
+    rho: ArrayLike = 1.0,
+    *,
+    zh: ArrayLike | None = None,
+    factor: str = "tau",
+    clamp: bool = True,
+) -> NDArray[np.float64]:
     """MS response to an order-2 SH environment (the post's ``EstimateMSIrradiance_SH``).
 
     L_o = F(rho) (1 - E(mu_o))/(pi - E_avg) max(0, sum_k L_k E_k(n)), E_k = ``sh.zh_rotate(zh, n)``.
@@ -370,7 +406,7 @@ def sh_response(model, env, normal, mu_o, roughness, rho=1.0, *, zh=None, factor
 # --------------------------------------------------------------------------- area lights (LTC)
 
 
-def ltc_m33_fit(alpha, lobe="oren_nayar"):
+def ltc_m33_fit(alpha: ArrayLike, lobe: str = "oren_nayar") -> NDArray[np.float64]:
     """The post's m33(beta): Oren-Nayar (a0 + a1 beta + a2 beta^2) / (b0 + b1 beta + b2 beta^2);
     ``lobe="ggx"``: min(15.2, (a0 + a1 beta^2) / (b0 + b1 beta^2))."""
     b = np.sqrt(_alpha(alpha))
@@ -384,7 +420,7 @@ def ltc_m33_fit(alpha, lobe="oren_nayar"):
     return (n0 + b * (n1 + b * n2)) / (d0 + b * (d1 + b * d2))
 
 
-def ltc_magnitude_fit(alpha, lobe="oren_nayar"):
+def ltc_magnitude_fit(alpha: ArrayLike, lobe: str = "oren_nayar") -> NDArray[np.float64]:
     """The post's magnitude(beta): Oren-Nayar max(0, c0 + c1 beta + c2 beta^2 + c3 beta^3);
     ``lobe="ggx"``: c1 beta + c2 beta^2 + c3 beta^3 + c4 beta^4.
 
@@ -400,7 +436,7 @@ def ltc_magnitude_fit(alpha, lobe="oren_nayar"):
     return np.maximum(0.0, c0 + b * (c1 + b * (c2 + b * c3)))
 
 
-def ltc_distribution(w, m33):
+def ltc_distribution(w: ArrayLike, m33: ArrayLike) -> NDArray[np.float64]:
     """D(w) of the LTC with M^-1 = diag(1, 1, m33): m33^2 max(0, z) / (pi (1 - z^2 + m33^2 z^2)^2).
 
     Heitz et al. 2016 Eq. 1 with D_o the clamped cosine; integrates to 1 over the sphere.
@@ -411,7 +447,7 @@ def ltc_distribution(w, m33):
     return m * m * np.maximum(z, 0.0) / (math.pi * (1.0 - z * z + m * m * z * z) ** 2)
 
 
-def _check_corners(corners):
+def _check_corners(corners: ArrayLike) -> NDArray[np.float64]:
     c = ar.as_float("corners", corners, np.float64)
     if c.ndim < 2 or c.shape[-1] != 3 or c.shape[-2] < 3:
         raise ValueError(f"corners must have shape (..., V, 3) with V >= 3 polygon vertices, got {c.shape}")
@@ -422,7 +458,7 @@ def _check_corners(corners):
     return c
 
 
-def polygon_irradiance(corners):
+def polygon_irradiance(corners: ArrayLike) -> NDArray[np.float64]:
     """(1/pi) int_P max(0, z) dw of a spherical polygon above the horizon (Lambert's edge formula).
 
     E = (1/(2 pi)) |sum_i acos(v_i . v_j) (v_i x v_j).z / |v_i x v_j||, v = normalised corners.
@@ -436,7 +472,7 @@ def polygon_irradiance(corners):
     return np.abs(np.sum(ang * crz, axis=-1)) / (2.0 * math.pi)
 
 
-def ltc_polygon_integral(corners, m33):
+def ltc_polygon_integral(corners: ArrayLike, m33: ArrayLike) -> NDArray[np.float64]:
     """int_P D_LTC(w) dw for M^-1 = diag(1, 1, m33): the polygon irradiance of M^-1 P (Heitz 2016)."""
     c = _check_corners(corners)
     m = np.asarray(m33, dtype=np.float64)
@@ -444,7 +480,7 @@ def ltc_polygon_integral(corners, m33):
     return polygon_irradiance(c * scale[..., None, :])
 
 
-def polygon_integral_exact(model, corners, roughness, *, n=48):
+def polygon_integral_exact(model: str, corners: ArrayLike, roughness: ArrayLike, *, n: int = 48) -> NDArray[np.float64]:
     """Brute force: int_P (1 - E(mu)) mu dw over planar parallelograms, Gauss-Legendre on their area.
 
     Parameters

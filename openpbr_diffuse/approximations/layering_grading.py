@@ -29,8 +29,10 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..microfacet.tables import dielectric_albedo, ggx_albedo
 from . import gotanda2012_layered as g
@@ -41,7 +43,7 @@ DATA = Path(__file__).resolve().parent.parent / "data"
 TABLE = DATA / "layered_grading.csv"
 
 
-def spec_albedo(mu, n: float, roughness: float, multiscatter: bool = True) -> np.ndarray:
+def spec_albedo(mu: ArrayLike, n: float, roughness: float, multiscatter: bool = True) -> np.ndarray:
     """E_spec(mu) of OpenPBR's GGX dielectric lobe (index n, perceptual roughness), with
     ``OpenPBRSurface``'s default multiple-scattering factor 1 + F0 (1 - E1)/E1 (Turquin 2019).
 
@@ -72,7 +74,9 @@ def spec_average(n: float, roughness: float, nq: int = 64) -> float:
     return float((2 * mu * spec_albedo(mu, n, roughness) * wm).sum())
 
 
-def diffuse_albedo(rule: str, mu, n: float, rho, roughness: float = 0.0, tau: float = 0.0) -> np.ndarray:
+def diffuse_albedo(
+    rule: str, mu: ArrayLike, n: float, rho: ArrayLike, roughness: float = 0.0, tau: float = 0.0
+) -> np.ndarray:
     """E_d(mu) of a Lambertian base of albedo rho under the layer, by ``rule`` (``RULES``).
 
     Example
@@ -100,7 +104,7 @@ def diffuse_albedo(rule: str, mu, n: float, rho, roughness: float = 0.0, tau: fl
     raise ValueError(f"rule must be one of {', '.join(RULES)}, got {rule!r}")
 
 
-def eon_base_albedo(rule: str, mu, n: float, rho, r: float, roughness: float = 0.0) -> np.ndarray:
+def eon_base_albedo(rule: str, mu: ArrayLike, n: float, rho: ArrayLike, r: float, roughness: float = 0.0) -> np.ndarray:
     """E_d(mu) of an EON base (roughness r, albedo rho) under the layer by OpenPBR's rules:
     ``openpbr`` (1 - E_spec(mu)) E_EON(mu) or ``openpbr_coat`` (1 - E_coat(mu)) (1 - K)/(1 -
     rho K) E_EON(mu) (no absorption); E_EON from the library's reference tables.
@@ -147,7 +151,7 @@ def load_table(path: Path | str = TABLE) -> tuple[dict, list[dict]]:
     return header, out
 
 
-def error_summary(rows: list[dict], rule: str, **where) -> dict:
+def error_summary(rows: list[dict[str, Any]], rule: str, **where: float) -> dict[str, Any]:
     """Largest and mean relative error |E_rule/E_phys - 1| over the rows matching ``where``.
 
     Example

@@ -22,9 +22,13 @@ These are the exact quantities that Gotanda's DC / linear scales (Eq. 27-29) and
 E0, E1, E2 fits approximate.
 """
 
+from __future__ import annotations
+
 import math
+from collections.abc import Callable
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .. import _arrays as ar
 
@@ -45,7 +49,7 @@ LAMBERT_BAND_SCALE = np.array([1.0, 2.0 / 3.0, 0.25])
 MU_MIN = 1e-7
 
 
-def basis(w):
+def basis(w: ArrayLike) -> NDArray[np.float64]:
     """The 9 real SH basis functions Y_k(w), order 2.
 
     Parameters
@@ -82,13 +86,13 @@ def basis(w):
     )
 
 
-def zonal_basis(mu):
+def zonal_basis(mu: ArrayLike) -> NDArray[np.float64]:
     """Y_00, Y_10, Y_20 at cos(theta) = mu; shape (..., 3)."""
     mu = ar.in_range("mu", mu, np.float64, -1.0, 1.0, " (cosine to the lobe axis)")
     return np.stack([np.full_like(mu, C0), C1 * mu, C3 * (3.0 * mu * mu - 1.0)], axis=-1)
 
 
-def zh_rotate(zh, n):
+def zh_rotate(zh: ArrayLike, n: ArrayLike) -> NDArray[np.float64]:
     """Full SH vector of a zonal lobe with ZH coefficients ``zh`` turned to point along ``n``.
 
     E_lm(n) = sqrt(4 pi / (2l + 1)) E_l Y_lm(n) (Sloan 2008; the ``RotateZH`` listing of the
@@ -116,7 +120,7 @@ def _gauss(n):
     return 0.5 * (x + 1.0), 0.5 * w
 
 
-def zh_project(h, n=64):
+def zh_project(h: Callable[[NDArray[np.float64]], ArrayLike], n: int = 64) -> NDArray[np.float64]:
     """ZH coefficients E_l = 2 pi int_0^1 Y_l0(mu) h(mu) mu dmu of the lobe h(mu) mu on H+.
 
     ``h`` is a callable of mu (array, shape (n,)) returning shape (n,) or (n, ...); the result
@@ -147,7 +151,7 @@ def _panel_nodes(edges, n):
     return (a + (b - a) * x).reshape(len(edges), -1), ((b - a) * w).reshape(len(edges), -1)
 
 
-def hemisphere_nodes(mu_o, n=32):
+def hemisphere_nodes(mu_o: ArrayLike, n: int = 32) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Quadrature nodes wi (N, T, P, 3) and weights (N, T, P) for int_{H+} g(wi) dwi.
 
     wo = (sqrt(1 - mu_o^2), 0, mu_o): theta_i panels split at theta_o, phi panels at pi/2 and
@@ -166,13 +170,22 @@ def hemisphere_nodes(mu_o, n=32):
     return wi, weight
 
 
-def wo_of(mu_o):
+def wo_of(mu_o: ArrayLike) -> NDArray[np.float64]:
     """wo = (sqrt(1 - mu_o^2), 0, mu_o): the local-frame view direction for ``lobe_transfer``."""
     mu_o = np.asarray(mu_o, dtype=np.float64)
     return np.stack([np.sqrt(np.maximum(0.0, 1.0 - mu_o * mu_o)), np.zeros_like(mu_o), mu_o], axis=-1)
 
 
-def lobe_transfer(model, mu_o, roughness, rho=1.0, *, n=24, color_mode="reference", brdf=None):
+def lobe_transfer(
+    model: str,
+    mu_o: ArrayLike,
+    roughness: ArrayLike,
+    rho: ArrayLike = 1.0,
+    *,
+    n: int = 24,
+    color_mode: str = "reference",
+    brdf: Callable[..., ArrayLike] | None = None,
+) -> NDArray[np.float64]:
     """Exact SH transfer vector T_k(wo) = int Y_k(wi) f(wi, wo) mu_i dwi of a lobe.
 
     Local frame (normal +z) with wo = (sqrt(1 - mu_o^2), 0, mu_o); coefficients 1, 4, 5 (odd
@@ -303,7 +316,7 @@ _DIRS = _fibonacci()
 _PINV = np.linalg.pinv(basis(_DIRS))  # (9, 64)
 
 
-def frame(normal, wo):
+def frame(normal: ArrayLike, wo: ArrayLike) -> NDArray[np.float64]:
     """Rotation R (..., 3, 3) whose columns are the local x (towards wo), y and z = normal.
 
     Parameters
@@ -325,7 +338,7 @@ def frame(normal, wo):
     return np.stack([t, b, n], axis=-1)
 
 
-def rotate(coeffs, R):
+def rotate(coeffs: ArrayLike, R: ArrayLike) -> NDArray[np.float64]:
     """SH coefficients of g(R^T w) given those of g(w): the rotation of an order-2 SH vector.
 
     Exact (order-2 SH are closed under rotation): the rotated function is sampled at 64 fixed
@@ -352,7 +365,16 @@ def rotate(coeffs, R):
     return out[..., 0] if squeeze else out
 
 
-def shade(model, env, normal, wo, roughness, rho=1.0, *, n=32):
+def shade(
+    model: str,
+    env: ArrayLike,
+    normal: ArrayLike,
+    wo: ArrayLike,
+    roughness: ArrayLike,
+    rho: ArrayLike = 1.0,
+    *,
+    n: int = 32,
+) -> NDArray[np.float64]:
     """Outgoing radiance of a lobe lit by an order-2 SH environment, exactly (up to quadrature).
 
     L_o = sum_k L_k T_k^world(wo) with T from ``lobe_transfer`` rotated into the world frame.

@@ -21,6 +21,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..microfacet.fresnel import fresnel_dielectric
 
@@ -34,7 +35,7 @@ def _mut(mu, n):
     return np.sqrt(1.0 - (1.0 - mu * mu) / (n * n))
 
 
-def diffuse_brdf(mu_i, mu_o, n: float, rho, tau: float = 0.0) -> np.ndarray:
+def diffuse_brdf(mu_i: ArrayLike, mu_o: ArrayLike, n: float, rho: ArrayLike, tau: float = 0.0) -> np.ndarray:
     """f_d of a smooth coating of index n and normal optical depth tau over a Lambertian base.
 
     Example
@@ -51,7 +52,7 @@ def diffuse_brdf(mu_i, mu_o, n: float, rho, tau: float = 0.0) -> np.ndarray:
     return (1 - _F(mi, n)) * (1 - _F(mo, n)) * a * np.asarray(rho, dtype=float) / math.pi
 
 
-def diffuse_albedo(mu, n: float, rho, tau: float = 0.0, nq: int = 256) -> np.ndarray:
+def diffuse_albedo(mu: ArrayLike, n: float, rho: ArrayLike, tau: float = 0.0, nq: int = 256) -> np.ndarray:
     """E_d(mu) of ``diffuse_brdf`` (Gauss-Legendre over the outgoing cosine).
 
     Example
