@@ -1,10 +1,13 @@
 """Reading the shipped CSV tables whose provenance header is ``# key: value`` lines."""
 
+from __future__ import annotations
+
 import csv
+import os
 from pathlib import Path
 
 
-def read_headed_csv(path):
+def read_headed_csv(path: str | os.PathLike[str]) -> tuple[dict[str, str], list[str], list[list[str]]]:
     """(header {key: value}, column names, rows of str) of a CSV with a ``#`` header.
 
     Header lines are ``# key: value`` (anywhere before or between rows); blank lines are

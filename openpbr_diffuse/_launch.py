@@ -14,13 +14,18 @@ so no input is ever expanded to full size: the extra memory of a call is a few b
 CHUNK rows (~3 MB) beyond its output, whatever the broadcast shapes.
 """
 
+from __future__ import annotations
+
 import concurrent.futures
 import itertools
 import os
 import threading
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from typing import Any
 
 import numba
 import numpy as np
+from numpy.typing import NDArray
 
 from ._jit import FASTMATH
 
@@ -89,7 +94,7 @@ MIN_CHUNK = 1 << 12
 FULL, TILED, BROADCAST = 0, 1, 2
 
 
-def rows(a, lead, k=None):
+def rows(a: NDArray[Any], lead: tuple[int, ...], k: int | None = None) -> tuple[NDArray[Any], int]:
     """``a`` (leading shape broadcasting to ``lead``; trailing axis of length k, if any) for ``launch``.
 
     Returns ``(buffer, mode)``: the C-contiguous (n*k,) data when ``a`` already has every
@@ -110,7 +115,7 @@ def rows(a, lead, k=None):
     return buf, mode
 
 
-def row_blocks(lead, size):
+def row_blocks(lead: Sequence[int], size: int) -> Iterator[tuple[int, int, tuple[int | slice, ...]]]:
     """Split the rows of ``lead`` (C order) into blocks of at most ``size`` rows.
 
     Yields ``(start, stop, index)``: flat row range and the basic index (ints and one
@@ -136,14 +141,21 @@ def row_blocks(lead, size):
             start += (b - a) * inner
 
 
-def gather(view, index):
+def gather(view: NDArray[Any], index: tuple[int | slice, ...]) -> NDArray[Any]:
     """Rows ``index`` (from ``row_blocks``) of a broadcast view, as a flat C-contiguous copy."""
     block = np.ascontiguousarray(view[index]).reshape(-1)
     block.flags.writeable = False
     return block
 
 
-def launch(drive, head: tuple, inputs: list, outputs: list, n: int, split: bool = True) -> int:
+def launch(
+    drive: Callable[..., int | None],
+    head: tuple[Any, ...],
+    inputs: list[tuple[NDArray[Any], int, int]],
+    outputs: list[tuple[NDArray[Any], int]],
+    n: int,
+    split: bool = True,
+) -> int:
     """Run ``drive(*head, *input buffers, *output buffers)`` over n rows.
 
     ``inputs`` = [(buffer, k, mode)] from ``rows``; ``outputs`` = [(flat buffer, k)].
@@ -172,7 +184,9 @@ def launch(drive, head: tuple, inputs: list, outputs: list, n: int, split: bool 
         elif m == BROADCAST:
             lead = b.shape[:-1]
         reps.append(b)
-    blocks = row_blocks(lead, B) if lead is not None else ((s, min(n, s + B), None) for s in range(0, n, B))
+    blocks: Iterable[tuple[int, int, Any]] = (
+        row_blocks(lead, B) if lead is not None else ((s, min(n, s + B), None) for s in range(0, n, B))
+    )
     bad = 0
     for s, e, index in blocks:
         args = [

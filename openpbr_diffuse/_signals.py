@@ -89,7 +89,7 @@ class blocked:
     Signals that arrive meanwhile are delivered when the block ends.
     """
 
-    def __enter__(self):
+    def __enter__(self) -> blocked:
         self._old = None
         if hasattr(signal, "pthread_sigmask") and threading.current_thread() is threading.main_thread():
             self._old = signal.pthread_sigmask(signal.SIG_BLOCK, SIGNALS)

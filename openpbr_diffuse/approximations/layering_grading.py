@@ -141,7 +141,7 @@ def load_table(path: Path | str = TABLE) -> tuple[dict, list[dict]]:
     header, names, rows = read_headed_csv(path)
     out = []
     for r in rows:
-        d = {}
+        d: dict[str, Any] = {}
         for k, v in zip(names, r):
             try:
                 d[k] = float(v)

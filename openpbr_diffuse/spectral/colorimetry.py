@@ -20,8 +20,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .._colour import _colour  # colour-science, imported on first use
 
@@ -60,7 +62,7 @@ CAT = "Bradford"
 DEFAULT_SHAPE = (380.0, 780.0, 5.0)
 
 
-def illuminant_names():
+def illuminant_names() -> list[str]:
     """Names accepted for ``illuminant`` (those of ``colour.SDS_ILLUMINANTS``)."""
     return sorted(_colour().SDS_ILLUMINANTS.keys())
 
@@ -92,23 +94,23 @@ class Colorimetry:
     white_xy: np.ndarray
     _cmfs: object
     _illuminant_sd: object
-    _space: object
+    _space: Any
 
     @property
-    def cmfs(self):
+    def cmfs(self) -> Any:
         """The CIE 1931 2 degree colour-matching functions aligned to ``shape`` (colour-science)."""
         return self._cmfs
 
     @property
-    def illuminant_sd(self):
+    def illuminant_sd(self) -> Any:
         """The illuminant's spectral distribution aligned to ``shape`` (colour-science)."""
         return self._illuminant_sd
 
     @property
-    def colour_shape(self):
+    def colour_shape(self) -> Any:
         return _colour().SpectralShape(*self.shape)
 
-    def describe(self):
+    def describe(self) -> dict[str, Any]:
         """The settings as plain data (for JSON output and table headers)."""
         start, end, interval = self.shape
         return {
@@ -130,7 +132,7 @@ class Colorimetry:
             "colour_science": _colour().__version__,
         }
 
-    def spectra_to_XYZ(self, spectra):
+    def spectra_to_XYZ(self, spectra: ArrayLike) -> NDArray[np.float64]:
         """XYZ (perfect reflector Y = 100) of reflectance spectra sampled on ``wavelengths``.
 
         Parameters
@@ -153,7 +155,7 @@ class Colorimetry:
             spectra, self._cmfs, self._illuminant_sd, method="Integration", shape=self.colour_shape
         )
 
-    def XYZ_to_RGB(self, XYZ):
+    def XYZ_to_RGB(self, XYZ: ArrayLike) -> NDArray[np.float64]:
         """Working-space linear RGB (reflectance scale, white = 1) of XYZ (Y = 100)."""
         colour = _colour()
         return colour.XYZ_to_RGB(
@@ -163,30 +165,30 @@ class Colorimetry:
             chromatic_adaptation_transform=CAT,
         )
 
-    def RGB_to_XYZ(self, RGB):
+    def RGB_to_XYZ(self, RGB: ArrayLike) -> NDArray[np.float64]:
         """XYZ (Y = 100, illuminant white) of working-space linear RGB (white = 1)."""
         colour = _colour()
         return 100.0 * colour.RGB_to_XYZ(
             np.asarray(RGB, np.float64), self._space, illuminant=self.white_xy, chromatic_adaptation_transform=CAT
         )
 
-    def XYZ_to_Lab(self, XYZ):
+    def XYZ_to_Lab(self, XYZ: ArrayLike) -> NDArray[np.float64]:
         """CIELAB of XYZ (Y = 100) with the illuminant's white as reference white."""
         colour = _colour()
         return colour.XYZ_to_Lab(np.asarray(XYZ, np.float64) / 100.0, self.white_xy)
 
     @staticmethod
-    def delta_E(Lab1, Lab2):
+    def delta_E(Lab1: ArrayLike, Lab2: ArrayLike) -> NDArray[np.float64]:
         """CIEDE2000 colour difference."""
         return _colour().delta_E(Lab1, Lab2, method="CIE 2000")
 
     @staticmethod
-    def chroma(Lab):
+    def chroma(Lab: ArrayLike) -> NDArray[np.float64]:
         """CIELAB chroma C*ab = sqrt(a*^2 + b*^2)."""
         return _colour().Lab_to_LCHab(Lab)[..., 1]
 
 
-def working_space_name(name):
+def working_space_name(name: str) -> str:
     """The ``WORKING_SPACES`` key a working-space name or alias stands for (case-insensitive)."""
     if not isinstance(name, str):
         raise TypeError(f"working_space must be a string, got {type(name).__name__}")
@@ -200,7 +202,11 @@ def working_space_name(name):
     return key
 
 
-def colorimetry(illuminant=DEFAULT_ILLUMINANT, working_space=DEFAULT_WORKING_SPACE, shape=DEFAULT_SHAPE):
+def colorimetry(
+    illuminant: str = DEFAULT_ILLUMINANT,
+    working_space: str = DEFAULT_WORKING_SPACE,
+    shape: tuple[float, float, float] = DEFAULT_SHAPE,
+) -> Colorimetry:
     """The ``Colorimetry`` for an illuminant, a working space and a spectral shape (cached).
 
     Parameters

@@ -18,13 +18,20 @@ its working-space RGB (``rho_rgb``) and where both came from:
 
 from __future__ import annotations
 
+import os
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .colorimetry import _colour
 from .recovery import check_rgb, resolve_method, rgb_to_spectra
+
+if TYPE_CHECKING:
+    from .colorimetry import Colorimetry
 
 CHECKER = "BabelColor Average"
 #: diffuse-colour parameter names by material shader (first present wins).
@@ -69,7 +76,7 @@ class ColourSet:
         return len(self.names)
 
     @staticmethod
-    def concat(sets):
+    def concat(sets: Iterable[ColourSet]) -> ColourSet:
         sets = [s for s in sets if len(s)]
         if not sets:
             raise ValueError("colors: no colours to evaluate")
@@ -95,7 +102,9 @@ def _measured(names, spectra, cm, source):
     return ColourSet(list(names), spectra, rgb, [f"measured: {source}"] * len(names), np.full(len(names), np.nan))
 
 
-def from_spectra(spectra, cm, names=None, source="spectra"):
+def from_spectra(
+    spectra: ArrayLike, cm: Colorimetry, names: Sequence[str] | None = None, source: str = "spectra"
+) -> ColourSet:
     """Reflectance spectra already sampled on ``cm.wavelengths`` (array (P, N) in [0, 1]).
 
     Examples
@@ -118,7 +127,7 @@ def from_spectra(spectra, cm, names=None, source="spectra"):
     return _measured(names, spectra, cm, source)
 
 
-def checker(cm):
+def checker(cm: Colorimetry) -> ColourSet:
     """The 24 measured ColorChecker spectra ('BabelColor Average' of colour-science).
 
     Examples
@@ -135,7 +144,9 @@ def checker(cm):
     return _measured(names, spectra, cm, f"colour.SDS_COLOURCHECKERS['{CHECKER}']")
 
 
-def from_rgb(rgb, cm, method="auto", names=None, source="rgb"):
+def from_rgb(
+    rgb: ArrayLike, cm: Colorimetry, method: str = "auto", names: Sequence[str] | None = None, source: str = "rgb"
+) -> ColourSet:
     """User colours (working-space linear RGB in [0, 1]) upsampled with ``method``."""
     rgb = check_rgb("colors", np.atleast_2d(rgb))
     name = resolve_method(method, cm)
@@ -145,7 +156,7 @@ def from_rgb(rgb, cm, method="auto", names=None, source="rgb"):
     return ColourSet(list(names), spectra, rgb, [f"{source} (upsampled: {name})"] * len(rgb), de)
 
 
-def from_spectra_csv(path, cm):
+def from_spectra_csv(path: str | os.PathLike[str], cm: Colorimetry) -> ColourSet:
     """Measured reflectance spectra from a CSV file: wavelength (nm), then one column per spectrum.
 
     The first row names the columns; lines starting with ``#`` are comments.  Each spectrum
@@ -207,7 +218,9 @@ def _material_roughness(material):
     return None
 
 
-def from_materials(paths, cm, method="auto"):
+def from_materials(
+    paths: Iterable[str | os.PathLike[str]], cm: Colorimetry, method: str = "auto"
+) -> tuple[ColourSet, list[str]]:
     """The diffuse colours of the supported materials of USD / MaterialX files.
 
     ``openpbr_diffuse.readers.load_materials`` resolves every colour into its working space,

@@ -26,9 +26,15 @@ otherwise.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .colorimetry import _colour
+
+if TYPE_CHECKING:
+    from .colorimetry import Colorimetry
 
 
 def _mallett2019(rgb, cm):
@@ -79,7 +85,7 @@ AUTO_METHOD = {"lin_rec709": "Mallett 2019"}
 DEFAULT_AUTO = "Otsu 2018"
 
 
-def resolve_method(method, cm):
+def resolve_method(method: str, cm: Colorimetry) -> str:
     """The method name ``method`` stands for (``"auto"`` depends on the working space)."""
     if not isinstance(method, str):
         raise TypeError(f"method must be a string, got {type(method).__name__}")
@@ -90,7 +96,7 @@ def resolve_method(method, cm):
     return method
 
 
-def check_rgb(name, rgb):
+def check_rgb(name: str, rgb: ArrayLike) -> NDArray[np.float64]:
     """``rgb`` as a float64 array (..., 3) of finite values in [0, 1], else ValueError/TypeError."""
     try:
         a = np.asarray(rgb, dtype=np.float64)
@@ -103,7 +109,9 @@ def check_rgb(name, rgb):
     return a
 
 
-def rgb_to_spectra(rgb, cm, method="auto"):
+def rgb_to_spectra(
+    rgb: ArrayLike, cm: Colorimetry, method: str = "auto"
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Upsample working-space linear RGB reflectances to spectra on ``cm.wavelengths``.
 
     Parameters
@@ -132,6 +140,6 @@ def rgb_to_spectra(rgb, cm, method="auto"):
     return spectra, roundtrip_delta_e(rgb, spectra, cm)
 
 
-def roundtrip_delta_e(rgb, spectra, cm):
+def roundtrip_delta_e(rgb: ArrayLike, spectra: ArrayLike, cm: Colorimetry) -> NDArray[np.float64]:
     """CIEDE2000 between working-space RGB colours and the colours of their spectra."""
     return cm.delta_E(cm.XYZ_to_Lab(cm.RGB_to_XYZ(rgb)), cm.XYZ_to_Lab(cm.spectra_to_XYZ(spectra)))

@@ -9,12 +9,17 @@ colour-science versions and the regeneration command ``python tools/make_colorsh
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .._csv import read_headed_csv
 from .validation import RGB_FIELDS, SCALAR_FIELDS
+
+if TYPE_CHECKING:
+    from .validation import ColourShift
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 TABLE_WORKING_SPACES = ("lin_rec709", "acescg")
@@ -30,14 +35,14 @@ COLUMNS = (
 )
 
 
-def table_path(working_space):
+def table_path(working_space: str) -> Path:
     """Path of the shipped table for ``working_space`` (one of ``TABLE_WORKING_SPACES``)."""
     if working_space not in TABLE_WORKING_SPACES:
         raise ValueError(f"working_space must be one of {', '.join(TABLE_WORKING_SPACES)}; got {working_space!r}")
     return DATA / f"colorshift_checker_{working_space}.csv"
 
 
-def table_lines(result):
+def table_lines(result: ColourShift) -> list[str]:
     """CSV data lines (header row first) of a ColourShift on the table grid."""
     theta = dict(zip(TABLE_MU, TABLE_THETA_DEG))
     out = [",".join(COLUMNS)]
@@ -61,7 +66,9 @@ def _fmt(v):
     return s[1:] if s.startswith("-") and not s.strip("-0.") else s  # no "-0.000..."
 
 
-def load_table(working_space="lin_rec709", path=None):
+def load_table(
+    working_space: str = "lin_rec709", path: str | os.PathLike[str] | None = None
+) -> tuple[dict[str, str], dict[str, Any]]:
     """The shipped table as (header dict, columns dict of arrays; ``patch`` a list of str).
 
     Examples
@@ -72,7 +79,7 @@ def load_table(working_space="lin_rec709", path=None):
     """
     path = Path(path) if path else table_path(working_space)
     header, names, rows = read_headed_csv(path)
-    cols = {n: [r[i] for r in rows] for i, n in enumerate(names)}
+    cols: dict[str, Any] = {n: [r[i] for r in rows] for i, n in enumerate(names)}
     for n in names:
         if n != "patch":
             cols[n] = np.array(cols[n], dtype=np.float64)

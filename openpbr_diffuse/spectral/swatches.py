@@ -11,9 +11,15 @@ clip); ``.exr`` keeps the linear working-space values (colour space in the metad
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import NDArray
+
+if TYPE_CHECKING:
+    from .validation import ColourShift
 
 #: working space -> OpenImageIO (built-in OCIO config) colour-space name.
 OIIO_SPACES = {
@@ -28,7 +34,7 @@ SWATCH, GAP, LABEL_W, HEAD_H, FONT = 28, 10, 200, 46, 13
 KINDS = (("L", "rho_rgb"), ("R", "albedo_rgb"), ("S", "albedo_spectral"), ("W", "albedo_white_tint"))
 
 
-def swatch_array(result):
+def swatch_array(result: ColourShift) -> tuple[NDArray[np.float32], list[tuple[int, int, str]]]:
     """The image as float32 (H, W, 3) working-space linear RGB plus the label positions."""
     P, K, M = result.delta_e_shift.shape
     group_w = 4 * SWATCH + GAP
@@ -51,7 +57,7 @@ def swatch_array(result):
     return img, labels
 
 
-def write_swatches(result, path):
+def write_swatches(result: ColourShift, path: str | os.PathLike[str]) -> Path:
     """Write the swatch image of ``result`` (a ``ColourShift``) to ``path`` (format by suffix).
 
     Returns the path.  Raises OSError if OpenImageIO cannot write it.

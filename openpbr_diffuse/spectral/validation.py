@@ -25,12 +25,18 @@ samples (or RGB channels) as its channel axis; colorimetry from ``colorimetry.Co
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .. import _arrays as ar
 from ..models import directional_albedo
 from .colorimetry import colorimetry as _make_colorimetry
+
+if TYPE_CHECKING:
+    from .colorimetry import Colorimetry
+    from .colorsets import ColourSet
 
 MODEL = "eon"
 DEFAULT_ROUGHNESS = (0.0, 0.25, 0.5, 0.75, 1.0)
@@ -55,10 +61,10 @@ class ColourShift:
     ``Lab_*`` (P, K, M, 3) for "spectral", "rgb", "white_tint"; the SCALAR_FIELDS (P, K, M).
     """
 
-    colours: object
+    colours: ColourSet
     roughness: np.ndarray
     mu: np.ndarray
-    colorimetry: object
+    colorimetry: Colorimetry
     rho_rgb: np.ndarray
     rho_rgb_clipped: np.ndarray
     albedo_spectral: np.ndarray
@@ -73,7 +79,7 @@ class ColourShift:
     rel_luminance_diff_shift: np.ndarray
     chroma_diff_shift: np.ndarray
 
-    def settings(self):
+    def settings(self) -> dict[str, Any]:
         """The settings used, as plain data."""
         d = {
             "model": MODEL,
@@ -98,7 +104,7 @@ class ColourShift:
         }
         return d
 
-    def rows(self):
+    def rows(self) -> list[dict[str, Any]]:
         """One dict per colour x roughness x mu (the JSON ``rows``), floats rounded to 1e-9."""
         cs = self.colours
         out = []
@@ -121,7 +127,7 @@ class ColourShift:
             out.append(row)
         return out
 
-    def summary(self, roughness=1.0):
+    def summary(self, roughness: float = 1.0) -> dict[float, dict[str, dict[str, tuple[Any, Any]]]]:
         """Largest and median ``delta_e_rgb_vs_spectral`` and ``delta_e_shift`` at ``roughness``, per mu.
 
         Returns {mu: {field: {"max": (value, patch), "max_in_gamut": (value, patch),
@@ -134,7 +140,7 @@ class ColourShift:
             raise ValueError(f"roughness {roughness} is not on the grid {self.roughness.tolist()}")
         names = self.colours.names
         inside = np.flatnonzero(~self.rho_rgb_clipped)
-        out = {}
+        out: dict[float, dict[str, dict[str, tuple[Any, Any]]]] = {}
         for m, mu in enumerate(self.mu):
             out[float(mu)] = {}
             for name in ("delta_e_rgb_vs_spectral", "delta_e_shift"):
@@ -161,7 +167,7 @@ def _relative(a, b):
         return np.where((a == 0) & (b == 0), 0.0, a / b - 1.0)
 
 
-def _grid(name, values, lo, hi):
+def _grid(name: str, values: ArrayLike, lo: float, hi: float) -> NDArray[np.float64]:
     a = np.atleast_1d(np.asarray(values, np.float64))
     if a.ndim != 1 or a.size == 0:
         raise ValueError(f"{name} must be a non-empty list of numbers")
@@ -169,7 +175,12 @@ def _grid(name, values, lo, hi):
     return a
 
 
-def colour_shift(colours, roughness=DEFAULT_ROUGHNESS, mu=DEFAULT_MU, cm=None):
+def colour_shift(
+    colours: ColourSet,
+    roughness: ArrayLike = DEFAULT_ROUGHNESS,
+    mu: ArrayLike = DEFAULT_MU,
+    cm: Colorimetry | None = None,
+) -> ColourShift:
     """Spectral vs RGB vs white-then-tint EON albedo for a colour set on a roughness x mu grid.
 
     Parameters
