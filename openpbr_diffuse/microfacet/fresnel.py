@@ -13,10 +13,13 @@ Edmondson, "Novel aspects of the Adobe Standard Material", 2021 (F82-tint).  Ope
 "Specular" and "Metal" (specular_weight as a modulation of F0; the F82-tint metal).
 """
 
+from __future__ import annotations
+
 import math
 
 import numba
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .._jit import kernel
 
@@ -152,7 +155,7 @@ def _f82(c, F0, a):
     return f82(c, F0, a)
 
 
-def fresnel_f82_tint(c, F0, tint):
+def fresnel_f82_tint(c: ArrayLike, F0: ArrayLike, tint: ArrayLike) -> NDArray[np.float64]:
     """F82-tint Fresnel (``f82``) with ``c`` (...) broadcast over the channel axis of
     ``F0``/``tint`` (..., C)."""
     c = np.asarray(c, dtype=np.float64)[..., None]

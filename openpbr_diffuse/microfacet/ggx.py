@@ -29,9 +29,13 @@ surfaces", EGSR 2007 (W07).  Heitz, "Understanding the masking-shadowing functio
 microfacet-based BRDFs", JCGT 3(2), 2014 (H14).  Heitz, JCGT 7(4), 2018.
 """
 
+from __future__ import annotations
+
 import math
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 #: Smallest GGX alpha used.  alpha = 0 is a mirror (a delta lobe with no density); like
 #: the OpenPBR viewer we clamp instead of adding a degenerate branch.
@@ -40,7 +44,7 @@ ALPHA_MIN = 1e-4
 SAMPLING_METHODS = ("vndf", "ndf")
 
 
-def alpha_of(roughness):
+def alpha_of(roughness: ArrayLike) -> NDArray[np.float64]:
     """GGX alpha = max(roughness^2, ALPHA_MIN) (OpenPBR's perceptual mapping)."""
     return np.maximum(np.square(np.asarray(roughness, dtype=np.float64)), ALPHA_MIN)
 
@@ -56,7 +60,7 @@ def _normalize(v):
 
 
 # --------------------------------------------------------------------------- microfacets
-def ndf(mu_h, alpha):
+def ndf(mu_h: float | NDArray[np.floating[Any]], alpha: float | NDArray[np.floating[Any]]) -> NDArray[np.float64]:
     """GGX D(h) for the cosine mu_h = h.z (0 for mu_h <= 0)."""
     a2 = np.square(alpha)
     c2 = np.square(mu_h)
@@ -64,7 +68,9 @@ def ndf(mu_h, alpha):
     return np.where(mu_h > 0.0, a2 / (math.pi * d * d), 0.0)
 
 
-def smith_lambda(mu, alpha):
+def smith_lambda(
+    mu: float | NDArray[np.floating[Any]], alpha: float | NDArray[np.floating[Any]]
+) -> NDArray[np.float64]:
     """Smith Lambda for GGX, written with alpha^2 tan^2 = alpha^2 (1 - mu^2)/mu^2 (mu > 0)."""
     mu2 = np.square(mu)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -72,14 +78,18 @@ def smith_lambda(mu, alpha):
     return 0.5 * (np.sqrt(1.0 + t2) - 1.0)
 
 
-def smith_g1(mu, alpha):
+def smith_g1(mu: float | NDArray[np.floating[Any]], alpha: float | NDArray[np.floating[Any]]) -> NDArray[np.float64]:
     """Masking G1 = 1/(1 + Lambda); 0 for mu <= 0."""
     with np.errstate(divide="ignore", invalid="ignore"):
         g = 1.0 / (1.0 + smith_lambda(mu, alpha))
     return np.where(mu > 0.0, g, 0.0)
 
 
-def smith_g2(mu_i, mu_o, alpha):
+def smith_g2(
+    mu_i: float | NDArray[np.floating[Any]],
+    mu_o: float | NDArray[np.floating[Any]],
+    alpha: float | NDArray[np.floating[Any]],
+) -> NDArray[np.float64]:
     """Height-correlated masking-shadowing G2 = 1/(1 + Lambda_i + Lambda_o); 0 below the horizon."""
     ok = (mu_i > 0.0) & (mu_o > 0.0)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -87,14 +97,16 @@ def smith_g2(mu_i, mu_o, alpha):
     return np.where(ok, g, 0.0)
 
 
-def half_vector(wi, wo):
+def half_vector(wi: ArrayLike, wo: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(h, wo.h); h = normalize(wi + wo), undefined (NaN-free zeros) when wi = -wo."""
     h, n = _normalize(np.asarray(wi) + np.asarray(wo))
     h = np.where((n > 0.0)[..., None], h, 0.0)
     return h, _dot(wo, h)
 
 
-def microfacet_terms(wi, wo, alpha):
+def microfacet_terms(
+    wi: ArrayLike, wo: ArrayLike, alpha: float | NDArray[np.floating[Any]]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Return (D G2 / (4 mu_i mu_o), wo.h): the BRDF without its Fresnel factor.
 
     The first term is 0 unless both directions are above the horizon and the half vector
@@ -115,7 +127,12 @@ def _reflect(wo, h):
     return 2.0 * _dot(wo, h)[..., None] * h - wo
 
 
-def sample_vndf_normal(wo, alpha, u1, u2):
+def sample_vndf_normal(
+    wo: NDArray[np.floating[Any]],
+    alpha: ArrayLike,
+    u1: float | NDArray[np.floating[Any]],
+    u2: float | NDArray[np.floating[Any]],
+) -> NDArray[np.float64]:
     """Visible-normal sample h for wo (mu_o > 0), Heitz 2018 Listing 1."""
     a = np.asarray(alpha, dtype=np.float64)
     Vh, _ = _normalize(np.stack([a * wo[..., 0], a * wo[..., 1], wo[..., 2]], axis=-1))
@@ -138,7 +155,11 @@ def sample_vndf_normal(wo, alpha, u1, u2):
     return Ne
 
 
-def sample_ndf_normal(alpha, u1, u2):
+def sample_ndf_normal(
+    alpha: float | NDArray[np.floating[Any]],
+    u1: float | NDArray[np.floating[Any]],
+    u2: float | NDArray[np.floating[Any]],
+) -> NDArray[np.float64]:
     """h distributed as D(h) mu_h: tan^2 theta_h = alpha^2 u1/(1 - u1), phi = 2 pi u2 (W07 Eq. 35-36)."""
     a2 = np.square(alpha)
     cos2 = (1.0 - u1) / (1.0 + (a2 - 1.0) * u1)
@@ -148,7 +169,9 @@ def sample_ndf_normal(alpha, u1, u2):
     return np.stack([st * np.cos(phi), st * np.sin(phi), ct], axis=-1)
 
 
-def reflection_pdf(wo, wi, alpha, method="vndf"):
+def reflection_pdf(
+    wo: ArrayLike, wi: ArrayLike, alpha: float | NDArray[np.floating[Any]], method: str = "vndf"
+) -> NDArray[np.float64]:
     """Solid-angle pdf of the reflected direction wi (whole sphere) given wo.
 
     vndf: G1(wo) D(h) / (4 mu_o);  ndf: D(h) mu_h / (4 wo.h).  0 if mu_o <= 0 or the half
@@ -166,7 +189,13 @@ def reflection_pdf(wo, wi, alpha, method="vndf"):
     return np.where((mu_o > 0.0) & (c > 0.0) & (h[..., 2] > 0.0), p, 0.0)
 
 
-def sample_reflection(wo, alpha, u1, u2, method="vndf"):
+def sample_reflection(
+    wo: ArrayLike,
+    alpha: float | NDArray[np.floating[Any]],
+    u1: float | NDArray[np.floating[Any]],
+    u2: float | NDArray[np.floating[Any]],
+    method: str = "vndf",
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Return (wi, pdf): wi = reflect(wo, h) with h from the visible normals or the NDF.
 
     wi may lie below the horizon (the BRDF is then 0; the pdf is still reported).  pdf = 0

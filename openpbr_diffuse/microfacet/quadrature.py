@@ -5,9 +5,13 @@ shared); ``tools/make_specular_table.py`` drives it and ``tests/test_ggx.py`` gr
 against a spherical-coordinate quadrature of the BRDF.
 """
 
+from __future__ import annotations
+
 import math
+from collections.abc import Callable
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .ggx import smith_g2
 
@@ -42,7 +46,9 @@ def _v_of_theta(theta, alpha):
     return 1.0 - alpha * c / np.sqrt(alpha * alpha * c * c + s * s)
 
 
-def albedo_quadrature(mu_o, alpha, fresnels, n_t=64, n_phi=64):
+def albedo_quadrature(
+    mu_o: float, alpha: float, fresnels: Callable[[NDArray[np.float64]], ArrayLike], n_t: int = 64, n_phi: int = 64
+) -> NDArray[np.float64]:
     """Directional albedos int F D G2/(4 mu_i mu_o) mu_i dwi of one GGX lobe for several F.
 
     Half-vector quadrature, independent of the samplers and of ``microfacet_terms``: with dwi = 4 (wo.h) dh and

@@ -22,12 +22,16 @@ r < 0.2 and mu >= 0.05; near-mirror lobes at extreme grazing (r < 0.05, mu < 0.0
 ~7e-3.  specular_roughness < 0.2 with grazing views is where the tables are weakest.
 """
 
+from __future__ import annotations
+
 import functools
 import itertools
 import math
 import os
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .._jit import kernel
 from . import fresnel
@@ -39,15 +43,15 @@ CONDUCTOR_FILE = "specular_albedo_conductor.csv"
 MU0 = 1e-6
 
 
-def mu_grid(n):
+def mu_grid(n: int) -> NDArray[np.float64]:
     return (np.arange(n) / (n - 1)) ** 2
 
 
-def roughness_grid(n):
+def roughness_grid(n: int) -> NDArray[np.float64]:
     return np.arange(n) / (n - 1)
 
 
-def x_grid(n):
+def x_grid(n: int) -> NDArray[np.float64]:
     """x = sin^2(pi k / (2 (n - 1))): dense near x = 0 (eta -> 1, where E changes fastest
     with F0 at grazing angles) and near x = 1 (eta -> infinity)."""
     return np.sin(0.5 * np.pi * np.arange(n) / (n - 1)) ** 2
@@ -105,7 +109,7 @@ def _dielectric():
     return E / E1[:, None, :], head
 
 
-def provenance():
+def provenance() -> dict[str, list[str]]:
     """The '#' header lines of both tables (method, resolution, error estimate, versions)."""
     return {DIELECTRIC_FILE: _dielectric()[1], CONDUCTOR_FILE: _conductor()[1]}
 
@@ -162,11 +166,11 @@ def _interpolate(padded, coords):
     return out
 
 
-def _floats(*arrays):
+def _floats(*arrays: ArrayLike) -> tuple[NDArray[np.float64], ...]:
     return np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in arrays))
 
 
-def dielectric_albedo(mu, roughness, x):
+def dielectric_albedo(mu: ArrayLike, roughness: ArrayLike, x: ArrayLike) -> NDArray[np.float64]:
     """E_diel(mu, roughness, x): single-scattering albedo of the dielectric specular lobe.
 
     Arrays broadcast; x = sqrt(F0) in [0, 1] of the index (``fresnel.modulated_ior_parameter``).
@@ -180,7 +184,9 @@ def dielectric_albedo(mu, roughness, x):
     return np.where(x > 0.0, np.clip(ratio, 0.0, 1.0), 0.0) * ggx_albedo(mu, roughness)
 
 
-def conductor_basis(mu, roughness):
+def conductor_basis(
+    mu: ArrayLike, roughness: ArrayLike
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """(E1, E5, E6) at (mu, roughness), each of the broadcast shape."""
     C, _ = _padded_conductor()
     mu, roughness = _floats(mu, roughness)
@@ -202,12 +208,14 @@ def _padded_dielectric():
     return _pad(R, 3), head
 
 
-def ggx_albedo(mu, roughness):
+def ggx_albedo(mu: ArrayLike, roughness: ArrayLike) -> NDArray[np.float64]:
     """E1: albedo of the GGX lobe with F = 1 (the energy single scattering keeps)."""
     return conductor_basis(mu, roughness)[0]
 
 
-def f82_albedo(mu, roughness, F0, tint):
+def f82_albedo(
+    mu: ArrayLike, roughness: ArrayLike, F0: float | NDArray[np.floating[Any]], tint: ArrayLike
+) -> NDArray[np.float64]:
     """Albedo of the F82-tint GGX lobe, F0 (E1 - E5) + E5 - a E6; F0, tint (..., C)."""
     E1, E5, E6 = conductor_basis(mu, roughness)
     a = fresnel.f82_coefficient(F0, tint)
@@ -247,7 +255,7 @@ def catmull_rom_at(t):
     )
 
 
-def padded_tables():
+def padded_tables() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(C, R): the padded conductor basis and dielectric ratio tables, float64, C-contiguous."""
     return (
         np.ascontiguousarray(_padded_conductor()[0], dtype=np.float64),
