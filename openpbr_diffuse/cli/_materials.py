@@ -1,8 +1,16 @@
 """Options shared by the material sub-commands (eval, render): file, material, time, uv,
 variants, purpose."""
 
+from __future__ import annotations
 
-def add_material_options(p, material_required=False):
+import argparse
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from ..readers.material import Material
+
+
+def add_material_options(p: argparse.ArgumentParser, material_required: bool = False) -> None:
     p.add_argument("file", metavar="FILE", help="USD stage (.usda/.usdc/.usdz) or MaterialX document (.mtlx)")
     p.add_argument(
         "--material",
@@ -30,7 +38,7 @@ def add_material_options(p, material_required=False):
     )
 
 
-def load(args):
+def load(args: argparse.Namespace) -> list[Material]:
     from ..readers import load_materials
 
     purpose = "" if args.purpose == "all" else args.purpose

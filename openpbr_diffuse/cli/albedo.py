@@ -11,6 +11,9 @@ reference-table value for closed-form models, and for "full_on" (whose value alr
 table's) a direct quadrature of ``evaluate``.
 """
 
+from __future__ import annotations
+
+import argparse
 import json
 
 import numpy as np
@@ -36,7 +39,7 @@ _QUERY_OPTIONS = (
 )
 
 
-def add_parser(subparsers):
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     import argparse
 
     p = subparsers.add_parser(
@@ -129,7 +132,7 @@ def _quadrature_reference(name, mu, roughness, rho, average):
     return value, float(np.max(err))
 
 
-def run(args):
+def run(args: argparse.Namespace) -> int:
     info = model_info(args.model)
     if args.export is not None:
         return _export(args, info)
@@ -183,7 +186,7 @@ def run(args):
         if args.average:
             out["average_albedo"] = value[0].tolist()
         else:
-            out["mu"] = mu.tolist()
+            out["mu"] = mu.tolist()  # type: ignore[union-attr]  # set unless --average
             out["albedo"] = value.tolist()
         if ref is not None:
             key = "reference_average_albedo" if args.average else "reference_albedo"
@@ -209,7 +212,7 @@ def run(args):
     widths = [max(10, len(c)) for c in cols]
     print("  ".join(c.rjust(w) for c, w in zip(cols, widths)))
     for i in range(value.shape[0]):
-        cells = [] if args.average else [f"{mu[i]:.6f}"]
+        cells = [] if args.average else [f"{mu[i]:.6f}"]  # type: ignore[index]  # set unless --average
         for k in range(C):
             cells.append(_fmt(value[i, k]))
             if ref is not None:

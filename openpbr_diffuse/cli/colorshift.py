@@ -12,20 +12,30 @@ materials' diffuse colours are used.  The quantities are those of
 ``openpbr_diffuse.spectral.validation``; colour-science does the colorimetry.
 """
 
+from __future__ import annotations
+
+import argparse
 import json
 import math
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..spectral.colorimetry import DEFAULT_ILLUMINANT, DEFAULT_WORKING_SPACE, WORKING_SPACES
 from ..spectral.recovery import RECOVERY_METHODS
 from ..spectral.validation import DEFAULT_MU, DEFAULT_ROUGHNESS
 
+if TYPE_CHECKING:
+    from ..spectral.colorimetry import Colorimetry
+    from ..spectral.colorsets import ColourSet
+
 #: accepted spellings of --method (lower case, spaces/dashes/underscores removed) -> method.
 METHOD_ALIASES = {"auto": "auto", **{m.lower().replace(" ", ""): m for m in RECOVERY_METHODS}}
 
 
-def add_parser(subparsers):
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
         "colorshift",
         help="spectral vs RGB colour shift of EON (ColorChecker, RGB colours, material files)",
@@ -120,13 +130,15 @@ def _file_readers():
     return readers
 
 
-def colour_set(tokens, cm, method):
+def colour_set(tokens: Sequence[str], cm: Colorimetry, method: str) -> tuple[ColourSet, list[str]]:
     """The ColourSet (and warnings) the --colors tokens name, in the order given."""
     from pathlib import Path
 
     from ..spectral import colorsets
 
-    sets, warnings, rgbs = [], [], []
+    sets: list[ColourSet] = []
+    warnings: list[str] = []
+    rgbs: list[NDArray[np.float64]] = []
     readers = _file_readers()
 
     def flush():
@@ -212,7 +224,7 @@ def _table(result, settings, warnings):
     return "\n".join(lines)
 
 
-def run(args):
+def run(args: argparse.Namespace) -> int:
     from ..spectral.colorimetry import colorimetry
     from ..spectral.validation import colour_shift
 

@@ -11,6 +11,8 @@ weight and selection probability, the directional albedo at theta_o and the BRDF
 to wo (180: forward, in the plane of incidence).
 """
 
+from __future__ import annotations
+
 import argparse
 import json
 import sys
@@ -20,7 +22,7 @@ import numpy as np
 from ._materials import add_material_options, load
 
 
-def add_parser(subparsers):
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
         "eval",
         help="evaluate the materials of a USD / MaterialX file",
@@ -87,7 +89,7 @@ def _node_defaults(node_class):
     return {n: v for n, (t, v, g) in mxlib.inputs(nd).items()} if nd else {}
 
 
-def run(args: "argparse.Namespace") -> int:
+def run(args: argparse.Namespace) -> int:
     from ..readers import WORKING_SPACE
     from ..readers.evaluate import evaluate
 

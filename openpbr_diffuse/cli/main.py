@@ -14,6 +14,8 @@ Conventions (tested in ``tests/test_cli_conventions.py``):
 - Ctrl-C prints ``openpbr-diffuse: interrupted`` and exits 130 (128 + SIGINT), no traceback.
 """
 
+from __future__ import annotations
+
 import argparse
 import importlib
 import os
@@ -64,7 +66,7 @@ class _Parser(argparse.ArgumentParser):
         raise UsageError(message, prog=self.prog)
 
 
-def build_parser():
+def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog=PROG, description=DESCRIPTION, epilog=f"Run '{PROG} COMMAND --help' for a command's options.")
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)

@@ -8,6 +8,8 @@ furnace: each pixel is the directional albedo at its view angle).  EXR: linear A
 PNG: sRGB, 8 bit (see :mod:`openpbr_diffuse.readers.preview`).
 """
 
+from __future__ import annotations
+
 import argparse
 import os
 
@@ -15,7 +17,7 @@ from ..readers.preview import render_image, write_image
 from ._materials import add_material_options, load
 
 
-def add_parser(subparsers):
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
         "render",
         help="preview a material on a sphere (directional and furnace light)",
@@ -33,7 +35,7 @@ def _check_out(path):
         raise ValueError(f"--out must end in .exr or .png (also .jpg, .tif), got {path!r}")
 
 
-def run(args: "argparse.Namespace") -> int:
+def run(args: argparse.Namespace) -> int:
     _check_out(args.out)
     if not 8 <= args.size <= 4096:
         raise ValueError(f"size must be an integer in [8, 4096], got {args.size!r}")

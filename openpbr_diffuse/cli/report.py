@@ -29,7 +29,7 @@ if TYPE_CHECKING:
 FAST_EVIDENCE = ("implementations", "approximations")
 
 
-def add_parser(subparsers) -> argparse.ArgumentParser:
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Add the ``report`` sub-command."""
     p = subparsers.add_parser(
         "report",
@@ -151,7 +151,7 @@ def _sections(args, under):
     return FAST_EVIDENCE if evidence == "fast" else SECTIONS
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     """Run the report per ``args``; the exit status."""
     from ..report.runner import run_report
 

@@ -8,6 +8,9 @@ Prints, per mu, the directional albedo in total and per bounce order (1, 2, >= 3
 standard errors (``--json``: a ``rows`` list with mu, albedo, albedo_by_order, stderr).
 """
 
+from __future__ import annotations
+
+import argparse
 import json
 import math
 import sys
@@ -18,7 +21,7 @@ from ..simulation.api import GEOMETRIES, simulate_albedo, simulate_average_albed
 from . import simulate_layered
 
 
-def add_parser(subparsers):
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
         "simulate",
         help="Monte Carlo albedo of a V-cavity / Smith Lambertian microsurface",
@@ -91,7 +94,7 @@ def _usage(message):
     return UsageError(f"simulate: {message}")
 
 
-def run(args):
+def run(args: argparse.Namespace) -> int:
     total = args.paths * (1 if args.average or not args.mu else len(args.mu))
     if total > WORK_BUDGET_PATHS and not args.yes:
         raise _usage(

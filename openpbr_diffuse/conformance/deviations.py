@@ -46,8 +46,12 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from .vectors import VectorSet
 
 #: MaterialX GLSL clamps L.V to [M_FLOAT_EPS, 1] (M_FLOAT_EPS = 1e-8).
 LDOTV_EPS = 1e-8
@@ -99,7 +103,7 @@ def _predict(
     return out
 
 
-def reference(vectors) -> np.ndarray:
+def reference(vectors: VectorSet) -> np.ndarray:
     """The conforming result of every row (float64): ``evaluate`` / ``directional_albedo``."""
     return _predict(vectors)
 

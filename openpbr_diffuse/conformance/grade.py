@@ -34,10 +34,14 @@ True
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from .vectors import VectorSet
 
 REL_TOL = 1e-4
 ABS_TOL = 1e-6
@@ -56,7 +60,7 @@ NOT_EXPLAINED = "no known deviation explains this"
 N_WORST = 10
 
 
-def json_safe(x):
+def json_safe(x: Any) -> Any:
     """``x`` with NumPy scalars as Python numbers and non-finite floats as JSON can hold them:
     NaN -> null, +-inf -> "inf" / "-inf" (the convention of ``check --json``)."""
     if isinstance(x, np.generic):
@@ -183,7 +187,7 @@ def _row(vectors, i, ref, out, e):
 ROUGHNESS_BINS = ((0.0, 0.0), (0.0, 0.25), (0.25, 0.5), (0.5, 1.0), (1.0, math.inf))
 
 
-def region_masks(vectors) -> dict[str, np.ndarray]:
+def region_masks(vectors: VectorSet) -> dict[str, np.ndarray]:
     """{region name: (n,) bool mask} of the breakdown by region.
 
     >>> from openpbr_diffuse.conformance.vectors import default_vectors
@@ -337,7 +341,12 @@ def _diagnose(vectors, out, ref, e_ref, rel, ab):
 
 
 def grade(
-    vectors, out: np.ndarray, *, model: str | None = None, tolerance: float | tuple | None = None, n_skipped: int = 0
+    vectors: VectorSet,
+    out: np.ndarray,
+    *,
+    model: str | None = None,
+    tolerance: float | tuple | None = None,
+    n_skipped: int = 0,
 ) -> Grade:
     """Grade submitted values ``out`` (n, 3) for the rows of ``vectors``.
 
@@ -519,7 +528,12 @@ class _Accumulator:
         return g
 
 
-def grade_chunks(chunks, *, model: str | None = None, tolerance: float | tuple | None = None) -> Grade:
+def grade_chunks(
+    chunks: Iterable[tuple[VectorSet, np.ndarray] | tuple[VectorSet, np.ndarray, int]],
+    *,
+    model: str | None = None,
+    tolerance: float | tuple | None = None,
+) -> Grade:
     """Grade ``(vectors, out[, n_skipped])`` chunks (e.g. :func:`.vectors.iter_results`) as one
     file: the same :class:`Grade` as :func:`grade` on the rows put together (the diagnosis is
     fitted on a sample of :data:`DIAGNOSIS_ROWS` rows when there are more); memory is bounded

@@ -39,6 +39,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 #: Version of the default vector set; bump when its rows change.
 VERSION = "2"  # 2: no albedo rows at exactly mu = 0 (a convention, not conformance)
@@ -97,7 +98,7 @@ class VectorSet:
     def __len__(self):
         return int(self.id.shape[0])
 
-    def subset(self, index):
+    def subset(self, index: ArrayLike | slice) -> VectorSet:
         """The rows selected by a boolean mask or an index array."""
         return VectorSet(
             self.id[index],
@@ -111,7 +112,7 @@ class VectorSet:
             self.version,
         )
 
-    def columns(self):
+    def columns(self) -> dict[str, np.ndarray]:
         """{column name: (n,) array} in :data:`COLUMNS` order."""
         cols = {"id": self.id, "kind": self.kind, "model": self.model}
         for k, axis in enumerate("xyz"):
