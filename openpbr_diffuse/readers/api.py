@@ -1,7 +1,10 @@
 """``load_materials`` and ``BUNDLED_MATERIALS``: the readers' public entry points."""
 
+from __future__ import annotations
+
 import os
 import stat
+from collections.abc import Iterable
 from pathlib import Path
 
 USD_SUFFIXES = (".usda", ".usdc", ".usd", ".usdz")
@@ -23,7 +26,7 @@ def _bundled():
 BUNDLED_MATERIALS = _bundled()
 
 
-def find_material_files(paths):
+def find_material_files(paths: Iterable[str | os.PathLike[str]]) -> list[Path]:
     """Material files (USD / MaterialX) among ``paths``, folders searched recursively, sorted."""
     out = []
     for p in paths:
@@ -64,10 +67,10 @@ def _check_variants(variants):
 
 
 def load_materials(
-    path: "str | os.PathLike",
+    path: str | os.PathLike,
     *,
     time: float | None = None,
-    variants: "dict | list | None" = None,
+    variants: dict | list | None = None,
     uv: tuple = (0.5, 0.5),
     material: str | None = None,
     purpose: str = "full",

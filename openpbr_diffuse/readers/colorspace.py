@@ -29,10 +29,13 @@ MaterialX's ``cmlib`` graphs clamp them); any other curve (ACEScc, ACEScct) is
 colour-science's ``cctf_decoding``, imported on first use.
 """
 
+from __future__ import annotations
+
 import functools
 import sys
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import _colorspace_table as _table
 
@@ -281,7 +284,7 @@ def _srgb_eotf(v: np.ndarray) -> np.ndarray:
         return np.where(v <= 0.04045, v / 12.92, ((np.maximum(v, 0.04045) + 0.055) / 1.055) ** 2.4)
 
 
-def decode(values, space: str) -> np.ndarray:
+def decode(values: ArrayLike, space: str) -> np.ndarray:
     """Remove the transfer function of ``space`` (values keep its primaries).
 
     Parameters
@@ -315,7 +318,7 @@ def decode(values, space: str) -> np.ndarray:
     return np.asarray(_colour().cctf_decoding(v, function=kind[1]), dtype=np.float64).reshape(v.shape)
 
 
-def to_working(rgb, space: str) -> np.ndarray:
+def to_working(rgb: ArrayLike, space: str) -> np.ndarray:
     """Convert colour(s) ``rgb`` (..., 3) from ``space`` to the working space (ACEScg).
 
     Parameters

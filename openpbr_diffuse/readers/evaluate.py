@@ -10,14 +10,25 @@ diffuse model are stacked into one node with array-valued inputs (the nodes broa
 inputs), so the cost is one vectorised call per group, not per material.
 """
 
+from __future__ import annotations
+
 import warnings
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from ..nodes.openpbr_surface import MODELLED
 
+if TYPE_CHECKING:
+    from ..nodes import OpenPBRSurface, OrenNayarDiffuseBSDF
+    from .material import Material
 
-def directions(theta_i, theta_o, phi):
+
+def directions(
+    theta_i: ArrayLike, theta_o: ArrayLike, phi: ArrayLike
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(wi, wo) unit vectors (..., 3) from angles in degrees (broadcast together)."""
     ti, to, ph = np.broadcast_arrays(*(np.radians(np.asarray(a, dtype=np.float64)) for a in (theta_i, theta_o, phi)))
     wi = np.stack([np.sin(ti) * np.cos(ph), np.sin(ti) * np.sin(ph), np.cos(ti)], axis=-1)
@@ -25,7 +36,7 @@ def directions(theta_i, theta_o, phi):
     return wi, wo
 
 
-def check_angles(name, values):
+def check_angles(name: str, values: ArrayLike) -> NDArray[np.float64]:
     a = np.asarray(values, dtype=np.float64)
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name} must be finite degrees, got {values!r}")
@@ -34,7 +45,9 @@ def check_angles(name, values):
     return a
 
 
-def evaluate(material, theta_i=(30.0,), theta_o=(30.0,), phi=(180.0,)):
+def evaluate(
+    material: Material, theta_i: ArrayLike = (30.0,), theta_o: ArrayLike = (30.0,), phi: ArrayLike = (180.0,)
+) -> dict[str, Any]:
     """Evaluate one material at the given directions.
 
     Returns
@@ -67,7 +80,9 @@ def evaluate(material, theta_i=(30.0,), theta_o=(30.0,), phi=(180.0,)):
     return out
 
 
-def diffuse_lobe(node, wo):
+def diffuse_lobe(
+    node: OpenPBRSurface | OrenNayarDiffuseBSDF, wo: NDArray[np.float64]
+) -> tuple[dict[str, Any], list[dict[str, Any]]]:
     """({weight, albedo, probability, contribution}, [{name, probability}]) of a node at wo."""
     n = wo.shape[0] if wo.ndim > 1 else 1
     if hasattr(node, "lobes"):
@@ -114,7 +129,7 @@ def _group_key(m):
     return (m.node_class, m.diffuse_model, flags)
 
 
-def stacked_node(materials):
+def stacked_node(materials: Sequence[Material]) -> OpenPBRSurface | OrenNayarDiffuseBSDF:
     """One library node whose inputs are the stacked inputs of ``materials`` (same node class
     and diffuse model); only the modelled inputs are stacked."""
     from ..nodes import OpenPBRSurface, OrenNayarDiffuseBSDF
@@ -142,7 +157,9 @@ def stacked_node(materials):
     return OrenNayarDiffuseBSDF(**kw, energy_compensation=bool(first.node_inputs["energy_compensation"].value))
 
 
-def evaluate_many(materials, theta_i=30.0, theta_o=30.0, phi=180.0):
+def evaluate_many(
+    materials: Sequence[Material], theta_i: float = 30.0, theta_o: float = 30.0, phi: float = 180.0
+) -> dict[str, Any]:
     """Evaluate many materials at one direction pair, vectorised per group.
 
     Returns

@@ -19,9 +19,13 @@ The same evaluator runs MaterialX's own translation graph for Standard Surface
 ``ND_`` nodes met in USD stages.
 """
 
+from __future__ import annotations
+
 import contextlib
 import os
 import sys
+from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 
@@ -40,7 +44,7 @@ MAX_CHAIN = 2000
 
 
 @contextlib.contextmanager
-def deep_stack(frames: int = 8 * MAX_CHAIN + 2000):
+def deep_stack(frames: int = 8 * MAX_CHAIN + 2000) -> Iterator[None]:
     """Raise the interpreter's recursion limit to at least ``frames`` while evaluating graphs
     (the evaluator recurses along connections; since Python 3.11 such frames do not use
     the C stack)."""
@@ -52,7 +56,7 @@ def deep_stack(frames: int = 8 * MAX_CHAIN + 2000):
         sys.setrecursionlimit(old)
 
 
-def to_python(v):
+def to_python(v: Any) -> Any:
     """Evaluator value -> Parameter value (tuple of floats for arrays)."""
     if isinstance(v, np.ndarray):
         return tuple(float(x) for x in v.reshape(-1))
@@ -61,7 +65,7 @@ def to_python(v):
     return v
 
 
-def convert_color(value, type_name, space):
+def convert_color(value: Any, type_name: str, space: str) -> Any:
     """A colorN value converted from ``space`` to the working space (alpha untouched)."""
     a = np.asarray(value, dtype=np.float64).reshape(-1)
     if type_name not in _COLORS or space == "raw" or space == colorspace.WORKING_SPACE:
@@ -98,7 +102,7 @@ class Resolver:
             lst.append(text)
 
     @contextlib.contextmanager
-    def inside(self, what: str):
+    def inside(self, what: str) -> Iterator[None]:
         """Notes made while evaluating the implementation graph of ``what`` (a node of the
         document) name it first."""
         self.via.append(what)
@@ -171,7 +175,7 @@ class Resolver:
         return Parameter(_array(raw), prov, "authored")
 
     # ----------------------------------------------------------------- ports
-    def port(self, port, trail=(), iface=None, library=False):
+    def port(self, port: Any, trail: tuple = (), iface: dict | None = None, library: bool = False) -> Parameter | None:
         """Resolve an input or output element; None when nothing is set (use the default)."""
         trail = self._cycle("port:" + port.getNamePath(), trail)
         if port.hasInterfaceName():
@@ -271,7 +275,7 @@ class Resolver:
 
     # ----------------------------------------------------------------- nodes
     def node_value(
-        self, node, outname: str, trail: tuple = (), iface: dict | None = None, library: bool = False
+        self, node: Any, outname: str, trail: tuple = (), iface: dict | None = None, library: bool = False
     ) -> Parameter | None:
         """The value of output ``outname`` of ``node`` (None if the node is not evaluated)."""
         key = (node.getNamePath(), outname, id(iface), library)
@@ -352,7 +356,7 @@ class Resolver:
             p.authored,
         )
 
-    def texture(self, where, ndname, resolved, out_type):
+    def texture(self, where: Any, ndname: str, resolved: dict[str, Parameter], out_type: str) -> Parameter | None:
         """An ``image`` node: sample its file at its texcoord with OpenImageIO."""
         fp = resolved["file"]
         default = resolved["default"].value
@@ -390,7 +394,7 @@ class Resolver:
         )
 
 
-def check_finite(file: str, where: str, p) -> None:
+def check_finite(file: str, where: str, p: Parameter) -> None:
     """ValueError when a resolved input's value is not finite (an undefined operation upstream:
     ln of 0, sqrt of a negative number, ...), naming the input and its provenance.
 

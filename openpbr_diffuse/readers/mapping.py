@@ -25,10 +25,13 @@ with max(base_color, 0) and the scaled specular F0 to [0, 0.99999]; the library'
 accept only the nodedef's [uimin, uimax]).
 """
 
+from __future__ import annotations
+
 import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -334,7 +337,7 @@ FAMILIES = {
 }
 
 
-def family(shader_id):
+def family(shader_id: str) -> Family | None:
     """The Family of a shader id (after ALIASES), or None."""
     return FAMILIES.get(ALIASES.get(shader_id, shader_id))
 
@@ -419,7 +422,16 @@ def _unmapped(sid: str, inner) -> str:
     return f"shader {sid or '(none)'} maps onto no node of the library"
 
 
-def build_material(shader, *, name, path, file, uv, variants=None, time=None):
+def build_material(
+    shader: Any,
+    *,
+    name: str,
+    path: str,
+    file: str,
+    uv: tuple[float, float],
+    variants: dict[str, str] | None = None,
+    time: float | None = None,
+) -> Material:
     """A Material from a shader adapter (MaterialX node or USD shader prim)."""
     m = Material(
         name=name,
@@ -437,8 +449,8 @@ def build_material(shader, *, name, path, file, uv, variants=None, time=None):
     inner = shader.unwrap_surface()
     if (
         inner is not None
-        and family(inner.shader_id()) is not None
-        and family(inner.shader_id()).node_class == "OrenNayarDiffuseBSDF"
+        and (inner_family := family(inner.shader_id())) is not None
+        and inner_family.node_class == "OrenNayarDiffuseBSDF"
     ):
         m.approximations.append(
             f"surface node {shader.path}: its bsdf {inner.path} is evaluated; the surface's edf and opacity are not"

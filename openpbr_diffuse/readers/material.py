@@ -8,11 +8,17 @@ the clamping to the nodedef's range; ``node()`` builds that node.  Colours are i
 working space, ACEScg (``colorspace.WORKING_SPACE``).
 """
 
+from __future__ import annotations
+
 import functools
 import warnings
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from ..nodes import OpenPBRSurface, OrenNayarDiffuseBSDF
 
 
 @dataclass(frozen=True)
@@ -32,7 +38,7 @@ class Parameter:
     kind: str = "authored"
     authored: object = None
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
         d = {"value": _jsonable(self.value), "provenance": self.provenance, "kind": self.kind}
         if self.authored is not None:
             d["authored"] = _jsonable(self.authored)
@@ -104,14 +110,14 @@ class Material:
     uv: tuple = (0.5, 0.5)
     error: str = ""
 
-    def node_kwargs(self):
+    def node_kwargs(self) -> dict[str, Any]:
         """Keyword arguments of the library node (plain values)."""
         kw = {n: p.value for n, p in self.node_inputs.items()}
         if self.node_class == "OpenPBRSurface":
             kw.update(surface_options(self.diffuse_model))
         return kw
 
-    def node(self):
+    def node(self) -> OpenPBRSurface | OrenNayarDiffuseBSDF | None:
         """The library node (``OpenPBRSurface`` / ``OrenNayarDiffuseBSDF``) or None.
 
         Inputs the node does not model are already listed in ``unsupported``, so the node's
@@ -126,7 +132,7 @@ class Material:
             warnings.simplefilter("ignore")
             return cls(**self.node_kwargs())
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
         """A JSON-ready dict (the ``materials[]`` entry of ``eval --json``)."""
         return {
             "name": self.name,
@@ -189,7 +195,7 @@ def failed_material(
     )
 
 
-def surface_options(diffuse_model):
+def surface_options(diffuse_model: str) -> dict[str, str]:
     """Keyword arguments selecting the diffuse model of OpenPBRSurface.
 
     ``diffuse_model`` is a keyword of OpenPBRSurface ("eon", "qon", "lambert"); when the

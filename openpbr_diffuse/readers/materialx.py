@@ -7,7 +7,10 @@ graph evaluator (``graph.Resolver``) and mapped onto the library's nodes (``mapp
 The file is only read.
 """
 
+from __future__ import annotations
+
 import os
+from typing import Any
 
 from . import mxlib
 from .graph import Resolver, check_finite, deep_stack, to_python
@@ -16,7 +19,7 @@ from .material import Material, Parameter, failed_material
 
 
 # ----------------------------------------------------------------------- documents
-def read_document(path):
+def read_document(path: str | os.PathLike[str]) -> Any:
     """Read a .mtlx file (never modified) with the MaterialX data library attached.
 
     Raises FileNotFoundError / ValueError (malformed or unreadable) with one-line messages.
@@ -47,13 +50,13 @@ SHADER_CATEGORIES = (
 )
 
 
-def shader_of(node):
+def shader_of(node: Any) -> Any:
     """The shader node a material node uses (following a nodegraph output), or None."""
     inp = node.getInput("surfaceshader")
     return inp.getConnectedNode() if inp is not None else None
 
 
-def id_of(node) -> str:
+def id_of(node: Any) -> str:
     """A node's identity within its document (its name path)."""
     return node.getNamePath()
 
@@ -62,7 +65,7 @@ def id_of(node) -> str:
 NOT_A_SHADER = "not a surface shader: MaterialX renders it unlit, there is no diffuse lobe to evaluate"
 
 
-def graph_shaders(doc, known: set) -> list:
+def graph_shaders(doc: Any, known: set) -> list:
     """[(name, path, shader node or output)] of the renderable nodegraph / document outputs that
     MaterialX's own ``findRenderableElements`` finds: a surface shader output (e.g. a ``surface``
     over an ``oren_nayar_diffuse_bsdf``), a ``material`` output (followed to the shader of its
@@ -114,7 +117,7 @@ def _not_a_shader(output, *, name, path, file, uv, variants):
 
 
 def load(
-    path: "str | os.PathLike",
+    path: str | os.PathLike,
     *,
     uv: tuple = (0.5, 0.5),
     material: str | None = None,

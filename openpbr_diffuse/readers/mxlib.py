@@ -5,9 +5,12 @@ usd-core has no shader registry for MaterialX ``ND_`` nodes, so defaults of ever
 ``ND_UsdPreviewSurface_surfaceshader``, ``ND_image_color3``, ...) come from here.
 """
 
+from __future__ import annotations
+
 import functools
 import os
 import re
+from typing import Any
 
 from ..nodes.materialx_defs import parse_value
 
@@ -22,7 +25,7 @@ def library():
     return lib
 
 
-def nodedef(name: str):
+def nodedef(name: str) -> Any:
     """The library nodedef ``name`` or None."""
     return library().getNodeDef(name)
 
@@ -32,7 +35,7 @@ def _local(name: str, nd) -> bool:
     return nd is not None and library().getNodeDef(name) is None
 
 
-def inputs(name: str, nd=None) -> dict:
+def inputs(name: str, nd: Any = None) -> dict:
     """{input name: (type, default value, defaultgeomprop)} of nodedef ``name`` (library order).
 
     ``nd``: the nodedef element itself, for a nodedef defined in a user's document (looked
@@ -80,7 +83,7 @@ def default_parameters(name):
     return {n: Parameter(v, prov, "default") for n, (t, v, g) in inputs(name).items() if not g}
 
 
-def outputs(name: str, nd=None) -> dict:
+def outputs(name: str, nd: Any = None) -> dict:
     """{output name: type} of nodedef ``name`` (``nd``: a document's own nodedef element).
 
     Raises LookupError if the nodedef is unknown.
@@ -115,7 +118,7 @@ def category(name: str):
     return nd.getNodeString() if nd is not None else None
 
 
-def implementation_graph(name: str, nd=None):
+def implementation_graph(name: str, nd: Any = None) -> Any:
     """The nodegraph implementing nodedef ``name`` (the library's, or for a document's own
     nodedef ``nd`` the document's), or None."""
     if _local(name, nd):
@@ -170,7 +173,7 @@ def base_unit(unittype: str) -> str:
     return ""
 
 
-def target_unit(elem) -> str:
+def target_unit(elem: Any) -> str:
     """The unit a value with a ``unit`` is converted to, as MaterialX's shader generation
     chooses it: the unit of the nodedef's input (``getActiveUnit``, e.g. degree for
     ``rotate2d``'s amount), else the global target -- the unit type's unit of scale 1
@@ -178,7 +181,7 @@ def target_unit(elem) -> str:
     return elem.getActiveUnit() or base_unit(elem.getUnitType())
 
 
-def convert_unit(elem, value):
+def convert_unit(elem: Any, value: Any) -> tuple[Any, str]:
     """``(value in the target unit, note)`` of an element with ``unit`` / ``unittype``
     (float or tuple of floats), converted by MaterialX's ``LinearUnitConverter``; the value
     unchanged with an empty note when it has no unit.  ValueError for an unknown unit.
@@ -212,7 +215,7 @@ def convert_unit(elem, value):
     return out, f"{show(value)} {unit} -> {show(out)} {target}"
 
 
-def source_folder(file: str, uri: str, doc=None) -> str:
+def source_folder(file: str, uri: str, doc: Any = None) -> str:
     """The folder of the document an element was read from, given its source URI.
 
     Parameters
@@ -272,7 +275,7 @@ def _include_folders(file: str, doc) -> list:
     return folders
 
 
-def mx_value(elem, type_name: str):
+def mx_value(elem: Any, type_name: str) -> Any:
     """The value of a MaterialX input / output element as parsed by MaterialX itself
     (``getValue``: "1 0 0" and "1, 0, 0" alike), as a Python value: float, int, bool, str
     or a tuple of floats; None when nothing (or nothing MaterialX can parse) is authored.

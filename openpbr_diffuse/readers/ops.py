@@ -18,7 +18,10 @@ finite (ln of 0, sqrt of -1: undefined in GLSL) is kept, as GLSL keeps it (an un
 branch may compute it); a shader input that ends up not finite fails its material.
 """
 
+from __future__ import annotations
+
 import math
+from typing import Any
 
 import numpy as np
 
@@ -397,7 +400,7 @@ OPS = {
 }
 
 
-def finite(value) -> bool:
+def finite(value: Any) -> bool:
     """Whether a value is finite (non-numbers count as finite).
 
     Examples
@@ -417,7 +420,7 @@ def finite(value) -> bool:
     return True
 
 
-def apply(category: str, inputs: dict, out_type: str):
+def apply(category: str, inputs: dict, out_type: str) -> Any:
     """The value of a ``category`` node with resolved ``inputs``; KeyError if not in OPS.
 
     Where the operation is undefined (ln of 0, sqrt of a negative number, remap with

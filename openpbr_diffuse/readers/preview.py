@@ -9,15 +9,24 @@ readers' working space), float. PNG: converted to sRGB with OpenImageIO's colorc
 (ACEScg -> srgb_rec709_scene), 8 bit. Vectorised: the whole image is one call of the node.
 """
 
+from __future__ import annotations
+
 import os
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+if TYPE_CHECKING:
+    from .material import Material
 
 LIGHT = np.array([-1.0, 1.0, 1.0]) / np.sqrt(3.0)
 VIEW = np.array([0.0, 0.0, 1.0])
 
 
-def local_directions(normals, view=VIEW, light=LIGHT):
+def local_directions(
+    normals: ArrayLike, view: ArrayLike = VIEW, light: ArrayLike = LIGHT
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(wi, wo) in each point's local frame (normal +z, wo in the xz-plane), from world normals (P, 3)."""
     n = normals
     mu_o = n @ view
@@ -45,7 +54,7 @@ def _unit(v):
     return v / np.linalg.norm(v, axis=1, keepdims=True)
 
 
-def render_image(material, size=256, supersample=2):
+def render_image(material: Material, size: int = 256, supersample: int = 2) -> NDArray[np.float32]:
     """(H, 2H, 4) float32 image: directional light | furnace, ACEScg, alpha = coverage."""
     node = material.node()
     if node is None:
@@ -72,7 +81,7 @@ def render_image(material, size=256, supersample=2):
     return img.astype(np.float32)
 
 
-def write_image(img, path):
+def write_image(img: ArrayLike, path: str | os.PathLike[str]) -> None:
     """EXR: linear ACEScg float; PNG/other: sRGB-encoded 8 bit via OpenImageIO colorconvert."""
     import OpenImageIO as oiio
 

@@ -17,13 +17,17 @@ the member's bytes are written once to a private temporary folder this module cr
 next to the package) and removed when the interpreter exits.
 """
 
+from __future__ import annotations
+
 import atexit
 import functools
 import os
 import shutil
 import tempfile
+from collections.abc import Iterable
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 _WRAPS = {
     "repeat": "Periodic",
@@ -41,7 +45,7 @@ class TextureError(OSError):
     """A texture file is missing or unreadable (callers fall back and warn)."""
 
 
-def wrap_name(mode):
+def wrap_name(mode: str) -> str:
     """Validate a wrap / address mode name; returns its lower-case form."""
     if not isinstance(mode, str) or mode.lower() not in _WRAPS:
         raise ValueError(
@@ -157,7 +161,7 @@ def _member_file(path: str, stamp: int) -> str:
     return tmp
 
 
-def local_file(path) -> str:
+def local_file(path: str) -> str:
     """A file OpenImageIO can open for ``path``: itself, or for a packaged member a private
     copy of its bytes (TextureError if missing).
 
@@ -176,7 +180,7 @@ def local_file(path) -> str:
     return path
 
 
-def info(path):
+def info(path: str) -> tuple[int, int, str]:
     """Channels, bits and colour space metadata of ``path`` (TextureError if unreadable)."""
     name = os.fspath(path)
     local = local_file(name)
@@ -186,7 +190,7 @@ def info(path):
         raise TextureError(str(exc).replace(local, name)) from None
 
 
-def sample(path, uv, wrap_s="periodic", wrap_t="periodic"):
+def sample(path: str, uv: Iterable[float], wrap_s: str = "periodic", wrap_t: str = "periodic") -> NDArray[np.float64]:
     """The texel value of ``path`` at ``uv`` (bilinear), one value per channel of the file.
 
     Parameters
@@ -225,7 +229,7 @@ def sample(path, uv, wrap_s="periodic", wrap_t="periodic"):
     return np.asarray(out, dtype=np.float64)
 
 
-def outside_unit(uv):
+def outside_unit(uv: ArrayLike) -> bool:
     """True if uv lies outside [0, 1]^2 (MaterialX "constant" address mode uses ``default``)."""
     return bool(np.any((np.asarray(uv, dtype=np.float64) < 0.0) | (np.asarray(uv, dtype=np.float64) > 1.0)))
 

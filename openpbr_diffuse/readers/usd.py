@@ -28,10 +28,14 @@ Resolution as USD defines it:
   binding to a material read from a .mtlx reference is matched by path).
 """
 
+from __future__ import annotations
+
 import contextlib
 import os
 import struct
 import tempfile
+from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 
@@ -66,7 +70,7 @@ _MX_TYPES = {
 
 
 @contextlib.contextmanager
-def captured_stderr(lines):
+def captured_stderr(lines: list[str]) -> Iterator[None]:
     """Capture what USD's diagnostics write to fd 2 (appended to ``lines``)."""
     try:
         fd = os.dup(2)
@@ -103,7 +107,7 @@ def _nesting(path):
     return int(np.max(np.cumsum(step), initial=0))
 
 
-def open_stage(path, diagnostics):
+def open_stage(path: str | os.PathLike[str], diagnostics: list[str]) -> Any:
     """Open a stage (ValueError with one line if it cannot be read).
 
     A text layer nested deeper than :data:`MAX_NESTING` levels is refused before usd-core
@@ -129,7 +133,7 @@ def open_stage(path, diagnostics):
     return stage
 
 
-def apply_variants(stage, variants, diagnostics):
+def apply_variants(stage: Any, variants: dict[str, str] | None, diagnostics: list[str]) -> None:
     """Select variants in the session layer; unknown sets / values raise ValueError."""
     from pxr import Usd
 
@@ -382,7 +386,7 @@ class _UsdResolver:
         return {n: out[n] for n in defs if n in out}
 
     # ----------------------------------------------------------------- shader nodes
-    def shader_value(self, shader, output: str, mx_type: str, trail: tuple) -> "Parameter | None":
+    def shader_value(self, shader, output: str, mx_type: str, trail: tuple) -> Parameter | None:
         """The value of ``output`` of a shader prim (memoised per shader, output and type)."""
         key = (shader.GetPath(), output, mx_type)
         if key in self._memo:
@@ -391,7 +395,7 @@ class _UsdResolver:
         self._memo[key] = p
         return p
 
-    def _shader_value(self, shader, output: str, mx_type: str, trail: tuple) -> "Parameter | None":
+    def _shader_value(self, shader, output: str, mx_type: str, trail: tuple) -> Parameter | None:
         sid = shader.GetShaderId() or ""
         path = str(shader.GetPath())
         trail = self._cycle(shader.GetPath(), trail)
@@ -438,7 +442,7 @@ class _UsdResolver:
             p.value, f"{cat} {path} ({sid} via {graph.getName()}) <- {p.provenance}", _kind(p), p.authored
         )
 
-    def primvar_fallback(self, shader, sid: str, trail: tuple) -> "Parameter | None":
+    def primvar_fallback(self, shader, sid: str, trail: tuple) -> Parameter | None:
         """A primvar reader other than the uv one: the reader has no geometry, so the
         reader's ``fallback`` (else its nodedef default) is used, with a warning naming the
         primvar."""
@@ -779,7 +783,7 @@ def _entries(stage, file, time, uv, variants, diagnostics):
     return entries
 
 
-def _build(entry: "_Entry", file: str, uv: tuple, variants: dict | None, time: object) -> Material:
+def _build(entry: _Entry, file: str, uv: tuple, variants: dict | None, time: object) -> Material:
     """Build one material; an error fails that material only (``Material.error``)."""
     try:
         with deep_stack():
@@ -823,7 +827,15 @@ def _ancestors(prim):
         prim = prim.GetParent()
 
 
-def load(path, *, time=None, variants=None, uv=(0.5, 0.5), material=None, purpose="full"):
+def load(
+    path: str | os.PathLike[str],
+    *,
+    time: float | None = None,
+    variants: dict[str, str] | None = None,
+    uv: tuple[float, float] = (0.5, 0.5),
+    material: str | None = None,
+    purpose: str = "full",
+) -> list[Material]:
     """Materials of a USD stage (see the module docstring)."""
     import gc
 
