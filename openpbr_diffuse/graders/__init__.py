@@ -26,8 +26,14 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .errors import GraderUnavailable
+
+if TYPE_CHECKING:
+    from ..conformance.vectors import VectorSet
+    from .grading import ImplementationGrade
+    from .subject import Subject
 
 
 @dataclass(frozen=True)
@@ -60,7 +66,7 @@ IMPLEMENTATIONS = {
 }
 
 
-def load(name: str, source: Path | str | None = None):
+def load(name: str, source: Path | str | None = None) -> Subject:
     """The :class:`~.subject.Subject` of a registered implementation.
 
     Raises
@@ -80,7 +86,9 @@ def load(name: str, source: Path | str | None = None):
     return impl.factory()(Path(source) if source is not None else None)
 
 
-def grade_implementation(name: str, source=None, *, quick: bool = False, vectors=None):
+def grade_implementation(
+    name: str, source: Path | str | None = None, *, quick: bool = False, vectors: VectorSet | None = None
+) -> ImplementationGrade:
     """Run implementation ``name``'s own code and grade it: an :class:`~.grading.ImplementationGrade`."""
     from .grading import grade_subject
 

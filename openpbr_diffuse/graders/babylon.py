@@ -56,6 +56,7 @@ import json
 import os
 import re
 import shutil
+from collections.abc import Iterable
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -220,7 +221,7 @@ def _shaders(folder: Path, names: tuple, wgsl: bool) -> dict:
     return json.loads(run.stdout)
 
 
-def shaders(names, folder: Path | None = None, *, wgsl: bool = False) -> dict[str, str]:
+def shaders(names: Iterable[str], folder: Path | None = None, *, wgsl: bool = False) -> dict[str, str]:
     """The GLSL (or WGSL) text of the named shader modules of the installed package.
 
     >>> text = shaders(["pbrBRDFFunctions"])["pbrBRDFFunctions"]

@@ -21,7 +21,11 @@ True
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 MIN_EXPECTED = 5.0
 
@@ -32,7 +36,9 @@ def _nodes(edges, nq):
     return 0.5 * (lo + hi) + 0.5 * (hi - lo) * x, 0.5 * (hi - lo) * w
 
 
-def bin_masses(pdf, z_edges, phi_edges, nq=4):
+def bin_masses(
+    pdf: Callable[[NDArray[np.float64]], ArrayLike], z_edges: ArrayLike, phi_edges: ArrayLike, nq: int = 4
+) -> NDArray[np.float64]:
     """Integral of ``pdf(wi (m,3)) -> (m,)`` over each (cos theta, phi) bin: (nz, nphi)."""
     zn, zw = _nodes(z_edges, nq)
     pn, pw = _nodes(phi_edges, nq)
@@ -44,21 +50,23 @@ def bin_masses(pdf, z_edges, phi_edges, nq=4):
     return np.einsum("ijab,ia,jb->ij", p, zw, pw)
 
 
-def histogram(wi, z_edges, phi_edges):
+def histogram(wi: ArrayLike, z_edges: NDArray[np.float64], phi_edges: NDArray[np.float64]) -> NDArray[np.float64]:
     wi = np.asarray(wi, dtype=np.float64)
     phi = np.mod(np.arctan2(wi[:, 1], wi[:, 0]), 2.0 * np.pi)
     counts, _, _ = np.histogram2d(wi[:, 2], phi, bins=[z_edges, phi_edges])
     return counts
 
 
-def pearson(observed, expected, min_expected=MIN_EXPECTED):
+def pearson(observed: ArrayLike, expected: ArrayLike, min_expected: float = MIN_EXPECTED) -> tuple[float, float, int]:
     """(p-value, chi2, dof): :func:`openpbr_diffuse.sampling.quality.pearson_chi2`."""
     from ..sampling.quality import pearson_chi2
 
     return pearson_chi2(observed, expected, min_expected)
 
 
-def chi2_test(samples, pdf, res=(16, 32), nq=4):
+def chi2_test(
+    samples: ArrayLike, pdf: Callable[[NDArray[np.float64]], ArrayLike], res: tuple[int, int] = (16, 32), nq: int = 4
+) -> dict[str, Any]:
     """Test directions ``samples`` (n,3) against ``pdf``; returns a dict with p, chi2, dof,
     the pdf's mass over the hemisphere and the number of samples outside it."""
     samples = np.asarray(samples, dtype=np.float64)

@@ -14,8 +14,10 @@ import os
 import shutil
 import subprocess
 import tempfile
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -193,7 +195,7 @@ def sampler_entries(sample_function: str, pdf_function: str) -> dict[str, Entry]
     }
 
 
-def sampler_functions(harness: Harness):
+def sampler_functions(harness: Harness) -> tuple[Callable[..., Any], Callable[..., Any]]:
     """``(sample, pdf)`` array functions running a harness's :func:`sampler_entries`
     (the same calling convention as :func:`.glsl.sampler_functions`)."""
     from ._arrays import rows

@@ -22,6 +22,8 @@ surface in the local frame whose normal is +z; ``mu`` is cos(theta_o).
 
 from __future__ import annotations
 
+import os
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 from . import cpp, glsl, limits
@@ -30,7 +32,7 @@ from .errors import GraderUnavailable
 from .subject import Subject
 
 
-def _check_file(path, what):
+def _check_file(path: str | os.PathLike[str], what: str) -> Path:
     path = Path(path)
     if not path.is_file():
         raise GraderUnavailable(f"{what} file {path} does not exist")
@@ -57,15 +59,15 @@ def _names(function, albedo_function, sample_function=None, pdf_function=None):
 
 
 def glsl_subject(
-    path,
-    function=None,
-    albedo_function=None,
+    path: str | os.PathLike[str],
+    function: str | None = None,
+    albedo_function: str | None = None,
     *,
-    includes=(),
-    defines=(),
-    model="eon",
-    sample_function=None,
-    pdf_function=None,
+    includes: Sequence[str | os.PathLike[str]] = (),
+    defines: Iterable[str] | dict = (),
+    model: str = "eon",
+    sample_function: str | None = None,
+    pdf_function: str | None = None,
 ) -> Subject:
     """A GLSL file's BRDF function ``function``, albedo function ``albedo_function`` and/or
     sampler ``sample_function`` with its pdf ``pdf_function`` (given together)."""
@@ -125,15 +127,15 @@ def glsl_subject(
 
 
 def cpp_subject(
-    path,
-    function=None,
-    albedo_function=None,
+    path: str | os.PathLike[str],
+    function: str | None = None,
+    albedo_function: str | None = None,
     *,
-    includes=(),
-    defines=(),
-    model="eon",
-    sample_function=None,
-    pdf_function=None,
+    includes: Sequence[str | os.PathLike[str]] = (),
+    defines: Iterable[str] | dict = (),
+    model: str = "eon",
+    sample_function: str | None = None,
+    pdf_function: str | None = None,
 ) -> Subject:
     """A C++ file's BRDF function ``function``, albedo function ``albedo_function`` and/or
     sampler ``sample_function`` with its pdf ``pdf_function`` (given together)."""

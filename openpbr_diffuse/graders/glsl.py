@@ -16,8 +16,10 @@ import os
 import pickle
 import re
 import sys
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -44,7 +46,7 @@ void main() { gl_Position = vec4(grader_xy, 0.0, 1.0); }
 """
 
 
-def gl_context():
+def gl_context() -> Any:
     """The process's standalone moderngl context (EGL, OpenGL >= 4.3), created once."""
     global _CONTEXT
     if _CONTEXT is None:
@@ -95,7 +97,7 @@ def resolve_includes(path: Path, search: tuple[Path, ...] = (), _seen: set | Non
     return _INCLUDE.sub(sub, text)
 
 
-def sources_hash(paths) -> str:
+def sources_hash(paths: Iterable[str | os.PathLike[str]]) -> str:
     """SHA-256 over the given files' bytes, in the given order (the version of a source tree)."""
     h = hashlib.sha256()
     for p in paths:
@@ -217,7 +219,7 @@ def _draw_rows(ctx, program, rows):
 
 def sampler_functions(
     code: str, sample_function: str, pdf_function: str, defines: dict | None = None, label: str = "shader"
-):
+) -> tuple[Callable[..., Any], Callable[..., Any]]:
     """``(sample, pdf)`` array functions around a subject's GLSL sampler and pdf.
 
     The GLSL signatures (local frame, normal +z, directions pointing away from the surface)::

@@ -12,12 +12,19 @@ surface implementations by the diffuse lobe's weight x albedo and selection prob
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from ._arrays import direction
+
+if TYPE_CHECKING:
+    from ..conformance.grade import Grade
+    from ..conformance.vectors import VectorSet
+    from .subject import Subject
 
 #: sampler: pdf normalisation over a (mu_o, roughness) grid, grazing mu_o included (mu_o < 0.2)
 SAMPLER_NORM_MU = (0.02, 0.05, 0.1, 0.15, 0.3, 0.5, 0.8, 1.0)
@@ -97,7 +104,9 @@ class QuantityGrade:
     plot: Any = field(default=None, repr=False, compare=False)
 
     @classmethod
-    def from_grade(cls, quantity, g, excluded=0, tolerance_reason=None):
+    def from_grade(
+        cls, quantity: str, g: Grade, excluded: int = 0, tolerance_reason: str | None = None
+    ) -> QuantityGrade:
         tol = f"|out - ref| <= {g.tolerance['absolute']:g} + {g.tolerance['relative']:g} |ref|"
         return cls(
             quantity,
@@ -163,7 +172,9 @@ def _failing_rows(rows, out, g):
     return text
 
 
-def grade_values(subject, vectors=None, kinds=("brdf", "albedo")) -> list[QuantityGrade]:
+def grade_values(
+    subject: Subject, vectors: VectorSet | None = None, kinds: Sequence[str] = ("brdf", "albedo")
+) -> list[QuantityGrade]:
     """BRDF / albedo of ``subject`` on the vectors of its model, graded by conformance.grade."""
     from ..conformance.grade import grade
     from ..conformance.vectors import default_vectors
@@ -248,7 +259,9 @@ def _sample_counts(wi, p):
     }
 
 
-def grade_sampler(subject, quick: bool = False, seed: int = 12, claim: str | None = None) -> list[QuantityGrade]:
+def grade_sampler(
+    subject: Subject, quick: bool = False, seed: int = 12, claim: str | None = None
+) -> list[QuantityGrade]:
     """Grade a subject's sampler and pdf: normalisation, chi-square, reference pdf, variance.
 
     Four measurements, each a sub-check with a stable id:
@@ -681,7 +694,7 @@ def grade_sampler(subject, quick: bool = False, seed: int = 12, claim: str | Non
     return [q_pdf, q_chi]
 
 
-def surface_reference(material, wo, selection):
+def surface_reference(material: dict, wo: ArrayLike, selection: str) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(w*E (n,3), probability (n,)) of the diffuse lobe of ``OpenPBRSurface``."""
     from ..nodes import OpenPBRSurface
 
@@ -690,7 +703,7 @@ def surface_reference(material, wo, selection):
     return np.asarray(lobe.weight * lobe.albedo, float), np.asarray(lobe.probability, float)
 
 
-def grade_surface(subject, selection) -> list[QuantityGrade]:
+def grade_surface(subject: Subject, selection: str) -> list[QuantityGrade]:
     """Diffuse weight x albedo and selection probability inside the surface, vs OpenPBRSurface."""
     if subject.surface is None:
         return []
@@ -759,13 +772,13 @@ def grade_surface(subject, selection) -> list[QuantityGrade]:
 
 
 def grade_subject(
-    subject,
+    subject: Subject,
     *,
-    vectors=None,
-    quick=False,
-    quantities=("brdf", "albedo", "sampler", "surface"),
-    selection=None,
-    sampler_model=None,
+    vectors: VectorSet | None = None,
+    quick: bool = False,
+    quantities: Sequence[str] = ("brdf", "albedo", "sampler", "surface"),
+    selection: str | None = None,
+    sampler_model: str | None = None,
 ) -> ImplementationGrade:
     """Grade every quantity ``subject`` offers; returns an :class:`ImplementationGrade`.
 

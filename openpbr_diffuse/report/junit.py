@@ -9,6 +9,7 @@ implementation that could not run is an ``<error>``.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
@@ -80,7 +81,7 @@ def junit_xml(doc: dict) -> str:
     return ET.tostring(root, encoding="unicode", xml_declaration=True) + "\n"
 
 
-def write_junit(doc: dict, path) -> Path:
+def write_junit(doc: dict, path: str | os.PathLike[str]) -> Path:
     """Write :func:`junit_xml` of ``doc`` to ``path`` (through a temporary file beside it)."""
     path = Path(path)
     tmp = path.with_name(f".{path.name}.tmp")

@@ -44,12 +44,19 @@ import datetime
 import importlib
 import json
 import math
+import os
 import time
+from collections.abc import Iterable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from . import output
 from .model import Check, Context, SectionResult, slug
+
+if TYPE_CHECKING:
+    from ..graders.subject import Subject
+    from .subject import UnderTest
 
 SCHEMA = "openpbr-diffuse-report/2"
 IMAGE_DIR = "images"
@@ -100,7 +107,7 @@ class ReportRun:
         return 0 if self.passed else 1
 
 
-def default_paths():
+def default_paths() -> list[Path]:
     """The bundled ``materials/`` folder (read by openpbr_diffuse.readers), or [] when the
     installation does not carry it."""
     from ..readers import BUNDLED_MATERIALS
@@ -137,14 +144,14 @@ def _section_title(key):
     return key.replace("_", " ").capitalize()
 
 
-def matches(patterns, text: str) -> bool:
+def matches(patterns: Iterable[str], text: str) -> bool:
     """Whether ``text`` (a check id or section key) matches one of the glob ``patterns``."""
     import fnmatch
 
     return any(fnmatch.fnmatchcase(text, p) for p in patterns)
 
 
-def section_selected(key: str, patterns) -> bool:
+def section_selected(key: str, patterns: Sequence[str] | None) -> bool:
     """A section runs when a pattern matches its key or the section part of a check id."""
     if not patterns:
         return True
@@ -173,7 +180,7 @@ def _status(res: SectionResult) -> str:
     return "pass" if all(c.passed for c in ran) else "fail"
 
 
-def run_section(key: str, ctx: Context, select=None) -> SectionRun:
+def run_section(key: str, ctx: Context, select: Sequence[str] | None = None) -> SectionRun:
     """Build one section; never raises (errors become an "error" section).
 
     ``select``: glob patterns of check ids; checks matching none are dropped (a pattern
@@ -240,7 +247,15 @@ def _clean(x):
     return x
 
 
-def build_document(run: ReportRun, *, paths, quick: bool, elapsed_s: float, select=(), figures=()) -> dict:
+def build_document(
+    run: ReportRun,
+    *,
+    paths: Sequence[str | os.PathLike[str]],
+    quick: bool,
+    elapsed_s: float,
+    select: Sequence[str] | None = (),
+    figures: Sequence[tuple[str, str]] = (),
+) -> dict:
     """``report.json``'s document (see the module docstring for the schema)."""
     from .._version import __version__
 
@@ -313,10 +328,10 @@ def run_report(
     *,
     quick: bool = False,
     progress: bool = True,
-    sections=None,
-    select=None,
-    under_test=None,
-    subject=None,
+    sections: Sequence[str] | None = None,
+    select: Sequence[str] | None = None,
+    under_test: UnderTest | None = None,
+    subject: Subject | None = None,
 ) -> ReportRun:
     """Run the report and write ``out/index.html``, ``out/report.json`` and ``out/images/``.
 

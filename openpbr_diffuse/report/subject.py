@@ -16,10 +16,15 @@ These verdicts are never mixed with the library's own evidence (the report's sec
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from ..graders.grading import QuantityGrade
+    from ..graders.subject import Subject
 
 CONFORMS, DOES_NOT_CONFORM, COULD_NOT_RUN = "conforms", "does not conform", "could not run"
 #: The sentence when a failure matches no known deviation.
@@ -237,7 +242,7 @@ def verdict_from_grade(quantity: str, g: dict) -> Verdict:
     )
 
 
-def verdict_from_quantity(q) -> Verdict:
+def verdict_from_quantity(q: QuantityGrade) -> Verdict:
     """A :class:`Verdict` from a ``graders.grading.QuantityGrade``.
 
     The sampler's quantities carry their own one-sentence diagnosis (``q.sentence``, e.g. "pdf
@@ -289,7 +294,7 @@ def _known() -> set:
     return set(DEVIATIONS)
 
 
-def grade_vectors_file(path) -> UnderTest:
+def grade_vectors_file(path: str | os.PathLike[str]) -> UnderTest:
     """Grade a filled vectors file (CSV / JSON) per kind, as ``check FILE`` does."""
     from ..conformance.grade import grade
     from ..conformance.vectors import read_results
@@ -306,7 +311,7 @@ def grade_vectors_file(path) -> UnderTest:
     return ut
 
 
-def grade_subject_under_test(subject, *, quick: bool = True, sampler_model: str | None = None) -> UnderTest:
+def grade_subject_under_test(subject: Subject, *, quick: bool = True, sampler_model: str | None = None) -> UnderTest:
     """Grade a :class:`~openpbr_diffuse.graders.subject.Subject`; missing pieces become "could not run".
 
     ``sampler_model``: the reference strategy its sampler claims (``graders.grading.grade_sampler``).
@@ -378,7 +383,7 @@ def _brdf_batch(brdf, mi, mo, th, rho) -> dict:
     return out
 
 
-def figures(subject, ut: UnderTest, image_dir, *, quick: bool = True) -> list:
+def figures(subject: Subject, ut: UnderTest, image_dir: str | os.PathLike[str], *, quick: bool = True) -> list:
     """Write the pictures of the subject's values beside the reference's; [(file, caption)]."""
     from ..models import directional_albedo, evaluate
     from ._plot import pyplot

@@ -6,12 +6,14 @@ held-out interpolation error); ``directional_albedo`` / ``average_albedo`` are t
 forms (Eq. 8-9, 12-15, 20).  The Eq. 14 fit of E_F is compared with the FON table.
 """
 
+from __future__ import annotations
+
 import math
 
 import numpy as np
 
 from .._plot import pyplot, save
-from ..model import Check, Figure, SectionResult, Table
+from ..model import Check, Context, Figure, SectionResult, Table
 
 TITLE = "Albedo: closed forms against the reference tables"
 #: Closed form vs table: the tables' interpolation error is < 3e-6 (stated in each file).
@@ -89,7 +91,7 @@ def _stated(ctx, res):
     )
 
 
-def build(ctx):
+def build(ctx: Context) -> SectionResult:
     import openpbr_diffuse as od
 
     from ...albedo.tables import load_table, table_path

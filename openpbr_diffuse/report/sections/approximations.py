@@ -7,13 +7,15 @@ paths (closed-form albedos, the reference tables, ``od.evaluate``), and plots th
 the exact curves.  One of the fast sections (it evaluates closed forms and shipped tables).
 """
 
+from __future__ import annotations
+
 import csv
 import importlib.resources
 import math
 
 import numpy as np
 
-from ..model import Check, Figure, SectionResult, Table
+from ..model import Check, Context, Figure, SectionResult, Table
 
 KEY = "approximations"
 TITLE = "Real-time approximations (Gotanda 2012, table-based energy compensation)"
@@ -251,7 +253,7 @@ def _plots(ctx, figures):
     )
 
 
-def build(ctx):
+def build(ctx: Context) -> SectionResult:
     header, rows = _rows()
     res = SectionResult(KEY, TITLE)
     res.notes.append(

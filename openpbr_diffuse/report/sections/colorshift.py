@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..model import Check, Figure, SectionResult, Table
+from ..model import Check, Context, Figure, SectionResult, Table
 
 KEY = "colorshift"
 TITLE = "Spectral versus RGB: the EON colour shift"
@@ -329,7 +329,7 @@ def _materials_table(ctx, cm):
     return table, warnings
 
 
-def build(ctx):
+def build(ctx: Context) -> SectionResult:
     from ...spectral import checker, colorimetry, colour_shift
     from ...spectral.colorimetry import _colour
 

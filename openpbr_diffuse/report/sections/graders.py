@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 import os
 
-from ..model import SectionResult, Table
+from ..model import Context, SectionResult, Table
 
 TITLE = "Third-party implementations, graded by running their own code (findings)"
 KEY = "graders"
@@ -57,7 +57,7 @@ def _version(v: dict) -> str:
     return ", ".join(parts) or "—"
 
 
-def build(ctx) -> SectionResult:
+def build(ctx: Context) -> SectionResult:
     from ...graders import grade_implementation
     from ...graders.errors import GraderUnavailable
 

@@ -6,14 +6,16 @@ shader's output) must fail and be diagnosed as that deviation.  Real implementat
 their own code are graded in the next section ("graders").
 """
 
+from __future__ import annotations
+
 import numpy as np
 
-from ..model import Check, SectionResult, Table
+from ..model import Check, Context, SectionResult, Table
 
 TITLE = "Grader self-test: test vectors and known deviations"
 
 
-def build(ctx):
+def build(ctx: Context) -> SectionResult:
     from ...conformance.deviations import DEVIATIONS, reference
     from ...conformance.grade import ABS_TOL, REL_TOL, TOLERANCE_REASON, grade
     from ...conformance.vectors import default_vectors

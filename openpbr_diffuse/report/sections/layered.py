@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..model import Check, Figure, SectionResult, Table
+from ..model import Check, Context, Figure, SectionResult, Table
 
 TITLE = "The diffuse lobe under a dielectric layer: layering rules against physics"
 KEY = "layered"
@@ -77,7 +77,7 @@ def _live(quick: bool, rows: list[dict]) -> list[Check]:
     return checks
 
 
-def build(ctx) -> SectionResult:
+def build(ctx: Context) -> SectionResult:
     from ...approximations import layering_grading as lg
 
     res = SectionResult(key=KEY, title=TITLE)

@@ -7,12 +7,14 @@ swapped arguments and with rho/pi.  Plots re-make the EON paper's Fig. 2 (BRDF s
 the plane of incidence, all models on one plot) and Fig. 5 (albedo curves).
 """
 
+from __future__ import annotations
+
 import math
 
 import numpy as np
 
 from .._plot import pyplot, save
-from ..model import Check, Figure, SectionResult, Table
+from ..model import Check, Context, Figure, SectionResult, Table
 
 TITLE = "Model properties"
 QUAD = "Gauss-Legendre quadrature of evaluate over the hemisphere (panels at the Oren-Nayar kinks)"
@@ -88,7 +90,7 @@ def _albedo_curves(ctx):
     return save(fig, ctx, "models_albedo.png")
 
 
-def build(ctx):
+def build(ctx: Context) -> SectionResult:
     import openpbr_diffuse as od
 
     from ...albedo.quadrature import hemisphere_albedo

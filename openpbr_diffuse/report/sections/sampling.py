@@ -7,12 +7,14 @@ rho = 1), with the variance of the throughput weight computed by quadrature
 (:func:`openpbr_diffuse.sampling.quality.exact_weight_moments`) instead of Monte Carlo.
 """
 
+from __future__ import annotations
+
 import math
 
 import numpy as np
 
 from .._plot import pyplot, save
-from ..model import Check, Figure, SectionResult, Table
+from ..model import Check, Context, Figure, SectionResult, Table
 
 TITLE = "Sampling: chi-square, normalisation, variance (Fig. 10-12)"
 ALPHA = 0.01
@@ -245,7 +247,7 @@ def _claim(ctx, res, mc, n_mc):
     )
 
 
-def build(ctx):
+def build(ctx: Context) -> SectionResult:
     res = SectionResult("sampling", TITLE)
     _chi2(ctx, res)
     _normalisation(ctx, res)

@@ -8,12 +8,14 @@ agree with them within its error.
 
 from __future__ import annotations
 
+import os
 import time
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from ..model import Check, Figure, SectionResult, Table
+from ..model import Check, Context, Figure, SectionResult, Table
 
 TITLE = "Physical ground truth: simulated rough Lambertian microsurfaces"
 KEY = "simulation"
@@ -37,7 +39,7 @@ def _grading_rows(g, fit="albedo"):
     return [{k: g[k][i] for k in g} for i in range(n) if g["fit"][i] == fit]
 
 
-def fit_power_law(x, y):
+def fit_power_law(x: ArrayLike, y: ArrayLike) -> tuple[float, float] | None:
     """r = (x / x0)^p by least squares in log space over 0 < r < 0.98; returns (x0, p) or None."""
     x = np.asarray(x, float)
     y = np.asarray(y, float)
@@ -48,7 +50,9 @@ def fit_power_law(x, y):
     return float(np.exp(-c / p)), float(p)
 
 
-def plot_all(table_dir, image_dir, prefix="simulation"):
+def plot_all(
+    table_dir: str | os.PathLike[str], image_dir: str | os.PathLike[str], prefix: str = "simulation"
+) -> list[Path]:
     """Figures from the shipped tables; returns the written paths."""
     import matplotlib
 
@@ -171,7 +175,7 @@ def _live_check(albedo_cols, quick):
     return mu, paths, seconds, out, est
 
 
-def build(ctx) -> SectionResult:
+def build(ctx: Context) -> SectionResult:
     from ...simulation import grading as gr
 
     res = SectionResult(key=KEY, title=TITLE)

@@ -12,13 +12,15 @@ vectorised batch calls on numba's thread count -- a different measurement, shown
 side for the shape of the table (relative costs), not as a pass/fail comparison.
 """
 
+from __future__ import annotations
+
 import math
 import time
 
 import numpy as np
 
 from .._plot import pyplot, save
-from ..model import Check, Figure, SectionResult, Table
+from ..model import Check, Context, Figure, SectionResult, Table
 
 TITLE = "Timings (the paper's Table 1 on this machine)"
 #: EON paper Table 1 (ns): eval, cosine sample, CLTC sample (None: not given).
@@ -50,7 +52,7 @@ def _best(fn, reps):
     return best
 
 
-def build(ctx):
+def build(ctx: Context) -> SectionResult:
     import numba
 
     import openpbr_diffuse as od
