@@ -52,7 +52,7 @@ _NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infin
 class UsageError(Exception):
     """Raised by a command for input it cannot use (exit status 2)."""
 
-    def __init__(self, message, prog=None):
+    def __init__(self, message: str, prog: str | None = None) -> None:
         super().__init__(message)
         self.prog = prog
 

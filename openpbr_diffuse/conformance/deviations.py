@@ -359,10 +359,10 @@ class Fitted:
     returns (parameter, prediction); ``label(parameter)`` describes it; calling it with
     ``vectors`` alone predicts at ``default``."""
 
-    def __init__(self, fit: Callable, predict: Callable, label: Callable, default: float):
+    def __init__(self, fit: Callable, predict: Callable, label: Callable, default: float) -> None:
         self.fit, self.predict, self.label, self.default = fit, predict, label, default
 
-    def __call__(self, vectors):
+    def __call__(self, vectors: VectorSet) -> np.ndarray:
         return self.predict(vectors, self.default)
 
 
@@ -450,7 +450,7 @@ class Deviation:
     source: str
     variants: tuple[tuple[str, Callable], ...]
 
-    def __call__(self, vectors) -> np.ndarray:
+    def __call__(self, vectors: VectorSet) -> np.ndarray:
         return self.variants[0][1](vectors)
 
 

@@ -31,7 +31,7 @@ XI_MAX = 0.99999
 
 
 @kernel
-def dielectric(c, eta):
+def dielectric(c: float, eta: float) -> float:
     """Exact unpolarised Fresnel reflectance of a dielectric interface (W07 Eq. 22).
 
     c: cosine between the incident direction and the microfacet normal, in [0, 1]; eta:
@@ -53,14 +53,14 @@ def dielectric(c, eta):
 
 
 @kernel
-def f0(eta):
+def f0(eta: float) -> float:
     """Normal-incidence reflectance F0 = ((eta - 1)/(eta + 1))^2."""
     q = (eta - 1.0) / (eta + 1.0)
     return q * q
 
 
 @kernel
-def modulated_x(weight, eta):
+def modulated_x(weight: float, eta: float) -> float:
     """x = sign(eta - 1) sqrt(clamp(weight F0(eta), 0, XI_MAX)); the modulated index is
     eta' = (1 + x)/(1 - x).
 
@@ -77,13 +77,13 @@ def modulated_x(weight, eta):
 
 
 @kernel
-def eta_of_x(x):
+def eta_of_x(x: float) -> float:
     """eta' = (1 + x)/(1 - x) (inverse of F0 = x^2 with the side of 1 given by sign(x))."""
     return (1.0 + x) / (1.0 - x)
 
 
 @kernel
-def schlick(c, F0):
+def schlick(c: float, F0: float) -> float:
     """Schlick's F0 + (1 - F0)(1 - c)^5."""
     m = 1.0 - c
     m2 = m * m
@@ -91,7 +91,7 @@ def schlick(c, F0):
 
 
 @kernel
-def f82_a(F0, tint):
+def f82_a(F0: float, tint: float) -> float:
     """a of the F82-tint model: F(mu_bar) = tint * F_Schlick(mu_bar) fixes
     a = F_Schlick(mu_bar)(1 - tint) / (mu_bar (1 - mu_bar)^6)  (Kutz et al. 2021; OpenPBR "Metal")."""
     m = 1.0 - MU_BAR
@@ -100,7 +100,7 @@ def f82_a(F0, tint):
 
 
 @kernel
-def f82(c, F0, a):
+def f82(c: float, F0: float, a: float) -> float:
     """F82-tint conductor Fresnel F_Schlick(c) - a c (1 - c)^6 (Kutz et al. 2021), with a from
     ``f82_a``.  Not clamped: with both F0 and tint near 0 it dips slightly below 0 near
     c = 0.5, as the published formula does."""

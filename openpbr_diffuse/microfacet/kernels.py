@@ -17,6 +17,8 @@ vector (``ndf_fraction``), Lambda as mu (1 + 2 Lambda) = sqrt(mu^2 + alpha^2 (1 
 textbook forms) is the independent check.
 """
 
+from __future__ import annotations
+
 import math
 
 from .._jit import INV_PI, kernel
@@ -25,13 +27,13 @@ from .ggx import ALPHA_MIN
 
 
 @kernel
-def alpha_of(roughness):
+def alpha_of(roughness: float) -> float:
     """GGX alpha = max(roughness^2, ALPHA_MIN) (OpenPBR's perceptual mapping; ``ggx.alpha_of``)."""
     return max(roughness * roughness, ALPHA_MIN)
 
 
 @kernel
-def ndf_fraction(hx, hy, hz, a2):
+def ndf_fraction(hx: float, hy: float, hz: float, a2: float) -> tuple[float, float]:
     """(num, den) with the GGX D(h) = num / den for the half vector h = (hx, hy, hz) of any
     length, hz > 0, alpha^2 = a2; callers fold den into their one division.
 
@@ -44,14 +46,14 @@ def ndf_fraction(hx, hy, hz, a2):
 
 
 @kernel
-def lambda_root(mu, a2):
+def lambda_root(mu: float, a2: float) -> float:
     """sqrt(mu^2 + a2 (1 - mu^2)) = mu (1 + 2 Lambda(mu)) for mu > 0: Smith's Lambda without
     its division by mu."""
     return math.sqrt(mu * mu + a2 * (1.0 - mu * mu))
 
 
 @kernel
-def reflection(ix, iy, iz, ox, oy, oz, alpha):
+def reflection(ix: float, iy: float, iz: float, ox: float, oy: float, oz: float, alpha: float) -> tuple[float, float]:
     """(D G2 / (4 mu_i mu_o), wo.h): the GGX BRDF without its Fresnel factor, and the cosine
     for the Fresnel factor; 0 unless both directions and the half vector are above the horizon.
 
@@ -68,7 +70,7 @@ def reflection(ix, iy, iz, ox, oy, oz, alpha):
 
 
 @kernel
-def reflection_pdf(ix, iy, iz, ox, oy, oz, alpha, vndf):
+def reflection_pdf(ix: float, iy: float, iz: float, ox: float, oy: float, oz: float, alpha: float, vndf: bool) -> float:
     """Solid-angle pdf of the reflected direction wi (whole sphere) given wo; 0 if mu_o <= 0
     or the half vector is below the horizon or faces away from wo.
 
@@ -85,7 +87,9 @@ def reflection_pdf(ix, iy, iz, ox, oy, oz, alpha, vndf):
 
 
 @kernel
-def ggx_visible_normal_h(vx, vy, vz, alpha, u1, u2):
+def ggx_visible_normal_h(
+    vx: float, vy: float, vz: float, alpha: float, u1: float, u2: float
+) -> tuple[float, float, float, float]:
     """(hx, hy, hz, |h|^2): the microfacet normal of ``ggx_visible_normal`` before its final
     normalisation (a caller that reflects about it divides by |h|^2 instead)."""
     sx, sy, sz = alpha * vx, alpha * vy, vz
@@ -113,7 +117,9 @@ def ggx_visible_normal_h(vx, vy, vz, alpha, u1, u2):
 
 
 @kernel
-def ggx_visible_normal(vx, vy, vz, alpha, u1, u2):
+def ggx_visible_normal(
+    vx: float, vy: float, vz: float, alpha: float, u1: float, u2: float
+) -> tuple[float, float, float]:
     """A GGX microfacet normal h drawn from the visible normals D_v(h) ~ <v, h>_+ D(h) of the
     unit direction v, from (u1, u2) in [0, 1)^2 (Heitz 2018, "Sampling the GGX distribution
     of visible normals", Listing 1): stretch v to alpha = 1, sample the projected
@@ -125,7 +131,7 @@ def ggx_visible_normal(vx, vy, vz, alpha, u1, u2):
 
 
 @kernel
-def ggx_normal(alpha, u1, u2):
+def ggx_normal(alpha: float, u1: float, u2: float) -> tuple[float, float, float, float]:
     """(hx, hy, hz, 1): a microfacet normal drawn from D(h) mu_h (Walter 2007 Eq. 35-36)."""
     a2 = alpha * alpha
     cos2 = (1.0 - u1) / (1.0 + (a2 - 1.0) * u1)
@@ -136,7 +142,9 @@ def ggx_normal(alpha, u1, u2):
 
 
 @kernel
-def sample_reflection(ox, oy, oz, alpha, u1, u2, vndf):
+def sample_reflection(
+    ox: float, oy: float, oz: float, alpha: float, u1: float, u2: float, vndf: bool
+) -> tuple[float, float, float, bool]:
     """(wi.x, wi.y, wi.z, ok): wi = reflect(wo, h), h from the visible normals (Heitz 2018,
     Listing 1) or the NDF (Walter 2007 Eq. 35-36).  ok is False when the sample fails
     (NDF: h facing away from wo); wi may lie below the horizon (f = 0 there).
@@ -153,6 +161,6 @@ def sample_reflection(ox, oy, oz, alpha, u1, u2, vndf):
 
 
 @kernel
-def multiscatter(F0, E1, on):
+def multiscatter(F0: float, E1: float, on: bool) -> float:
     """Turquin 2019 factor 1 + F0 (1 - E1)/E1 (1 when ``on`` is False)."""
     return 1.0 + F0 * ((1.0 - E1) / E1) if on else 1.0

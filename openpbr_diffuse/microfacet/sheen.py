@@ -14,6 +14,8 @@ paper's fitted functions in the rational/Gaussian form that MaterialX ships
 the fit.  Sampling draws a cosine direction and maps it by M (pdf = D).
 """
 
+from __future__ import annotations
+
 import math
 
 from .._jit import INV_PI, kernel
@@ -24,12 +26,12 @@ R_MIN = 0.01
 
 
 @kernel
-def clamp_roughness(r):
+def clamp_roughness(r: float) -> float:
     return min(max(r, R_MIN), 1.0)
 
 
 @kernel
-def sheen_albedo_fit(r):
+def sheen_albedo_fit(r: float) -> tuple[float, float, float]:
     """(s, m, o) of the albedo fit R(mu_o, r) = N(mu_o; m, s) + o at roughness r: the part
     that depends on r alone (once per material in the surface)."""
     y = clamp_roughness(r)
@@ -40,7 +42,7 @@ def sheen_albedo_fit(r):
 
 
 @kernel
-def sheen_albedo_at(mu, s, m, o):
+def sheen_albedo_at(mu: float, s: float, m: float, o: float) -> float:
     """R(mu_o) from the fit's (s, m, o) (``sheen_albedo_fit``), floored at 0: the fit dips
     to -1.9e-5 near mu_o = 0.9, r = 0.1, and a negative albedo would make the fuzz lobe and
     its selection weight negative."""
@@ -49,14 +51,14 @@ def sheen_albedo_at(mu, s, m, o):
 
 
 @kernel
-def sheen_albedo(mu, r):
+def sheen_albedo(mu: float, r: float) -> float:
     """Directional albedo R(mu_o, r) of the sheen lobe (Zeltner 2022 fit), floored at 0."""
     s, m, o = sheen_albedo_fit(r)
     return sheen_albedo_at(mu, s, m, o)
 
 
 @kernel
-def ltc_inverse(mu, r):
+def ltc_inverse(mu: float, r: float) -> tuple[float, float]:
     """(a, b) of M^-1 (Zeltner 2022 rational fits)."""
     x = min(max(mu, 0.0), 1.0)
     y = clamp_roughness(r)
@@ -66,7 +68,7 @@ def ltc_inverse(mu, r):
 
 
 @kernel
-def sheen_density(lx, ly, lz, mu, r):
+def sheen_density(lx: float, ly: float, lz: float, mu: float, r: float) -> float:
     """D(w) at the direction (lx, ly, lz) of the wo frame (X towards wo); 0 for lz <= 0."""
     a, b = ltc_inverse(mu, r)
     x, y, z = a * lx + b * lz, a * ly, lz
@@ -76,7 +78,7 @@ def sheen_density(lx, ly, lz, mu, r):
 
 
 @kernel
-def sheen_sample(mu, r, u1, u2):
+def sheen_sample(mu: float, r: float, u1: float, u2: float) -> tuple[float, float, float]:
     """(lx, ly, lz) in the wo frame, distributed as ``sheen_density``."""
     a, b = ltc_inverse(mu, r)
     cx, cy, cz, _ = cosine_sample_local(u1, u2)

@@ -231,7 +231,7 @@ MU_AXIS, X_AXIS, R_AXIS = 0, 1, 2
 
 
 @kernel
-def node_at(v, n, kind):
+def node_at(v: float, n: int, kind: int) -> tuple[int, float]:
     v = min(max(v, 0.0), 1.0)
     if kind == MU_AXIS:
         s = math.sqrt(v) * (n - 1)
@@ -244,7 +244,7 @@ def node_at(v, n, kind):
 
 
 @kernel
-def catmull_rom_at(t):
+def catmull_rom_at(t: float) -> tuple[float, float, float, float]:
     t2 = t * t
     t3 = t2 * t
     return (

@@ -28,9 +28,10 @@ from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import colorspace, mxlib, ops, textures
-from .material import Parameter
+from .material import Material, Parameter
 from .mxlib import mx_value
 
 #: Node output types the evaluator can produce (closures are not values).
@@ -82,7 +83,7 @@ class Resolver:
     ``default_space``: colour space of colours when the document names none.
     """
 
-    def __init__(self, file, uv, default_space, sink):
+    def __init__(self, file: str | os.PathLike[str], uv: ArrayLike, default_space: str, sink: Material) -> None:
         self.file = str(file)
         self.uv = np.asarray(uv, dtype=np.float64)
         self.default_space = default_space

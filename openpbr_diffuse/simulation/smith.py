@@ -28,9 +28,12 @@ visible-slope CDF in the stretched (alpha = 1) configuration (Newton with bisect
 safeguard, to 1e-10 in the slope), with an exact rejection sampler for the far tail.
 """
 
+from __future__ import annotations
+
 import math
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..microfacet.kernels import ggx_visible_normal
 from ._common import INV_PI, cosine_about, inline, order_class
@@ -41,13 +44,13 @@ _SQRT_PI = math.sqrt(math.pi)
 
 
 @inline
-def C1(h):
+def C1(h: float) -> float:
     """Cumulative uniform height distribution on [-1, 1] (h = inf above the surface)."""
     return min(max(0.5 * (h + 1.0), 0.0), 1.0)
 
 
 @inline
-def lam(wz, alpha, dist):
+def lam(wz: float, alpha: float, dist: int) -> float:
     """Smith Lambda(w) of a direction with cosine ``wz`` (any sign), isotropic alpha."""
     s = math.sqrt(max(0.0, 1.0 - wz * wz))
     if s == 0.0 or alpha == 0.0:
@@ -63,7 +66,7 @@ def lam(wz, alpha, dist):
 
 
 @inline
-def G1(wz, h, alpha, dist):
+def G1(wz: float, h: float, alpha: float, dist: int) -> float:
     """Probability that a ray leaving height h along w escapes (0 downwards)."""
     if wz <= 0.0:
         return 0.0
@@ -77,7 +80,7 @@ def G1(wz, h, alpha, dist):
 
 
 @inline
-def sample_height(wz, h, alpha, dist):
+def sample_height(wz: float, h: float, alpha: float, dist: int) -> float:
     """Height of the next intersection along w from h, or inf when the ray escapes."""
     U = np.random.random()
     if wz > 0.0:
@@ -138,7 +141,7 @@ def _beckmann_visible_slope_x(cos_t, sin_t):
 
 
 @inline
-def sample_visible_normal(vx, vy, vz, alpha, dist):
+def sample_visible_normal(vx: float, vy: float, vz: float, alpha: float, dist: int) -> tuple[float, float, float]:
     """A microfacet normal drawn from D_v(m) ~ <v, m>_+ D(m) (v may point downwards)."""
     if dist == GGX:
         return ggx_visible_normal(vx, vy, vz, alpha, np.random.random(), np.random.random())
@@ -166,7 +169,18 @@ def sample_visible_normal(vx, vy, vz, alpha, dist):
 
 
 @inline
-def walk(wi_x, wi_y, wi_z, wo, alpha, dist, rho, rk, path_nee, max_bounces):
+def walk(
+    wi_x: float,
+    wi_y: float,
+    wi_z: float,
+    wo: NDArray[np.float64],
+    alpha: float,
+    dist: int,
+    rho: NDArray[np.float64],
+    rk: NDArray[np.float64],
+    path_nee: NDArray[np.float64],
+    max_bounces: int,
+) -> tuple[int, bool]:
     """Trace one path (Heitz et al. 2016, Alg. 3 with diffuse microfacets); returns (k, escaped)."""
     C = rho.shape[0]
     m = wo.shape[0]

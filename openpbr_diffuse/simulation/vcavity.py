@@ -30,9 +30,12 @@ Lambertian facet element reflects rho/pi (n . wo) of the power it receives per u
 angle, and the macro area sees it foreshortened by mu_o.)
 """
 
+from __future__ import annotations
+
 import math
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ._common import HALF_PI, INV_PI, PI, cosine_about, inline, order_class
 
@@ -43,7 +46,7 @@ _FLAT = 1e-12
 
 
 @inline
-def sample_slope(sigma):
+def sample_slope(sigma: float) -> float:
     """theta_a with density ~ exp(-theta^2 / (2 sigma^2)) sin(theta) on [0, pi/2).
 
     Rayleigh(sigma) proposal (density theta exp(-theta^2/2sigma^2) / sigma^2), accepted with
@@ -85,7 +88,18 @@ def _nee(k, px, pz, nx, nz, st, ct, h, side, wo_g, rk, path_nee):
 
 
 @inline
-def walk(wi_x, wi_y, wi_z, wo, sigma, rho, rk, wo_g, path_nee, max_bounces):
+def walk(
+    wi_x: float,
+    wi_y: float,
+    wi_z: float,
+    wo: NDArray[np.float64],
+    sigma: float,
+    rho: NDArray[np.float64],
+    rk: NDArray[np.float64],
+    wo_g: NDArray[np.float64],
+    path_nee: NDArray[np.float64],
+    max_bounces: int,
+) -> tuple[int, bool]:
     """Trace one path in a random groove; returns (k, escaped).
 
     ``rk`` (C,) and ``wo_g`` (m, 3) are scratch arrays; next-event sums are added to
