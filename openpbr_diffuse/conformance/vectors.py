@@ -37,9 +37,10 @@ import re
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
 #: Version of the default vector set; bump when its rows change.
 VERSION = "2"  # 2: no albedo rows at exactly mu = 0 (a convention, not conformance)
@@ -98,7 +99,7 @@ class VectorSet:
     def __len__(self):
         return int(self.id.shape[0])
 
-    def subset(self, index: ArrayLike | slice) -> VectorSet:
+    def subset(self, index: NDArray[Any] | slice) -> VectorSet:
         """The rows selected by a boolean mask or an index array."""
         return VectorSet(
             self.id[index],
@@ -541,7 +542,9 @@ def iter_results(
     n = 0
     any_results = False
     while True:
-        take, out, own = [], [], []
+        take: list[tuple[int, Any]] = []
+        own: list[tuple[int, Any]] = []
+        out: list[Any] = []
         skipped = 0
         for rec in records:
             if first:
@@ -555,6 +558,7 @@ def iter_results(
             rid = str(rec.get("id", "")).strip()
             label = _label(path, n, rid)
             i = index.get(rid)
+            row: int | tuple[Any, ...]
             if i is None:
                 if _SET_ID.match(rid) or not rid:
                     raise ValueError(f"{label}: no such vector in set version {vectors.version}")
@@ -648,8 +652,8 @@ def read_results(path: str | Path, vectors: VectorSet | None = None, *, with_ski
     vs = [c[0] for c in chunks if len(c[0])]
     if not vs:
         raise ValueError(f"{path}: no row has results (fill out_r, out_g, out_b of the rows to grade)")
-    cat = VectorSet(
-        *(
+    cat = VectorSet(  # type: ignore[misc]  # the eight array fields by position, then version
+        *(  # type: ignore[arg-type]
             np.concatenate([getattr(v, f) for v in vs])
             for f in ("id", "kind", "model", "wi", "wo", "mu", "roughness", "rho")
         ),

@@ -106,7 +106,9 @@ def glsl_subject(
             return k_albedo.run(rows(mu, roughness, rho), label)
 
     sample, pdf = (
-        glsl.sampler_functions(code, sample_function, pdf_function, defs, label) if sample_function else (None, None)
+        glsl.sampler_functions(code, sample_function, pdf_function, defs, label)
+        if sample_function and pdf_function is not None  # given together (_names)
+        else (None, None)
     )
     return Subject(
         name=f"glsl:{path.name}:{function or albedo_function or sample_function}",
@@ -159,7 +161,7 @@ def cpp_subject(
     const auto grader_E = {albedo_function}(in[0], in[1], glm::vec3(in[2], in[3], in[4]));
     out[0] = grader_E[0]; out[1] = grader_E[1]; out[2] = grader_E[2];""",
         )
-    if sample_function:
+    if sample_function and pdf_function is not None:  # given together (_names)
         entries.update(cpp.sampler_entries(sample_function, pdf_function))
     prelude = f'#include <glm/glm.hpp>\n#include "{path.resolve()}"\n'
     h = cpp.Harness(

@@ -400,7 +400,7 @@ def grade_sampler(
         ref_err[strategy] = float(
             np.max(np.abs(p_nodes.reshape(-1)[ok] - ref) / np.maximum(ref, SAMPLER_PDF_FLOOR), initial=0.0)
         )
-    best = min(ref_err, key=ref_err.get)
+    best = min(ref_err, key=ref_err.__getitem__)
     matches = ref_err[best] <= SAMPLER_PDF_TOL
     ref_detail = (
         f"matches the reference '{best}' strategy's pdf to {ref_err[best]:.2g} relative"
@@ -425,7 +425,7 @@ def grade_sampler(
     else:
         ref_ok, ref_status = True, "info"
         ref_detail += " (no sampler model claimed: reported, not graded)"
-    pdf_checks = [
+    pdf_checks: list[dict[str, Any]] = [
         {
             "id": "sampler_pdf.normalisation",
             "status": "pass" if norm_ok else "fail",
@@ -450,7 +450,7 @@ def grade_sampler(
         pdf_diag, pdf_sentence = ("pdf_not_finite" if bad_nodes.any() else "pdf_not_normalised"), norm_sentence
     elif not ref_ok:
         pdf_diag = f"pdf_differs_from_{claim}"
-        pdf_sentence = f"pdf differs from the reference '{claim}' pdf by up to {ref_err[claim]:.2g} relative" + (
+        pdf_sentence = f"pdf differs from the reference '{claim}' pdf by up to {ref_err[claim]:.2g} relative" + (  # type: ignore[index]  # not ref_ok: a claim
             f" (it matches '{best}')" if matches else ""
         )
     else:
@@ -494,7 +494,8 @@ def grade_sampler(
     p_all = np.asarray(p_all, np.float64).reshape(len(SAMPLER_CASES), per)
     # (d) f at their samples and at the reference sampler's: one BRDF call
     nv = min(n, SAMPLER_VARIANCE_N)
-    ref_wi, ref_p = [], []
+    ref_wi: Any = []  # per case, then stacked
+    ref_p: Any = []
     for c, k in enumerate(idx):
         w, pr = od.sample_rng(SAMPLER_REFERENCE, wo_c[k], r_c[k], seed + 1 + c, shape=(nv,))
         ref_wi.append(w)
@@ -517,7 +518,9 @@ def grade_sampler(
     f_ref = f_all[len(idx) * nv :].reshape(len(idx), nv)
 
     sidak = 1.0 - (1.0 - SAMPLER_ALPHA) ** (1.0 / len(SAMPLER_CASES))
-    tests, counts_total, first_bad, warnings, chi_regions, plot = [], {}, None, [], {}, []
+    counts_total: dict[str, Any] = {}
+    first_bad: str | None = None
+    tests, warnings, chi_regions, plot = [], [], {}, []
     for c, (mu, r) in enumerate(SAMPLER_CASES):
         wi, p = wi_all[c], p_all[c]
         cnt = _sample_counts(wi, p)
@@ -681,7 +684,7 @@ def grade_sampler(
         sentence=sentence,
         checks=chi_checks,
         where=(
-            first_bad
+            first_bad  # type: ignore[arg-type]  # set when a sample is invalid
             if invalid
             else (
                 f"{_case_label(pmin_t['mu_o'], pmin_t['roughness'])}: chi2 p = {pmin_t['p']:.3g}" if not chi_ok else ""
@@ -708,7 +711,12 @@ def grade_surface(subject: Subject, selection: str) -> list[QuantityGrade]:
     if subject.surface is None:
         return []
     wo = direction(np.array(SURFACE_MU), SAMPLER_PHI)
-    got_w, got_p, ref_w, ref_p, cand = [], [], [], [], {"white_tint": [], "selection_other": []}
+    # per material, then concatenated
+    got_w: Any = []
+    got_p: Any = []
+    ref_w: Any = []
+    ref_p: Any = []
+    cand: dict[str, Any] = {"white_tint": [], "selection_other": []}
     other = "length" if selection == "max" else "max"
     for material in SURFACE_MATERIALS:
         res = subject.surface(material, wo)
@@ -799,5 +807,5 @@ def grade_subject(
     if "sampler" in quantities:
         result.quantities += grade_sampler(subject, quick=quick, claim=sampler_model)
     if "surface" in quantities and subject.surface is not None:
-        result.quantities += grade_surface(subject, selection or getattr(subject, "selection", "length"))
+        result.quantities += grade_surface(subject, selection or getattr(subject, "selection", "length") or "length")
     return result

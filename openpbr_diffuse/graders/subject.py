@@ -53,7 +53,7 @@ class Subject:
 
     name: str
     model: str
-    tolerance: tuple
+    tolerance: tuple | None
     tolerance_reason: str
     version: dict = field(default_factory=dict)
     brdf: Callable | None = None

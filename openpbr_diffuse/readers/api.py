@@ -48,7 +48,7 @@ def _check_uv(uv):
     return (u, v)
 
 
-def _check_variants(variants):
+def _check_variants(variants: dict | list | None) -> dict[str, str]:
     if variants is None:
         return {}
     if isinstance(variants, dict):

@@ -33,11 +33,14 @@ from __future__ import annotations
 
 import functools
 import sys
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _colorspace_table as _table
+
+_SPACES: dict[str, Any] = _table.SPACES  # generated: name -> matrix, decoding, ...
 
 #: The working colour space of every resolved colour (MaterialX / USD names).
 WORKING_SPACE = "acescg"
@@ -256,7 +259,7 @@ def canonical(name: str) -> str:
 
 @functools.cache
 def _matrix(space: str) -> np.ndarray:
-    m = np.array(_table.SPACES[space]["matrix"], dtype=np.float64)
+    m = np.array(_SPACES[space]["matrix"], dtype=np.float64)
     m.setflags(write=False)
     return m
 
@@ -308,7 +311,7 @@ def decode(values: ArrayLike, space: str) -> np.ndarray:
     v = np.asarray(values, dtype=np.float64)
     if space == "raw":
         return v.copy()
-    kind = _table.SPACES[space]["decoding"]
+    kind = _SPACES[space]["decoding"]
     if kind[0] == "linear":
         return v.copy()
     if kind[0] == "srgb":
@@ -356,7 +359,7 @@ def is_linear(space: str) -> bool:
     (True, False, True)
     """
     space = canonical(space)
-    return space == "raw" or _table.SPACES[space]["decoding"][0] == "linear"
+    return space == "raw" or _SPACES[space]["decoding"][0] == "linear"
 
 
 __all__ = [

@@ -168,9 +168,9 @@ def evaluate_many(
     diffuse_weight (N, 3), diffuse_probability (N,).
     """
     N = len(materials)
-    out = {k: np.full((N, 3), np.nan) for k in ("brdf", "albedo", "diffuse_weight")}
+    out: dict[str, NDArray[np.float64]] = {k: np.full((N, 3), np.nan) for k in ("brdf", "albedo", "diffuse_weight")}
     out["diffuse_probability"] = np.full(N, np.nan)
-    groups = {}
+    groups: dict[Any, list[int]] = {}
     for i, m in enumerate(materials):
         if m.supported:
             groups.setdefault(_group_key(m), []).append(i)

@@ -90,9 +90,9 @@ class Resolver:
         self.sink = sink
         # node outputs already evaluated, per (node, output, interface context, library):
         # a graph that reads one node many times evaluates it once
-        self._memo = {}
-        self._folders = {}  # source URI -> folder of that document
-        self.via = []  # document nodes whose library implementation graph is being evaluated
+        self._memo: dict[tuple, Any] = {}
+        self._folders: dict[str, str] = {}  # source URI -> folder of that document
+        self.via: list[str] = []  # document nodes whose library implementation graph is being evaluated
 
     # ----------------------------------------------------------------- helpers
     def _note(self, text, unsupported=False):

@@ -33,10 +33,10 @@ class Parameter:
     (None when it is the same as ``value``).
     """
 
-    value: object
+    value: Any
     provenance: str
     kind: str = "authored"
-    authored: object = None
+    authored: Any = None
 
     def to_dict(self) -> dict[str, Any]:
         d = {"value": _jsonable(self.value), "provenance": self.provenance, "kind": self.kind}

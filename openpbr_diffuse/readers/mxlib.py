@@ -257,8 +257,7 @@ def _include_folders(file: str, doc) -> list:
     folders = [os.path.dirname(file)]
     if doc is None:
         return folders
-    uris = {e.getSourceUri() for e in doc.traverseTree()} - {"", file}
-    uris = sorted(u for u in uris if not os.path.isabs(u))
+    uris = sorted(u for u in {e.getSourceUri() for e in doc.traverseTree()} - {"", file} if not os.path.isabs(u))
     changed = True
     while changed and uris:
         changed = False

@@ -25,7 +25,7 @@ VIEW = np.array([0.0, 0.0, 1.0])
 
 
 def local_directions(
-    normals: ArrayLike, view: ArrayLike = VIEW, light: ArrayLike = LIGHT
+    normals: NDArray[np.float64], view: NDArray[np.float64] = VIEW, light: NDArray[np.float64] = LIGHT
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(wi, wo) in each point's local frame (normal +z, wo in the xz-plane), from world normals (P, 3)."""
     n = normals
@@ -81,7 +81,7 @@ def render_image(material: Material, size: int = 256, supersample: int = 2) -> N
     return img.astype(np.float32)
 
 
-def write_image(img: ArrayLike, path: str | os.PathLike[str]) -> None:
+def write_image(img: ArrayLike, path: str) -> None:
     """EXR: linear ACEScg float; PNG/other: sRGB-encoded 8 bit via OpenImageIO colorconvert."""
     import OpenImageIO as oiio
 

@@ -117,7 +117,7 @@ def display_name(path: str) -> str:
     return os.path.basename(path)
 
 
-_PRIVATE = []
+_PRIVATE: list = []  # [folder, pid of the process that made it]
 
 
 def _private_dir() -> str:

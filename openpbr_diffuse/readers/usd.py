@@ -141,7 +141,7 @@ def apply_variants(stage: Any, variants: dict[str, str] | None, diagnostics: lis
         return
     stage.SetEditTarget(Usd.EditTarget(stage.GetSessionLayer()))
     pending = dict(variants)
-    seen_sets = {}
+    seen_sets: dict[str, set[str]] = {}
     for _ in range(len(pending) + 2):
         progressed = False
         for prim in stage.TraverseAll():
@@ -168,7 +168,7 @@ def apply_variants(stage: Any, variants: dict[str, str] | None, diagnostics: lis
         raise ValueError(f"variant set {missing[0]!r} is not on any prim; variant sets: {known}")
 
 
-_PXR = {}
+_PXR: dict[str, Any] = {}
 _F32 = struct.Struct("f")
 
 
@@ -767,7 +767,7 @@ def _entries(stage, file, time, uv, variants, diagnostics):
                     continue
                 path = f"{prefix}/{name}" if only is None else str(prim.GetPath())
 
-                def build(mtlx=mtlx, name=name, path=path, prim_path=str(prim.GetPath())):  # noqa: B008 (bound per prim)
+                def build_referenced(mtlx=mtlx, name=name, path=path, prim_path=str(prim.GetPath())):  # noqa: B008 (bound per prim)
                     got = materialx.load(mtlx, uv=uv, material=name)
                     m = got[0]
                     m.path = path
@@ -779,7 +779,7 @@ def _entries(stage, file, time, uv, variants, diagnostics):
                     )
                     return m
 
-                entries.append(_Entry(path, name, build))
+                entries.append(_Entry(path, name, build_referenced))
     return entries
 
 
@@ -850,11 +850,13 @@ def load(
             gc.enable()
 
 
-def _load(path, *, time: float | None, variants: dict, uv: tuple, material: str | None, purpose: str) -> list[Material]:
+def _load(
+    path, *, time: float | None, variants: dict[str, str] | None, uv: tuple, material: str | None, purpose: str
+) -> list[Material]:
     from pxr import Sdf, UsdShade
 
     file = os.fspath(path)
-    diagnostics = []
+    diagnostics: list[str] = []
     stage = open_stage(file, diagnostics)
     apply_variants(stage, variants, diagnostics)
     entries = _entries(stage, file, time, uv, variants, diagnostics)

@@ -60,7 +60,7 @@ class Check:
         if self.comparison == ">=":
             return m >= self.threshold
         if self.comparison == "==":
-            return abs(m - self.expected) <= self.threshold
+            return abs(m - self.expected) <= self.threshold  # type: ignore[operator]  # '==' checks give expected
         raise ValueError(f"comparison must be '<=', '>=' or '==', got {self.comparison!r}")
 
     def to_dict(self) -> dict[str, Any]:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 _TEMPLATE = """<!DOCTYPE html>
 <html lang="en">
@@ -156,7 +157,8 @@ def render_html(doc: dict, image_dir: Path | None = None) -> str:
         sections = []
         for s in doc.get("sections", []):
             s = dict(s)
-            keep, missing = [], []
+            keep: list[Any] = []
+            missing: list[Any] = []
             for f in s.get("figures", []):
                 (keep if (Path(image_dir) / Path(f["file"]).name).is_file() else missing).append(f)
             s["figures"] = keep

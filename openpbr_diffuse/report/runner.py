@@ -79,7 +79,7 @@ class ReportRun:
     sections: list = field(default_factory=list)
     out_dir: Path | None = None
     document: dict = field(default_factory=dict)
-    under_test: object = None
+    under_test: UnderTest | None = None
 
     @property
     def checks(self) -> list:

@@ -16,8 +16,8 @@ These verdicts are never mixed with the library's own evidence (the report's sec
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -257,7 +257,7 @@ def verdict_from_quantity(q: QuantityGrade) -> Verdict:
             q.quantity,
             CONFORMS if passed else DOES_NOT_CONFORM,
             None if passed else q.diagnosis,
-            q.sentence,
+            q.sentence or "",  # not None here
             _finite(q.max_abs_error),
             getattr(q, "where", ""),
             len(q.checks),
@@ -294,7 +294,7 @@ def _known() -> set:
     return set(DEVIATIONS)
 
 
-def grade_vectors_file(path: str | os.PathLike[str]) -> UnderTest:
+def grade_vectors_file(path: str | Path) -> UnderTest:
     """Grade a filled vectors file (CSV / JSON) per kind, as ``check FILE`` does."""
     from ..conformance.grade import grade
     from ..conformance.vectors import read_results
@@ -383,7 +383,7 @@ def _brdf_batch(brdf, mi, mo, th, rho) -> dict:
     return out
 
 
-def figures(subject: Subject, ut: UnderTest, image_dir: str | os.PathLike[str], *, quick: bool = True) -> list:
+def figures(subject: Subject, ut: UnderTest, image_dir: Path, *, quick: bool = True) -> list:
     """Write the pictures of the subject's values beside the reference's; [(file, caption)]."""
     from ..models import directional_albedo, evaluate
     from ._plot import pyplot

@@ -12,6 +12,7 @@ from __future__ import annotations
 import shutil
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -104,7 +105,7 @@ def build(ctx: Context) -> SectionResult:
     for tau in (0.0, 0.1, 0.5):
         trows = []
         for a in sorted({r["interface_alpha"] for r in rows}):
-            cells = ["smooth" if a == 0 else f"GGX alpha {a:g}"]
+            cells: list[Any] = ["smooth" if a == 0 else f"GGX alpha {a:g}"]
             for rule in lg.RULES:
                 s = lg.error_summary(rows, rule, interface_alpha=a, tau=tau)
                 cells.append(f"{100 * s['mean']:.1f} / {100 * s['max']:.0f}")
@@ -135,9 +136,9 @@ def build(ctx: Context) -> SectionResult:
     ec = {k: i for i, k in enumerate(en)}
     etab = []
     for a in (0.0, 0.25):
-        for r in (0.5, 1.0):
-            sel_e = [x for x in erows if float(x[ec["interface_alpha"]]) == a and float(x[ec["r"]]) == r]
-            cells = ["smooth" if a == 0 else f"GGX alpha {a:g}", r]
+        for r_eon in (0.5, 1.0):
+            sel_e = [x for x in erows if float(x[ec["interface_alpha"]]) == a and float(x[ec["r"]]) == r_eon]
+            cells = ["smooth" if a == 0 else f"GGX alpha {a:g}", r_eon]
             for rule in ("openpbr", "openpbr_coat"):
                 err = np.array([float(x[ec[rule]]) / float(x[ec["physics"]]) - 1 for x in sel_e])
                 cells.append(f"{100 * np.mean(np.abs(err)):.1f} / {100 * np.max(np.abs(err)):.0f}")

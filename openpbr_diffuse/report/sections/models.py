@@ -10,6 +10,7 @@ the plane of incidence, all models on one plot) and Fig. 5 (albedo curves).
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -103,7 +104,7 @@ def build(ctx: Context) -> SectionResult:
     rho = rng.uniform(0.0, 1.0, (n, 3))
     mus = np.array([0.0, 0.3, 1.0] if ctx.quick else [0.0, 0.01, 0.05, 0.1, 0.2, 0.35, 0.5, 0.7, 0.85, 1.0])
     order = 5 if ctx.quick else 6
-    rows = []
+    rows: list[list[Any]] = []
     for m, info in INFO.items():
         ctx.progress(f"model {m}")
         rmax = _rmax(info)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -240,7 +241,7 @@ def build(ctx: Context) -> SectionResult:
         ):
             table_rows = []
             for sv in rough:
-                cells = [float(sv)]
+                cells: list[Any] = [float(sv)]
                 for model in gr.GRADED_MODELS:
                     r = next(r for r in rr if r["geometry"] == geom and r["model"] == model and r["roughness"] == sv)
                     cells.append(f"{r[key]:.4f} ({r['model_roughness']:.3f})")
