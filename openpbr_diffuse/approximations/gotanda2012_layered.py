@@ -40,14 +40,14 @@ NORM_SLOPE = 0.0397436
 NORM_OFFSET = 0.0856832
 
 
-def _cos(name: str, v) -> np.ndarray:
+def _cos(name: str, v: ArrayLike) -> np.ndarray:
     a = np.asarray(v, dtype=float)
     if not np.all((a > 0.0) & (a <= 1.0)):
         raise ValueError(f"{name} must be cosines in (0, 1]")
     return a
 
 
-def _ior(name: str, v) -> np.ndarray:
+def _ior(name: str, v: ArrayLike) -> np.ndarray:
     a = np.asarray(v, dtype=float)
     if not np.all(np.isfinite(a) & (a > 0.0)):
         raise ValueError(f"{name} must be a positive finite index of refraction")

@@ -12,9 +12,14 @@ from __future__ import annotations
 import argparse
 import json
 import math
+from collections.abc import Iterable
+from typing import TYPE_CHECKING
 
 from ..conformance.vectors import VECTOR_MODELS
 from ..graders import cli as graders_cli
+
+if TYPE_CHECKING:
+    from ..conformance.grade import Grade
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -43,7 +48,7 @@ def _num(x: float) -> str:
     return f"{x:.6g}"
 
 
-def _vec(v) -> str:
+def _vec(v: Iterable[float] | None) -> str:
     return "-" if v is None else "(" + ", ".join(_num(x) for x in v) + ")"
 
 
@@ -55,7 +60,7 @@ def _error(w: dict) -> str:
     return f"error {w['normalised_error']:.3g}x tolerance"
 
 
-def _print_text(g, path) -> None:
+def _print_text(g: Grade, path: str) -> None:
     print(
         f"{path}: {'CONFORMS' if g.passed else 'DOES NOT CONFORM'} "
         f"({g.n_rows} rows of {', '.join(g.models)}, vectors version {g.version}"

@@ -21,6 +21,7 @@ import importlib
 import os
 import re
 import sys
+from collections.abc import Iterable
 
 from .._version import __version__
 
@@ -93,7 +94,7 @@ def _silence_stdout():
         pass
 
 
-def _suggest(word: str, choices) -> str:
+def _suggest(word: str, choices: Iterable[str]) -> str:
     """`` (did you mean X?)`` for the closest of ``choices`` to ``word``, or ``""``."""
     import difflib
 

@@ -13,8 +13,12 @@ from __future__ import annotations
 
 import argparse
 import json
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from .main import UsageError
 
 BASES = ("lambert", "eon", "smith-ggx", "vcavity")
 
@@ -56,7 +60,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
-def _usage(message: str):
+def _usage(message: str) -> UsageError:
     from .main import UsageError
 
     return UsageError(f"simulate: {message}")

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 
-def rows(*columns, n=None) -> np.ndarray:
+def rows(*columns: ArrayLike, n: int | None = None) -> np.ndarray:
     """Stack columns ((n,) or (n,k) arrays, or scalars) side by side into an (n, K) float32 array.
 
     >>> rows(np.zeros((2, 3)), [0.5, 1.0], 7.0).tolist()
@@ -23,7 +24,7 @@ def rows(*columns, n=None) -> np.ndarray:
     return np.ascontiguousarray(np.concatenate(out, axis=1), dtype=np.float32)
 
 
-def direction(mu, phi=0.0) -> np.ndarray:
+def direction(mu: ArrayLike, phi: ArrayLike = 0.0) -> np.ndarray:
     """Unit vectors with z = mu at azimuth phi: (..., 3).
 
     >>> direction(0.6).round(6).tolist()

@@ -21,6 +21,7 @@ import math
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from .grading import ImplementationGrade
     from .subject import Subject
 
 
@@ -111,7 +112,7 @@ def add_arguments(parser: argparse.ArgumentParser | argparse._ArgumentGroup) -> 
     g.add_argument("--quick", action="store_true", help="fewer sampler samples (40k instead of 200k per case)")
 
 
-def _print_text(result) -> None:
+def _print_text(result: ImplementationGrade) -> None:
     print(f"{result.name}: {'CONFORMS' if result.passed else 'DOES NOT CONFORM'} (reference model {result.model})")
     for k, v in result.version.items():
         if v not in (None, "", [], {}):

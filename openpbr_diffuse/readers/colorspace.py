@@ -98,7 +98,7 @@ def _colour():
     return load()
 
 
-def _decoding_kind(fn) -> tuple:
+def _decoding_kind(fn: Any) -> tuple:
     """A colour-science decoding function as ("linear",), ("srgb",), ("gamma", exponent) or
     ("colour", None) -- the last evaluated by colour-science itself at run time."""
     colour = _colour()

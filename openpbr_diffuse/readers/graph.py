@@ -129,7 +129,7 @@ class Resolver:
             raise ValueError(f"{self.file}: connection cycle: {' -> '.join(loop)}")
         return trail + (key,)
 
-    def _source_folder(self, elem) -> str:
+    def _source_folder(self, elem: Any) -> str:
         """The folder of the document ``elem`` was read from: relative file names resolve
         against it (after MaterialX's ``fileprefix``, applied by ``getResolvedValueString``).
 
@@ -142,7 +142,7 @@ class Resolver:
             self._folders[uri] = mxlib.source_folder(self.file, uri, elem.getDocument())
         return self._folders[uri]
 
-    def _authored(self, port, library: bool) -> Parameter:
+    def _authored(self, port: Any, library: bool) -> Parameter:
         t = port.getType()
         text = port.getValueString()
         try:
@@ -228,7 +228,7 @@ class Resolver:
             self._note(f"{port.getNamePath()} is connected to nothing; default used")
         return None
 
-    def _dangling(self, port) -> str:
+    def _dangling(self, port: Any) -> str:
         """What a connection that leads nowhere leads to (a missing node, nodegraph or output)."""
         where = port.getNamePath()
         graph_name = port.getNodeGraphString()
@@ -256,7 +256,7 @@ class Resolver:
             return f"{out.getNamePath()} is connected to nothing"
         return f"{where}: connected to {port.getNodeName()!r}, which does not exist"
 
-    def _check_connection_type(self, port, node, out) -> None:
+    def _check_connection_type(self, port: Any, node: Any, out: Any) -> None:
         """A warning when an input is connected to an output of another type (MaterialX's
         validation reports it; the value is converted as ``convert`` would)."""
         src = out.getType() if out is not None else node.getType()
@@ -287,7 +287,7 @@ class Resolver:
         self._memo[key] = (p, iface)  # iface kept alive so that its id is not reused
         return p
 
-    def _node_value(self, node, outname: str, trail: tuple, iface: dict | None, library: bool) -> Parameter | None:
+    def _node_value(self, node: Any, outname: str, trail: tuple, iface: dict | None, library: bool) -> Parameter | None:
         trail = self._cycle("node:" + node.getNamePath(), trail)
         nd = node.getNodeDef()
         cat = node.getCategory()

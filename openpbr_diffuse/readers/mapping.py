@@ -410,7 +410,7 @@ def clamp_inputs(m: Material) -> None:
 
 
 # ----------------------------------------------------------------------- building
-def _unmapped(sid: str, inner) -> str:
+def _unmapped(sid: str, inner: Any) -> str:
     """Why a shader maps onto no node (for a ``surface`` node: the BSDF it wraps)."""
     if sid == "ND_surface":
         what = f"{inner.path} ({inner.shader_id()})" if inner is not None else "nothing connected"

@@ -30,7 +30,7 @@ def nodedef(name: str) -> Any:
     return library().getNodeDef(name)
 
 
-def _local(name: str, nd) -> bool:
+def _local(name: str, nd: Any) -> bool:
     """Whether ``nd`` is a nodedef of a user's document rather than of the data library."""
     return nd is not None and library().getNodeDef(name) is None
 
@@ -59,7 +59,7 @@ def _library_inputs(name: str) -> dict:
     return _inputs_of(nd)
 
 
-def _inputs_of(nd) -> dict:
+def _inputs_of(nd: Any) -> dict:
     out = {}
     for i in nd.getActiveInputs():
         t = i.getType()
@@ -106,13 +106,13 @@ def _library_outputs(name: str) -> dict:
     return _outputs_of(nd)
 
 
-def _outputs_of(nd) -> dict:
+def _outputs_of(nd: Any) -> dict:
     outs = {o.getName(): o.getType() for o in nd.getActiveOutputs()}
     return outs or {"out": nd.getType()}
 
 
 @functools.cache
-def category(name: str):
+def category(name: str) -> str | None:
     """The node category (e.g. "multiply") of nodedef ``name``, or None if unknown."""
     nd = nodedef(name)
     return nd.getNodeString() if nd is not None else None
@@ -127,7 +127,7 @@ def implementation_graph(name: str, nd: Any = None) -> Any:
 
 
 @functools.cache
-def _library_graph(name: str):
+def _library_graph(name: str) -> Any:
     nd = nodedef(name)
     if nd is None:
         return None
@@ -148,7 +148,7 @@ def _graph_of(nd, doc):
 
 
 @functools.cache
-def _unit_converter(unittype: str):
+def _unit_converter(unittype: str) -> Any:
     """MaterialX's own ``LinearUnitConverter`` of a unit type of the data library (None if unknown)."""
     import MaterialX as mx
 
@@ -251,7 +251,7 @@ def source_folder(file: str, uri: str, doc: Any = None) -> str:
     return os.path.dirname(os.path.normpath(os.path.join(root, uri)))
 
 
-def _include_folders(file: str, doc) -> list:
+def _include_folders(file: str, doc: Any) -> list:
     """Folders of ``file`` and of the documents it includes (found from its elements'
     source URIs, each looked up in the folders found before it)."""
     folders = [os.path.dirname(file)]

@@ -349,7 +349,7 @@ class _UsdResolver:
             v = np.asarray(v, dtype=np.float64)
         return Parameter(v, prov, "time" if note else "authored")
 
-    def inputs(self, shader, sid: str, trail: tuple, authored: dict | None = None) -> dict:
+    def inputs(self, shader: Any, sid: str, trail: tuple, authored: dict | None = None) -> dict:
         """Resolved {name: Parameter} of every nodedef input of a shader (defaults filled).
 
         ``authored``: {name: UsdShade.Input} of the shader's authored inputs (from
@@ -386,7 +386,7 @@ class _UsdResolver:
         return {n: out[n] for n in defs if n in out}
 
     # ----------------------------------------------------------------- shader nodes
-    def shader_value(self, shader, output: str, mx_type: str, trail: tuple) -> Parameter | None:
+    def shader_value(self, shader: Any, output: str, mx_type: str, trail: tuple) -> Parameter | None:
         """The value of ``output`` of a shader prim (memoised per shader, output and type)."""
         key = (shader.GetPath(), output, mx_type)
         if key in self._memo:
@@ -395,7 +395,7 @@ class _UsdResolver:
         self._memo[key] = p
         return p
 
-    def _shader_value(self, shader, output: str, mx_type: str, trail: tuple) -> Parameter | None:
+    def _shader_value(self, shader: Any, output: str, mx_type: str, trail: tuple) -> Parameter | None:
         sid = shader.GetShaderId() or ""
         path = str(shader.GetPath())
         trail = self._cycle(shader.GetPath(), trail)
@@ -442,7 +442,7 @@ class _UsdResolver:
             p.value, f"{cat} {path} ({sid} via {graph.getName()}) <- {p.provenance}", _kind(p), p.authored
         )
 
-    def primvar_fallback(self, shader, sid: str, trail: tuple) -> Parameter | None:
+    def primvar_fallback(self, shader: Any, sid: str, trail: tuple) -> Parameter | None:
         """A primvar reader other than the uv one: the reader has no geometry, so the
         reader's ``fallback`` (else its nodedef default) is used, with a warning naming the
         primvar."""
@@ -556,7 +556,7 @@ _PRIMVAR_READERS = {
 _PRIMVAR_READERS = {k: v for k, v in _PRIMVAR_READERS.items() if v is not None}
 
 
-def _anchored(attr, path: str) -> str:
+def _anchored(attr: Any, path: str) -> str:
     """An asset path the resolver did not resolve, anchored to the layer that authors it
     (inside a package: the package member ``pkg.usdz[path]``), for the warning to name."""
     from pxr import Ar
@@ -594,7 +594,7 @@ def _kind(p):
     return p.kind if p.kind in ("texture", "time", "file") else "connection"
 
 
-def _no_id(shader) -> str:
+def _no_id(shader: Any) -> str:
     """How a shader without ``info:id`` says what it is: its ``info:implementationSource``
     (sourceAsset: the asset of each source type; sourceCode) -- an Sdr shader the readers
     cannot map."""
@@ -619,7 +619,7 @@ def _no_id(shader) -> str:
     return "(no info:id)"
 
 
-def _no_surface_reason(mat) -> str:
+def _no_surface_reason(mat: Any) -> str:
     """Why a UsdShade material has no surface shader: where its surface outputs lead, or which
     outputs it has instead."""
     from pxr import UsdShade
@@ -851,7 +851,13 @@ def load(
 
 
 def _load(
-    path, *, time: float | None, variants: dict[str, str] | None, uv: tuple, material: str | None, purpose: str
+    path: str | os.PathLike[str],
+    *,
+    time: float | None,
+    variants: dict[str, str] | None,
+    uv: tuple,
+    material: str | None,
+    purpose: str,
 ) -> list[Material]:
     from pxr import Sdf, UsdShade
 

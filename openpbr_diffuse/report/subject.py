@@ -16,6 +16,7 @@ These verdicts are never mixed with the library's own evidence (the report's sec
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -133,7 +134,7 @@ def _json_safe(x):
     return json_safe(x)
 
 
-def _regions_rows(regions) -> list | None:
+def _regions_rows(regions: Any) -> list | None:
     """The grade's breakdown by region (grazing, L.V < 0, roughness bins, dark rho) as
     [[region, text]] rows for the page, whatever mapping / list form the grader gives."""
     if not regions:
@@ -167,7 +168,7 @@ def _deviation_sentence(name: str | None) -> str:
         return str(name)
 
 
-def _fmt_vec(v) -> str:
+def _fmt_vec(v: Any) -> str:
     return "—" if v is None else "(" + ", ".join(f"{x:.4g}" for x in v) + ")"
 
 
@@ -190,7 +191,7 @@ def _where(row: dict | None) -> str:
     return f"row {row.get('id', '?')}: " + ", ".join(parts)
 
 
-def _finite(x) -> float | None:
+def _finite(x: Any) -> float | None:
     try:
         x = float(x)
     except (TypeError, ValueError):
@@ -355,7 +356,7 @@ def _dirs(mu, phi):
     return np.stack([s * np.cos(phi), s * np.sin(phi), mu], axis=-1)
 
 
-def _brdf_batch(brdf, mi, mo, th, rho) -> dict:
+def _brdf_batch(brdf: Callable[..., Any], mi: np.ndarray, mo: np.ndarray, th: np.ndarray, rho: np.ndarray) -> dict:
     """The subject's first channel on every input the pictures draw, from ONE call of ``brdf``
     (a GLSL or C++ subject pays a process and a GL context per call): keys ("map", dphi, r)
     over the (mu_i, mu_o) grid and ("slice", mu_o, r) over the in-plane theta_i."""
@@ -489,7 +490,7 @@ def figures(subject: Subject, ut: UnderTest, image_dir: Path, *, quick: bool = T
     return written
 
 
-def _sampler_figures(plt, plot) -> list:
+def _sampler_figures(plt: Any, plot: dict) -> list:
     """The sampler's histograms against its pdf, from the counts the grading computed
     (``graders.grading.grade_sampler``'s ``plot``): marginals over cos theta_i and phi_i per
     case, and the worst case's (observed - expected) / sqrt(expected) over the 2-D bins."""

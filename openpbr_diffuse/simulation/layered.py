@@ -48,7 +48,7 @@ MAX_BOUNCES = 10_000
 _KIND = {"albedo": 11, "average": 12, "brdf": 13}
 
 
-def _number(name: str, v, lo: float, hi: float, lo_open: bool = False) -> float:
+def _number(name: str, v: float, lo: float, hi: float, lo_open: bool = False) -> float:
     if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
         raise TypeError(f"{name} must be a number, got {type(v).__name__}")
     x = float(v)
@@ -133,7 +133,7 @@ class LayeredSurface:
         return [INTERFACES.index(self.interface), BASES.index(self.base), *map(int, bits)]
 
 
-def _check_count(name: str, value, minimum: int) -> int:
+def _check_count(name: str, value: int | float, minimum: int) -> int:
     if isinstance(value, (float, np.floating)) and math.isfinite(value) and float(value).is_integer():
         value = int(value)
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
@@ -143,7 +143,7 @@ def _check_count(name: str, value, minimum: int) -> int:
     return int(value)
 
 
-def _channels(surface: LayeredSurface, rho) -> tuple[np.ndarray, np.ndarray]:
+def _channels(surface: LayeredSurface, rho: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     r = np.ascontiguousarray(ar.rho_array("rho", rho, np.dtype(np.float64)).reshape(-1))
     tau = surface.tau
     if r.size == 0:
@@ -154,14 +154,14 @@ def _channels(surface: LayeredSurface, rho) -> tuple[np.ndarray, np.ndarray]:
     return np.ascontiguousarray(np.broadcast_to(r, (C,))), np.ascontiguousarray(np.broadcast_to(tau, (C,)))
 
 
-def _mu(mu) -> np.ndarray:
+def _mu(mu: ArrayLike) -> np.ndarray:
     m = np.atleast_1d(np.asarray(mu, dtype=float))
     if m.ndim != 1 or m.size == 0 or not np.all((m > 0.0) & (m <= 1.0)):
         raise ValueError(f"mu must be cosines in (0, 1], got {mu!r}")
     return m
 
 
-def _chunk_seed(seed: int, kind: str, surface: LayeredSurface, key, chunk: int) -> int:
+def _chunk_seed(seed: int, kind: str, surface: LayeredSurface, key: ArrayLike, chunk: int) -> int:
     bits = np.frombuffer(np.asarray(key, dtype=np.float64).tobytes(), dtype=np.uint32)
     entropy = [int(seed), _KIND[kind], *surface.key(), *map(int, bits), int(chunk)]
     return int(np.random.SeedSequence(entropy).generate_state(1)[0])
@@ -457,7 +457,7 @@ def simulate_layered_brdf(
 # ---------------------------------------------------------------------------------------
 
 
-def _gauss_legendre(n: int = 256):
+def _gauss_legendre(n: int = 256) -> tuple[np.ndarray, np.ndarray]:
     x, w = np.polynomial.legendre.leggauss(n)
     return 0.5 * (x + 1.0), 0.5 * w
 
