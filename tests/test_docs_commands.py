@@ -14,7 +14,8 @@ Commands that cannot run here (installers, the test runner, a Dask cluster, benc
 :data:`SKIP`; expensive ones (compiling and grading code, simulations, full reports) are in
 :data:`SLOW` and run with ``-m slow``.  Both lists are checked against the pages, so an entry
 whose command left the documentation fails.  Any other shell command fails: document
-``openpbr-diffuse`` commands, or add the line to :data:`SKIP` with the reason.
+``openpbr-diffuse`` or ``python tools/NAME.py`` commands, or add the line to :data:`SKIP` with
+the reason.
 """
 
 from __future__ import annotations
@@ -77,7 +78,7 @@ class Snippet:
 
     page: str
     line: int
-    kind: str  # "python", "cli" or "shell"
+    kind: str  # "python", "cli" (openpbr-diffuse), "tool" (python tools/NAME.py) or "shell"
     text: str
     expect: int = 0
     skip: str | None = None
@@ -91,7 +92,9 @@ class Snippet:
     def writes(self) -> bool:
         if self.kind == "python":
             return True
-        return self.kind == "cli" and any(t.split("=")[0] in WRITERS for t in shlex.split(self.text, comments=True))
+        return self.kind in ("cli", "tool") and any(
+            t.split("=")[0] in WRITERS for t in shlex.split(self.text, comments=True)
+        )
 
 
 def _fenced_blocks(text: str):
@@ -160,8 +163,17 @@ def collect() -> dict[str, list[Snippet]]:
                 continue
             for line, command in _command_lines(lang, start, body):
                 words = shlex.split(command, comments=True)
-                cli = words[:1] == ["openpbr-diffuse"] and not {"&&", "||", "|", ";"} & set(words)
-                kind = "cli" if cli else "shell"
+                plain = not {"&&", "||", "|", ";"} & set(words)
+                if plain and words[:1] == ["openpbr-diffuse"]:
+                    kind = "cli"
+                elif (
+                    plain
+                    and words[:1] == ["python"]
+                    and re.fullmatch(r"tools/\w+\.py", words[1] if len(words) > 1 else "")
+                ):
+                    kind = "tool"
+                else:
+                    kind = "shell"
                 snippets.append(_classify(Snippet(page, line, kind, command, _expected_status(command))))
         if snippets:
             out[page] = snippets
@@ -200,8 +212,12 @@ class PageRun:
         env = dict(os.environ, NO_COLOR="1", COLUMNS="80", MPLBACKEND="Agg")
         env["PYTHONPATH"] = str(ROOT) + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
         words = shlex.split(s.text, comments=True)
+        if s.kind == "tool":
+            argv = [sys.executable, str(ROOT / words[1]), *words[2:]]
+        else:
+            argv = [sys.executable, "-m", "openpbr_diffuse", *words[1:]]
         r = subprocess.run(
-            [sys.executable, "-m", "openpbr_diffuse", *words[1:]],
+            argv,
             cwd=self.folder,
             env=env,
             capture_output=True,
