@@ -64,7 +64,7 @@ SLOW = [
     ("docs/guide/report.md", "report --glsl", "a report with an implementation"),
     ("docs/guide/report.md", "report --cpp", "a report with an implementation"),
     ("docs/guide/report.md", "report --implementation", "a report with an implementation"),
-    ("docs/guide/report.md", "report --quick", "the quick report (minutes)"),
+    ("docs/guide/report.md", "report --quick", "the quick report: every evidence section"),
     ("docs/guide/report.md", "report --select", "runs two sections of the report"),
     ("docs/guide/report.md", "report --list-checks", "runs the selected sections of the report"),
     ("docs/guide/simulation.md", "simulate", "Monte Carlo simulations of the microsurface"),
@@ -145,7 +145,7 @@ def _classify(s: Snippet) -> Snippet:
         if page == s.page and needle in s.text:
             s.slow = why
     if s.kind == "cli" and shlex.split(s.text, comments=True) == ["openpbr-diffuse", "report"]:
-        s.slow = "the full report (minutes)"
+        s.slow = "the full report: every evidence section"
     return s
 
 
