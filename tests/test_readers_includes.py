@@ -156,3 +156,40 @@ def test_brass_doubled_prefix_is_what_materialx_resolves(tmp_path, monkeypatch):
     for value in {v for v in flat.values()}:
         want = os.path.normpath(BRASS_USDWG.parent / value)
         assert any(want in w for w in missing), (want, missing)
+
+
+PLAIN = """
+<?xml version="1.0"?>
+<materialx version="1.39">
+  <image name="colour" type="color3">
+    <input name="file" type="filename" value="img/tex.png" colorspace="acescg" />
+  </image>
+  <open_pbr_surface name="S" type="surfaceshader">
+    <input name="base_color" type="color3" nodename="colour" />
+  </open_pbr_surface>
+  <surfacematerial name="M" type="material">
+    <input name="surfaceshader" type="surfaceshader" nodename="S" />
+  </surfacematerial>
+</materialx>
+"""
+
+
+@pytest.mark.parametrize("which", ["plain", "include"])
+def test_document_named_by_a_relative_path_resolves_like_its_absolute_path(tmp_path, monkeypatch, which):
+    """A document named relative to the working directory (``eval looks/main.mtlx``) carries that
+    relative name as its elements' source URI; its textures resolve next to it, as with the
+    absolute name, and the texel is OpenImageIO's."""
+    main = _layout(tmp_path)
+    if which == "plain":
+        main = main.parent / "plain.mtlx"
+        main.write_text(textwrap.dedent(PLAIN).lstrip())
+        want = _texel(main.parent / "img" / "tex.png")
+    else:
+        want = _texel(main.parent / "parts" / "img" / "tex.png")
+    monkeypatch.chdir(tmp_path)
+    relative = os.path.relpath(main, tmp_path)
+    (a,) = load_materials(main)
+    (r,) = load_materials(relative)
+    for m in (a, r):
+        assert m.error == "" and not [w for w in m.warnings if "does not exist" in w], m.warnings
+        np.testing.assert_allclose(m.parameters["base_color"].value, want, atol=1e-12)

@@ -238,9 +238,14 @@ def source_folder(file: str, uri: str, doc: Any = None) -> str:
     '/lib'
     >>> source_folder("/a/b/look.mtlx", "sub/inc.mtlx")   # not found: relative to the document read
     '/a/b/sub'
+    >>> import os
+    >>> source_folder("b/look.mtlx", "b/look.mtlx") == os.path.abspath("b")   # the document itself, named relatively
+    True
     """
     root = os.path.dirname(os.path.abspath(file))
-    if not uri:
+    # the document's own elements carry the path it was read with (relative to the working
+    # directory when the file was named so), not an include's href
+    if not uri or uri == file or (doc is not None and uri == doc.getSourceUri()):
         return root
     if os.path.isabs(uri):
         return os.path.dirname(os.path.normpath(uri))
