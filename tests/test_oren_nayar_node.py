@@ -46,7 +46,7 @@ class TestValues:
         assert np.allclose(node.eval(wi, wo), 0.7 * _qon_angles(wi, wo, sigma, rho), rtol=1e-10, atol=1e-14)
 
     def test_eon_albedo_matches_paper_and_quadrature(self):
-        # EON is energy preserving: white furnace (paper; spec/models.md "EON white furnace")
+        # EON is energy preserving: white furnace (the EON paper's white furnace)
         white = OrenNayarDiffuseBSDF(1.0, (1.0, 1.0, 1.0), 1.0, True)
         for mu in (0.1, 0.5, 1.0):
             wo = np.array([math.sqrt(1 - mu * mu), 0.0, mu])

@@ -187,7 +187,7 @@ class TestClosedFormsAgreeWithTables:
             f"\nEq. 14 fit: max |E_F approx - table| at r = 1: {err.max():.3e} at mu = {mu[err.argmax()]:.3f}; "
             f"max relative {np.max(err / ref):.3e}"
         )
-        assert err.max() == pytest.approx(4.7e-4, abs=0.2e-4)  # spec/models.md
+        assert err.max() == pytest.approx(4.7e-4, abs=0.2e-4)  # the EON paper's stated fit error
         assert np.max(err / ref) < 1e-3  # the paper's 0.1 %
         # on the nodes as well (no interpolation involved)
         table = load_table("fon")
@@ -304,7 +304,7 @@ class TestRegeneration:
 
 
 class TestCheckedValues:
-    """spec/models.md "Values checked here" from the tables (independent of the closed forms)."""
+    """The EON paper's stated values from the tables (independent of the closed forms)."""
 
     def test_full_on_gains_energy_near_grazing(self):
         assert float(reference_albedo("full_on", 0.05, 0.5)[0]) == pytest.approx(1.0047, abs=5e-5)
@@ -338,7 +338,7 @@ class TestCheckedValues:
         np.testing.assert_allclose(table.avg_g + table.avg_h, 1.0, atol=1e-6)
 
     def test_eon_coloured_albedo(self):
-        """models.md: rho = 0.5, r = 1, mu = 0.3 gives 0.4780 (Blender's 0.4689 is too dark)."""
+        """Independent quadrature: rho = 0.5, r = 1, mu = 0.3 gives 0.4780 (Blender's 0.4689 is too dark)."""
         assert float(reference_albedo("eon", 0.3, 1.0, 0.5)[0]) == pytest.approx(0.4780, abs=1e-4)
 
     def test_lambert(self):

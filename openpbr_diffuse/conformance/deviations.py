@@ -12,7 +12,8 @@ model, e.g. sigma' = sigma^2 > pi/2): the grader fits the other rows.  Some devi
 in a few variants (e.g. which way a roughness mix-up goes); the
 grader fits every variant and reports the best.
 
-The deviations (``models.md``, "Known deviations"):
+The deviations (each found in a published implementation named below; see the guide page
+"Graded implementations"):
 
 - ``no_energy_compensation_qon``: QON (sigma = the given r) where EON is asked for -- the
   MaterialX OSL backend ignores ``energy_compensation``;
