@@ -150,3 +150,30 @@ def _opaque_intrinsic():
 
 
 opaque = _opaque_intrinsic()
+
+
+def by_constant(stub, table):
+    """The dispatch skeleton of a family of compiled functions with one signature: compiled
+    code calling ``stub(k, *args)``, k a compile-time constant (a literal int), calls
+    ``table[k](*args)``; the choice is made while the caller is typed.  The surface's lobe
+    verbs use it (``nodes._surface_kernels``): a block pass compiled for one lobe then holds
+    that lobe's formula only, where a run-time switch on k would compile every lobe's
+    formula into each pass (LLVM folds the switch after inlining, but only after
+    optimising every branch).  ``stub`` is the Python function that documents the family
+    (it raises if called from Python); returns it."""
+    from numba import errors, types
+    from numba.extending import overload
+
+    code = stub.__code__
+    names = code.co_varnames[: code.co_argcount]
+
+    def implementation(*argtypes):
+        if not isinstance(argtypes[0], types.IntegerLiteral):
+            raise errors.TypingError(f"{stub.__name__}: the first argument must be a compile-time constant")
+        env = {"fn": table[argtypes[0].literal_value], "__name__": stub.__module__}
+        exec(f"def impl({', '.join(names)}):\n    return fn({', '.join(names[1:])})\n", env)
+        return env["impl"]
+
+    typer = eval(f"lambda {', '.join(names)}: implementation({', '.join(names)})", {"implementation": implementation, "__name__": stub.__module__})
+    overload(stub, inline="always", prefer_literal=True)(typer)
+    return stub

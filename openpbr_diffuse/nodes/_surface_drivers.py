@@ -251,7 +251,7 @@ def _lobes_run(ps):
         for b in range(b0, b1):
             s0, m, mb = _block(b, n)
             load_pass(wo, s0, m, f, OX)
-            state_passes(active, dmodel, ms, True, True, q, ps, s0, mb, f)
+            state_passes(active, dmodel, ms, opaque(True), opaque(True), q, ps, s0, mb, f)
             probability_pass(active, sel, q, ps, s0, mb, f, ms)
             for k in range(N_LOBES):
                 lobe_outputs_pass(k, is_on(active, k), ms, q, ps, s0, m, f, W, E, P)
@@ -273,7 +273,7 @@ def _albedo_run(ps):
         for b in range(b0, b1):
             s0, m, mb = _block(b, n)
             load_pass(wo, s0, m, f, OX)
-            state_passes(active, dmodel, ms, True, True, q, ps, s0, mb, f)
+            state_passes(active, dmodel, ms, opaque(True), opaque(True), q, ps, s0, mb, f)
             fill_pass(f, A0, mb, 0.0)
             fill_pass(f, A1, mb, 0.0)
             fill_pass(f, A2, mb, 0.0)
@@ -299,7 +299,7 @@ def _eval_run(ps):
             s0, m, mb = _block(b, n)
             load_pass(wo, s0, m, f, OX)
             load_pass(wi, s0, m, f, IX)
-            state_passes(active, dmodel, ms, False, False, q, ps, s0, mb, f)
+            state_passes(active, dmodel, ms, opaque(False), opaque(False), q, ps, s0, mb, f)
             ggx_pass(lobes, q, ps, s0, mb, f)
             fill_pass(f, A0, mb, 0.0)
             fill_pass(f, A1, mb, 0.0)
@@ -325,7 +325,7 @@ def _pdf_run(ps):
             s0, m, mb = _block(b, n)
             load_pass(wo, s0, m, f, OX)
             load_pass(wi, s0, m, f, IX)
-            state_passes(active, dmodel, ms, True, True, q, ps, s0, mb, f)
+            state_passes(active, dmodel, ms, opaque(True), opaque(True), q, ps, s0, mb, f)
             probability_pass(active, sel, q, ps, s0, mb, f, ms)
             ggx_pdf_pass(active, vndf, q, ps, s0, mb, f)
             fill_pass(f, Q, mb, 0.0)
@@ -354,7 +354,7 @@ def _sample_run(ps):
         for b in range(b0, b1):
             s0, m, mb = _block(b, n)
             load_pass(wo, s0, m, f, OX)
-            state_passes(active, dmodel, ms, True, True, q, ps, s0, mb, f)
+            state_passes(active, dmodel, ms, opaque(True), opaque(True), q, ps, s0, mb, f)
             probability_pass(active, sel, q, ps, s0, mb, f, ms)
             _choose(ud, u, s0, m, mb, f)
             compact(dmodel, mb, f, idx, cnt)

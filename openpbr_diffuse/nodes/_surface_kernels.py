@@ -25,7 +25,7 @@ import math
 import numba
 import numpy as np
 
-from .._jit import INV_PI, kernel
+from .._jit import INV_PI, by_constant, kernel
 from ..microfacet import fresnel
 from ..microfacet import kernels as mf
 from ..microfacet.sheen import sheen_albedo_fit, sheen_density, sheen_sample
@@ -36,6 +36,7 @@ from ..models.qon import qon_AB, qon_albedo, qon_terms
 from ..sampling.ltc import from_frame, ltc_frame, to_frame
 from ..sampling.mis import eon_pdf, eon_sample, pow_tenth
 from ..sampling.simple import cosine_pdf, cosine_sample_local
+
 
 DIFFUSE, SPECULAR, METAL, TRANSMISSION, SUBSURFACE, SUBSURFACE_T, COAT, FUZZ = range(8)
 N_LOBES = 8
@@ -495,7 +496,89 @@ def diffuse_gh(dmodel, p, o, iz, oz, s):
     return INV_PI, 0.0
 
 
+# The lobes' own BSDFs, one function per lobe slot with one signature (the arguments of
+# ``lobe_f``); ``lobe_f`` picks one by the lobe id.
+
+
 @kernel
+def f_diffuse(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
+    up = (iz > 0.0) & (oz > 0.0)
+    s = ix * ox + iy * oy + iz * oz - iz * oz
+    g, h = diffuse_gh(dmodel, p, o, iz, oz, s)
+    g = g if up else 0.0
+    h = h if up else 0.0
+    return (
+        p[o + P_BASE_COLOR] * g + p[o + P_RHO_MS] * h,
+        p[o + P_BASE_COLOR + 1] * g + p[o + P_RHO_MS + 1] * h,
+        p[o + P_BASE_COLOR + 2] * g + p[o + P_RHO_MS + 2] * h,
+    )
+
+
+@kernel
+def f_specular(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
+    x = p[o + P_X_S]
+    v = m * fresnel.dielectric(c, p[o + P_ETA_S]) * mf.multiscatter(x * x, E1s, ms)
+    return v, v, v
+
+
+@kernel
+def f_metal(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
+    F0r, F0g, F0b = p[o + P_METAL_F0], p[o + P_METAL_F0 + 1], p[o + P_METAL_F0 + 2]
+    return (
+        m * fresnel.f82(c, F0r, p[o + P_METAL_A]) * mf.multiscatter(F0r, E1s, ms),
+        m * fresnel.f82(c, F0g, p[o + P_METAL_A + 1]) * mf.multiscatter(F0g, E1s, ms),
+        m * fresnel.f82(c, F0b, p[o + P_METAL_A + 2]) * mf.multiscatter(F0b, E1s, ms),
+    )
+
+
+@kernel
+def f_transmission(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
+    """The GGX lobe mirrored below the surface, normalised by E1."""
+    mt, _ = mf.reflection(ix, iy, -iz, ox, oy, oz, p[o + P_ALPHA_S])
+    mt = mt / E1s
+    return mt * p[o + P_TRANS_TINT], mt * p[o + P_TRANS_TINT + 1], mt * p[o + P_TRANS_TINT + 2]
+
+
+@kernel
+def f_subsurface(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
+    """QON when thin-walled (its reflection half), else Lambert."""
+    up = (iz > 0.0) & (oz > 0.0)
+    s = ix * ox + iy * oy + iz * oz - iz * oz
+    q = qon_terms(iz, oz, s, p[o + P_QON_AB], p[o + P_QON_AB + 1])
+    thin = p[o + P_THIN] > 0.0
+    g = q if thin else INV_PI
+    g = g if up else 0.0
+    return p[o + P_SSS_COLOR] * g, p[o + P_SSS_COLOR + 1] * g, p[o + P_SSS_COLOR + 2] * g
+
+
+@kernel
+def f_subsurface_t(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
+    g = INV_PI if (iz < 0.0) & (oz > 0.0) else 0.0
+    return p[o + P_SSS_COLOR] * g, p[o + P_SSS_COLOR + 1] * g, p[o + P_SSS_COLOR + 2] * g
+
+
+@kernel
+def f_coat(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
+    mc, cc = mf.reflection(ix, iy, iz, ox, oy, oz, p[o + P_ALPHA_C])
+    x = p[o + P_X_C]
+    v = mc * fresnel.dielectric(cc, p[o + P_ETA_C]) * mf.multiscatter(x * x, E1c, ms)
+    return v, v, v
+
+
+@kernel
+def f_fuzz(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
+    up = (iz > 0.0) & (oz > 0.0)
+    Xx, Xy = ltc_frame(ox, oy)
+    lx, ly = to_frame(Xx, Xy, ix, iy)
+    v = Ef * sheen_density(lx, ly, iz, oz, p[o + P_FUZZ_R]) / iz
+    v = v if up else 0.0
+    return v, v, v
+
+
+#: ``lobe_f``'s function of each lobe slot, in slot order
+LOBE_F = (f_diffuse, f_specular, f_metal, f_transmission, f_subsurface, f_subsurface_t, f_coat, f_fuzz)
+
+
 def lobe_f(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
     """The lobe's own BSDF (f0, f1, f2), weight not applied; 0 outside the lobe's hemisphere.
 
@@ -503,53 +586,14 @@ def lobe_f(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
     specular and metal lobes (computed once per row by the caller); E1s, E1c: the GGX albedo
     E1 of the base specular and the coat (multiple-scattering factors, the transmission's
     normalisation); Ef: the fuzz albedo.  Branches on the directions are selects, so that
-    a loop over rows calling it for one lobe k vectorises."""
-    up = (iz > 0.0) & (oz > 0.0)
-    if k == DIFFUSE or k == SUBSURFACE:
-        s = ix * ox + iy * oy + iz * oz - iz * oz
-        if k == SUBSURFACE:  # QON when thin-walled (its reflection half), else Lambert
-            q = qon_terms(iz, oz, s, p[o + P_QON_AB], p[o + P_QON_AB + 1])
-            thin = p[o + P_THIN] > 0.0
-            g = q if thin else INV_PI
-            g = g if up else 0.0
-            return p[o + P_SSS_COLOR] * g, p[o + P_SSS_COLOR + 1] * g, p[o + P_SSS_COLOR + 2] * g
-        g, h = diffuse_gh(dmodel, p, o, iz, oz, s)
-        g = g if up else 0.0
-        h = h if up else 0.0
-        return (
-            p[o + P_BASE_COLOR] * g + p[o + P_RHO_MS] * h,
-            p[o + P_BASE_COLOR + 1] * g + p[o + P_RHO_MS + 1] * h,
-            p[o + P_BASE_COLOR + 2] * g + p[o + P_RHO_MS + 2] * h,
-        )
-    if k == SUBSURFACE_T:
-        g = INV_PI if (iz < 0.0) & (oz > 0.0) else 0.0
-        return p[o + P_SSS_COLOR] * g, p[o + P_SSS_COLOR + 1] * g, p[o + P_SSS_COLOR + 2] * g
-    if k == FUZZ:
-        Xx, Xy = ltc_frame(ox, oy)
-        lx, ly = to_frame(Xx, Xy, ix, iy)
-        v = Ef * sheen_density(lx, ly, iz, oz, p[o + P_FUZZ_R]) / iz
-        v = v if up else 0.0
-        return v, v, v
-    if k == TRANSMISSION:  # the GGX lobe mirrored below the surface, normalised by E1
-        mt, _ = mf.reflection(ix, iy, -iz, ox, oy, oz, p[o + P_ALPHA_S])
-        mt = mt / E1s
-        return mt * p[o + P_TRANS_TINT], mt * p[o + P_TRANS_TINT + 1], mt * p[o + P_TRANS_TINT + 2]
-    if k == COAT:
-        mc, cc = mf.reflection(ix, iy, iz, ox, oy, oz, p[o + P_ALPHA_C])
-        x = p[o + P_X_C]
-        v = mc * fresnel.dielectric(cc, p[o + P_ETA_C]) * mf.multiscatter(x * x, E1c, ms)
-        return v, v, v
-    if k == SPECULAR:
-        x = p[o + P_X_S]
-        v = m * fresnel.dielectric(c, p[o + P_ETA_S]) * mf.multiscatter(x * x, E1s, ms)
-        return v, v, v
-    # METAL
-    F0r, F0g, F0b = p[o + P_METAL_F0], p[o + P_METAL_F0 + 1], p[o + P_METAL_F0 + 2]
-    return (
-        m * fresnel.f82(c, F0r, p[o + P_METAL_A]) * mf.multiscatter(F0r, E1s, ms),
-        m * fresnel.f82(c, F0g, p[o + P_METAL_A + 1]) * mf.multiscatter(F0g, E1s, ms),
-        m * fresnel.f82(c, F0b, p[o + P_METAL_A + 2]) * mf.multiscatter(F0b, E1s, ms),
-    )
+    a loop over rows calling it for one lobe k vectorises.
+
+    Compiled form only (``_jit.by_constant``): the lobe id ``k`` is a compile-time constant and picks
+    that lobe's function (``LOBE_F``) while the caller is typed."""
+    raise NotImplementedError("compiled only: called from the block passes")
+
+
+by_constant(lobe_f, LOBE_F)
 
 
 @kernel

@@ -318,7 +318,7 @@ def score_pass(k, sel, p, ps, s0, m, f, ms):
 @kernel
 def _score_or_zero(k, active, sel, p, ps, s0, m, f, ms):
     if is_on(active, k):
-        score_pass(opaque(k), sel, p, ps, s0, m, f, ms)
+        score_pass(k, sel, p, ps, s0, m, f, ms)
     else:
         fill_pass(f, PR + k, m, 0.0)
 
@@ -330,14 +330,14 @@ def probability_pass(active, sel, p, ps, s0, m, f, ms):
     horizon; 0 for inactive slots).  One loop per active lobe's score, then one that
     normalises: each vectorises (one loop doing all of it does not)."""
     # one pass per slot, the slot a constant (a run-time slot leaves each loop a switch)
-    _score_or_zero(DIFFUSE, active, sel, p, ps, s0, m, f, ms)
-    _score_or_zero(SPECULAR, active, sel, p, ps, s0, m, f, ms)
-    _score_or_zero(METAL, active, sel, p, ps, s0, m, f, ms)
-    _score_or_zero(TRANSMISSION, active, sel, p, ps, s0, m, f, ms)
-    _score_or_zero(SUBSURFACE, active, sel, p, ps, s0, m, f, ms)
-    _score_or_zero(SUBSURFACE_T, active, sel, p, ps, s0, m, f, ms)
-    _score_or_zero(COAT, active, sel, p, ps, s0, m, f, ms)
-    _score_or_zero(FUZZ, active, sel, p, ps, s0, m, f, ms)
+    _score_or_zero(opaque(DIFFUSE), active, sel, p, ps, s0, m, f, ms)
+    _score_or_zero(opaque(SPECULAR), active, sel, p, ps, s0, m, f, ms)
+    _score_or_zero(opaque(METAL), active, sel, p, ps, s0, m, f, ms)
+    _score_or_zero(opaque(TRANSMISSION), active, sel, p, ps, s0, m, f, ms)
+    _score_or_zero(opaque(SUBSURFACE), active, sel, p, ps, s0, m, f, ms)
+    _score_or_zero(opaque(SUBSURFACE_T), active, sel, p, ps, s0, m, f, ms)
+    _score_or_zero(opaque(COAT), active, sel, p, ps, s0, m, f, ms)
+    _score_or_zero(opaque(FUZZ), active, sel, p, ps, s0, m, f, ms)
     flat = 1.0 / active_count(active)
     for r in range(m):
         S = 0.0
@@ -387,7 +387,7 @@ def eval_lobe_pass(k, dmodel, weighted, ms, p, ps, s0, m, f):
     for r in range(m):
         o = par(ps, s0, r)
         f0, f1, f2 = lobe_f(
-            opaque(k),
+            k,
             p,
             o,
             f[at(IX, r)],
