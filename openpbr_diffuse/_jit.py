@@ -152,28 +152,40 @@ def _opaque_intrinsic():
 opaque = _opaque_intrinsic()
 
 
-def by_constant(stub, table):
-    """The dispatch skeleton of a family of compiled functions with one signature: compiled
-    code calling ``stub(k, *args)``, k a compile-time constant (a literal int), calls
-    ``table[k](*args)``; the choice is made while the caller is typed.  The surface's lobe
-    verbs use it (``nodes._surface_kernels``): a block pass compiled for one lobe then holds
-    that lobe's formula only, where a run-time switch on k would compile every lobe's
-    formula into each pass (LLVM folds the switch after inlining, but only after
-    optimising every branch).  ``stub`` is the Python function that documents the family
-    (it raises if called from Python); returns it."""
+def unrolled(name, argnames, body_of, env, module):
+    """A function ``name(*argnames)`` for compiled code whose body is generated, while its
+    caller is typed, from the value of its first argument, a compile-time constant (a
+    literal int): ``body_of(value)`` returns the body's Python source (over ``argnames``
+    and the names of ``env``), which numba inlines into the caller.  The one place the
+    package writes code from code: the surface's lobe dispatch (``by_constant``) and its
+    loops over a set of lobes (``nodes._surface_passes.lobe_loop``) unroll into straight
+    calls with constant ids, so that each call compiles its own lobe's formula only.  (A
+    run-time ``if k == ...`` chain is typed branch by branch: every call site compiled every
+    lobe.)  Returns the Python stub, which raises if called from Python."""
     from numba import errors, types
     from numba.extending import overload
 
-    code = stub.__code__
-    names = code.co_varnames[: code.co_argcount]
+    args = ", ".join(argnames)
+    names = {"__name__": module}
+    exec(f"def {name}({args}):\n    raise NotImplementedError('compiled only')\n", names)
+    stub = names[name]
 
     def implementation(*argtypes):
         if not isinstance(argtypes[0], types.IntegerLiteral):
-            raise errors.TypingError(f"{stub.__name__}: the first argument must be a compile-time constant")
-        env = {"fn": table[argtypes[0].literal_value], "__name__": stub.__module__}
-        exec(f"def impl({', '.join(names)}):\n    return fn({', '.join(names[1:])})\n", env)
-        return env["impl"]
+            raise errors.TypingError(f"{name}: the first argument must be a compile-time constant")
+        body = body_of(argtypes[0].literal_value).replace("\n", "\n    ")
+        ns = dict(env, __name__=module)
+        exec(f"def impl({args}):\n    {body}\n", ns)
+        return ns["impl"]
 
-    typer = eval(f"lambda {', '.join(names)}: implementation({', '.join(names)})", {"implementation": implementation, "__name__": stub.__module__})
+    typer = eval(f"lambda {args}: implementation({args})", {"implementation": implementation, "__name__": module})
     overload(stub, inline="always", prefer_literal=True)(typer)
     return stub
+
+
+def by_constant(name, argnames, table, module):
+    """``name(k, *rest)`` in compiled code calls ``table[k](*rest)``, k a compile-time constant
+    (``unrolled``): the dispatch of a family of functions with one signature."""
+    rest = ", ".join(argnames[1:])
+    env = {f"f{k}": fn for k, fn in enumerate(table)}
+    return unrolled(name, argnames, lambda k: f"return f{k}({rest})", env, module)
