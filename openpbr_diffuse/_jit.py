@@ -26,6 +26,19 @@ FASTMATH = {"contract", "arcp", "nsz", "afn"}
 #: Decorator for scalar formula functions (inlined into the batch drivers).
 kernel = numba.njit(cache=True, fastmath=FASTMATH, error_model="numpy", forceinline=True)
 
+#: Decorator for the tiny helpers (scratch indices, block bounds): inlined in numba's IR, so
+#: that they are never compiled on their own (a ``kernel`` is compiled once per distinct
+#: literal argument of its call sites).
+inline = numba.njit(inline="always")
+
+#: Decorator for the block runners of the surface's verbs (``nodes._surface_drivers``):
+#: cached, ``nogil`` (the launcher's pool runs them on several threads at once), serial.
+runner = numba.njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
+
+#: Decorator for a compiled loop that is neither a formula nor a runner (the packing of a
+#: material's inputs, ``nodes._surface_kernels.pack_drive``): cached, strict IEEE arithmetic.
+serial = numba.njit(cache=True, error_model="numpy")
+
 PI = math.pi
 INV_PI = 1.0 / math.pi
 EPS = 1e-7  # the epsilon of Listing 1 (f_ms guards)

@@ -15,10 +15,11 @@ Rapids code).  What is bit for bit by construction: a call's rows do not depend 
 thread count nor on how a call is split at multiples of ``B`` rows (the same compiled runner
 runs the same blocks).
 
-Each driver is built for a parameter stride (0: one material for every row; N_PARAMS: a
-material per row) as a compile-time constant, once, with ``nogil``: a call of fewer than
+Each driver is built per parameter stride (0: one material for every row; N_PARAMS: a
+material per row), lobe set and diffuse model, compile-time constants, on first use, with
+``nogil``: a call of fewer than
 ``SERIAL_ROWS`` rows runs it on the calling thread, a larger one runs it over runs of blocks
-on a pool of Python threads (``_Builds``).
+on the package's thread pool (``_Builds``).
 No input is checked here: the public class checks its inputs once, at construction and on
 each call's directions.
 """
@@ -29,7 +30,7 @@ import math
 import numba
 import numpy as np
 
-from .._jit import FASTMATH, kernel, opaque, stack_buffer
+from .._jit import inline, kernel, opaque, runner, stack_buffer
 from .._launch import _U, SERIAL_ROWS, executor, launch, rows
 from ._surface_kernels import (
     COAT,
@@ -82,7 +83,7 @@ _counts = stack_buffer(N_SAMPLERS, numba.int64)
 _param_buffer = stack_buffer(N_PARAMS)
 
 
-@numba.njit(inline="always")
+@inline
 def _local_params(p):
     """One material's parameters, copied to a stack buffer."""
     q = _param_buffer()
@@ -124,16 +125,14 @@ def _choose(ud, u, s0, m, mb, f):
 # called by both builds of the driver (``_Builds``), so that the serial and the parallel
 # driver share one compiled body.
 
-_jit_run = numba.njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
 
-
-@numba.njit(inline="always")
+@inline
 def _block_range(t, nt, n):
     nb = (n + B - 1) // B
     return t * nb // nt, (t + 1) * nb // nt
 
 
-@numba.njit(inline="always")
+@inline
 def _block(b, n):
     """Block b of n rows: its first row s0, its rows m and the rows its passes run over."""
     s0 = b * B
@@ -142,7 +141,7 @@ def _block(b, n):
 
 
 def _lobes_run(ps, lobes, dmodel):
-    @_jit_run
+    @runner
     def lobes_run(t, nt, active, sel, ms, p, wo, W, E, P):
         """W, E (n*8*3), P (n*8): weight, albedo and probability of every lobe slot."""
         n = wo.shape[0] // 3
@@ -156,7 +155,7 @@ def _lobes_run(ps, lobes, dmodel):
             s0, m, mb = _block(b, n)
             load_pass(wo, s0, m, f, ROW.OX)
             state_passes(opaque(lobes), active, opaque(dmodel), ms, opaque(True), opaque(True), q, ps, s0, mb, f)
-            probability_pass(opaque(lobes), active, sel, q, ps, s0, mb, f, ms)
+            probability_pass(lobes, active, sel, q, ps, s0, mb, f, ms)
             for k in range(N_LOBES):
                 lobe_outputs_pass(k, is_on(active, k), ms, q, ps, s0, m, f, W, E, P)
 
@@ -164,7 +163,7 @@ def _lobes_run(ps, lobes, dmodel):
 
 
 def _albedo_run(ps, lobes, dmodel):
-    @_jit_run
+    @runner
     def albedo_run(t, nt, active, ms, p, wo, out):
         """out (n*3) = sum_k w_k E_k."""
         n = wo.shape[0] // 3
@@ -188,7 +187,7 @@ def _albedo_run(ps, lobes, dmodel):
 
 
 def _eval_run(ps, lobes, dmodel):
-    @_jit_run
+    @runner
     def eval_run(t, nt, active, only, ms, p, wi, wo, out):
         """out (n*3) = sum_k w_k f_k, or the unweighted f_only when only >= 0."""
         n = wo.shape[0] // 3
@@ -215,7 +214,7 @@ def _eval_run(ps, lobes, dmodel):
 
 
 def _pdf_run(ps, lobes, dmodel):
-    @_jit_run
+    @runner
     def pdf_run(t, nt, active, sel, ms, vndf, p, wo, wi, out):
         """out (n) = sum_k P_k pdf_k(wi | wo); 0 where wo is below the horizon."""
         n = wo.shape[0] // 3
@@ -230,7 +229,7 @@ def _pdf_run(ps, lobes, dmodel):
             load_pass(wo, s0, m, f, ROW.OX)
             load_pass(wi, s0, m, f, ROW.IX)
             state_passes(opaque(lobes), active, opaque(dmodel), ms, opaque(True), opaque(True), q, ps, s0, mb, f)
-            probability_pass(opaque(lobes), active, sel, q, ps, s0, mb, f, ms)
+            probability_pass(lobes, active, sel, q, ps, s0, mb, f, ms)
             ggx_pdf_pass(active, vndf, q, ps, s0, mb, f)
             fill_pass(f, ROW.Q, mb, 0.0)
             each_pdf(lobes, active, dmodel, False, vndf, q, ps, s0, mb, f)
@@ -241,7 +240,7 @@ def _pdf_run(ps, lobes, dmodel):
 
 
 def _sample_run(ps, lobes, dmodel):
-    @_jit_run
+    @runner
     def sample_run(t, nt, active, sel, ms, vndf, p, wo, u, wi, out):
         """Pick lobe k with P_k (u[0]), sample it (u[1:3], or u[0] rescaled and u[1] when u has
         2 columns); wi (n*3), out (n) = the mixture pdf at wi; 0 marks a failed sample."""
@@ -259,7 +258,7 @@ def _sample_run(ps, lobes, dmodel):
             s0, m, mb = _block(b, n)
             load_pass(wo, s0, m, f, ROW.OX)
             state_passes(opaque(lobes), active, opaque(dmodel), ms, opaque(True), opaque(True), q, ps, s0, mb, f)
-            probability_pass(opaque(lobes), active, sel, q, ps, s0, mb, f, ms)
+            probability_pass(lobes, active, sel, q, ps, s0, mb, f, ms)
             _choose(ud, u, s0, m, mb, f)
             compact(opaque(dmodel), mb, f, idx, cnt)
             _each_sampler(vndf, q, ps, s0, f, idx, cnt)

@@ -5,7 +5,7 @@ Lobes are plain values with the verbs of pbrt-v4's ``BxDF`` -- ``lobe_f`` (the l
 BSDF, weight not applied), ``lobe_sample`` and ``lobe_pdf`` -- selected by a lobe id, with
 ``lobe_albedo`` (its directional albedo E_k(wo)), ``layer_factor`` and ``lobe_score`` (its
 selection score |w_k E_k|).  A surface row is a flat vector of prepared parameters (layout
-``P_*``, built once per material by ``pack_drive``).  Each weight is a layer factor of mu_o
+``PARAMS``, built once per material by ``pack_drive``).  Each weight is a layer factor of mu_o
 (the albedos of the specular, coat and fuzz layers, which scale what lies beneath) times a
 colour of the material, w_k[c] = L_k(mu_o) K_k[c] (``layer_factor``, ``_pack_weights``), so
 that the selection scores are constants of the material times functions of mu_o.  No input
@@ -23,10 +23,9 @@ reflection part when thin-walled), SUBSURFACE_T (thin-walled translucency), COAT
 import collections
 import math
 
-import numba
 import numpy as np
 
-from .._jit import INV_PI, by_constant, kernel
+from .._jit import INV_PI, by_constant, kernel, serial
 from ..microfacet import fresnel
 from ..microfacet import kernels as mf
 from ..microfacet.sheen import sheen_albedo_fit, sheen_density, sheen_sample
@@ -383,7 +382,7 @@ def _pack_drive(raw, out, CT, RT):
     return mask, warn
 
 
-pack_drive = numba.njit(cache=True, error_model="numpy")(_pack_drive)
+pack_drive = serial(_pack_drive)
 
 
 @kernel

@@ -5,9 +5,9 @@ A driver (``_surface_drivers``) walks its rows in blocks of ``B``; each block ke
 per-row values in a scratch buffer ``f`` of ``NROWS`` rows of B float64 (``at(row, r)``):
 the directions, the layer albedos of mu_o (``state_passes``), the selection probabilities
 (``probability_pass``), then whatever the verb accumulates.  The lobe passes run once per
-active lobe with the lobe id a compile-time constant (the callers write ``if active & bit:
-pass(SLOT, ...)``), so ``lobe_f`` / ``lobe_pdf`` / ``lobe_sample`` fold to that lobe's
-formula and the loop body has no switch; the material's options (multiple scattering, VNDF,
+active lobe with the lobe id a compile-time constant (``lobe_loop``, the one loop over the
+lobe ids), so ``lobe_f`` / ``lobe_pdf`` / ``lobe_sample`` fold to that lobe's formula and the
+loop body has no switch; the material's options (multiple scattering, VNDF,
 the selection rule) are selects, the diffuse model a constant of the diffuse lobe's pass.
 A loop with a run-time switch inside, or a libm call (``exp`` of the fuzz albedo), stays
 scalar; measured on the 2-core test VM, the base surface's sample went from ~235 to ~60 ns
@@ -18,9 +18,7 @@ Parameters: ``ps`` is the parameter stride, a compile-time constant of each driv
 material per row (``par``).
 """
 
-import numba
-
-from .._jit import kernel, opaque, unrolled
+from .._jit import inline, kernel, opaque, unrolled
 from .._launch import _U
 from ..microfacet import kernels as mf
 from ..microfacet.sheen import sheen_albedo_at
@@ -31,14 +29,10 @@ from ._surface_kernels import (
     D_EON,
     DIFFUSE,
     FUZZ,
-    METAL,
     N_LOBES,
     N_SAMPLERS,
     PARAM,
-    SPECULAR,
     SUBSURFACE,
-    SUBSURFACE_T,
-    TRANSMISSION,
     diffuse_albedo_terms,
     layer_albedos,
     layer_factor,
@@ -84,18 +78,13 @@ ROWS = (
 ROW, NROWS = layout("Row", ROWS)
 
 
-#: Tiny helpers are inlined in numba's IR rather than by LLVM: a ``kernel`` is compiled once per
-#: distinct literal argument (``at`` alone had 43 compilations per driver).
-_inline = numba.njit(inline="always")
-
-
-@_inline
+@inline
 def at(row, r):
     """Index of entry r of scratch row ``row``."""
     return _U(row) * _U(B) + _U(r)
 
 
-@_inline
+@inline
 def span(m):
     """The rows the passes of a block of m rows run over: B for a whole block (a constant trip
     count), else m rounded up to the vector width (a short call, lobes(wo) of one row, does
@@ -103,13 +92,13 @@ def span(m):
     return B if m == B else (m + 3) // 4 * 4
 
 
-@_inline
+@inline
 def par(ps, s0, r):
     """Offset of the parameters of row s0 + r: 0 for one material (ps = 0), else a row's own."""
     return _U(s0 + r) * _U(ps)
 
 
-@_inline
+@inline
 def active_count(active):
     """K: the number of active lobe slots."""
     K = 0
@@ -118,7 +107,7 @@ def active_count(active):
     return K
 
 
-@_inline
+@inline
 def is_on(active, k):
     return (active & (1 << k)) != 0
 
@@ -160,7 +149,7 @@ def load_u_pass(ud, u, s0, m, f):
         f[at(ROW.U2, r)] = 0.5
 
 
-@_inline
+@inline
 def fill_pass(f, row, m, v):
     for r in range(m):
         f[at(row, r)] = v
@@ -267,8 +256,9 @@ def factor_of(k, f, r):
 
 
 @kernel
-def score_pass(k, sel, p, ps, s0, m, f, ms):
-    """ROW.PR + k = s_k, the selection score of lobe slot k (``lobe_score``), at every row."""
+def score_pass(k, dmodel, sel, p, ps, s0, m, f, ms):
+    """ROW.PR + k = s_k, the selection score of lobe slot k (``lobe_score``), at every row
+    (dmodel: unused; the diffuse score uses EON's form of the albedo, as ``albedo_of``)."""
     for r in range(m):
         o = par(ps, s0, r)
         f[at(ROW.PR + k, r)] = lobe_score(
@@ -290,29 +280,47 @@ def score_pass(k, sel, p, ps, s0, m, f, ms):
         )
 
 
-@kernel
-def _score_or_zero(k, lobes, active, sel, p, ps, s0, m, f, ms):
-    if is_on(lobes, k) and is_on(active, k):
-        score_pass(k, sel, p, ps, s0, m, f, ms)
-    else:
-        fill_pass(f, ROW.PR + k, m, 0.0)
+def lobe_loop(name, pass_, literal):
+    """``name(lobes, active, dmodel, *rest)``, compiled code only: ``pass_(k, dmodel, *rest)`` of
+    every lobe slot k of the compile-time set ``lobes`` (a bit mask, the runner's) that the
+    run-time mask ``active`` holds, in slot order -- the one dispatch skeleton of the lobe
+    passes.  The slots outside ``lobes`` are not compiled at all.
+
+    ``literal``: k is a literal constant of each call, and so is the diffuse model for the
+    diffuse slot's (D_EON for the others, which ignore it): the pass is compiled once per
+    lobe, folded to that lobe's formula (``eval``: without it LLVM did not vectorise the
+    lobe loops).  Otherwise k and the model are passed through ``_jit.opaque``: the pass
+    is compiled once, and LLVM folds the constants after inlining it into its driver."""
+    code = pass_.py_func.__code__
+    rest = code.co_varnames[2 : code.co_argcount]
+    args = ", ".join(rest)
+
+    def body(lobes):
+        calls = []
+        for k in range(N_LOBES):
+            if lobes >> k & 1:
+                if literal:
+                    head = f"{k}, dmodel" if k == DIFFUSE else f"{k}, {D_EON}"
+                else:
+                    head = f"opaque({k}), opaque(dmodel)"
+                calls.append(f"if active >> {k} & 1:\n    pass_({head}, {args})")
+        return "\n".join(calls) or "return"
+
+    return unrolled(name, ("lobes", "active", "dmodel", *rest), body, {"pass_": pass_, "opaque": opaque}, __name__)
+
+
+each_score = lobe_loop("each_score", score_pass, literal=False)
 
 
 @kernel
 def probability_pass(lobes, active, sel, p, ps, s0, m, f, ms):
-    """ROW.PR + k: the selection probability P_k = s_k / sum_j s_j of every lobe slot k (uniform
+    """PR + k: the selection probability P_k = s_k / sum_j s_j of every lobe slot k (uniform
     over the active slots when every score is 0 -- a black surface -- or wo is below the
-    horizon; 0 for inactive slots).  One loop per active lobe's score, then one that
-    normalises: each vectorises (one loop doing all of it does not)."""
-    # one pass per slot, the slot a constant (a run-time slot leaves each loop a switch)
-    _score_or_zero(opaque(DIFFUSE), lobes, active, sel, p, ps, s0, m, f, ms)
-    _score_or_zero(opaque(SPECULAR), lobes, active, sel, p, ps, s0, m, f, ms)
-    _score_or_zero(opaque(METAL), lobes, active, sel, p, ps, s0, m, f, ms)
-    _score_or_zero(opaque(TRANSMISSION), lobes, active, sel, p, ps, s0, m, f, ms)
-    _score_or_zero(opaque(SUBSURFACE), lobes, active, sel, p, ps, s0, m, f, ms)
-    _score_or_zero(opaque(SUBSURFACE_T), lobes, active, sel, p, ps, s0, m, f, ms)
-    _score_or_zero(opaque(COAT), lobes, active, sel, p, ps, s0, m, f, ms)
-    _score_or_zero(opaque(FUZZ), lobes, active, sel, p, ps, s0, m, f, ms)
+    horizon; 0 for inactive slots).  One loop per active lobe's score (``each_score``), then
+    one that normalises: each vectorises (one loop doing all of it does not)."""
+    for k in range(N_LOBES):
+        fill_pass(f, ROW.PR + k, m, 0.0)
+    each_score(lobes, active, D_EON, sel, p, ps, s0, m, f, ms)
     flat = 1.0 / active_count(active)
     for r in range(m):
         S = 0.0
@@ -549,38 +557,6 @@ def rgb_out_pass(s0, m, f, out):
         out[j] = f[at(ROW.A0, r)] if up else 0.0
         out[j + _U(1)] = f[at(ROW.A1, r)] if up else 0.0
         out[j + _U(2)] = f[at(ROW.A2, r)] if up else 0.0
-
-
-# --------------------------------------------------------------------------- lobe loops
-
-
-def lobe_loop(name, pass_, literal):
-    """``name(lobes, active, dmodel, *rest)``, compiled code only: ``pass_(k, dmodel, *rest)`` of
-    every lobe slot k of the compile-time set ``lobes`` (a bit mask, the runner's) that the
-    run-time mask ``active`` holds, in slot order -- the one dispatch skeleton of the lobe
-    passes.  The slots outside ``lobes`` are not compiled at all.
-
-    ``literal``: k is a literal constant of each call, and so is the diffuse model for the
-    diffuse slot's (D_EON for the others, which ignore it): the pass is compiled once per
-    lobe, folded to that lobe's formula (``eval``: without it LLVM did not vectorise the
-    lobe loops).  Otherwise k and the model are passed through ``_jit.opaque``: the pass
-    is compiled once, and LLVM folds the constants after inlining it into its driver."""
-    code = pass_.py_func.__code__
-    rest = code.co_varnames[2 : code.co_argcount]
-    args = ", ".join(rest)
-
-    def body(lobes):
-        calls = []
-        for k in range(N_LOBES):
-            if lobes >> k & 1:
-                if literal:
-                    head = f"{k}, dmodel" if k == DIFFUSE else f"{k}, {D_EON}"
-                else:
-                    head = f"opaque({k}), opaque(dmodel)"
-                calls.append(f"if active >> {k} & 1:\n    pass_({head}, {args})")
-        return "\n".join(calls) or "return"
-
-    return unrolled(name, ("lobes", "active", "dmodel", *rest), body, {"pass_": pass_, "opaque": opaque}, __name__)
 
 
 each_eval = lobe_loop("each_eval", eval_lobe_pass, literal=True)
