@@ -452,27 +452,33 @@ def layer_factor(k, Tu, Tb, Tf):
     return Tu
 
 
+#: The state of mu_o that one row's lobe albedos and scores read (``state_passes`` computes it
+#: for a block; ``_surface_passes.state_at`` reads one row's): E1s, E5s, E6s, Es -- the GGX
+#: basis albedos E1, E5, E6 and the dielectric albedo of the base specular; Ec, Ef -- the coat's
+#: and the fuzz's albedos; eg, eh -- the diffuse albedo terms, E = rho e_g + rho_ms e_h; Eq --
+#: the QON albedo of the thin-walled subsurface reflection (1 when not thin-walled).
+LayerState = collections.namedtuple("LayerState", ("E1s", "E5s", "E6s", "Es", "Ec", "Ef", "eg", "eh", "Eq"))
+
+
 @kernel
-def lobe_albedo(k, c, p, o, dmodel, ms, E1s, E5s, E6s, Es, Ec, Ef, eg, eh, Eq):
-    """E_k(wo), the directional albedo of lobe slot k in channel c, from the row's layer
-    albedos (E1/E5/E6/E_spec of the base specular, E_coat, E_fuzz), the diffuse albedo terms
-    (e_g, e_h) and Eq, the QON albedo of the thin-walled subsurface reflection (1 when not
-    thin-walled)."""
+def lobe_albedo(k, c, p, o, dmodel, ms, st):
+    """E_k(wo), the directional albedo of lobe slot k in channel c, from the row's
+    ``LayerState`` ``st``."""
     if k == DIFFUSE:
-        return diffuse_albedo(dmodel, p[o + PARAM.BASE_COLOR + c], p[o + PARAM.RHO_MS + c], eg, eh)
+        return diffuse_albedo(dmodel, p[o + PARAM.BASE_COLOR + c], p[o + PARAM.RHO_MS + c], st.eg, st.eh)
     if k == SPECULAR:
-        return Es
+        return st.Es
     if k == METAL:
-        return metal_albedo(p, o, c, E1s, E5s, E6s, ms)
+        return metal_albedo(p, o, c, st.E1s, st.E5s, st.E6s, ms)
     if k == TRANSMISSION:
         return p[o + PARAM.TRANS_TINT + c]
     if k == SUBSURFACE:
-        return p[o + PARAM.SSS_COLOR + c] * Eq
+        return p[o + PARAM.SSS_COLOR + c] * st.Eq
     if k == SUBSURFACE_T:
         return p[o + PARAM.SSS_COLOR + c]
     if k == COAT:
-        return Ec
-    return Ef
+        return st.Ec
+    return st.Ef
 
 
 @kernel
@@ -482,8 +488,9 @@ def _norm_or_max(mx, a, b, c):
 
 
 @kernel
-def lobe_score(k, sel, p, o, ms, L, E1s, E5s, E6s, Es, Ec, Ef, eg, eh, Eq):
-    """The selection score s_k = |w_k E_k| of lobe slot k (L = its ``layer_factor``): the RGB
+def lobe_score(k, sel, p, o, ms, L, st):
+    """The selection score s_k = |w_k E_k| of lobe slot k (L = its ``layer_factor``; st: the
+    row's ``LayerState``): the RGB
     length (SEL_LENGTH), the largest component (SEL_MAX) or 1 (SEL_UNIFORM).
 
     With w_k = L_k K_k most reduce to constants of the material (``_pack_weights``):
@@ -497,27 +504,31 @@ def lobe_score(k, sel, p, o, ms, L, E1s, E5s, E6s, Es, Ec, Ef, eg, eh, Eq):
     mx = sel == SEL_MAX
     q = o + PARAM.K + 3 * k
     if k == DIFFUSE:
-        d0 = p[q] * diffuse_albedo(D_EON, p[o + PARAM.BASE_COLOR], p[o + PARAM.RHO_MS], eg, eh)
-        d1 = p[q + 1] * diffuse_albedo(D_EON, p[o + PARAM.BASE_COLOR + 1], p[o + PARAM.RHO_MS + 1], eg, eh)
-        d2 = p[q + 2] * diffuse_albedo(D_EON, p[o + PARAM.BASE_COLOR + 2], p[o + PARAM.RHO_MS + 2], eg, eh)
-        q2 = p[o + PARAM.DQ] * eg * eg + 2.0 * p[o + PARAM.DQ + 1] * eg * eh + p[o + PARAM.DQ + 2] * eh * eh
+        d0 = p[q] * diffuse_albedo(D_EON, p[o + PARAM.BASE_COLOR], p[o + PARAM.RHO_MS], st.eg, st.eh)
+        d1 = p[q + 1] * diffuse_albedo(D_EON, p[o + PARAM.BASE_COLOR + 1], p[o + PARAM.RHO_MS + 1], st.eg, st.eh)
+        d2 = p[q + 2] * diffuse_albedo(D_EON, p[o + PARAM.BASE_COLOR + 2], p[o + PARAM.RHO_MS + 2], st.eg, st.eh)
+        q2 = (
+            p[o + PARAM.DQ] * st.eg * st.eg
+            + 2.0 * p[o + PARAM.DQ + 1] * st.eg * st.eh
+            + p[o + PARAM.DQ + 2] * st.eh * st.eh
+        )
         s = _norm_or_max(True, d0, d1, d2) if mx else math.sqrt(max(q2, 0.0))
     elif k == METAL:
-        m0 = p[q] * metal_albedo(p, o, 0, E1s, E5s, E6s, ms)
-        m1 = p[q + 1] * metal_albedo(p, o, 1, E1s, E5s, E6s, ms)
-        m2 = p[q + 2] * metal_albedo(p, o, 2, E1s, E5s, E6s, ms)
+        m0 = p[q] * metal_albedo(p, o, 0, st.E1s, st.E5s, st.E6s, ms)
+        m1 = p[q + 1] * metal_albedo(p, o, 1, st.E1s, st.E5s, st.E6s, ms)
+        m2 = p[q + 2] * metal_albedo(p, o, 2, st.E1s, st.E5s, st.E6s, ms)
         s = _norm_or_max(True, m0, m1, m2) if mx else _norm_or_max(False, m0, m1, m2)
     else:
         cl, cm = p[o + PARAM.SC + 2 * k], p[o + PARAM.SC + 2 * k + 1]
         c = cm if mx else cl
         if k == SPECULAR:
-            s = Es * c
+            s = st.Es * c
         elif k == COAT:
-            s = Ec * c
+            s = st.Ec * c
         elif k == FUZZ:
-            s = Ef * c
+            s = st.Ef * c
         elif k == SUBSURFACE:
-            s = Eq * c
+            s = st.Eq * c
         else:  # TRANSMISSION, SUBSURFACE_T: constant colours
             s = c
     return 1.0 if sel == SEL_UNIFORM else abs(L) * s

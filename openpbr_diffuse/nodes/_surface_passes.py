@@ -33,6 +33,7 @@ from ._surface_kernels import (
     N_SAMPLERS,
     PARAM,
     SUBSURFACE,
+    LayerState,
     diffuse_albedo_terms,
     layer_albedos,
     layer_factor,
@@ -226,17 +227,10 @@ def diffuse_albedo_pass(dmodel, p, ps, s0, m, f):
         f[at(ROW.EH, r)] = eh
 
 
-@kernel
-def albedo_of(k, c, p, o, f, r, ms):
-    """E_k in channel c at row r (``lobe_albedo`` on the state rows).  The diffuse albedo uses
-    EON's form rho e_g + rho_ms e_h for every model: e_h = 0 for QON and Lambert."""
-    return lobe_albedo(
-        k,
-        c,
-        p,
-        o,
-        D_EON,
-        ms,
+@inline
+def state_at(f, r):
+    """The ``LayerState`` of row r, from the state rows of the scratch."""
+    return LayerState(
         f[at(ROW.E1S, r)],
         f[at(ROW.E5S, r)],
         f[at(ROW.E6S, r)],
@@ -247,6 +241,13 @@ def albedo_of(k, c, p, o, f, r, ms):
         f[at(ROW.EH, r)],
         f[at(ROW.EQ, r)],
     )
+
+
+@kernel
+def albedo_of(k, c, p, o, f, r, ms):
+    """E_k in channel c at row r (``lobe_albedo`` on the state rows).  The diffuse albedo uses
+    EON's form rho e_g + rho_ms e_h for every model: e_h = 0 for QON and Lambert."""
+    return lobe_albedo(k, c, p, o, D_EON, ms, state_at(f, r))
 
 
 @kernel
@@ -261,23 +262,7 @@ def score_pass(k, dmodel, sel, p, ps, s0, m, f, ms):
     (dmodel: unused; the diffuse score uses EON's form of the albedo, as ``albedo_of``)."""
     for r in range(m):
         o = par(ps, s0, r)
-        f[at(ROW.PR + k, r)] = lobe_score(
-            k,
-            sel,
-            p,
-            o,
-            ms,
-            factor_of(k, f, r),
-            f[at(ROW.E1S, r)],
-            f[at(ROW.E5S, r)],
-            f[at(ROW.E6S, r)],
-            f[at(ROW.ES, r)],
-            f[at(ROW.EC, r)],
-            f[at(ROW.EF, r)],
-            f[at(ROW.EG, r)],
-            f[at(ROW.EH, r)],
-            f[at(ROW.EQ, r)],
-        )
+        f[at(ROW.PR + k, r)] = lobe_score(k, sel, p, o, ms, factor_of(k, f, r), state_at(f, r))
 
 
 def lobe_loop(name, pass_, literal):
