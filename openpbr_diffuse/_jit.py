@@ -26,6 +26,19 @@ FASTMATH = {"contract", "arcp", "nsz", "afn"}
 #: Decorator for scalar formula functions (inlined into the batch drivers).
 kernel = numba.njit(cache=True, fastmath=FASTMATH, error_model="numpy", forceinline=True)
 
+#: Decorator for the tiny helpers (scratch indices, block bounds): inlined in numba's IR, so
+#: that they are never compiled on their own (a ``kernel`` is compiled once per distinct
+#: literal argument of its call sites).
+inline = numba.njit(inline="always")
+
+#: Decorator for the block runners of the surface's verbs (``nodes._surface_drivers``):
+#: cached, ``nogil`` (the launcher's pool runs them on several threads at once), serial.
+runner = numba.njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
+
+#: Decorator for a compiled loop that is neither a formula nor a runner (the packing of a
+#: material's inputs, ``nodes._surface_kernels.pack_drive``): cached, strict IEEE arithmetic.
+serial = numba.njit(cache=True, error_model="numpy")
+
 PI = math.pi
 INV_PI = 1.0 / math.pi
 EPS = 1e-7  # the epsilon of Listing 1 (f_ms guards)
@@ -150,3 +163,42 @@ def _opaque_intrinsic():
 
 
 opaque = _opaque_intrinsic()
+
+
+def unrolled(name, argnames, body_of, env, module):
+    """A function ``name(*argnames)`` for compiled code whose body is generated, while its
+    caller is typed, from the value of its first argument, a compile-time constant (a
+    literal int): ``body_of(value)`` returns the body's Python source (over ``argnames``
+    and the names of ``env``), which numba inlines into the caller.  The one place the
+    package writes code from code: the surface's lobe dispatch (``by_constant``) and its
+    loops over a set of lobes (``nodes._surface_passes.lobe_loop``) unroll into straight
+    calls with constant ids, so that each call compiles its own lobe's formula only.  (A
+    run-time ``if k == ...`` chain is typed branch by branch: every call site compiled every
+    lobe.)  Returns the Python stub, which raises if called from Python."""
+    from numba import errors, types
+    from numba.extending import overload
+
+    args = ", ".join(argnames)
+    names = {"__name__": module}
+    exec(f"def {name}({args}):\n    raise NotImplementedError('compiled only')\n", names)
+    stub = names[name]
+
+    def implementation(*argtypes):
+        if not isinstance(argtypes[0], types.IntegerLiteral):
+            raise errors.TypingError(f"{name}: the first argument must be a compile-time constant")
+        body = body_of(argtypes[0].literal_value).replace("\n", "\n    ")
+        ns = dict(env, __name__=module)
+        exec(f"def impl({args}):\n    {body}\n", ns)
+        return ns["impl"]
+
+    typer = eval(f"lambda {args}: implementation({args})", {"implementation": implementation, "__name__": module})
+    overload(stub, inline="always", prefer_literal=True)(typer)
+    return stub
+
+
+def by_constant(name, argnames, table, module):
+    """``name(k, *rest)`` in compiled code calls ``table[k](*rest)``, k a compile-time constant
+    (``unrolled``): the dispatch of a family of functions with one signature."""
+    rest = ", ".join(argnames[1:])
+    env = {f"f{k}": fn for k, fn in enumerate(table)}
+    return unrolled(name, argnames, lambda k: f"return f{k}({rest})", env, module)

@@ -15,10 +15,11 @@ Rapids code).  What is bit for bit by construction: a call's rows do not depend 
 thread count nor on how a call is split at multiples of ``B`` rows (the same compiled runner
 runs the same blocks).
 
-Each driver is built for a parameter stride (0: one material for every row; N_PARAMS: a
-material per row) as a compile-time constant, once, with ``nogil``: a call of fewer than
+Each driver is built per parameter stride (0: one material for every row; N_PARAMS: a
+material per row), lobe set and diffuse model, compile-time constants, on first use, with
+``nogil``: a call of fewer than
 ``SERIAL_ROWS`` rows runs it on the calling thread, a larger one runs it over runs of blocks
-on a pool of Python threads (``_Builds``).
+on the package's thread pool (``_Builds``).
 No input is checked here: the public class checks its inputs once, at construction and on
 each call's directions.
 """
@@ -29,13 +30,11 @@ import math
 import numba
 import numpy as np
 
-from .._jit import FASTMATH, kernel, opaque, stack_buffer
+from .._jit import inline, kernel, opaque, runner, stack_buffer
 from .._launch import _U, SERIAL_ROWS, executor, launch, rows
 from ._surface_kernels import (
     COAT,
     D_EON,
-    D_LAMBERT,
-    D_QON,
     DIFFUSE,
     FUZZ,
     METAL,
@@ -49,27 +48,17 @@ from ._surface_kernels import (
     S_GGX,
     S_SHEEN,
     SPECULAR,
-    SUBSURFACE,
-    SUBSURFACE_T,
-    TRANSMISSION,
 )
 from ._surface_passes import (
-    A0,
-    A1,
-    A2,
-    IX,
-    MINE,
     NROWS,
-    OK,
-    OX,
-    OZ,
+    ROW,
     B,
-    Q,
-    albedo_lobe_pass,
     at,
     choose_pass,
     compact,
-    eval_lobe_pass,
+    each_albedo,
+    each_eval,
+    each_pdf,
     fill_pass,
     ggx_pass,
     ggx_pdf_pass,
@@ -77,7 +66,6 @@ from ._surface_passes import (
     load_pass,
     load_u_pass,
     lobe_outputs_pass,
-    pdf_lobe_pass,
     probability_pass,
     rgb_out_pass,
     sample_pass,
@@ -95,96 +83,13 @@ _counts = stack_buffer(N_SAMPLERS, numba.int64)
 _param_buffer = stack_buffer(N_PARAMS)
 
 
-@numba.njit(inline="always")
+@inline
 def _local_params(p):
     """One material's parameters, copied to a stack buffer."""
     q = _param_buffer()
     for i in range(N_PARAMS):
         q[i] = p[i]
     return q
-
-
-# --------------------------------------------------------------------------- lobe loops
-# One block pass per active lobe slot, the slot a literal constant (and the diffuse model
-# too, for the diffuse slot's pass).
-
-
-@kernel
-def _each_eval(active, dmodel, weighted, ms, p, ps, s0, m, f):
-    """``eval_lobe_pass`` of every active lobe."""
-    if is_on(active, DIFFUSE):
-        if dmodel == D_EON:
-            eval_lobe_pass(DIFFUSE, D_EON, weighted, ms, p, ps, s0, m, f)
-        elif dmodel == D_QON:
-            eval_lobe_pass(DIFFUSE, D_QON, weighted, ms, p, ps, s0, m, f)
-        else:
-            eval_lobe_pass(DIFFUSE, D_LAMBERT, weighted, ms, p, ps, s0, m, f)
-    if is_on(active, SPECULAR):
-        eval_lobe_pass(SPECULAR, D_EON, weighted, ms, p, ps, s0, m, f)
-    if is_on(active, METAL):
-        eval_lobe_pass(METAL, D_EON, weighted, ms, p, ps, s0, m, f)
-    if is_on(active, TRANSMISSION):
-        eval_lobe_pass(TRANSMISSION, D_EON, weighted, ms, p, ps, s0, m, f)
-    if is_on(active, SUBSURFACE):
-        eval_lobe_pass(SUBSURFACE, D_EON, weighted, ms, p, ps, s0, m, f)
-    if is_on(active, SUBSURFACE_T):
-        eval_lobe_pass(SUBSURFACE_T, D_EON, weighted, ms, p, ps, s0, m, f)
-    if is_on(active, COAT):
-        eval_lobe_pass(COAT, D_EON, weighted, ms, p, ps, s0, m, f)
-    if is_on(active, FUZZ):
-        eval_lobe_pass(FUZZ, D_EON, weighted, ms, p, ps, s0, m, f)
-
-
-@kernel
-def _each_pdf(active, dmodel, track, vndf, p, ps, s0, m, f):
-    """``pdf_lobe_pass`` of every active lobe."""
-    if is_on(active, DIFFUSE):
-        if dmodel == D_EON:
-            pdf_lobe_pass(opaque(DIFFUSE), opaque(D_EON), track, vndf, p, ps, s0, m, f)
-        elif dmodel == D_QON:
-            pdf_lobe_pass(opaque(DIFFUSE), opaque(D_QON), track, vndf, p, ps, s0, m, f)
-        else:
-            pdf_lobe_pass(opaque(DIFFUSE), opaque(D_LAMBERT), track, vndf, p, ps, s0, m, f)
-    if is_on(active, SPECULAR):
-        pdf_lobe_pass(opaque(SPECULAR), opaque(D_EON), track, vndf, p, ps, s0, m, f)
-    if is_on(active, METAL):
-        pdf_lobe_pass(opaque(METAL), opaque(D_EON), track, vndf, p, ps, s0, m, f)
-    if is_on(active, TRANSMISSION):
-        pdf_lobe_pass(opaque(TRANSMISSION), opaque(D_EON), track, vndf, p, ps, s0, m, f)
-    if is_on(active, SUBSURFACE):
-        pdf_lobe_pass(opaque(SUBSURFACE), opaque(D_EON), track, vndf, p, ps, s0, m, f)
-    if is_on(active, SUBSURFACE_T):
-        pdf_lobe_pass(opaque(SUBSURFACE_T), opaque(D_EON), track, vndf, p, ps, s0, m, f)
-    if is_on(active, COAT):
-        pdf_lobe_pass(opaque(COAT), opaque(D_EON), track, vndf, p, ps, s0, m, f)
-    if is_on(active, FUZZ):
-        pdf_lobe_pass(opaque(FUZZ), opaque(D_EON), track, vndf, p, ps, s0, m, f)
-
-
-@kernel
-def _each_albedo(active, dmodel, ms, p, ps, s0, m, f):
-    """``albedo_lobe_pass`` of every active lobe."""
-    if is_on(active, DIFFUSE):
-        if dmodel == D_EON:
-            albedo_lobe_pass(opaque(DIFFUSE), opaque(D_EON), ms, p, ps, s0, m, f)
-        elif dmodel == D_QON:
-            albedo_lobe_pass(opaque(DIFFUSE), opaque(D_QON), ms, p, ps, s0, m, f)
-        else:
-            albedo_lobe_pass(opaque(DIFFUSE), opaque(D_LAMBERT), ms, p, ps, s0, m, f)
-    if is_on(active, SPECULAR):
-        albedo_lobe_pass(opaque(SPECULAR), opaque(D_EON), ms, p, ps, s0, m, f)
-    if is_on(active, METAL):
-        albedo_lobe_pass(opaque(METAL), opaque(D_EON), ms, p, ps, s0, m, f)
-    if is_on(active, TRANSMISSION):
-        albedo_lobe_pass(opaque(TRANSMISSION), opaque(D_EON), ms, p, ps, s0, m, f)
-    if is_on(active, SUBSURFACE):
-        albedo_lobe_pass(opaque(SUBSURFACE), opaque(D_EON), ms, p, ps, s0, m, f)
-    if is_on(active, SUBSURFACE_T):
-        albedo_lobe_pass(opaque(SUBSURFACE_T), opaque(D_EON), ms, p, ps, s0, m, f)
-    if is_on(active, COAT):
-        albedo_lobe_pass(opaque(COAT), opaque(D_EON), ms, p, ps, s0, m, f)
-    if is_on(active, FUZZ):
-        albedo_lobe_pass(opaque(FUZZ), opaque(D_EON), ms, p, ps, s0, m, f)
 
 
 @kernel
@@ -220,16 +125,14 @@ def _choose(ud, u, s0, m, mb, f):
 # called by both builds of the driver (``_Builds``), so that the serial and the parallel
 # driver share one compiled body.
 
-_jit_run = numba.njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
 
-
-@numba.njit(inline="always")
+@inline
 def _block_range(t, nt, n):
     nb = (n + B - 1) // B
     return t * nb // nt, (t + 1) * nb // nt
 
 
-@numba.njit(inline="always")
+@inline
 def _block(b, n):
     """Block b of n rows: its first row s0, its rows m and the rows its passes run over."""
     s0 = b * B
@@ -237,9 +140,9 @@ def _block(b, n):
     return s0, m, span(m)
 
 
-def _lobes_run(ps):
-    @_jit_run
-    def lobes_run(t, nt, active, dmodel, sel, ms, p, wo, W, E, P):
+def _lobes_run(ps, lobes, dmodel):
+    @runner
+    def lobes_run(t, nt, active, sel, ms, p, wo, W, E, P):
         """W, E (n*8*3), P (n*8): weight, albedo and probability of every lobe slot."""
         n = wo.shape[0] // 3
         f = _scratch()
@@ -250,18 +153,18 @@ def _lobes_run(ps):
         b0, b1 = _block_range(t, nt, n)
         for b in range(b0, b1):
             s0, m, mb = _block(b, n)
-            load_pass(wo, s0, m, f, OX)
-            state_passes(active, dmodel, ms, True, True, q, ps, s0, mb, f)
-            probability_pass(active, sel, q, ps, s0, mb, f, ms)
+            load_pass(wo, s0, m, f, ROW.OX)
+            state_passes(opaque(lobes), active, opaque(dmodel), ms, opaque(True), opaque(True), q, ps, s0, mb, f)
+            probability_pass(lobes, active, sel, q, ps, s0, mb, f, ms)
             for k in range(N_LOBES):
                 lobe_outputs_pass(k, is_on(active, k), ms, q, ps, s0, m, f, W, E, P)
 
     return lobes_run
 
 
-def _albedo_run(ps):
-    @_jit_run
-    def albedo_run(t, nt, active, dmodel, ms, p, wo, out):
+def _albedo_run(ps, lobes, dmodel):
+    @runner
+    def albedo_run(t, nt, active, ms, p, wo, out):
         """out (n*3) = sum_k w_k E_k."""
         n = wo.shape[0] // 3
         f = _scratch()
@@ -272,23 +175,23 @@ def _albedo_run(ps):
         b0, b1 = _block_range(t, nt, n)
         for b in range(b0, b1):
             s0, m, mb = _block(b, n)
-            load_pass(wo, s0, m, f, OX)
-            state_passes(active, dmodel, ms, True, True, q, ps, s0, mb, f)
-            fill_pass(f, A0, mb, 0.0)
-            fill_pass(f, A1, mb, 0.0)
-            fill_pass(f, A2, mb, 0.0)
-            _each_albedo(active, dmodel, ms, q, ps, s0, mb, f)
+            load_pass(wo, s0, m, f, ROW.OX)
+            state_passes(opaque(lobes), active, opaque(dmodel), ms, opaque(True), opaque(True), q, ps, s0, mb, f)
+            fill_pass(f, ROW.A0, mb, 0.0)
+            fill_pass(f, ROW.A1, mb, 0.0)
+            fill_pass(f, ROW.A2, mb, 0.0)
+            each_albedo(lobes, active, dmodel, ms, q, ps, s0, mb, f)
             rgb_out_pass(s0, m, f, out)
 
     return albedo_run
 
 
-def _eval_run(ps):
-    @_jit_run
-    def eval_run(t, nt, active, only, dmodel, ms, p, wi, wo, out):
+def _eval_run(ps, lobes, dmodel):
+    @runner
+    def eval_run(t, nt, active, only, ms, p, wi, wo, out):
         """out (n*3) = sum_k w_k f_k, or the unweighted f_only when only >= 0."""
         n = wo.shape[0] // 3
-        lobes = active if only < 0 else active & (1 << only)
+        on = active if only < 0 else active & (1 << only)
         f = _scratch()
         if ps == 0:  # one material: a local copy (ps is a constant: the other branch is pruned)
             q = _local_params(p)
@@ -297,22 +200,22 @@ def _eval_run(ps):
         b0, b1 = _block_range(t, nt, n)
         for b in range(b0, b1):
             s0, m, mb = _block(b, n)
-            load_pass(wo, s0, m, f, OX)
-            load_pass(wi, s0, m, f, IX)
-            state_passes(active, dmodel, ms, False, False, q, ps, s0, mb, f)
-            ggx_pass(lobes, q, ps, s0, mb, f)
-            fill_pass(f, A0, mb, 0.0)
-            fill_pass(f, A1, mb, 0.0)
-            fill_pass(f, A2, mb, 0.0)
-            _each_eval(lobes, dmodel, only < 0, ms, q, ps, s0, mb, f)
+            load_pass(wo, s0, m, f, ROW.OX)
+            load_pass(wi, s0, m, f, ROW.IX)
+            state_passes(opaque(lobes), active, opaque(dmodel), ms, opaque(False), opaque(False), q, ps, s0, mb, f)
+            ggx_pass(on, q, ps, s0, mb, f)
+            fill_pass(f, ROW.A0, mb, 0.0)
+            fill_pass(f, ROW.A1, mb, 0.0)
+            fill_pass(f, ROW.A2, mb, 0.0)
+            each_eval(lobes, on, dmodel, only < 0, ms, q, ps, s0, mb, f)
             rgb_out_pass(s0, m, f, out)
 
     return eval_run
 
 
-def _pdf_run(ps):
-    @_jit_run
-    def pdf_run(t, nt, active, dmodel, sel, ms, vndf, p, wo, wi, out):
+def _pdf_run(ps, lobes, dmodel):
+    @runner
+    def pdf_run(t, nt, active, sel, ms, vndf, p, wo, wi, out):
         """out (n) = sum_k P_k pdf_k(wi | wo); 0 where wo is below the horizon."""
         n = wo.shape[0] // 3
         f = _scratch()
@@ -323,22 +226,22 @@ def _pdf_run(ps):
         b0, b1 = _block_range(t, nt, n)
         for b in range(b0, b1):
             s0, m, mb = _block(b, n)
-            load_pass(wo, s0, m, f, OX)
-            load_pass(wi, s0, m, f, IX)
-            state_passes(active, dmodel, ms, True, True, q, ps, s0, mb, f)
-            probability_pass(active, sel, q, ps, s0, mb, f, ms)
+            load_pass(wo, s0, m, f, ROW.OX)
+            load_pass(wi, s0, m, f, ROW.IX)
+            state_passes(opaque(lobes), active, opaque(dmodel), ms, opaque(True), opaque(True), q, ps, s0, mb, f)
+            probability_pass(lobes, active, sel, q, ps, s0, mb, f, ms)
             ggx_pdf_pass(active, vndf, q, ps, s0, mb, f)
-            fill_pass(f, Q, mb, 0.0)
-            _each_pdf(active, dmodel, False, vndf, q, ps, s0, mb, f)
+            fill_pass(f, ROW.Q, mb, 0.0)
+            each_pdf(lobes, active, dmodel, False, vndf, q, ps, s0, mb, f)
             for r in range(m):
-                out[_U(s0 + r)] = f[at(Q, r)] if f[at(OZ, r)] > 0.0 else 0.0
+                out[_U(s0 + r)] = f[at(ROW.Q, r)] if f[at(ROW.OZ, r)] > 0.0 else 0.0
 
     return pdf_run
 
 
-def _sample_run(ps):
-    @_jit_run
-    def sample_run(t, nt, active, dmodel, sel, ms, vndf, p, wo, u, wi, out):
+def _sample_run(ps, lobes, dmodel):
+    @runner
+    def sample_run(t, nt, active, sel, ms, vndf, p, wo, u, wi, out):
         """Pick lobe k with P_k (u[0]), sample it (u[1:3], or u[0] rescaled and u[1] when u has
         2 columns); wi (n*3), out (n) = the mixture pdf at wi; 0 marks a failed sample."""
         n = wo.shape[0] // 3
@@ -353,24 +256,24 @@ def _sample_run(ps):
         b0, b1 = _block_range(t, nt, n)
         for b in range(b0, b1):
             s0, m, mb = _block(b, n)
-            load_pass(wo, s0, m, f, OX)
-            state_passes(active, dmodel, ms, True, True, q, ps, s0, mb, f)
-            probability_pass(active, sel, q, ps, s0, mb, f, ms)
+            load_pass(wo, s0, m, f, ROW.OX)
+            state_passes(opaque(lobes), active, opaque(dmodel), ms, opaque(True), opaque(True), q, ps, s0, mb, f)
+            probability_pass(lobes, active, sel, q, ps, s0, mb, f, ms)
             _choose(ud, u, s0, m, mb, f)
-            compact(dmodel, mb, f, idx, cnt)
+            compact(opaque(dmodel), mb, f, idx, cnt)
             _each_sampler(vndf, q, ps, s0, f, idx, cnt)
             ggx_pdf_pass(active, vndf, q, ps, s0, mb, f)
-            fill_pass(f, Q, mb, 0.0)
-            fill_pass(f, MINE, mb, 0.0)
-            _each_pdf(active, dmodel, True, vndf, q, ps, s0, mb, f)
+            fill_pass(f, ROW.Q, mb, 0.0)
+            fill_pass(f, ROW.MINE, mb, 0.0)
+            each_pdf(lobes, active, dmodel, True, vndf, q, ps, s0, mb, f)
             for r in range(m):
                 j = _U(3) * _U(s0 + r)
-                up = f[at(OZ, r)] > 0.0
-                good = up & (f[at(OK, r)] > 0.0) & (f[at(MINE, r)] > 0.0)
-                out[_U(s0 + r)] = f[at(Q, r)] if good else 0.0
-                wi[j] = f[at(IX, r)] if up else 0.0
-                wi[j + _U(1)] = f[at(IX + 1, r)] if up else 0.0
-                wi[j + _U(2)] = f[at(IX + 2, r)] if up else 1.0
+                up = f[at(ROW.OZ, r)] > 0.0
+                good = up & (f[at(ROW.OK, r)] > 0.0) & (f[at(ROW.MINE, r)] > 0.0)
+                out[_U(s0 + r)] = f[at(ROW.Q, r)] if good else 0.0
+                wi[j] = f[at(ROW.IX, r)] if up else 0.0
+                wi[j + _U(1)] = f[at(ROW.IX + 1, r)] if up else 0.0
+                wi[j + _U(2)] = f[at(ROW.IX + 2, r)] if up else 1.0
 
     return sample_run
 
@@ -382,20 +285,49 @@ def _sample_run(ps):
 RUNS_PER_THREAD = 2
 
 
-class _Builds:
-    """A verb's block runners (one material; a material per row) and how a call runs them.
+#: The lobe sets a runner is compiled for, smallest first: a call runs the runner of the first
+#: set that holds every lobe its material(s) can have (``_Builds.runner``), so that a verb
+#: compiles the lobe passes of the base surface's three lobes for the base surface, and every
+#: lobe's only for a material that needs them.
+BASE = (1 << DIFFUSE) | (1 << SPECULAR) | (1 << METAL)
+LAYERED = BASE | (1 << COAT) | (1 << FUZZ)
+ALL = (1 << N_LOBES) - 1
+LOBE_SETS = (BASE, LAYERED, ALL)
 
-    The runners are compiled with ``nogil``, and a large call runs them on a pool of Python
-    threads: one compiled body serves the serial and the parallel call.  (A numba
+
+def lobe_set(active):
+    """The first of ``LOBE_SETS`` that holds the lobes of ``active``."""
+    return next(s for s in LOBE_SETS if active & ~s == 0)
+
+
+class _Builds:
+    """A verb's block runners and how a call runs them.
+
+    A runner is built per parameter stride (0: one material; N_PARAMS: a material per row),
+    lobe set (``LOBE_SETS``) and diffuse model, all three constants it closes over (plain
+    ints: a closure over them is found in numba's cache), on first use.  ``one`` and
+    ``each`` are the base surface's runners with the EON diffuse lobe.
+
+    The runners are compiled with ``nogil``, and a large call runs them on the package's
+    thread pool: one compiled body serves the serial and the parallel call.  (A numba
     ``prange`` driver would be a second compilation of the whole body, which numba
     re-optimises as it inlines it -- a minute of a cold start -- and its OpenMP threads,
     once idle, took up to milliseconds to wake on the test VM.)"""
 
     def __init__(self, factory):
-        self.one, self.each = factory(0), factory(N_PARAMS)
+        self.factory = factory
+        self.runners = {}
+        self.one, self.each = self.runner(False, BASE, D_EON), self.runner(True, BASE, D_EON)
 
-    def __call__(self, per_row, n, *args):
-        run = self.each if per_row else self.one
+    def runner(self, per_row, active, dmodel):
+        """The runner of a call's lobes ``active`` (bit mask) and diffuse model."""
+        key = (per_row, lobe_set(active), dmodel)
+        run = self.runners.get(key)
+        if run is None:
+            run = self.runners[key] = self.factory(N_PARAMS if per_row else 0, key[1], dmodel)
+        return run
+
+    def __call__(self, run, n, *args):
         threads = numba.get_num_threads()
         if n < SERIAL_ROWS or threads == 1:
             run(0, 1, *args)
@@ -418,7 +350,7 @@ BUILDS = {"lobes": LOBES, "albedo": ALBEDO, "eval": EVAL, "pdf": PDF, "sample": 
 @functools.cache
 def tables():
     """(C, R): the padded GGX albedo tables (``microfacet.tables.padded_tables``), read by
-    ``pack_drive`` only: it collapses them per material into the P_CURVE_* and P_E* curves
+    ``pack_drive`` only: it collapses them per material into the PARAM.CURVE_* and PARAM.E* curves
     in mu that the per-row drivers interpolate."""
     from ..microfacet.tables import padded_tables
 
@@ -431,14 +363,15 @@ def tables():
     return C, R
 
 
-def _run(builds, head, params, lead, dirs, outs):
+def _run(builds, flags, head, params, lead, dirs, outs):
     """Run a verb's driver over the rows of ``lead``: ``params`` is one material (never copied
     or tiled) or materials broadcasting to ``lead`` (expanded to a material per row)."""
     n = math.prod(lead)
     if n == 0:
         return
+    run = builds.runner(params.ndim > 1, flags.active, flags.dmodel)
     if params.ndim == 1 and n == 1:  # one material, one row (lobes(wo) of a material): no batch machinery
-        builds.one(0, 1, *head, params, *(rows(d, lead, k)[0] for d, k in dirs), *(o for o, _ in outs))
+        run(0, 1, *head, params, *(rows(d, lead, k)[0] for d, k in dirs), *(o for o, _ in outs))
         return
     if params.ndim == 1:
         inputs = []
@@ -448,7 +381,7 @@ def _run(builds, head, params, lead, dirs, outs):
         first = len(head) + 1  # the first direction buffer (3 a row) follows the parameters
 
         def drive(*args):
-            builds(False, args[first].size // 3, *args)
+            builds(run, args[first].size // 3, *args)
 
         launch(drive, head + (params,), inputs, outs, n, split=False)  # the runners use the pool themselves
         return
@@ -461,7 +394,7 @@ def _run(builds, head, params, lead, dirs, outs):
     whole = n - n % B
     if whole:
         builds(
-            True,
+            run,
             whole,
             *head,
             p[: whole * N_PARAMS],
@@ -473,7 +406,7 @@ def _run(builds, head, params, lead, dirs, outs):
         tail[: (n - whole) * N_PARAMS] = p[whole * N_PARAMS :]
         tail[(n - whole) * N_PARAMS :] = np.tile(p[(n - 1) * N_PARAMS :], B - (n - whole))
         builds(
-            True,
+            run,
             n - whole,
             *head,
             tail,
@@ -490,7 +423,8 @@ def lobes_rows(flags, params, wo, lead):
     P = np.empty(n * N_LOBES)
     _run(
         LOBES,
-        (flags.active, flags.dmodel, flags.sel, flags.ms),
+        flags,
+        (flags.active, flags.sel, flags.ms),
         params,
         lead,
         [(wo, 3)],
@@ -501,21 +435,19 @@ def lobes_rows(flags, params, wo, lead):
 
 def albedo_rows(flags, params, wo, lead):
     out = np.empty(math.prod(lead) * 3)
-    _run(ALBEDO, (flags.active, flags.dmodel, flags.ms), params, lead, [(wo, 3)], [(out, 3)])
+    _run(ALBEDO, flags, (flags.active, flags.ms), params, lead, [(wo, 3)], [(out, 3)])
     return out.reshape(lead + (3,))
 
 
 def eval_rows(flags, params, wi, wo, lead, only=-1):
     out = np.empty(math.prod(lead) * 3)
-    _run(EVAL, (flags.active, only, flags.dmodel, flags.ms), params, lead, [(wi, 3), (wo, 3)], [(out, 3)])
+    _run(EVAL, flags, (flags.active, only, flags.ms), params, lead, [(wi, 3), (wo, 3)], [(out, 3)])
     return out.reshape(lead + (3,))
 
 
 def pdf_rows(flags, params, wo, wi, lead):
     out = np.empty(math.prod(lead))
-    _run(
-        PDF, (flags.active, flags.dmodel, flags.sel, flags.ms, flags.vndf), params, lead, [(wo, 3), (wi, 3)], [(out, 1)]
-    )
+    _run(PDF, flags, (flags.active, flags.sel, flags.ms, flags.vndf), params, lead, [(wo, 3), (wi, 3)], [(out, 1)])
     return out.reshape(lead)
 
 
@@ -525,7 +457,8 @@ def sample_rows(flags, params, wo, u, lead):
     out = np.empty(n)
     _run(
         SAMPLE,
-        (flags.active, flags.dmodel, flags.sel, flags.ms, flags.vndf),
+        flags,
+        (flags.active, flags.sel, flags.ms, flags.vndf),
         params,
         lead,
         [(wo, 3), (u, u.shape[-1])],

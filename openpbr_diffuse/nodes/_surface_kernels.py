@@ -5,7 +5,7 @@ Lobes are plain values with the verbs of pbrt-v4's ``BxDF`` -- ``lobe_f`` (the l
 BSDF, weight not applied), ``lobe_sample`` and ``lobe_pdf`` -- selected by a lobe id, with
 ``lobe_albedo`` (its directional albedo E_k(wo)), ``layer_factor`` and ``lobe_score`` (its
 selection score |w_k E_k|).  A surface row is a flat vector of prepared parameters (layout
-``P_*``, built once per material by ``pack_drive``).  Each weight is a layer factor of mu_o
+``PARAMS``, built once per material by ``pack_drive``).  Each weight is a layer factor of mu_o
 (the albedos of the specular, coat and fuzz layers, which scale what lies beneath) times a
 colour of the material, w_k[c] = L_k(mu_o) K_k[c] (``layer_factor``, ``_pack_weights``), so
 that the selection scores are constants of the material times functions of mu_o.  No input
@@ -20,12 +20,12 @@ Lobe ids (slots): DIFFUSE, SPECULAR, METAL, TRANSMISSION, SUBSURFACE (the thin-w
 reflection part when thin-walled), SUBSURFACE_T (thin-walled translucency), COAT, FUZZ.
 """
 
+import collections
 import math
 
-import numba
 import numpy as np
 
-from .._jit import INV_PI, kernel
+from .._jit import INV_PI, by_constant, kernel, serial
 from ..microfacet import fresnel
 from ..microfacet import kernels as mf
 from ..microfacet.sheen import sheen_albedo_fit, sheen_density, sheen_sample
@@ -45,66 +45,85 @@ D_EON, D_QON, D_LAMBERT = 0, 1, 2
 #: selection rules
 SEL_LENGTH, SEL_MAX, SEL_UNIFORM = 0, 1, 2
 
-# parameter layout of one surface row (float64)
-P_BASE_COLOR = 0  # 3: rho of the diffuse lobe
-P_R_DIFF = 3  # base_diffuse_roughness (EON r; QON sigma)
-P_BASE_WEIGHT = 4
-P_METAL = 5  # base_metalness
-P_SPEC_COLOR = 6  # 3
-P_SPEC_WEIGHT = 9
-P_ALPHA_S = 10  # GGX alpha of the base specular and metal (coat-affected)
-P_R_S = 11  # its roughness (table coordinate)
-P_X_S = 12  # |sqrt(F0)| of the modulated index (table coordinate)
-P_ETA_S = 13  # modulated index eta' >= 1
-P_METAL_F0 = 14  # 3: base_weight * base_color
-P_METAL_A = 17  # 3: F82-tint coefficient a
-P_TRANS_W = 20
-P_TRANS_TINT = 21  # 3
-P_SSS_W = 24
-P_SSS_COLOR = 25  # 3
-P_SSS_ANISO = 28
-P_COAT_W = 29
-P_ALPHA_C = 30
-P_R_C = 31
-P_X_C = 32
-P_ETA_C = 33
-P_BASE_MUL = 34  # 3: coat attenuation x darkening of everything under the coat
-P_FUZZ_W = 37
-P_FUZZ_COLOR = 38  # 3
-P_FUZZ_R = 41
-P_THIN = 42  # geometry_thin_walled (0/1)
-# table axes fixed per material (``microfacet.tables.axis_weights``): for the base specular
-# (P_TAB_S) and the coat (P_TAB_C), the conductor table's roughness node and 4 weights, the
-# dielectric table's roughness node and 4 weights, its x node and 4 weights
-P_TAB_S = 43  # 15
-P_TAB_C = 58  # 15
-# the dielectric table collapsed on those two axes: E_diel/E1 at every (padded) mu node of the
-# table, for the base specular and the coat; per row only a 4-point cubic in mu remains
-N_CURVE = 35  # mu nodes of the dielectric table + 2 ghost nodes
-P_CURVE_S = 73
-P_CURVE_C = P_CURVE_S + N_CURVE
-# the conductor table collapsed on its roughness axis: E1, E5, E6 of the base specular's
-# roughness and E1 of the coat's at every (padded) mu node; per row only a 4-point cubic in
-# mu remains (``_conductor_curve``)
-N_CCURVE = 67  # mu nodes of the conductor table + 2 ghost nodes
-P_E1S = P_CURVE_C + N_CURVE
-P_E5S = P_E1S + N_CCURVE
-P_E6S = P_E5S + N_CCURVE
-P_E1C = P_E6S + N_CCURVE
-# values of one material that the per-row formulas would otherwise recompute
-P_R_TENTH = P_E1C + N_CCURVE  # base_diffuse_roughness^0.1 (the EON sampler's P_u)
-P_RHO_MS = P_R_TENTH + 1  # 3: rho_ms(base_color, <E_F>) of the EON lobe (Eq. 18)
-P_SHEEN_FIT = P_RHO_MS + 3  # 3: (s, m, o) of the fuzz albedo fit at fuzz_roughness
-# every lobe's weight is a layer factor of mu_o times a constant of the material,
-# w_k[c](wo) = L_k(wo) K_k[c] (``layer_factors``); the selection scores |w_k E_k| then
-# reduce to constants of the material times functions of mu_o (``lobe_score``)
-P_K = P_SHEEN_FIT + 3  # 8 x 3: K_k[c]
-P_SC = P_K + 3 * N_LOBES  # 8 x 2: |K_k e_k| and max_c |K_k[c] e_k[c]| for the lobes whose albedo is
-# a constant colour e_k or a scalar times 1 (e_k = 1)
-P_DQ = P_SC + 2 * N_LOBES  # 3: |K rho|^2, (K rho).(K rho_ms), |K rho_ms|^2 of the diffuse lobe
-P_EON_FIT = P_DQ + 3  # 3: (A_F, B_F, s_h) of the EON albedo at base_diffuse_roughness
-P_QON_AB = P_EON_FIT + 3  # 2: QON's (A, B) at base_diffuse_roughness (QON diffuse, thin-walled subsurface)
-N_PARAMS = P_QON_AB + 2
+N_CURVE = 35  # mu nodes of the dielectric albedo table + 2 ghost nodes
+N_CCURVE = 67  # mu nodes of the conductor albedo table + 2 ghost nodes
+
+
+def layout(name, fields):
+    """(offsets, size) of a flat layout declared as (field, width) pairs, in order: ``offsets``
+    is a namedtuple of each field's first index.  numba reads a global namedtuple as
+    constants, so ``p[o + PARAM.X_S]`` compiles to a load at a constant offset."""
+    offsets, at = [], 0
+    for _, width in fields:
+        offsets.append(at)
+        at += width
+    return collections.namedtuple(name, [f for f, _ in fields])(*offsets), at
+
+
+#: The parameter layout of one surface row (float64), built once per material by
+#: ``pack_drive``: the material's inputs the formulas read, and values of the material alone
+#: that the per-row formulas would otherwise recompute.
+PARAMS = (
+    ("BASE_COLOR", 3),  # rho of the diffuse lobe
+    ("R_DIFF", 1),  # base_diffuse_roughness (EON r; QON sigma)
+    ("BASE_WEIGHT", 1),
+    ("METAL", 1),  # base_metalness
+    ("SPEC_COLOR", 3),
+    ("SPEC_WEIGHT", 1),
+    ("ALPHA_S", 1),  # GGX alpha of the base specular and metal (coat-affected)
+    ("R_S", 1),  # its roughness (table coordinate)
+    ("X_S", 1),  # |sqrt(F0)| of the modulated index (table coordinate)
+    ("ETA_S", 1),  # modulated index eta' >= 1
+    ("METAL_F0", 3),  # base_weight * base_color
+    ("METAL_A", 3),  # F82-tint coefficient a
+    ("TRANS_W", 1),
+    ("TRANS_TINT", 3),
+    ("SSS_W", 1),
+    ("SSS_COLOR", 3),
+    ("SSS_ANISO", 1),
+    ("COAT_W", 1),
+    ("ALPHA_C", 1),
+    ("R_C", 1),
+    ("X_C", 1),
+    ("ETA_C", 1),
+    ("BASE_MUL", 3),  # coat attenuation x darkening of everything under the coat
+    ("FUZZ_W", 1),
+    ("FUZZ_COLOR", 3),
+    ("FUZZ_R", 1),
+    ("THIN", 1),  # geometry_thin_walled (0/1)
+    # table axes fixed per material (``microfacet.tables.axis_weights``): for the base
+    # specular (TAB_S) and the coat (TAB_C), the conductor table's roughness node and 4
+    # weights, the dielectric table's roughness node and 4 weights, its x node and 4 weights
+    ("TAB_S", 15),
+    ("TAB_C", 15),
+    # the dielectric table collapsed on those two axes: E_diel/E1 at every (padded) mu node,
+    # for the base specular and the coat; per row only a 4-point cubic in mu remains
+    ("CURVE_S", N_CURVE),
+    ("CURVE_C", N_CURVE),
+    # the conductor table collapsed on its roughness axis: E1, E5, E6 of the base specular's
+    # roughness and E1 of the coat's at every (padded) mu node (``_conductor_curve``)
+    ("E1S", N_CCURVE),
+    ("E5S", N_CCURVE),
+    ("E6S", N_CCURVE),
+    ("E1C", N_CCURVE),
+    ("R_TENTH", 1),  # base_diffuse_roughness^0.1 (the EON sampler's P_u)
+    ("RHO_MS", 3),  # rho_ms(base_color, <E_F>) of the EON lobe (Eq. 18)
+    ("SHEEN_FIT", 3),  # (s, m, o) of the fuzz albedo fit at fuzz_roughness
+    # every lobe's weight is a layer factor of mu_o times a constant of the material,
+    # w_k[c](wo) = L_k(wo) K_k[c] (``layer_factor``); the selection scores |w_k E_k| then
+    # reduce to constants of the material times functions of mu_o (``lobe_score``)
+    ("K", 3 * N_LOBES),  # K_k[c]
+    # |K_k e_k| and max_c |K_k[c] e_k[c]| for the lobes whose albedo is a constant colour e_k
+    # or a scalar times 1 (e_k = 1)
+    ("SC", 2 * N_LOBES),
+    ("DQ", 3),  # |K rho|^2, (K rho).(K rho_ms), |K rho_ms|^2 of the diffuse lobe
+    ("EON_FIT", 3),  # (A_F, B_F, s_h) of the EON albedo at base_diffuse_roughness
+    ("QON_AB", 2),  # QON's (A, B) at base_diffuse_roughness (QON diffuse, thin-walled subsurface)
+)
+PARAM, N_PARAMS = layout("Param", PARAMS)
+# module-level names of the offsets the table-lookup tests pass to ``layer_albedos``
+P_X_S, P_X_C, P_CURVE_S, P_CURVE_C = PARAM.X_S, PARAM.X_C, PARAM.CURVE_S, PARAM.CURVE_C
+P_E1S, P_E5S, P_E6S, P_E1C = PARAM.E1S, PARAM.E5S, PARAM.E6S, PARAM.E1C
 
 
 # --------------------------------------------------------------------------- packing
@@ -135,7 +154,7 @@ RAW = (
     ("fuzz_roughness", 1),
     ("geometry_thin_walled", 1),
 )
-N_RAW = sum(w for _, w in RAW)
+INPUT, N_RAW = layout("Input", RAW)
 #: warning bits of ``pack_drive``
 W_SPEC_TIR, W_COAT_TIR, W_F82_NEGATIVE = 1, 2, 4
 
@@ -188,53 +207,53 @@ def _conductor_curve(out, q, t, C, c):
 
 @kernel
 def _pack_weights(out, o):
-    """The material part K_k[c] of every lobe's weight (P_K), following the reference graph
-    (open_pbr_surface.mtlx): the base attenuated by the coat (P_BASE_MUL); metal /
+    """The material part K_k[c] of every lobe's weight (PARAM.K), following the reference graph
+    (open_pbr_surface.mtlx): the base attenuated by the coat (PARAM.BASE_MUL); metal /
     dielectric by base_metalness; under the dielectric specular layer the substrate mixes
     transmission, subsurface and diffuse; the subsurface lobe is Lambert, or when thin-walled
     the reflection half of the thin-walled mix (QON, colour^2 (1 - g)/2) and SUBSURFACE_T its
-    translucent half.  Then the score constants (P_SC, P_DQ) of ``lobe_score``."""
-    M, T, S, g = out[o + P_METAL], out[o + P_TRANS_W], out[o + P_SSS_W], out[o + P_SSS_ANISO]
-    thin = out[o + P_THIN] > 0.0
+    translucent half.  Then the score constants (PARAM.SC, PARAM.DQ) of ``lobe_score``."""
+    M, T, S, g = out[o + PARAM.METAL], out[o + PARAM.TRANS_W], out[o + PARAM.SSS_W], out[o + PARAM.SSS_ANISO]
+    thin = out[o + PARAM.THIN] > 0.0
     for c in range(3):
-        base = out[o + P_BASE_MUL + c]
+        base = out[o + PARAM.BASE_MUL + c]
         diel = base * (1.0 - M)
         opaque = diel * (1.0 - T)
-        color = out[o + P_SSS_COLOR + c]
+        color = out[o + PARAM.SSS_COLOR + c]
         K = (
-            opaque * (1.0 - S) * out[o + P_BASE_WEIGHT],  # DIFFUSE
-            diel * out[o + P_SPEC_COLOR + c],  # SPECULAR
-            base * M * out[o + P_SPEC_WEIGHT],  # METAL
+            opaque * (1.0 - S) * out[o + PARAM.BASE_WEIGHT],  # DIFFUSE
+            diel * out[o + PARAM.SPEC_COLOR + c],  # SPECULAR
+            base * M * out[o + PARAM.SPEC_WEIGHT],  # METAL
             diel * T,  # TRANSMISSION
             opaque * S * 0.5 * color * (1.0 - g) if thin else opaque * S,  # SUBSURFACE
             opaque * S * 0.5 * color * (1.0 + g),  # SUBSURFACE_T
-            out[o + P_COAT_W],  # COAT
-            out[o + P_FUZZ_W] * out[o + P_FUZZ_COLOR + c],
+            out[o + PARAM.COAT_W],  # COAT
+            out[o + PARAM.FUZZ_W] * out[o + PARAM.FUZZ_COLOR + c],
         )  # FUZZ
         for k in range(N_LOBES):
-            out[o + P_K + 3 * k + c] = K[k]
+            out[o + PARAM.K + 3 * k + c] = K[k]
     for k in range(N_LOBES):
         n2 = 0.0
         mx = 0.0
         for c in range(3):
             e = 1.0  # SPECULAR, COAT, FUZZ (scalar albedos), and DIFFUSE, METAL (unused)
             if k == TRANSMISSION:
-                e = out[o + P_TRANS_TINT + c]
+                e = out[o + PARAM.TRANS_TINT + c]
             elif k == SUBSURFACE or k == SUBSURFACE_T:
-                e = out[o + P_SSS_COLOR + c]
-            v = out[o + P_K + 3 * k + c] * e
+                e = out[o + PARAM.SSS_COLOR + c]
+            v = out[o + PARAM.K + 3 * k + c] * e
             n2 += v * v
             mx = max(mx, abs(v))
-        out[o + P_SC + 2 * k] = math.sqrt(n2)
-        out[o + P_SC + 2 * k + 1] = mx
+        out[o + PARAM.SC + 2 * k] = math.sqrt(n2)
+        out[o + PARAM.SC + 2 * k + 1] = mx
     a = b = d = 0.0
     for c in range(3):
-        x = out[o + P_K + c] * out[o + P_BASE_COLOR + c]
-        y = out[o + P_K + c] * out[o + P_RHO_MS + c]
+        x = out[o + PARAM.K + c] * out[o + PARAM.BASE_COLOR + c]
+        y = out[o + PARAM.K + c] * out[o + PARAM.RHO_MS + c]
         a += x * x
         b += x * y
         d += y * y
-    out[o + P_DQ], out[o + P_DQ + 1], out[o + P_DQ + 2] = a, b, d
+    out[o + PARAM.DQ], out[o + PARAM.DQ + 1], out[o + PARAM.DQ + 2] = a, b, d
 
 
 def _pack_drive(raw, out, CT, RT):
@@ -247,11 +266,20 @@ def _pack_drive(raw, out, CT, RT):
     for i in range(m):
         a = i * N_RAW
         o = i * N_PARAMS
-        bw, M, sw = raw[a + 4], raw[a + 5], raw[a + 9]
-        r_s, ior = raw[a + 10], raw[a + 11]
-        T, S, g = raw[a + 12], raw[a + 17], raw[a + 21]
-        C, r_c, c_ior, c_dark = raw[a + 22], raw[a + 26], raw[a + 27], raw[a + 28]
-        F, thin = raw[a + 29], raw[a + 34]
+        bw, M, sw = raw[a + INPUT.base_weight], raw[a + INPUT.base_metalness], raw[a + INPUT.specular_weight]
+        r_s, ior = raw[a + INPUT.specular_roughness], raw[a + INPUT.specular_ior]
+        T, S, g = (
+            raw[a + INPUT.transmission_weight],
+            raw[a + INPUT.subsurface_weight],
+            raw[a + INPUT.subsurface_scatter_anisotropy],
+        )
+        C, r_c, c_ior, c_dark = (
+            raw[a + INPUT.coat_weight],
+            raw[a + INPUT.coat_roughness],
+            raw[a + INPUT.coat_ior],
+            raw[a + INPUT.coat_darkening],
+        )
+        F, thin = raw[a + INPUT.fuzz_weight], raw[a + INPUT.geometry_thin_walled]
         # the coat's effect on the base specular [effective_specular_roughness, eta_s]
         r_eff = (1.0 - C) * r_s + C * min(1.0, 2.0 * r_c**4 + r_s**4) ** 0.25
         eta_s = ior
@@ -268,64 +296,76 @@ def _pack_drive(raw, out, CT, RT):
         xc = abs(xc)
         K = 1.0 - (1.0 - fresnel.f0(c_ior)) / (c_ior * c_ior)
         for c in range(3):
-            bc = raw[a + c]
-            sc = raw[a + 6 + c]
-            out[o + P_BASE_COLOR + c] = bc
-            out[o + P_SPEC_COLOR + c] = sc
+            bc = raw[a + INPUT.base_color + c]
+            sc = raw[a + INPUT.specular_color + c]
+            out[o + PARAM.BASE_COLOR + c] = bc
+            out[o + PARAM.SPEC_COLOR + c] = sc
             F0 = bw * bc
-            out[o + P_METAL_F0 + c] = F0
+            out[o + PARAM.METAL_F0 + c] = F0
             am = fresnel.f82_a(F0, sc)
-            out[o + P_METAL_A + c] = am
+            out[o + PARAM.METAL_A + c] = am
             if M > 0.0 and sw > 0.0:
                 for k in range(257):
                     if fresnel.f82(k / 256.0, F0, am) < 0.0:
                         warn |= W_F82_NEGATIVE
-            out[o + P_TRANS_TINT + c] = 1.0 if raw[a + 16] > 0.0 else raw[a + 13 + c]
-            ssc = raw[a + 18 + c]
-            out[o + P_SSS_COLOR + c] = ssc
+            out[o + PARAM.TRANS_TINT + c] = (
+                1.0 if raw[a + INPUT.transmission_depth] > 0.0 else raw[a + INPUT.transmission_color + c]
+            )
+            ssc = raw[a + INPUT.subsurface_color + c]
+            out[o + PARAM.SSS_COLOR + c] = ssc
             # base darkening and coat attenuation [Kcoat, Ebase, base_darkening, coat_attenuation]
             E_base = (1.0 - M) * ((1.0 - S) * bc + S * ssc) + M * bc * sw
             dark = (1.0 - K) / (1.0 - E_base * K)
-            out[o + P_BASE_MUL + c] = (1.0 + C * c_dark * (dark - 1.0)) * (1.0 + C * (raw[a + 23 + c] - 1.0))
-            out[o + P_FUZZ_COLOR + c] = raw[a + 30 + c]
-        out[o + P_R_DIFF] = raw[a + 3]
-        out[o + P_R_TENTH] = pow_tenth(raw[a + 3])
-        avg = E_F_avg(raw[a + 3])
+            out[o + PARAM.BASE_MUL + c] = (1.0 + C * c_dark * (dark - 1.0)) * (
+                1.0 + C * (raw[a + INPUT.coat_color + c] - 1.0)
+            )
+            out[o + PARAM.FUZZ_COLOR + c] = raw[a + INPUT.fuzz_color + c]
+        out[o + PARAM.R_DIFF] = raw[a + INPUT.base_diffuse_roughness]
+        out[o + PARAM.R_TENTH] = pow_tenth(raw[a + INPUT.base_diffuse_roughness])
+        avg = E_F_avg(raw[a + INPUT.base_diffuse_roughness])
         for c in range(3):
-            out[o + P_RHO_MS + c] = rho_ms(raw[a + c], avg)
-        out[o + P_SHEEN_FIT], out[o + P_SHEEN_FIT + 1], out[o + P_SHEEN_FIT + 2] = sheen_albedo_fit(raw[a + 33])
-        out[o + P_EON_FIT], out[o + P_EON_FIT + 1], out[o + P_EON_FIT + 2] = eon_albedo_fit(raw[a + 3])
-        out[o + P_QON_AB], out[o + P_QON_AB + 1] = qon_AB(raw[a + 3], 0.33)
-        out[o + P_BASE_WEIGHT] = bw
-        out[o + P_METAL] = M
-        out[o + P_SPEC_WEIGHT] = sw
-        out[o + P_ALPHA_S] = mf.alpha_of(r_eff)
-        out[o + P_R_S] = r_eff
-        out[o + P_X_S] = x
-        out[o + P_ETA_S] = fresnel.eta_of_x(x)
-        out[o + P_TRANS_W] = T
-        out[o + P_SSS_W] = S
-        out[o + P_SSS_ANISO] = g
-        out[o + P_COAT_W] = C
-        out[o + P_ALPHA_C] = mf.alpha_of(r_c)
-        out[o + P_R_C] = r_c
-        out[o + P_X_C] = xc
-        out[o + P_ETA_C] = fresnel.eta_of_x(xc)
-        out[o + P_FUZZ_W] = F
-        out[o + P_FUZZ_R] = raw[a + 33]
-        out[o + P_THIN] = thin
-        _table_axes(out, o + P_TAB_S, r_eff, x, nCr, nRr, nRx)
-        _table_axes(out, o + P_TAB_C, r_c, xc, nCr, nRr, nRx)
-        _curve(out, o + P_CURVE_S, o + P_TAB_S, RT)
-        _curve(out, o + P_CURVE_C, o + P_TAB_C, RT)
-        _conductor_curve(out, o + P_E1S, o + P_TAB_S, CT, 0)
-        _conductor_curve(out, o + P_E5S, o + P_TAB_S, CT, 1)
-        _conductor_curve(out, o + P_E6S, o + P_TAB_S, CT, 2)
-        _conductor_curve(out, o + P_E1C, o + P_TAB_C, CT, 0)
+            out[o + PARAM.RHO_MS + c] = rho_ms(raw[a + INPUT.base_color + c], avg)
+        out[o + PARAM.SHEEN_FIT], out[o + PARAM.SHEEN_FIT + 1], out[o + PARAM.SHEEN_FIT + 2] = sheen_albedo_fit(
+            raw[a + INPUT.fuzz_roughness]
+        )
+        out[o + PARAM.EON_FIT], out[o + PARAM.EON_FIT + 1], out[o + PARAM.EON_FIT + 2] = eon_albedo_fit(
+            raw[a + INPUT.base_diffuse_roughness]
+        )
+        out[o + PARAM.QON_AB], out[o + PARAM.QON_AB + 1] = qon_AB(raw[a + INPUT.base_diffuse_roughness], 0.33)
+        out[o + PARAM.BASE_WEIGHT] = bw
+        out[o + PARAM.METAL] = M
+        out[o + PARAM.SPEC_WEIGHT] = sw
+        out[o + PARAM.ALPHA_S] = mf.alpha_of(r_eff)
+        out[o + PARAM.R_S] = r_eff
+        out[o + PARAM.X_S] = x
+        out[o + PARAM.ETA_S] = fresnel.eta_of_x(x)
+        out[o + PARAM.TRANS_W] = T
+        out[o + PARAM.SSS_W] = S
+        out[o + PARAM.SSS_ANISO] = g
+        out[o + PARAM.COAT_W] = C
+        out[o + PARAM.ALPHA_C] = mf.alpha_of(r_c)
+        out[o + PARAM.R_C] = r_c
+        out[o + PARAM.X_C] = xc
+        out[o + PARAM.ETA_C] = fresnel.eta_of_x(xc)
+        out[o + PARAM.FUZZ_W] = F
+        out[o + PARAM.FUZZ_R] = raw[a + INPUT.fuzz_roughness]
+        out[o + PARAM.THIN] = thin
+        _table_axes(out, o + PARAM.TAB_S, r_eff, x, nCr, nRr, nRx)
+        _table_axes(out, o + PARAM.TAB_C, r_c, xc, nCr, nRr, nRx)
+        _curve(out, o + PARAM.CURVE_S, o + PARAM.TAB_S, RT)
+        _curve(out, o + PARAM.CURVE_C, o + PARAM.TAB_C, RT)
+        _conductor_curve(out, o + PARAM.E1S, o + PARAM.TAB_S, CT, 0)
+        _conductor_curve(out, o + PARAM.E5S, o + PARAM.TAB_S, CT, 1)
+        _conductor_curve(out, o + PARAM.E6S, o + PARAM.TAB_S, CT, 2)
+        _conductor_curve(out, o + PARAM.E1C, o + PARAM.TAB_C, CT, 0)
         _pack_weights(out, o)
         # lobes that can be non-zero
         diel = 1.0 - M
-        sc_any = raw[a + 6] > 0.0 or raw[a + 7] > 0.0 or raw[a + 8] > 0.0
+        sc_any = (
+            raw[a + INPUT.specular_color] > 0.0
+            or raw[a + INPUT.specular_color + 1] > 0.0
+            or raw[a + INPUT.specular_color + 2] > 0.0
+        )
         on = (
             diel * (1.0 - T) * (1.0 - S) * bw > 0.0,
             diel > 0.0 and x > 0.0 and sc_any,
@@ -342,7 +382,7 @@ def _pack_drive(raw, out, CT, RT):
     return mask, warn
 
 
-pack_drive = numba.njit(cache=True, error_model="numpy")(_pack_drive)
+pack_drive = serial(_pack_drive)
 
 
 @kernel
@@ -353,8 +393,8 @@ def cubic_at(p, b, w0, w1, w2, w3):
 @kernel
 def layer_albedos(p, o, e1, e5, e6, q, mu, x, ms):
     """(E1, E5, E6, E) of a GGX layer from its curves collapsed per material: the conductor
-    basis at p[o + e1], p[o + e5], p[o + e6] (P_E*), the dielectric ratio at p[o + q]
-    (P_CURVE_*): the basis albedos and the dielectric lobe's albedo with the
+    basis at p[o + e1], p[o + e5], p[o + e6] (PARAM.E*), the dielectric ratio at p[o + q]
+    (PARAM.CURVE_*): the basis albedos and the dielectric lobe's albedo with the
     multiple-scattering factor (0 at x = 0: index-matched)."""
     im, tm = node_at(mu, N_CCURVE - 2, MU_AXIS)
     w0, w1, w2, w3 = catmull_rom_at(tm)
@@ -371,12 +411,12 @@ def layer_albedos(p, o, e1, e5, e6, q, mu, x, ms):
 @kernel
 def diffuse_albedo_terms(dmodel, p, o, mu):
     """(e_g, e_h) of the diffuse lobe's albedo rho e_g + m(rho) e_h (channel-free): EON
-    Eq. 20 (m = rho_ms), QON Eq. 8 or Lambert (m = 0), from the material's fits (P_EON_FIT,
-    P_QON_AB)."""
+    Eq. 20 (m = rho_ms), QON Eq. 8 or Lambert (m = 0), from the material's fits (PARAM.EON_FIT,
+    PARAM.QON_AB)."""
     if dmodel == D_EON:
-        return eon_albedo_at(mu, p[o + P_EON_FIT], p[o + P_EON_FIT + 1], p[o + P_EON_FIT + 2])
+        return eon_albedo_at(mu, p[o + PARAM.EON_FIT], p[o + PARAM.EON_FIT + 1], p[o + PARAM.EON_FIT + 2])
     if dmodel == D_QON:
-        return qon_albedo(mu, p[o + P_QON_AB], p[o + P_QON_AB + 1]), 0.0
+        return qon_albedo(mu, p[o + PARAM.QON_AB], p[o + PARAM.QON_AB + 1]), 0.0
     return 1.0, 0.0
 
 
@@ -391,8 +431,8 @@ def diffuse_albedo(dmodel, rho, rms, eg, eh):
 @kernel
 def metal_albedo(p, o, c, E1, E5, E6, ms):
     """F82-tint GGX albedo F0 (E1 - E5) + E5 - a E6 (times the multiple-scattering factor)."""
-    F0 = p[o + P_METAL_F0 + c]
-    return (F0 * (E1 - E5) + E5 - p[o + P_METAL_A + c] * E6) * mf.multiscatter(F0, E1, ms)
+    F0 = p[o + PARAM.METAL_F0 + c]
+    return (F0 * (E1 - E5) + E5 - p[o + PARAM.METAL_A + c] * E6) * mf.multiscatter(F0, E1, ms)
 
 
 @kernel
@@ -412,27 +452,33 @@ def layer_factor(k, Tu, Tb, Tf):
     return Tu
 
 
+#: The state of mu_o that one row's lobe albedos and scores read (``state_passes`` computes it
+#: for a block; ``_surface_passes.state_at`` reads one row's): E1s, E5s, E6s, Es -- the GGX
+#: basis albedos E1, E5, E6 and the dielectric albedo of the base specular; Ec, Ef -- the coat's
+#: and the fuzz's albedos; eg, eh -- the diffuse albedo terms, E = rho e_g + rho_ms e_h; Eq --
+#: the QON albedo of the thin-walled subsurface reflection (1 when not thin-walled).
+LayerState = collections.namedtuple("LayerState", ("E1s", "E5s", "E6s", "Es", "Ec", "Ef", "eg", "eh", "Eq"))
+
+
 @kernel
-def lobe_albedo(k, c, p, o, dmodel, ms, E1s, E5s, E6s, Es, Ec, Ef, eg, eh, Eq):
-    """E_k(wo), the directional albedo of lobe slot k in channel c, from the row's layer
-    albedos (E1/E5/E6/E_spec of the base specular, E_coat, E_fuzz), the diffuse albedo terms
-    (e_g, e_h) and Eq, the QON albedo of the thin-walled subsurface reflection (1 when not
-    thin-walled)."""
+def lobe_albedo(k, c, p, o, dmodel, ms, st):
+    """E_k(wo), the directional albedo of lobe slot k in channel c, from the row's
+    ``LayerState`` ``st``."""
     if k == DIFFUSE:
-        return diffuse_albedo(dmodel, p[o + P_BASE_COLOR + c], p[o + P_RHO_MS + c], eg, eh)
+        return diffuse_albedo(dmodel, p[o + PARAM.BASE_COLOR + c], p[o + PARAM.RHO_MS + c], st.eg, st.eh)
     if k == SPECULAR:
-        return Es
+        return st.Es
     if k == METAL:
-        return metal_albedo(p, o, c, E1s, E5s, E6s, ms)
+        return metal_albedo(p, o, c, st.E1s, st.E5s, st.E6s, ms)
     if k == TRANSMISSION:
-        return p[o + P_TRANS_TINT + c]
+        return p[o + PARAM.TRANS_TINT + c]
     if k == SUBSURFACE:
-        return p[o + P_SSS_COLOR + c] * Eq
+        return p[o + PARAM.SSS_COLOR + c] * st.Eq
     if k == SUBSURFACE_T:
-        return p[o + P_SSS_COLOR + c]
+        return p[o + PARAM.SSS_COLOR + c]
     if k == COAT:
-        return Ec
-    return Ef
+        return st.Ec
+    return st.Ef
 
 
 @kernel
@@ -442,8 +488,9 @@ def _norm_or_max(mx, a, b, c):
 
 
 @kernel
-def lobe_score(k, sel, p, o, ms, L, E1s, E5s, E6s, Es, Ec, Ef, eg, eh, Eq):
-    """The selection score s_k = |w_k E_k| of lobe slot k (L = its ``layer_factor``): the RGB
+def lobe_score(k, sel, p, o, ms, L, st):
+    """The selection score s_k = |w_k E_k| of lobe slot k (L = its ``layer_factor``; st: the
+    row's ``LayerState``): the RGB
     length (SEL_LENGTH), the largest component (SEL_MAX) or 1 (SEL_UNIFORM).
 
     With w_k = L_k K_k most reduce to constants of the material (``_pack_weights``):
@@ -455,29 +502,33 @@ def lobe_score(k, sel, p, o, ms, L, E1s, E5s, E6s, Es, Ec, Ef, eg, eh, Eq):
     diffuse one by max) is summed over channels.  Both rules are computed and one selected:
     a loop over rows calling it for one k has no branch."""
     mx = sel == SEL_MAX
-    q = o + P_K + 3 * k
+    q = o + PARAM.K + 3 * k
     if k == DIFFUSE:
-        d0 = p[q] * diffuse_albedo(D_EON, p[o + P_BASE_COLOR], p[o + P_RHO_MS], eg, eh)
-        d1 = p[q + 1] * diffuse_albedo(D_EON, p[o + P_BASE_COLOR + 1], p[o + P_RHO_MS + 1], eg, eh)
-        d2 = p[q + 2] * diffuse_albedo(D_EON, p[o + P_BASE_COLOR + 2], p[o + P_RHO_MS + 2], eg, eh)
-        q2 = p[o + P_DQ] * eg * eg + 2.0 * p[o + P_DQ + 1] * eg * eh + p[o + P_DQ + 2] * eh * eh
+        d0 = p[q] * diffuse_albedo(D_EON, p[o + PARAM.BASE_COLOR], p[o + PARAM.RHO_MS], st.eg, st.eh)
+        d1 = p[q + 1] * diffuse_albedo(D_EON, p[o + PARAM.BASE_COLOR + 1], p[o + PARAM.RHO_MS + 1], st.eg, st.eh)
+        d2 = p[q + 2] * diffuse_albedo(D_EON, p[o + PARAM.BASE_COLOR + 2], p[o + PARAM.RHO_MS + 2], st.eg, st.eh)
+        q2 = (
+            p[o + PARAM.DQ] * st.eg * st.eg
+            + 2.0 * p[o + PARAM.DQ + 1] * st.eg * st.eh
+            + p[o + PARAM.DQ + 2] * st.eh * st.eh
+        )
         s = _norm_or_max(True, d0, d1, d2) if mx else math.sqrt(max(q2, 0.0))
     elif k == METAL:
-        m0 = p[q] * metal_albedo(p, o, 0, E1s, E5s, E6s, ms)
-        m1 = p[q + 1] * metal_albedo(p, o, 1, E1s, E5s, E6s, ms)
-        m2 = p[q + 2] * metal_albedo(p, o, 2, E1s, E5s, E6s, ms)
+        m0 = p[q] * metal_albedo(p, o, 0, st.E1s, st.E5s, st.E6s, ms)
+        m1 = p[q + 1] * metal_albedo(p, o, 1, st.E1s, st.E5s, st.E6s, ms)
+        m2 = p[q + 2] * metal_albedo(p, o, 2, st.E1s, st.E5s, st.E6s, ms)
         s = _norm_or_max(True, m0, m1, m2) if mx else _norm_or_max(False, m0, m1, m2)
     else:
-        cl, cm = p[o + P_SC + 2 * k], p[o + P_SC + 2 * k + 1]
+        cl, cm = p[o + PARAM.SC + 2 * k], p[o + PARAM.SC + 2 * k + 1]
         c = cm if mx else cl
         if k == SPECULAR:
-            s = Es * c
+            s = st.Es * c
         elif k == COAT:
-            s = Ec * c
+            s = st.Ec * c
         elif k == FUZZ:
-            s = Ef * c
+            s = st.Ef * c
         elif k == SUBSURFACE:
-            s = Eq * c
+            s = st.Eq * c
         else:  # TRANSMISSION, SUBSURFACE_T: constant colours
             s = c
     return 1.0 if sel == SEL_UNIFORM else abs(L) * s
@@ -486,70 +537,111 @@ def lobe_score(k, sel, p, o, ms, L, E1s, E5s, E6s, Es, Ec, Ef, eg, eh, Eq):
 @kernel
 def diffuse_gh(dmodel, p, o, iz, oz, s):
     """(g, h) of the diffuse lobe's BSDF f = rho g + rho_ms h, channel-free: EON Eq. 16-19,
-    QON Eq. 1 (the material's A, B: P_QON_AB) or Lambert (h = 0 for both)."""
+    QON Eq. 1 (the material's A, B: PARAM.QON_AB) or Lambert (h = 0 for both)."""
     if dmodel == D_EON:
-        g, h, _ = eon_terms(iz, oz, s, p[o + P_R_DIFF], False)
+        g, h, _ = eon_terms(iz, oz, s, p[o + PARAM.R_DIFF], False)
         return g, h
     if dmodel == D_QON:
-        return qon_terms(iz, oz, s, p[o + P_QON_AB], p[o + P_QON_AB + 1]), 0.0
+        return qon_terms(iz, oz, s, p[o + PARAM.QON_AB], p[o + PARAM.QON_AB + 1]), 0.0
     return INV_PI, 0.0
 
 
-@kernel
-def lobe_f(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
-    """The lobe's own BSDF (f0, f1, f2), weight not applied; 0 outside the lobe's hemisphere.
+# The lobes' own BSDFs, one function per lobe slot with one signature (the arguments of
+# ``lobe_f``); ``lobe_f`` picks one by the lobe id.
 
-    (m, c): ``microfacet.kernels.reflection`` at the base specular's alpha, shared by the
-    specular and metal lobes (computed once per row by the caller); E1s, E1c: the GGX albedo
-    E1 of the base specular and the coat (multiple-scattering factors, the transmission's
-    normalisation); Ef: the fuzz albedo.  Branches on the directions are selects, so that
-    a loop over rows calling it for one lobe k vectorises."""
+
+@kernel
+def f_diffuse(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
     up = (iz > 0.0) & (oz > 0.0)
-    if k == DIFFUSE or k == SUBSURFACE:
-        s = ix * ox + iy * oy + iz * oz - iz * oz
-        if k == SUBSURFACE:  # QON when thin-walled (its reflection half), else Lambert
-            q = qon_terms(iz, oz, s, p[o + P_QON_AB], p[o + P_QON_AB + 1])
-            thin = p[o + P_THIN] > 0.0
-            g = q if thin else INV_PI
-            g = g if up else 0.0
-            return p[o + P_SSS_COLOR] * g, p[o + P_SSS_COLOR + 1] * g, p[o + P_SSS_COLOR + 2] * g
-        g, h = diffuse_gh(dmodel, p, o, iz, oz, s)
-        g = g if up else 0.0
-        h = h if up else 0.0
-        return (
-            p[o + P_BASE_COLOR] * g + p[o + P_RHO_MS] * h,
-            p[o + P_BASE_COLOR + 1] * g + p[o + P_RHO_MS + 1] * h,
-            p[o + P_BASE_COLOR + 2] * g + p[o + P_RHO_MS + 2] * h,
-        )
-    if k == SUBSURFACE_T:
-        g = INV_PI if (iz < 0.0) & (oz > 0.0) else 0.0
-        return p[o + P_SSS_COLOR] * g, p[o + P_SSS_COLOR + 1] * g, p[o + P_SSS_COLOR + 2] * g
-    if k == FUZZ:
-        Xx, Xy = ltc_frame(ox, oy)
-        lx, ly = to_frame(Xx, Xy, ix, iy)
-        v = Ef * sheen_density(lx, ly, iz, oz, p[o + P_FUZZ_R]) / iz
-        v = v if up else 0.0
-        return v, v, v
-    if k == TRANSMISSION:  # the GGX lobe mirrored below the surface, normalised by E1
-        mt, _ = mf.reflection(ix, iy, -iz, ox, oy, oz, p[o + P_ALPHA_S])
-        mt = mt / E1s
-        return mt * p[o + P_TRANS_TINT], mt * p[o + P_TRANS_TINT + 1], mt * p[o + P_TRANS_TINT + 2]
-    if k == COAT:
-        mc, cc = mf.reflection(ix, iy, iz, ox, oy, oz, p[o + P_ALPHA_C])
-        x = p[o + P_X_C]
-        v = mc * fresnel.dielectric(cc, p[o + P_ETA_C]) * mf.multiscatter(x * x, E1c, ms)
-        return v, v, v
-    if k == SPECULAR:
-        x = p[o + P_X_S]
-        v = m * fresnel.dielectric(c, p[o + P_ETA_S]) * mf.multiscatter(x * x, E1s, ms)
-        return v, v, v
-    # METAL
-    F0r, F0g, F0b = p[o + P_METAL_F0], p[o + P_METAL_F0 + 1], p[o + P_METAL_F0 + 2]
+    s = ix * ox + iy * oy + iz * oz - iz * oz
+    g, h = diffuse_gh(dmodel, p, o, iz, oz, s)
+    g = g if up else 0.0
+    h = h if up else 0.0
     return (
-        m * fresnel.f82(c, F0r, p[o + P_METAL_A]) * mf.multiscatter(F0r, E1s, ms),
-        m * fresnel.f82(c, F0g, p[o + P_METAL_A + 1]) * mf.multiscatter(F0g, E1s, ms),
-        m * fresnel.f82(c, F0b, p[o + P_METAL_A + 2]) * mf.multiscatter(F0b, E1s, ms),
+        p[o + PARAM.BASE_COLOR] * g + p[o + PARAM.RHO_MS] * h,
+        p[o + PARAM.BASE_COLOR + 1] * g + p[o + PARAM.RHO_MS + 1] * h,
+        p[o + PARAM.BASE_COLOR + 2] * g + p[o + PARAM.RHO_MS + 2] * h,
     )
+
+
+@kernel
+def f_specular(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
+    x = p[o + PARAM.X_S]
+    v = m * fresnel.dielectric(c, p[o + PARAM.ETA_S]) * mf.multiscatter(x * x, E1s, ms)
+    return v, v, v
+
+
+@kernel
+def f_metal(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
+    F0r, F0g, F0b = p[o + PARAM.METAL_F0], p[o + PARAM.METAL_F0 + 1], p[o + PARAM.METAL_F0 + 2]
+    return (
+        m * fresnel.f82(c, F0r, p[o + PARAM.METAL_A]) * mf.multiscatter(F0r, E1s, ms),
+        m * fresnel.f82(c, F0g, p[o + PARAM.METAL_A + 1]) * mf.multiscatter(F0g, E1s, ms),
+        m * fresnel.f82(c, F0b, p[o + PARAM.METAL_A + 2]) * mf.multiscatter(F0b, E1s, ms),
+    )
+
+
+@kernel
+def f_transmission(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
+    """The GGX lobe mirrored below the surface, normalised by E1."""
+    mt, _ = mf.reflection(ix, iy, -iz, ox, oy, oz, p[o + PARAM.ALPHA_S])
+    mt = mt / E1s
+    return mt * p[o + PARAM.TRANS_TINT], mt * p[o + PARAM.TRANS_TINT + 1], mt * p[o + PARAM.TRANS_TINT + 2]
+
+
+@kernel
+def f_subsurface(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
+    """QON when thin-walled (its reflection half), else Lambert."""
+    up = (iz > 0.0) & (oz > 0.0)
+    s = ix * ox + iy * oy + iz * oz - iz * oz
+    q = qon_terms(iz, oz, s, p[o + PARAM.QON_AB], p[o + PARAM.QON_AB + 1])
+    thin = p[o + PARAM.THIN] > 0.0
+    g = q if thin else INV_PI
+    g = g if up else 0.0
+    return p[o + PARAM.SSS_COLOR] * g, p[o + PARAM.SSS_COLOR + 1] * g, p[o + PARAM.SSS_COLOR + 2] * g
+
+
+@kernel
+def f_subsurface_t(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
+    g = INV_PI if (iz < 0.0) & (oz > 0.0) else 0.0
+    return p[o + PARAM.SSS_COLOR] * g, p[o + PARAM.SSS_COLOR + 1] * g, p[o + PARAM.SSS_COLOR + 2] * g
+
+
+@kernel
+def f_coat(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
+    mc, cc = mf.reflection(ix, iy, iz, ox, oy, oz, p[o + PARAM.ALPHA_C])
+    x = p[o + PARAM.X_C]
+    v = mc * fresnel.dielectric(cc, p[o + PARAM.ETA_C]) * mf.multiscatter(x * x, E1c, ms)
+    return v, v, v
+
+
+@kernel
+def f_fuzz(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
+    up = (iz > 0.0) & (oz > 0.0)
+    Xx, Xy = ltc_frame(ox, oy)
+    lx, ly = to_frame(Xx, Xy, ix, iy)
+    v = Ef * sheen_density(lx, ly, iz, oz, p[o + PARAM.FUZZ_R]) / iz
+    v = v if up else 0.0
+    return v, v, v
+
+
+#: ``lobe_f``'s function of each lobe slot, in slot order
+LOBE_F = (f_diffuse, f_specular, f_metal, f_transmission, f_subsurface, f_subsurface_t, f_coat, f_fuzz)
+
+
+#: ``lobe_f(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef)``, compiled code
+#: only, k a compile-time constant: the lobe's own BSDF (f0, f1, f2), weight not applied; 0
+#: outside the lobe's hemisphere.  (m, c): ``microfacet.kernels.reflection`` at the base
+#: specular's alpha, shared by the specular and metal lobes (computed once per row by the
+#: caller); E1s, E1c: the GGX albedo E1 of the base specular and the coat (multiple-scattering
+#: factors, the transmission's normalisation); Ef: the fuzz albedo.  Branches on the
+#: directions are selects, so that a loop over rows calling it for one lobe vectorises.
+lobe_f = by_constant(
+    "lobe_f",
+    ("k", "p", "o", "ix", "iy", "iz", "ox", "oy", "oz", "dmodel", "ms", "m", "c", "E1s", "E1c", "Ef"),
+    LOBE_F,
+    __name__,
+)
 
 
 @kernel
@@ -565,7 +657,7 @@ def lobe_pdf(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, vndf, pdf_s):
         if diffuse_uses_eon_sampler(k, dmodel):
             Xx, Xy = ltc_frame(ox, oy)
             lx, ly = to_frame(Xx, Xy, ix, iy)
-            q = eon_pdf(lx, ly, iz, min(oz, 1.0), p[o + P_R_DIFF], p[o + P_R_TENTH])
+            q = eon_pdf(lx, ly, iz, min(oz, 1.0), p[o + PARAM.R_DIFF], p[o + PARAM.R_TENTH])
         else:
             q = cosine_pdf(iz)
         return q if iz > 0.0 else 0.0  # a select: no branch on the direction
@@ -574,11 +666,11 @@ def lobe_pdf(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, vndf, pdf_s):
     if k == FUZZ:
         Xx, Xy = ltc_frame(ox, oy)
         lx, ly = to_frame(Xx, Xy, ix, iy)
-        return sheen_density(lx, ly, iz, oz, p[o + P_FUZZ_R])
+        return sheen_density(lx, ly, iz, oz, p[o + PARAM.FUZZ_R])
     if k == TRANSMISSION:
-        return mf.reflection_pdf(ix, iy, -iz, ox, oy, oz, p[o + P_ALPHA_S], vndf)
+        return mf.reflection_pdf(ix, iy, -iz, ox, oy, oz, p[o + PARAM.ALPHA_S], vndf)
     if k == COAT:
-        return mf.reflection_pdf(ix, iy, iz, ox, oy, oz, p[o + P_ALPHA_C], vndf)
+        return mf.reflection_pdf(ix, iy, iz, ox, oy, oz, p[o + PARAM.ALPHA_C], vndf)
     return pdf_s
 
 
@@ -622,16 +714,16 @@ def lobe_sample(sampler, k, p, o, ox, oy, oz, u1, u2, vndf):
     a CLTC direction on the clipped boundary), so that the sample lies in its lobe and its
     pdf is the lobe's pdf there."""
     if sampler == S_GGX:
-        a_s, a_c = p[o + P_ALPHA_S], p[o + P_ALPHA_C]
+        a_s, a_c = p[o + PARAM.ALPHA_S], p[o + PARAM.ALPHA_C]
         x, y, z, ok = mf.sample_reflection(ox, oy, oz, a_c if k == COAT else a_s, u1, u2, vndf)
         return x, y, (-z if k == TRANSMISSION else z), ok
     mu = min(max(oz, 0.0), 1.0)
     Xx, Xy = ltc_frame(ox, oy)
     if sampler == S_EON:
-        x, y, z, _ = eon_sample(Xx, Xy, mu, p[o + P_R_DIFF], p[o + P_R_TENTH], u1, u2)
+        x, y, z, _ = eon_sample(Xx, Xy, mu, p[o + PARAM.R_DIFF], p[o + PARAM.R_TENTH], u1, u2)
         return x, y, max(z, Z_MIN), True
     if sampler == S_SHEEN:
-        lx, ly, z = sheen_sample(mu, p[o + P_FUZZ_R], u1, u2)
+        lx, ly, z = sheen_sample(mu, p[o + PARAM.FUZZ_R], u1, u2)
     else:
         lx, ly, z, _ = cosine_sample_local(u1, u2)
     x, y = from_frame(Xx, Xy, lx, ly)

@@ -5,9 +5,9 @@ A driver (``_surface_drivers``) walks its rows in blocks of ``B``; each block ke
 per-row values in a scratch buffer ``f`` of ``NROWS`` rows of B float64 (``at(row, r)``):
 the directions, the layer albedos of mu_o (``state_passes``), the selection probabilities
 (``probability_pass``), then whatever the verb accumulates.  The lobe passes run once per
-active lobe with the lobe id a compile-time constant (the callers write ``if active & bit:
-pass(SLOT, ...)``), so ``lobe_f`` / ``lobe_pdf`` / ``lobe_sample`` fold to that lobe's
-formula and the loop body has no switch; the material's options (multiple scattering, VNDF,
+active lobe with the lobe id a compile-time constant (``lobe_loop``, the one loop over the
+lobe ids), so ``lobe_f`` / ``lobe_pdf`` / ``lobe_sample`` fold to that lobe's formula and the
+loop body has no switch; the material's options (multiple scattering, VNDF,
 the selection rule) are selects, the diffuse model a constant of the diffuse lobe's pass.
 A loop with a run-time switch inside, or a libm call (``exp`` of the fuzz albedo), stays
 scalar; measured on the 2-core test VM, the base surface's sample went from ~235 to ~60 ns
@@ -18,9 +18,7 @@ Parameters: ``ps`` is the parameter stride, a compile-time constant of each driv
 material per row (``par``).
 """
 
-import numba
-
-from .._jit import kernel, opaque
+from .._jit import inline, kernel, opaque, unrolled
 from .._launch import _U
 from ..microfacet import kernels as mf
 from ..microfacet.sheen import sheen_albedo_at
@@ -31,31 +29,15 @@ from ._surface_kernels import (
     D_EON,
     DIFFUSE,
     FUZZ,
-    METAL,
     N_LOBES,
     N_SAMPLERS,
-    P_ALPHA_S,
-    P_COAT_W,
-    P_CURVE_C,
-    P_CURVE_S,
-    P_E1C,
-    P_E1S,
-    P_E5S,
-    P_E6S,
-    P_FUZZ_W,
-    P_K,
-    P_QON_AB,
-    P_SHEEN_FIT,
-    P_THIN,
-    P_X_C,
-    P_X_S,
-    SPECULAR,
+    PARAM,
     SUBSURFACE,
-    SUBSURFACE_T,
-    TRANSMISSION,
+    LayerState,
     diffuse_albedo_terms,
     layer_albedos,
     layer_factor,
+    layout,
     lobe_albedo,
     lobe_f,
     lobe_pdf,
@@ -68,68 +50,42 @@ from ._surface_kernels import (
 #: Rows per block: a block's scratch (NROWS x B float64, 25 KB) stays in the L1 cache.
 B = 64
 
-# scratch rows of a block
-(
-    OX,
-    OY,
-    OZ,  # wo
-    IX,
-    IY,
-    IZ,  # wi (given, or sampled)
-    MU,  # mu_o clamped to [0, 1]
-    E1S,
-    E5S,
-    E6S,
-    ES,  # GGX basis albedos and the dielectric albedo of the base specular
-    E1C,
-    EC,  # E1 and the dielectric albedo of the coat (1, 0 without coat)
-    EF,  # fuzz albedo (0 without fuzz)
-    EG,
-    EH,  # diffuse albedo terms, E = rho e_g + rho_ms e_h
-    EQ,  # QON albedo of the thin-walled subsurface reflection (1 otherwise)
-    TU,
-    TB,
-    TF,  # layer factors: under the specular layer, the base, under the fuzz
-    A0,
-    A1,
-    A2,  # RGB accumulators (eval, albedo)
-    GM,
-    GC,
-    GP,  # base specular GGX: f without Fresnel, wo.h; its pdf
-    U0,
-    U1,
-    U2,  # u: the lobe choice's, and the chosen lobe's sampler inputs
-    OK,  # 1 where the sampler succeeded
-    CH,  # the chosen lobe slot
-    Q,  # mixture pdf
-    MINE,  # the chosen lobe's own pdf at the sample
-    TOX,
-    TOY,
-    TOZ,
-    TU1,
-    TU2,
-    TK,  # one sampler's rows of OX..OZ, U1, U2, CH, gathered (``sample_pass``)
-    TX,
-    TY,
-    TZ,
-    TOK,  # its samples, before they are scattered to IX..IZ, OK
-    PR,
-) = range(44)  # PR .. PR + 7: the selection probabilities P_k
-NROWS = PR + N_LOBES
+#: The scratch rows of a block, each B float64 (``at(row, r)``): the per-row values a block's
+#: passes hand to each other.
+ROWS = (
+    ("OX", 1), ("OY", 1), ("OZ", 1),  # wo
+    ("IX", 1), ("IY", 1), ("IZ", 1),  # wi (given, or sampled)
+    ("MU", 1),  # mu_o clamped to [0, 1]
+    # the state of mu_o (``state_passes``)
+    ("E1S", 1), ("E5S", 1), ("E6S", 1), ("ES", 1),  # GGX basis albedos, dielectric albedo of the base specular
+    ("E1C", 1), ("EC", 1),  # E1 and the dielectric albedo of the coat (1, 0 without coat)
+    ("EF", 1),  # fuzz albedo (0 without fuzz)
+    ("EG", 1), ("EH", 1),  # diffuse albedo terms, E = rho e_g + rho_ms e_h
+    ("EQ", 1),  # QON albedo of the thin-walled subsurface reflection (1 otherwise)
+    ("TU", 1), ("TB", 1), ("TF", 1),  # layer factors: under the specular layer, the base, under the fuzz
+    ("A0", 1), ("A1", 1), ("A2", 1),  # RGB accumulators (eval, albedo)
+    ("GM", 1), ("GC", 1), ("GP", 1),  # base specular GGX: f without Fresnel, wo.h; its pdf
+    ("U0", 1), ("U1", 1), ("U2", 1),  # u: the lobe choice's, and the chosen lobe's sampler inputs
+    ("OK", 1),  # 1 where the sampler succeeded
+    ("CH", 1),  # the chosen lobe slot
+    ("Q", 1),  # mixture pdf
+    ("MINE", 1),  # the chosen lobe's own pdf at the sample
+    # one sampler's rows of OX..OZ, U1, U2, CH, gathered (``sample_pass``), and its samples,
+    # before they are scattered to IX..IZ, OK
+    ("TOX", 1), ("TOY", 1), ("TOZ", 1), ("TU1", 1), ("TU2", 1), ("TK", 1),
+    ("TX", 1), ("TY", 1), ("TZ", 1), ("TOK", 1),
+    ("PR", N_LOBES),  # the selection probabilities P_k
+)  # fmt: skip
+ROW, NROWS = layout("Row", ROWS)
 
 
-#: Tiny helpers are inlined in numba's IR rather than by LLVM: a ``kernel`` is compiled once per
-#: distinct literal argument (``at`` alone had 43 compilations per driver).
-_inline = numba.njit(inline="always")
-
-
-@_inline
+@inline
 def at(row, r):
     """Index of entry r of scratch row ``row``."""
     return _U(row) * _U(B) + _U(r)
 
 
-@_inline
+@inline
 def span(m):
     """The rows the passes of a block of m rows run over: B for a whole block (a constant trip
     count), else m rounded up to the vector width (a short call, lobes(wo) of one row, does
@@ -137,13 +93,13 @@ def span(m):
     return B if m == B else (m + 3) // 4 * 4
 
 
-@_inline
+@inline
 def par(ps, s0, r):
     """Offset of the parameters of row s0 + r: 0 for one material (ps = 0), else a row's own."""
     return _U(s0 + r) * _U(ps)
 
 
-@_inline
+@inline
 def active_count(active):
     """K: the number of active lobe slots."""
     K = 0
@@ -152,7 +108,7 @@ def active_count(active):
     return K
 
 
-@_inline
+@inline
 def is_on(active, k):
     return (active & (1 << k)) != 0
 
@@ -178,176 +134,188 @@ def load_pass(d, s0, m, f, row):
 
 @kernel
 def load_u_pass(ud, u, s0, m, f):
-    """U0 = u[0] and, with 3 columns, U1, U2 = u[1], u[2]; with 2, U2 = u[1] (U1 is then u0
+    """ROW.U0 = u[0] and, with 3 columns, ROW.U1, ROW.U2 = u[1], u[2]; with 2, ROW.U2 = u[1] (ROW.U1 is then u0
     rescaled, ``choose_pass``).  Padded with 1/2 beyond row m."""
     for r in range(m):
         j = _U(ud) * _U(s0 + r)
-        f[at(U0, r)] = u[j]
+        f[at(ROW.U0, r)] = u[j]
         if ud == 3:
-            f[at(U1, r)] = u[j + _U(1)]
-            f[at(U2, r)] = u[j + _U(2)]
+            f[at(ROW.U1, r)] = u[j + _U(1)]
+            f[at(ROW.U2, r)] = u[j + _U(2)]
         else:
-            f[at(U2, r)] = u[j + _U(1)]
+            f[at(ROW.U2, r)] = u[j + _U(1)]
     for r in range(m, B):
-        f[at(U0, r)] = 0.5
-        f[at(U1, r)] = 0.5
-        f[at(U2, r)] = 0.5
+        f[at(ROW.U0, r)] = 0.5
+        f[at(ROW.U1, r)] = 0.5
+        f[at(ROW.U2, r)] = 0.5
 
 
-@_inline
+@inline
 def fill_pass(f, row, m, v):
     for r in range(m):
         f[at(row, r)] = v
 
 
 @kernel
-def state_passes(active, dmodel, ms, albedos, basis, p, ps, s0, m, f):
-    """The per-row values of mu_o shared by every lobe: the layer albedos (E1S, ES, and E5S,
-    E6S when ``basis``; E1C, EC; EF), the layer factors (TU, TB, TF) and, when ``albedos``,
-    the diffuse albedo terms (EG, EH) and EQ.  Layers no material of the call has are filled
-    with their neutral values instead of looked up."""
+def state_passes(lobes, active, dmodel, ms, albedos, basis, p, ps, s0, m, f):
+    """The per-row values of mu_o shared by every lobe: the layer albedos (ROW.E1S, ROW.ES, and ROW.E5S,
+    ROW.E6S when ``basis``; ROW.E1C, ROW.EC; ROW.EF), the layer factors (ROW.TU, ROW.TB, ROW.TF) and, when ``albedos``,
+    the diffuse albedo terms (ROW.EG, ROW.EH) and ROW.EQ.  Layers no material of the call has are filled
+    with their neutral values instead of looked up (``lobes``: the runner's lobe set, a
+    constant once inlined, so that a runner without coat or fuzz has no such loops)."""
     for r in range(m):
-        f[at(MU, r)] = min(max(f[at(OZ, r)], 0.0), 1.0)
+        f[at(ROW.MU, r)] = min(max(f[at(ROW.OZ, r)], 0.0), 1.0)
     for r in range(m):
         o = par(ps, s0, r)
-        E1, E5, E6, E = layer_albedos(p, o, P_E1S, P_E5S, P_E6S, P_CURVE_S, f[at(MU, r)], p[o + P_X_S], ms)
-        f[at(E1S, r)] = E1
-        f[at(ES, r)] = E
+        E1, E5, E6, E = layer_albedos(
+            p, o, PARAM.E1S, PARAM.E5S, PARAM.E6S, PARAM.CURVE_S, f[at(ROW.MU, r)], p[o + PARAM.X_S], ms
+        )
+        f[at(ROW.E1S, r)] = E1
+        f[at(ROW.ES, r)] = E
         if basis:
-            f[at(E5S, r)] = E5
-            f[at(E6S, r)] = E6
-    if is_on(active, COAT):
+            f[at(ROW.E5S, r)] = E5
+            f[at(ROW.E6S, r)] = E6
+    if is_on(lobes, COAT) and is_on(active, COAT):
         for r in range(m):
             o = par(ps, s0, r)
-            E1, _, _, E = layer_albedos(p, o, P_E1C, P_E1C, P_E1C, P_CURVE_C, f[at(MU, r)], p[o + P_X_C], ms)
-            on = p[o + P_COAT_W] > 0.0
-            f[at(E1C, r)] = E1 if on else 1.0
-            f[at(EC, r)] = E if on else 0.0
+            E1, _, _, E = layer_albedos(
+                p, o, PARAM.E1C, PARAM.E1C, PARAM.E1C, PARAM.CURVE_C, f[at(ROW.MU, r)], p[o + PARAM.X_C], ms
+            )
+            on = p[o + PARAM.COAT_W] > 0.0
+            f[at(ROW.E1C, r)] = E1 if on else 1.0
+            f[at(ROW.EC, r)] = E if on else 0.0
     else:
-        fill_pass(f, E1C, m, 1.0)
-        fill_pass(f, EC, m, 0.0)
-    if is_on(active, FUZZ):
+        fill_pass(f, ROW.E1C, m, 1.0)
+        fill_pass(f, ROW.EC, m, 0.0)
+    if is_on(lobes, FUZZ) and is_on(active, FUZZ):
         for r in range(m):
             o = par(ps, s0, r)
-            E = sheen_albedo_at(f[at(MU, r)], p[o + P_SHEEN_FIT], p[o + P_SHEEN_FIT + 1], p[o + P_SHEEN_FIT + 2])
-            f[at(EF, r)] = E if p[o + P_FUZZ_W] > 0.0 else 0.0
+            E = sheen_albedo_at(
+                f[at(ROW.MU, r)], p[o + PARAM.SHEEN_FIT], p[o + PARAM.SHEEN_FIT + 1], p[o + PARAM.SHEEN_FIT + 2]
+            )
+            f[at(ROW.EF, r)] = E if p[o + PARAM.FUZZ_W] > 0.0 else 0.0
     else:
-        fill_pass(f, EF, m, 0.0)
+        fill_pass(f, ROW.EF, m, 0.0)
     for r in range(m):
         o = par(ps, s0, r)
-        Tf = 1.0 - p[o + P_FUZZ_W] * f[at(EF, r)]
-        Tb = Tf * (1.0 - p[o + P_COAT_W] * f[at(EC, r)])
-        f[at(TF, r)] = Tf
-        f[at(TB, r)] = Tb
-        f[at(TU, r)] = Tb * (1.0 - f[at(ES, r)])
+        Tf = 1.0 - p[o + PARAM.FUZZ_W] * f[at(ROW.EF, r)]
+        Tb = Tf * (1.0 - p[o + PARAM.COAT_W] * f[at(ROW.EC, r)])
+        f[at(ROW.TF, r)] = Tf
+        f[at(ROW.TB, r)] = Tb
+        f[at(ROW.TU, r)] = Tb * (1.0 - f[at(ROW.ES, r)])
     if not albedos:
         return
     if dmodel == D_EON:
         diffuse_albedo_pass(D_EON, p, ps, s0, m, f)
     else:
         diffuse_albedo_pass(dmodel, p, ps, s0, m, f)
-    if is_on(active, SUBSURFACE) and p[P_THIN] > 0.0:  # thin-walled is one value per surface
+    if (
+        is_on(lobes, SUBSURFACE) and is_on(active, SUBSURFACE) and p[PARAM.THIN] > 0.0
+    ):  # thin-walled is one value per surface
         for r in range(m):
             o = par(ps, s0, r)
-            f[at(EQ, r)] = qon_albedo(f[at(MU, r)], p[o + P_QON_AB], p[o + P_QON_AB + 1])
+            f[at(ROW.EQ, r)] = qon_albedo(f[at(ROW.MU, r)], p[o + PARAM.QON_AB], p[o + PARAM.QON_AB + 1])
     else:
-        fill_pass(f, EQ, m, 1.0)
+        fill_pass(f, ROW.EQ, m, 1.0)
 
 
 @kernel
 def diffuse_albedo_pass(dmodel, p, ps, s0, m, f):
     for r in range(m):
-        eg, eh = diffuse_albedo_terms(dmodel, p, par(ps, s0, r), f[at(MU, r)])
-        f[at(EG, r)] = eg
-        f[at(EH, r)] = eh
+        eg, eh = diffuse_albedo_terms(dmodel, p, par(ps, s0, r), f[at(ROW.MU, r)])
+        f[at(ROW.EG, r)] = eg
+        f[at(ROW.EH, r)] = eh
+
+
+@inline
+def state_at(f, r):
+    """The ``LayerState`` of row r, from the state rows of the scratch."""
+    return LayerState(
+        f[at(ROW.E1S, r)],
+        f[at(ROW.E5S, r)],
+        f[at(ROW.E6S, r)],
+        f[at(ROW.ES, r)],
+        f[at(ROW.EC, r)],
+        f[at(ROW.EF, r)],
+        f[at(ROW.EG, r)],
+        f[at(ROW.EH, r)],
+        f[at(ROW.EQ, r)],
+    )
 
 
 @kernel
 def albedo_of(k, c, p, o, f, r, ms):
     """E_k in channel c at row r (``lobe_albedo`` on the state rows).  The diffuse albedo uses
     EON's form rho e_g + rho_ms e_h for every model: e_h = 0 for QON and Lambert."""
-    return lobe_albedo(
-        k,
-        c,
-        p,
-        o,
-        D_EON,
-        ms,
-        f[at(E1S, r)],
-        f[at(E5S, r)],
-        f[at(E6S, r)],
-        f[at(ES, r)],
-        f[at(EC, r)],
-        f[at(EF, r)],
-        f[at(EG, r)],
-        f[at(EH, r)],
-        f[at(EQ, r)],
-    )
+    return lobe_albedo(k, c, p, o, D_EON, ms, state_at(f, r))
 
 
 @kernel
 def factor_of(k, f, r):
     """L_k at row r (``layer_factor`` on the state rows)."""
-    return layer_factor(k, f[at(TU, r)], f[at(TB, r)], f[at(TF, r)])
+    return layer_factor(k, f[at(ROW.TU, r)], f[at(ROW.TB, r)], f[at(ROW.TF, r)])
 
 
 @kernel
-def score_pass(k, sel, p, ps, s0, m, f, ms):
-    """PR + k = s_k, the selection score of lobe slot k (``lobe_score``), at every row."""
+def score_pass(k, dmodel, sel, p, ps, s0, m, f, ms):
+    """ROW.PR + k = s_k, the selection score of lobe slot k (``lobe_score``), at every row
+    (dmodel: unused; the diffuse score uses EON's form of the albedo, as ``albedo_of``)."""
     for r in range(m):
         o = par(ps, s0, r)
-        f[at(PR + k, r)] = lobe_score(
-            k,
-            sel,
-            p,
-            o,
-            ms,
-            factor_of(k, f, r),
-            f[at(E1S, r)],
-            f[at(E5S, r)],
-            f[at(E6S, r)],
-            f[at(ES, r)],
-            f[at(EC, r)],
-            f[at(EF, r)],
-            f[at(EG, r)],
-            f[at(EH, r)],
-            f[at(EQ, r)],
-        )
+        f[at(ROW.PR + k, r)] = lobe_score(k, sel, p, o, ms, factor_of(k, f, r), state_at(f, r))
+
+
+def lobe_loop(name, pass_, literal):
+    """``name(lobes, active, dmodel, *rest)``, compiled code only: ``pass_(k, dmodel, *rest)`` of
+    every lobe slot k of the compile-time set ``lobes`` (a bit mask, the runner's) that the
+    run-time mask ``active`` holds, in slot order -- the one dispatch skeleton of the lobe
+    passes.  The slots outside ``lobes`` are not compiled at all.
+
+    ``literal``: k is a literal constant of each call, and so is the diffuse model for the
+    diffuse slot's (D_EON for the others, which ignore it): the pass is compiled once per
+    lobe, folded to that lobe's formula (``eval``: without it LLVM did not vectorise the
+    lobe loops).  Otherwise k and the model are passed through ``_jit.opaque``: the pass
+    is compiled once, and LLVM folds the constants after inlining it into its driver."""
+    code = pass_.py_func.__code__
+    rest = code.co_varnames[2 : code.co_argcount]
+    args = ", ".join(rest)
+
+    def body(lobes):
+        calls = []
+        for k in range(N_LOBES):
+            if lobes >> k & 1:
+                if literal:
+                    head = f"{k}, dmodel" if k == DIFFUSE else f"{k}, {D_EON}"
+                else:
+                    head = f"opaque({k}), opaque(dmodel)"
+                calls.append(f"if active >> {k} & 1:\n    pass_({head}, {args})")
+        return "\n".join(calls) or "return"
+
+    return unrolled(name, ("lobes", "active", "dmodel", *rest), body, {"pass_": pass_, "opaque": opaque}, __name__)
+
+
+each_score = lobe_loop("each_score", score_pass, literal=False)
 
 
 @kernel
-def _score_or_zero(k, active, sel, p, ps, s0, m, f, ms):
-    if is_on(active, k):
-        score_pass(opaque(k), sel, p, ps, s0, m, f, ms)
-    else:
-        fill_pass(f, PR + k, m, 0.0)
-
-
-@kernel
-def probability_pass(active, sel, p, ps, s0, m, f, ms):
+def probability_pass(lobes, active, sel, p, ps, s0, m, f, ms):
     """PR + k: the selection probability P_k = s_k / sum_j s_j of every lobe slot k (uniform
     over the active slots when every score is 0 -- a black surface -- or wo is below the
-    horizon; 0 for inactive slots).  One loop per active lobe's score, then one that
-    normalises: each vectorises (one loop doing all of it does not)."""
-    # one pass per slot, the slot a constant (a run-time slot leaves each loop a switch)
-    _score_or_zero(DIFFUSE, active, sel, p, ps, s0, m, f, ms)
-    _score_or_zero(SPECULAR, active, sel, p, ps, s0, m, f, ms)
-    _score_or_zero(METAL, active, sel, p, ps, s0, m, f, ms)
-    _score_or_zero(TRANSMISSION, active, sel, p, ps, s0, m, f, ms)
-    _score_or_zero(SUBSURFACE, active, sel, p, ps, s0, m, f, ms)
-    _score_or_zero(SUBSURFACE_T, active, sel, p, ps, s0, m, f, ms)
-    _score_or_zero(COAT, active, sel, p, ps, s0, m, f, ms)
-    _score_or_zero(FUZZ, active, sel, p, ps, s0, m, f, ms)
+    horizon; 0 for inactive slots).  One loop per active lobe's score (``each_score``), then
+    one that normalises: each vectorises (one loop doing all of it does not)."""
+    for k in range(N_LOBES):
+        fill_pass(f, ROW.PR + k, m, 0.0)
+    each_score(lobes, active, D_EON, sel, p, ps, s0, m, f, ms)
     flat = 1.0 / active_count(active)
     for r in range(m):
         S = 0.0
         for k in range(N_LOBES):
-            S += f[at(PR + k, r)]
-        pos = (S > 0.0) & (f[at(OZ, r)] > 0.0)
+            S += f[at(ROW.PR + k, r)]
+        pos = (S > 0.0) & (f[at(ROW.OZ, r)] > 0.0)
         inv = 1.0 / S
         for k in range(N_LOBES):
-            P = f[at(PR + k, r)] * inv if pos else flat
-            f[at(PR + k, r)] = P if is_on(active, k) else 0.0
+            P = f[at(ROW.PR + k, r)] * inv if pos else flat
+            f[at(ROW.PR + k, r)] = P if is_on(active, k) else 0.0
 
 
 # --------------------------------------------------------------------------- lobes
@@ -355,96 +323,109 @@ def probability_pass(active, sel, p, ps, s0, m, f, ms):
 
 @kernel
 def ggx_pass(active, p, ps, s0, m, f):
-    """GM, GC: the base specular's GGX reflection (without Fresnel) and wo.h, shared by the
+    """ROW.GM, ROW.GC: the base specular's GGX reflection (without Fresnel) and wo.h, shared by the
     specular and metal lobes."""
     if not uses_base_ggx(active):
         return
     for r in range(m):
         o = par(ps, s0, r)
         g, c = mf.reflection(
-            f[at(IX, r)], f[at(IY, r)], f[at(IZ, r)], f[at(OX, r)], f[at(OY, r)], f[at(OZ, r)], p[o + P_ALPHA_S]
+            f[at(ROW.IX, r)],
+            f[at(ROW.IY, r)],
+            f[at(ROW.IZ, r)],
+            f[at(ROW.OX, r)],
+            f[at(ROW.OY, r)],
+            f[at(ROW.OZ, r)],
+            p[o + PARAM.ALPHA_S],
         )
-        f[at(GM, r)] = g
-        f[at(GC, r)] = c
+        f[at(ROW.GM, r)] = g
+        f[at(ROW.GC, r)] = c
 
 
 @kernel
 def ggx_pdf_pass(active, vndf, p, ps, s0, m, f):
-    """GP: the base specular's GGX reflection pdf at wi (specular and metal lobes)."""
+    """ROW.GP: the base specular's GGX reflection pdf at wi (specular and metal lobes)."""
     if not uses_base_ggx(active):
         return
     for r in range(m):
         o = par(ps, s0, r)
-        f[at(GP, r)] = mf.reflection_pdf(
-            f[at(IX, r)], f[at(IY, r)], f[at(IZ, r)], f[at(OX, r)], f[at(OY, r)], f[at(OZ, r)], p[o + P_ALPHA_S], vndf
+        f[at(ROW.GP, r)] = mf.reflection_pdf(
+            f[at(ROW.IX, r)],
+            f[at(ROW.IY, r)],
+            f[at(ROW.IZ, r)],
+            f[at(ROW.OX, r)],
+            f[at(ROW.OY, r)],
+            f[at(ROW.OZ, r)],
+            p[o + PARAM.ALPHA_S],
+            vndf,
         )
 
 
 @kernel
 def eval_lobe_pass(k, dmodel, weighted, ms, p, ps, s0, m, f):
-    """A0..A2 += w_k f_k, or f_k unweighted (``weighted`` False: one lobe's own BSDF, added
+    """ROW.A0..A2 += w_k f_k, or f_k unweighted (``weighted`` False: one lobe's own BSDF, added
     to zeros), at every row of the block."""
     for r in range(m):
         o = par(ps, s0, r)
         f0, f1, f2 = lobe_f(
-            opaque(k),
+            k,
             p,
             o,
-            f[at(IX, r)],
-            f[at(IY, r)],
-            f[at(IZ, r)],
-            f[at(OX, r)],
-            f[at(OY, r)],
-            f[at(OZ, r)],
+            f[at(ROW.IX, r)],
+            f[at(ROW.IY, r)],
+            f[at(ROW.IZ, r)],
+            f[at(ROW.OX, r)],
+            f[at(ROW.OY, r)],
+            f[at(ROW.OZ, r)],
             opaque(dmodel),
             ms,
-            f[at(GM, r)],
-            f[at(GC, r)],
-            f[at(E1S, r)],
-            f[at(E1C, r)],
-            f[at(EF, r)],
+            f[at(ROW.GM, r)],
+            f[at(ROW.GC, r)],
+            f[at(ROW.E1S, r)],
+            f[at(ROW.E1C, r)],
+            f[at(ROW.EF, r)],
         )
         L = factor_of(opaque(k), f, r)
-        q = o + P_K + 3 * k
-        f[at(A0, r)] += (L * p[q] if weighted else 1.0) * f0
-        f[at(A1, r)] += (L * p[q + 1] if weighted else 1.0) * f1
-        f[at(A2, r)] += (L * p[q + 2] if weighted else 1.0) * f2
+        q = o + PARAM.K + 3 * k
+        f[at(ROW.A0, r)] += (L * p[q] if weighted else 1.0) * f0
+        f[at(ROW.A1, r)] += (L * p[q + 1] if weighted else 1.0) * f1
+        f[at(ROW.A2, r)] += (L * p[q + 2] if weighted else 1.0) * f2
 
 
 @kernel
 def pdf_lobe_pass(k, dmodel, track, vndf, p, ps, s0, m, f):
-    """Q += P_k pdf_k(wi | wo) (a lobe with P_k = 0 adds nothing, whatever its pdf); when
-    ``track``, MINE = pdf_k on the rows that chose lobe k."""
+    """ROW.Q += P_k pdf_k(wi | wo) (a lobe with P_k = 0 adds nothing, whatever its pdf); when
+    ``track``, ROW.MINE = pdf_k on the rows that chose lobe k."""
     for r in range(m):
         o = par(ps, s0, r)
         pk = lobe_pdf(
             k,
             p,
             o,
-            f[at(IX, r)],
-            f[at(IY, r)],
-            f[at(IZ, r)],
-            f[at(OX, r)],
-            f[at(OY, r)],
-            f[at(OZ, r)],
+            f[at(ROW.IX, r)],
+            f[at(ROW.IY, r)],
+            f[at(ROW.IZ, r)],
+            f[at(ROW.OX, r)],
+            f[at(ROW.OY, r)],
+            f[at(ROW.OZ, r)],
             dmodel,
             vndf,
-            f[at(GP, r)],
+            f[at(ROW.GP, r)],
         )
-        P = f[at(PR + k, r)]
-        f[at(Q, r)] += P * pk if P > 0.0 else 0.0
+        P = f[at(ROW.PR + k, r)]
+        f[at(ROW.Q, r)] += P * pk if P > 0.0 else 0.0
         if track:
-            f[at(MINE, r)] = pk if f[at(CH, r)] == k else f[at(MINE, r)]
+            f[at(ROW.MINE, r)] = pk if f[at(ROW.CH, r)] == k else f[at(ROW.MINE, r)]
 
 
 @kernel
 def choose_pass(ud, m, f):
-    """CH: the lobe whose interval of the CDF (slot order) holds u0 (U0); U1: its sampler's
+    """ROW.CH: the lobe whose interval of the CDF (slot order) holds u0 (ROW.U0); ROW.U1: its sampler's
     first input, u[1] (ud = 3, loaded) or u0 rescaled within the chosen interval,
     (u0 - C_{k-1})/P_k (ud = 2).  A u0 that rounding leaves above the CDF's end picks the
     last slot with P_k > 0."""
     for r in range(m):
-        u0 = f[at(U0, r)]
+        u0 = f[at(ROW.U0, r)]
         lo = 0.0
         chosen = -1.0
         Pc = 0.0
@@ -452,7 +433,7 @@ def choose_pass(ud, m, f):
         Plast = 0.0
         lolast = 0.0
         for k in range(N_LOBES):  # a constant bound: unrolled, branch-free
-            Pk = f[at(PR + k, r)]
+            Pk = f[at(ROW.PR + k, r)]
             hit = (chosen < 0.0) & (u0 < lo + Pk)
             pos = Pk > 0.0
             lolast = lo if pos else lolast
@@ -462,11 +443,11 @@ def choose_pass(ud, m, f):
             lo = lo if (hit | (chosen >= 0.0)) else lo + Pk
             chosen = float(k) if hit else chosen
         miss = chosen < 0.0
-        f[at(CH, r)] = last if miss else chosen
+        f[at(ROW.CH, r)] = last if miss else chosen
         Pc = Plast if miss else Pc
         lo = lolast if miss else lo
         if ud == 2:
-            f[at(U1, r)] = min(max((u0 - lo) / Pc, 0.0), U_MAX)
+            f[at(ROW.U1, r)] = min(max((u0 - lo) / Pc, 0.0), U_MAX)
 
 
 @kernel
@@ -476,14 +457,14 @@ def compact(dmodel, m, f, idx, cnt):
     for s in range(N_SAMPLERS):
         cnt[s] = 0
     for r in range(m):
-        s = sampler_of(int(f[at(CH, r)]), dmodel)
+        s = sampler_of(int(f[at(ROW.CH, r)]), dmodel)
         idx[_U(s) * _U(B) + _U(cnt[s])] = r
         cnt[s] += 1
 
 
 @kernel
 def sample_pass(sampler, vndf, p, ps, s0, f, idx, cnt):
-    """IX..IZ, OK of the rows drawn by ``sampler``: their lobes' samples at (U1, U2).  The
+    """ROW.IX..IZ, ROW.OK of the rows drawn by ``sampler``: their lobes' samples at (ROW.U1, ROW.U2).  The
     rows' inputs are gathered into contiguous scratch rows, sampled there (a vectorised
     loop; with stores to rows listed in ``idx`` it would not be, as LLVM cannot rule out
     repeats), and the samples scattered back."""
@@ -491,27 +472,36 @@ def sample_pass(sampler, vndf, p, ps, s0, f, idx, cnt):
     lst = _U(sampler) * _U(B)
     for t in range(c):
         r = idx[lst + _U(t)]
-        f[at(TOX, t)] = f[at(OX, r)]
-        f[at(TOY, t)] = f[at(OY, r)]
-        f[at(TOZ, t)] = f[at(OZ, r)]
-        f[at(TU1, t)] = f[at(U1, r)]
-        f[at(TU2, t)] = f[at(U2, r)]
-        f[at(TK, t)] = f[at(CH, r)]
+        f[at(ROW.TOX, t)] = f[at(ROW.OX, r)]
+        f[at(ROW.TOY, t)] = f[at(ROW.OY, r)]
+        f[at(ROW.TOZ, t)] = f[at(ROW.OZ, r)]
+        f[at(ROW.TU1, t)] = f[at(ROW.U1, r)]
+        f[at(ROW.TU2, t)] = f[at(ROW.U2, r)]
+        f[at(ROW.TK, t)] = f[at(ROW.CH, r)]
     for t in range(c):
         o = par(ps, s0, idx[lst + _U(t)])
         x, y, z, ok = lobe_sample(
-            sampler, f[at(TK, t)], p, o, f[at(TOX, t)], f[at(TOY, t)], f[at(TOZ, t)], f[at(TU1, t)], f[at(TU2, t)], vndf
+            sampler,
+            f[at(ROW.TK, t)],
+            p,
+            o,
+            f[at(ROW.TOX, t)],
+            f[at(ROW.TOY, t)],
+            f[at(ROW.TOZ, t)],
+            f[at(ROW.TU1, t)],
+            f[at(ROW.TU2, t)],
+            vndf,
         )
-        f[at(TX, t)] = x
-        f[at(TY, t)] = y
-        f[at(TZ, t)] = z
-        f[at(TOK, t)] = 1.0 if ok else 0.0
+        f[at(ROW.TX, t)] = x
+        f[at(ROW.TY, t)] = y
+        f[at(ROW.TZ, t)] = z
+        f[at(ROW.TOK, t)] = 1.0 if ok else 0.0
     for t in range(c):
         r = idx[lst + _U(t)]
-        f[at(IX, r)] = f[at(TX, t)]
-        f[at(IY, r)] = f[at(TY, t)]
-        f[at(IZ, r)] = f[at(TZ, t)]
-        f[at(OK, r)] = f[at(TOK, t)]
+        f[at(ROW.IX, r)] = f[at(ROW.TX, t)]
+        f[at(ROW.IY, r)] = f[at(ROW.TY, t)]
+        f[at(ROW.IZ, r)] = f[at(ROW.TZ, t)]
+        f[at(ROW.OK, r)] = f[at(ROW.TOK, t)]
 
 
 @kernel
@@ -521,26 +511,26 @@ def lobe_outputs_pass(k, on, ms, p, ps, s0, m, f, W, E, P):
     for r in range(m):
         o = par(ps, s0, r)
         b = _U(s0 + r) * _U(N_LOBES) + _U(k)
-        up = f[at(OZ, r)] > 0.0
+        up = f[at(ROW.OZ, r)] > 0.0
         L = factor_of(k, f, r)
-        q = o + P_K + 3 * k
+        q = o + PARAM.K + 3 * k
         for c in range(3):
             W[b * _U(3) + _U(c)] = L * p[q + c] if on else 0.0
             e = albedo_of(k, c, p, o, f, r, ms)
             E[b * _U(3) + _U(c)] = e if (on and up) else 0.0
-        P[b] = f[at(PR + k, r)] if on else 0.0
+        P[b] = f[at(ROW.PR + k, r)] if on else 0.0
 
 
 @kernel
 def albedo_lobe_pass(k, dmodel, ms, p, ps, s0, m, f):
-    """A0..A2 += w_k E_k of lobe slot k (dmodel: unused, see ``albedo_of``)."""
+    """ROW.A0..A2 += w_k E_k of lobe slot k (dmodel: unused, see ``albedo_of``)."""
     for r in range(m):
         o = par(ps, s0, r)
         L = factor_of(k, f, r)
-        q = o + P_K + 3 * k
-        f[at(A0, r)] += L * p[q] * albedo_of(k, opaque(0), p, o, f, r, ms)
-        f[at(A1, r)] += L * p[q + 1] * albedo_of(k, opaque(1), p, o, f, r, ms)
-        f[at(A2, r)] += L * p[q + 2] * albedo_of(k, opaque(2), p, o, f, r, ms)
+        q = o + PARAM.K + 3 * k
+        f[at(ROW.A0, r)] += L * p[q] * albedo_of(k, opaque(0), p, o, f, r, ms)
+        f[at(ROW.A1, r)] += L * p[q + 1] * albedo_of(k, opaque(1), p, o, f, r, ms)
+        f[at(ROW.A2, r)] += L * p[q + 2] * albedo_of(k, opaque(2), p, o, f, r, ms)
 
 
 @kernel
@@ -548,7 +538,12 @@ def rgb_out_pass(s0, m, f, out):
     """out[3 (s0 + r) + c] = A_c, 0 where wo is below the horizon."""
     for r in range(m):
         j = _U(3) * _U(s0 + r)
-        up = f[at(OZ, r)] > 0.0
-        out[j] = f[at(A0, r)] if up else 0.0
-        out[j + _U(1)] = f[at(A1, r)] if up else 0.0
-        out[j + _U(2)] = f[at(A2, r)] if up else 0.0
+        up = f[at(ROW.OZ, r)] > 0.0
+        out[j] = f[at(ROW.A0, r)] if up else 0.0
+        out[j + _U(1)] = f[at(ROW.A1, r)] if up else 0.0
+        out[j + _U(2)] = f[at(ROW.A2, r)] if up else 0.0
+
+
+each_eval = lobe_loop("each_eval", eval_lobe_pass, literal=True)
+each_pdf = lobe_loop("each_pdf", pdf_lobe_pass, literal=False)
+each_albedo = lobe_loop("each_albedo", albedo_lobe_pass, literal=False)
