@@ -153,6 +153,8 @@ def _sections(args, under):
 
 def run(args) -> int:
     """Run the report per ``args``; the exit status."""
+    from ..report.model import QUICK_NOT_RUN
+    from ..report.render import quick_skipped
     from ..report.runner import run_report
 
     progress = not args.no_progress and sys.stderr.isatty()
@@ -217,8 +219,22 @@ def run(args) -> int:
     for s in doc["sections"]:
         ran = [c for c in s["checks"] if c["status"] != "not run"]
         n_pass = sum(c["passed"] for c in ran)
-        counts = f"not run: {s['not_run']}" if s["status"] == "not run" else f"{n_pass}/{len(ran)} checks"
+        reason = s["not_run"] or ""
+        counts = (
+            (reason if reason.startswith("not run") else f"not run: {reason}")
+            if s["status"] == "not run"
+            else f"{n_pass}/{len(ran)} checks"
+        )
+        skipped = sum(c["not_run"] == QUICK_NOT_RUN for c in s["checks"])
+        if skipped and s["status"] != "not run":
+            counts += f" ({skipped} not run in --quick)"
         print(f"  {s['key']:<16} {s['status']:<14} {counts}  {s['elapsed_s']:.1f} s")
+    skipped = quick_skipped(doc)
+    if skipped:
+        print(
+            "Quick run: not run here, and run by the full report (`openpbr-diffuse report`): "
+            + ", ".join(f"{key} ({n} checks)" for key, _, n in skipped)
+        )
     failed = [c for c in doc["checks"] if c["status"] == "fail"]
     for c in failed[:20]:
         print(f"  FAIL {c['id']}: {c['name']} (measured {c['measured']}, {c['comparison']} {c['threshold']})")

@@ -70,6 +70,21 @@ class Check:
         return d
 
 
+#: Why a check that ``report --quick`` leaves out did not run (its compile or run time is the
+#: larger part of a quick report's; the full report runs it).
+QUICK_NOT_RUN = "not run in --quick: run `openpbr-diffuse report` for it"
+
+
+def skipped_in_quick(name: str, reference: str = "", detail: str = "", unit: str = "") -> Check:
+    """A check that ``report --quick`` does not run: listed as "not run", never passed.
+
+    >>> c = skipped_in_quick("live simulation vs the closed form")
+    >>> c.status, c.passed, c.not_run == QUICK_NOT_RUN
+    ('not run', False, True)
+    """
+    return Check(name, math.nan, math.nan, reference=reference, detail=detail, unit=unit, not_run=QUICK_NOT_RUN)
+
+
 def slug(text: str) -> str:
     """A check name as an id part: lower case, runs of other characters as one ``_``.
 
