@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from ..model import Check, Figure, SectionResult, Table
+from ..model import WHITE, Check, Figure, SectionResult, Table, grey
 
 KEY = "approximations"
 TITLE = "Real-time approximations (Gotanda 2012, table-based energy compensation)"
@@ -108,14 +108,14 @@ def _live_checks(rows):
     p = _at(rows["gotanda_eq27_vs_e25"])
     same(
         "gotanda_eq27_vs_e25",
-        abs(gt.dc_scale_eq27(p["mu_o"], p["sigma"]) - od.directional_albedo("gotanda", p["mu_o"], p["sigma"])[0]),
+        abs(gt.dc_scale_eq27(p["mu_o"], p["sigma"]) - od.directional_albedo("gotanda", p["mu_o"], p["sigma"], WHITE)[0]),
         "closed-form albedo of the Eq. 25 lobe (od.directional_albedo)",
     )
     p = _at(rows["gotanda_eq25_vs_fullon"])
     s_i = math.sqrt(1 - p["mu_i"] ** 2)
     wi = np.array([s_i * math.cos(p["phi"]), s_i * math.sin(p["phi"]), p["mu_i"]])
     wo = np.array([math.sqrt(1 - p["mu_o"] ** 2), 0.0, p["mu_o"]])
-    full = od.evaluate("full_on", wi, wo, p["sigma"], 0.9)[0] / 0.9
+    full = od.evaluate("full_on", wi, wo, p["sigma"], grey(0.9))[0] / 0.9
     same(
         "gotanda_eq25_vs_fullon",
         abs(math.pi * (gt.improved(wi, wo, p["sigma"])[0] - full) * p["mu_i"]),
@@ -127,7 +127,7 @@ def _live_checks(rows):
         a = _at(rows[rid])["alpha"]
         x, w = np.polynomial.legendre.leggauss(96)
         mu, w = 0.5 * (x + 1), 0.5 * w
-        E = od.directional_albedo("qon", mu, a * math.pi / 2)[:, 0]  # closed form, not the table
+        E = od.directional_albedo("qon", mu, a * math.pi / 2, WHITE)[:, 0]  # closed form, not the table
         Y = (
             0.5 / math.sqrt(math.pi) + 0 * mu,
             math.sqrt(3 / (4 * math.pi)) * mu,
@@ -137,7 +137,7 @@ def _live_checks(rows):
         same(rid, abs(kc.zh_fit_oren_nayar(a)[l] - exact), "QON closed-form albedo (EON Eq. 8), Gauss-Legendre", 1e-3)
     p = _at(rows["kc_tau_factor_albedo"])
     avg = od.average_albedo("qon", p["sigma"])[0]
-    E1 = od.directional_albedo("qon", p["mu_o"], p["sigma"])[0]
+    E1 = od.directional_albedo("qon", p["mu_o"], p["sigma"], WHITE)[0]
     rho = p["rho"]
     same(
         "kc_tau_factor_albedo",
@@ -183,7 +183,7 @@ def _plots(ctx, figures):
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8))
     for sig, c in ((0.5, "C0"), (1.0, "C1")):
         axes[0].plot(
-            mu, od.directional_albedo("gotanda", mu, sig)[:, 0], c, lw=2, label=f"exact, Eq. 25 lobe, sigma={sig}"
+            mu, od.directional_albedo("gotanda", mu, sig, WHITE)[:, 0], c, lw=2, label=f"exact, Eq. 25 lobe, sigma={sig}"
         )
         axes[0].plot(
             mu, od.reference_albedo("full_on", mu, sig)[:, 0], c, lw=1, ls=":", label=f"exact, fullON, sigma={sig}"
