@@ -24,12 +24,12 @@ first use (``functools.cache``) and compiled lazily per dtype; numba caches them
 
 import functools
 
-import numba
 import numpy as np
 from numba import errors, types
 from numba.extending import overload
 
 from .._arrays import is_unit, is_within
+from .._jit import kernel
 from .._launch import _F, _U, compiled, launch, rows
 from .eon import eon_albedo_terms, eon_average_terms, eon_terms, rho_ms
 from .fon import fon_albedo, fon_terms
@@ -187,39 +187,28 @@ def _albedo_terms(model, mu, r, average):
     return impl
 
 
-def _mixer(kind):
-    """``shade`` for the model's rho dependence ``kind`` (registry MIX_*), inlined in numba's IR."""
+@kernel
+def mix(kind, rho, g, h, avg):
+    """rho g + m(rho) h for the model's rho dependence ``kind`` (registry MIX_*)."""
     if kind == MIX_RHO_MS:
-
-        @numba.njit(inline="always")
-        def mix(rho, g, h, avg):
-            return rho * g + rho_ms(rho, avg) * h
-    elif kind == MIX_RHO2:
-
-        @numba.njit(inline="always")
-        def mix(rho, g, h, avg):
-            return rho * g + rho * rho * h
-    else:
-
-        @numba.njit(inline="always")
-        def mix(rho, g, h, avg):
-            return rho * g
-
-    @numba.njit(inline="always")
-    def shade(tint, up, p, g, h, avg):
-        """One channel: ``rho g + m(rho) h`` (reference) or ``rho f(rho = 1)`` (white_tint); 0 unless ``up``.
-
-        Written with selects, not branches, so that the batch loop stays vectorisable."""
-        q = 1.0 if tint else p
-        v = mix(q, g, h, avg)
-        v = p * v if tint else v
-        return v if up else 0.0
-
-    return shade
+        return rho * g + rho_ms(rho, avg) * h
+    if kind == MIX_RHO2:
+        return rho * g + rho * rho * h
+    return rho * g
 
 
-#: one ``shade`` per rho dependence, shared by the drivers of every model with it
-_SHADE = {k: _mixer(k) for k in sorted({info.mix for info in INFO.values()})}
+@kernel
+def shade(kind, tint, up, p, g, h, avg):
+    """One channel: ``rho g + m(rho) h`` (reference) or ``rho f(rho = 1)`` (white_tint); 0 unless ``up``.
+
+    Written with selects, not branches, so that the batch loop stays vectorisable.
+    """
+    q = 1.0 if tint else p
+    v = mix(kind, q, g, h, avg)
+    v = p * v if tint else v
+    return v if up else 0.0
+
+
 _MIX = {info.id: info.mix for info in INFO.values()}
 
 
@@ -228,57 +217,38 @@ def _channels(C):
     return C if C in (1, 3) else 0
 
 
-@numba.njit(inline="always")
+@kernel
 def checked_rho(rho, c, ok):
     """rho[c] widened to float64, and ``ok`` and-ed with its range check ([0, 1], finite)."""
     p = _F(rho[c])
     return p, ok & is_within(p, 0.0, 1.0, False, False)
 
 
+@kernel
 def write_row(nc, kind, tint, up, rho, out, i, n, g, h, avg, ok):
     """Shade row i into ``out`` for every channel; returns ``ok`` and-ed with the rho checks.
 
-    Compiled form only (``_write_row``): ``nc`` (the driver's channel variant: 3, 1, or 0 =
-    any count) and ``kind`` (the model's rho dependence) are compile-time constants that pick
-    the code while the driver is typed, so the RGB and grey loops are straight-line code;
-    the row, its mix and its rho checks are inlined in numba's IR, not compiled on their own
-    (as separate functions they were 15 compilations of a cold report, one per literal
-    argument combination)."""
-    raise NotImplementedError("compiled only: called from the batch drivers")
-
-
-@overload(write_row, inline="always")
-def _write_row(nc, kind, tint, up, rho, out, i, n, g, h, avg, ok):
-    shade = _SHADE[_model_id(kind)]
-    channels = _model_id(nc)
-    if channels == 3:
-
-        def impl(nc, kind, tint, up, rho, out, i, n, g, h, avg, ok):
-            c = _U(i) * _U(3)
-            p, ok = checked_rho(rho, c, ok)
-            out[c] = shade(tint, up, p, g, h, avg)
-            p, ok = checked_rho(rho, c + _U(1), ok)
-            out[c + _U(1)] = shade(tint, up, p, g, h, avg)
-            p, ok = checked_rho(rho, c + _U(2), ok)
-            out[c + _U(2)] = shade(tint, up, p, g, h, avg)
-            return ok
-    elif channels == 1:
-
-        def impl(nc, kind, tint, up, rho, out, i, n, g, h, avg, ok):
-            p, ok = checked_rho(rho, _U(i), ok)
-            out[i] = shade(tint, up, p, g, h, avg)
-            return ok
+    ``nc`` is the driver's compile-time channel variant (3, 1, or 0 = any count), so after
+    inlining only one branch is left and the RGB and grey loops are straight-line code.
+    """
+    if nc == 3:
+        c = _U(i) * _U(3)
+        p, ok = checked_rho(rho, c, ok)
+        out[c] = shade(kind, tint, up, p, g, h, avg)
+        p, ok = checked_rho(rho, c + _U(1), ok)
+        out[c + _U(1)] = shade(kind, tint, up, p, g, h, avg)
+        p, ok = checked_rho(rho, c + _U(2), ok)
+        out[c + _U(2)] = shade(kind, tint, up, p, g, h, avg)
+    elif nc == 1:
+        p, ok = checked_rho(rho, _U(i), ok)
+        out[i] = shade(kind, tint, up, p, g, h, avg)
     else:
-
-        def impl(nc, kind, tint, up, rho, out, i, n, g, h, avg, ok):
-            m = rho.shape[0] // n
-            c = _U(i) * _U(m)
-            for k in range(m):
-                p, ok = checked_rho(rho, c + _U(k), ok)
-                out[c + _U(k)] = shade(tint, up, p, g, h, avg)
-            return ok
-
-    return impl
+        m = rho.shape[0] // n
+        c = _U(i) * _U(m)
+        for k in range(m):
+            p, ok = checked_rho(rho, c + _U(k), ok)
+            out[c + _U(k)] = shade(kind, tint, up, p, g, h, avg)
+    return ok
 
 
 @functools.cache
