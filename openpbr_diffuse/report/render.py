@@ -85,7 +85,7 @@ materials: {% for p in doc.paths %}<code>{{ p }}</code>{% if not loop.last %}, {
 <section id="section-{{ s.key }}" class="report-section" data-key="{{ s.key }}" data-status="{{ s.status }}">
 <h2>{{ s.title }} <span class="badge {{ status_class(s.status) }}">{{ s.status }}</span></h2>
 {% if s.error %}<p class="warn">Section failed: {{ s.error }}</p>{% endif %}
-{% if s.not_run %}<p class="warn not-run">{{ s.not_run | not_run }}</p>{% endif %}
+{% if s.not_run %}<p class="warn not-run">{{ s.not_run if s.not_run.startswith('not run') else 'Not run: ' ~ s.not_run }}</p>{% endif %}
 {% for n in s.notes %}<p>{{ n }}</p>{% endfor %}
 {% for w in s.warnings %}<p class="warn">{{ w }}</p>{% endfor %}
 {% if s.checks %}<table class="checks"><caption>Checks</caption>
