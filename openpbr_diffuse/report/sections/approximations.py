@@ -118,7 +118,7 @@ def _live_checks(rows):
     full = od.evaluate("full_on", wi, wo, p["sigma"], grey(0.9))[0] / 0.9
     same(
         "gotanda_eq25_vs_fullon",
-        abs(math.pi * (gt.improved(wi, wo, p["sigma"])[0] - full) * p["mu_i"]),
+        abs(math.pi * (gt.improved(wi, wo, p["sigma"], WHITE)[0] - full) * p["mu_i"]),
         "od.evaluate('full_on')",
         1e-6,
     )
@@ -152,7 +152,7 @@ def _live_checks(rows):
     wi = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], -1)
     wgt = np.outer(0.25 * math.pi * w, math.pi * w) * np.sin(T) * np.cos(T)
     wo = np.array([0.0, 0.0, 1.0])
-    E = float(np.sum(kc.compensated("qon", wi, wo, 1.2, 1.0)[..., 0] * wgt))
+    E = float(np.sum(kc.compensated("qon", wi, wo, 1.2, WHITE)[..., 0] * wgt))
     checks.append(
         Check(
             "K-C on QON: white furnace at mu_o = 1, sigma = 1.2 (live quadrature)",
