@@ -29,10 +29,10 @@ import math
 
 import numpy as np
 
-
 #: rho = 1 as RGB: the same values as a scalar rho, and the driver the report's other sections
 #: compile (a model's driver is compiled per channel count).
 _WHITE = (1.0, 1.0, 1.0)
+
 
 def wo_of(mu_o, phi=0.0):
     """Unit outgoing direction with cosine ``mu_o`` at azimuth ``phi``."""

@@ -108,7 +108,9 @@ def _live_checks(rows):
     p = _at(rows["gotanda_eq27_vs_e25"])
     same(
         "gotanda_eq27_vs_e25",
-        abs(gt.dc_scale_eq27(p["mu_o"], p["sigma"]) - od.directional_albedo("gotanda", p["mu_o"], p["sigma"], WHITE)[0]),
+        abs(
+            gt.dc_scale_eq27(p["mu_o"], p["sigma"]) - od.directional_albedo("gotanda", p["mu_o"], p["sigma"], WHITE)[0]
+        ),
         "closed-form albedo of the Eq. 25 lobe (od.directional_albedo)",
     )
     p = _at(rows["gotanda_eq25_vs_fullon"])
@@ -183,7 +185,11 @@ def _plots(ctx, figures):
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8))
     for sig, c in ((0.5, "C0"), (1.0, "C1")):
         axes[0].plot(
-            mu, od.directional_albedo("gotanda", mu, sig, WHITE)[:, 0], c, lw=2, label=f"exact, Eq. 25 lobe, sigma={sig}"
+            mu,
+            od.directional_albedo("gotanda", mu, sig, WHITE)[:, 0],
+            c,
+            lw=2,
+            label=f"exact, Eq. 25 lobe, sigma={sig}",
         )
         axes[0].plot(
             mu, od.reference_albedo("full_on", mu, sig)[:, 0], c, lw=1, ls=":", label=f"exact, fullON, sigma={sig}"

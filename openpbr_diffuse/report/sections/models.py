@@ -139,7 +139,10 @@ def build(ctx):
         else:
             roughs = [0.25 * rmax, 0.5 * rmax, rmax]
         E = np.array(
-            [hemisphere_albedo(lambda a, b, rr=rr: od.evaluate(m, a, b, rr, WHITE)[..., 0], mus, order) for rr in roughs]
+            [
+                hemisphere_albedo(lambda a, b, rr=rr: od.evaluate(m, a, b, rr, WHITE)[..., 0], mus, order)
+                for rr in roughs
+            ]
         )
         k = np.unravel_index(np.argmax(E), E.shape)
         rows.append(
