@@ -40,7 +40,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         "paths", nargs="*", metavar="PATHS", help="USD / MaterialX files or folders (default: the bundled materials/)"
     )
     p.add_argument("--out", default="report", metavar="DIR", help="output directory (default: report)")
-    p.add_argument("--quick", action="store_true", help="smaller grids and sample counts")
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help="smaller grids and sample counts; the live simulations are listed as not run (the full report runs them)",
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     g = p.add_argument_group("the implementation under test")
     g.add_argument("--vectors", metavar="FILE", help="a filled vectors file (CSV / JSON with out_r, out_g, out_b)")
