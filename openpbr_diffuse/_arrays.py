@@ -26,8 +26,9 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 import numba  # noqa: E402
 import numpy as np  # noqa: E402
-from numba import prange  # noqa: E402
 from numpy.typing import ArrayLike, DTypeLike, NDArray  # noqa: E402
+
+from ._launch import FULL, compiled, launch  # noqa: E402
 
 if TYPE_CHECKING:
     from .models.registry import ModelInfo
@@ -133,14 +134,19 @@ def is_within(x: float, lo: float, hi: float, lo_open: bool, hi_open: bool) -> b
     return (abs(x) < np.inf) & above & below  # NaN fails every comparison
 
 
-@numba.njit(cache=True, parallel=True, error_model="numpy")
-def _count_not_unit(w):
-    """Number of rows of a flat C-contiguous (3n,) array that are not finite unit vectors."""
+@compiled
+def _not_unit_rows(w):
     bad = 0
-    for i in prange(w.shape[0] // 3):
+    for i in range(w.shape[0] // 3):
         j = _U(i) * _U(3)
         bad += 0 if is_unit(w[j], w[j + _U(1)], w[j + _U(2)]) else 1
     return bad
+
+
+def _count_not_unit(w):
+    """Number of rows of a flat C-contiguous (3n,) array that are not finite unit vectors
+    (a serial ``nogil`` loop, run on the thread pool as the drivers are: ``_launch.launch``)."""
+    return launch(_not_unit_rows, (), [(_read_only(w), 3, FULL)], [], w.shape[0] // 3)
 
 
 def _norms2(flat):
@@ -190,13 +196,24 @@ def directions(name: str, value: ArrayLike, dtype: DTypeLike, check: bool = True
     return w
 
 
-@numba.njit(cache=True, parallel=True, error_model="numpy")
-def _count_outside(a, lo, hi, lo_open, hi_open):
-    """Number of values of a flat C-contiguous array that fail ``is_within``."""
+@compiled
+def _outside_values(lo, hi, lo_open, hi_open, a):
     bad = 0
-    for i in prange(a.shape[0]):
+    for i in range(a.shape[0]):
         bad += 0 if is_within(a[i], lo, hi, lo_open, hi_open) else 1
     return bad
+
+
+def _count_outside(a, lo, hi, lo_open, hi_open):
+    """Number of values of a flat C-contiguous array that fail ``is_within`` (as ``_count_not_unit``)."""
+    return launch(_outside_values, (lo, hi, bool(lo_open), bool(hi_open)), [(_read_only(a), 1, FULL)], [], a.shape[0])
+
+
+def _read_only(a):
+    """A read-only view: one compiled signature per dtype, whatever the caller's flags."""
+    v = a.view()
+    v.flags.writeable = False
+    return v
 
 
 def in_range(

@@ -103,8 +103,17 @@ def test_report_json_schema(quick_report):
         assert set(s) == SECTION_KEYS
         for f in s["figures"]:
             assert (out / f["file"]).is_file()
+    from openpbr_diffuse.report.model import QUICK_NOT_RUN
+
     for c in doc["checks"]:
-        assert set(c) == CHECK_KEYS and c["passed"] is True and c["reference"] and c["status"] == "pass"
+        assert set(c) == CHECK_KEYS and c["reference"]
+        if c["status"] == "not run":  # the live simulations: the full report runs them
+            assert c["not_run"] == QUICK_NOT_RUN and c["passed"] is False
+            assert c["section"] in ("simulation", "layered")
+        else:
+            assert c["passed"] is True and c["status"] == "pass"
+    skipped = {c["section"] for c in doc["checks"] if c["status"] == "not run"}
+    assert skipped == {"simulation", "layered"} and doc["evidence"]["n_not_run"] == 8
     ids = [c["id"] for c in doc["checks"]]
     assert len(set(ids)) == len(ids) and all(i.startswith(c["section"] + ".") for i, c in zip(ids, doc["checks"]))
     titles = [s["title"] for s in doc["sections"]]

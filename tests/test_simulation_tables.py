@@ -64,4 +64,14 @@ def test_report_section_builds(tmp_path):
     assert res.key == "simulation" and res.tables and len(res.figures) == 3
     for f in res.figures:
         assert (tmp_path / f.file).stat().st_size > 1000 and f.file.startswith("simulation_")
-    assert all(c.passed for c in res.checks), [(c.name, c.measured) for c in res.checks if not c.passed]
+    from openpbr_diffuse.report.model import QUICK_NOT_RUN
+
+    ran = [c for c in res.checks if c.status != "not run"]
+    assert ran and all(c.passed for c in ran), [(c.name, c.measured) for c in ran if not c.passed]
+    live = [c for c in res.checks if c.status == "not run"]  # --quick: the full report runs them
+    assert len(live) == 4 and all(c.not_run == QUICK_NOT_RUN for c in live)
+    mu, _, _, values, estimate = simulation._live_check(simulation._tables()["albedo"][1], True)
+    assert [simulation._live_name(col, mu) for col in values] == [c.name for c in live[:3]]
+    for v, s, ref, ref_se in values.values():
+        assert abs(v - ref) / np.hypot(s, ref_se) <= 4.5
+    assert abs(estimate.albedo[0, 1] - 1.0) <= 1e-12

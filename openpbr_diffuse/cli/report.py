@@ -40,7 +40,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         "paths", nargs="*", metavar="PATHS", help="USD / MaterialX files or folders (default: the bundled materials/)"
     )
     p.add_argument("--out", default="report", metavar="DIR", help="output directory (default: report)")
-    p.add_argument("--quick", action="store_true", help="smaller grids and sample counts")
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help="smaller grids and sample counts; the live simulations are listed as not run (the full report runs them)",
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     g = p.add_argument_group("the implementation under test")
     g.add_argument("--vectors", metavar="FILE", help="a filled vectors file (CSV / JSON with out_r, out_g, out_b)")
@@ -153,6 +157,8 @@ def _sections(args, under):
 
 def run(args: argparse.Namespace) -> int:
     """Run the report per ``args``; the exit status."""
+    from ..report.model import QUICK_NOT_RUN
+    from ..report.render import quick_skipped
     from ..report.runner import run_report
 
     progress = not args.no_progress and sys.stderr.isatty()
@@ -217,8 +223,22 @@ def run(args: argparse.Namespace) -> int:
     for s in doc["sections"]:
         ran = [c for c in s["checks"] if c["status"] != "not run"]
         n_pass = sum(c["passed"] for c in ran)
-        counts = f"not run: {s['not_run']}" if s["status"] == "not run" else f"{n_pass}/{len(ran)} checks"
+        reason = s["not_run"] or ""
+        counts = (
+            (reason if reason.startswith("not run") else f"not run: {reason}")
+            if s["status"] == "not run"
+            else f"{n_pass}/{len(ran)} checks"
+        )
+        skipped = sum(c["not_run"] == QUICK_NOT_RUN for c in s["checks"])
+        if skipped and s["status"] != "not run":
+            counts += f" ({skipped} not run in --quick)"
         print(f"  {s['key']:<16} {s['status']:<14} {counts}  {s['elapsed_s']:.1f} s")
+    skipped = quick_skipped(doc)
+    if skipped:
+        print(
+            "Quick run: not run here, and run by the full report (`openpbr-diffuse report`): "
+            + ", ".join(f"{key} ({n} checks)" for key, _, n in skipped)
+        )
     failed = [c for c in doc["checks"] if c["status"] == "fail"]
     for c in failed[:20]:
         print(f"  FAIL {c['id']}: {c['name']} (measured {c['measured']}, {c['comparison']} {c['threshold']})")

@@ -70,6 +70,36 @@ class Check:
         return d
 
 
+#: Why a check that ``report --quick`` leaves out did not run (its compile or run time is the
+#: larger part of a quick report's; the full report runs it).
+QUICK_NOT_RUN = "not run in --quick: run `openpbr-diffuse report` for it"
+
+
+#: rho of a grey or white surface as an RGB triple.  The report calls the lobe models with
+#: three channels everywhere (its colours are RGB): a model's driver is compiled for one
+#: channel count, and a scalar rho beside an RGB one would compile every model twice.
+WHITE = (1.0, 1.0, 1.0)
+
+
+def grey(v: float) -> tuple:
+    """rho = v in each of the three RGB channels (see ``WHITE``).
+
+    >>> grey(0.8)
+    (0.8, 0.8, 0.8)
+    """
+    return (v, v, v)
+
+
+def skipped_in_quick(name: str, reference: str = "", detail: str = "", unit: str = "") -> Check:
+    """A check that ``report --quick`` does not run: listed as "not run", never passed.
+
+    >>> c = skipped_in_quick("live simulation vs the closed form")
+    >>> c.status, c.passed, c.not_run == QUICK_NOT_RUN
+    ('not run', False, True)
+    """
+    return Check(name, math.nan, math.nan, reference=reference, detail=detail, unit=unit, not_run=QUICK_NOT_RUN)
+
+
 def slug(text: str) -> str:
     """A check name as an id part: lower case, runs of other characters as one ``_``.
 

@@ -40,6 +40,8 @@ caption { text-align: left; font-weight: 600; padding: .2em 0; }
 <p class="meta">openpbr-diffuse {{ doc.version }} &middot; generated {{ doc.generated }} &middot;
 {{ "quick run" if doc.quick else "full run" }} &middot; {{ doc.elapsed_s | num }} s &middot;
 materials: {% for p in doc.paths %}<code>{{ p }}</code>{% if not loop.last %}, {% endif %}{% else %}none{% endfor %}</p>
+{% set skipped = quick_skipped(doc) %}{% if skipped %}<p id="quick-skipped" class="warn">Quick run: not run here, and run by the full report
+(<code>openpbr-diffuse report</code>): {% for key, title, n in skipped %}<a href="#section-{{ key }}">{{ title }}</a> ({{ n }} check{{ 's' if n != 1 }}){% if not loop.last %}, {% endif %}{% endfor %}.</p>{% endif %}
 {% set ut = doc.implementation %}
 {% if ut %}<section id="under-test" data-status="{{ ut.status }}">
 <p id="headline" class="{{ 'pass' if ut.status == 'conforms' else ('na' if ut.status == 'could not run' else 'fail') }}">{{ ut.headline }}</p>
@@ -77,21 +79,21 @@ materials: {% for p in doc.paths %}<code>{{ p }}</code>{% if not loop.last %}, {
 <tr><th>section</th><th>status</th><th>checks passed</th><th>time (s)</th></tr>
 {% for s in doc.sections %}<tr><td><a href="#section-{{ s.key }}">{{ s.title }}</a></td>
 <td class="{{ status_class(s.status) }}">{{ s.status }}</td>
-<td class="num">{% if s.status == 'not run' %}not run: {{ s.not_run }}{% else %}{{ s.checks | selectattr('passed') | list | length }} / {{ s.checks | rejectattr('status', 'equalto', 'not run') | list | length }}{% endif %}</td>
+<td class="num">{% if s.status == 'not run' %}{{ s.not_run | not_run }}{% else %}{{ s.checks | selectattr('passed') | list | length }} / {{ s.checks | rejectattr('status', 'equalto', 'not run') | list | length }}{% endif %}</td>
 <td class="num">{{ s.elapsed_s | num }}</td></tr>
 {% endfor %}</table>
 {% for s in doc.sections %}
 <section id="section-{{ s.key }}" class="report-section" data-key="{{ s.key }}" data-status="{{ s.status }}">
 <h2>{{ s.title }} <span class="badge {{ status_class(s.status) }}">{{ s.status }}</span></h2>
 {% if s.error %}<p class="warn">Section failed: {{ s.error }}</p>{% endif %}
-{% if s.not_run %}<p class="warn not-run">Not run: {{ s.not_run }}</p>{% endif %}
+{% if s.not_run %}<p class="warn not-run">{{ s.not_run if s.not_run.startswith('not run') else 'Not run: ' ~ s.not_run }}</p>{% endif %}
 {% for n in s.notes %}<p>{{ n }}</p>{% endfor %}
 {% for w in s.warnings %}<p class="warn">{{ w }}</p>{% endfor %}
 {% if s.checks %}<table class="checks"><caption>Checks</caption>
 <tr><th>id</th><th>check</th><th>measured</th><th>threshold</th><th>result</th><th>reference</th><th>detail</th></tr>
 {% for c in s.checks %}<tr data-id="{{ c.id }}"><td><code>{{ c.id }}</code></td><td>{{ c.name }}</td><td class="num">{{ c.measured | num }}{% if c.unit %} {{ c.unit }}{% endif %}</td>
 <td class="num">{% if c.comparison == '==' %}{{ c.expected | num }} &plusmn; {{ c.threshold | num }}{% else %}{{ c.comparison }} {{ c.threshold | num }}{% endif %}</td>
-<td class="{{ status_class(c.status) }}">{{ {'pass': 'pass', 'fail': 'FAIL'}.get(c.status, 'not run: ' ~ (c.not_run or '')) }}</td>
+<td class="{{ status_class(c.status) }}">{{ {'pass': 'pass', 'fail': 'FAIL'}.get(c.status, c.not_run | not_run) }}</td>
 <td>{{ c.reference }}</td><td>{{ c.detail }}</td></tr>
 {% endfor %}</table>{% endif %}
 {% for t in s.tables %}<table class="data"><caption>{{ t.caption }}</caption>
@@ -128,6 +130,29 @@ def _vec(v):
     if v is None:
         return "—"
     return "(" + ", ".join(str(_num(float(x))) for x in v) + ")"
+
+
+def _not_run(reason):
+    """A "not run" cell: the reason, prefixed with "not run: " unless it says so itself."""
+    reason = reason or ""
+    return reason if reason.startswith("not run") else f"not run: {reason}"
+
+
+def quick_skipped(doc: dict) -> list:
+    """(key, title, number of checks) of each section that left checks out as ``report --quick`` does.
+
+    >>> from openpbr_diffuse.report.model import QUICK_NOT_RUN
+    >>> quick_skipped({"sections": [{"key": "layered", "title": "Layered", "checks": [{"not_run": QUICK_NOT_RUN}]}]})
+    [('layered', 'Layered', 1)]
+    """
+    from .model import QUICK_NOT_RUN
+
+    out = []
+    for s in doc.get("sections", []):
+        n = sum(1 for c in s.get("checks", []) if c.get("not_run") == QUICK_NOT_RUN)
+        if n:
+            out.append((s["key"], s["title"], n))
+    return out
 
 
 def _status_class(status):
@@ -168,10 +193,11 @@ def render_html(doc: dict, image_dir: Path | None = None) -> str:
     env = Environment(autoescape=True, trim_blocks=False, lstrip_blocks=False)
     env.filters["num"] = _num
     env.filters["vec"] = _vec
+    env.filters["not_run"] = _not_run
     doc.setdefault("implementation", None)
     doc.setdefault("evidence", {"n_checks": doc.get("n_checks", 0), "n_failed": doc.get("n_failed", 0), "n_not_run": 0})
     template = env.from_string(_TEMPLATE)
-    return template.render(doc=doc, status_class=_status_class)
+    return template.render(doc=doc, status_class=_status_class, quick_skipped=quick_skipped)
 
 
-__all__ = ["render_html"]
+__all__ = ["render_html", "quick_skipped"]

@@ -29,6 +29,10 @@ import math
 
 import numpy as np
 
+#: rho = 1 as RGB: the same values as a scalar rho, and the driver the report's other sections
+#: compile (a model's driver is compiled per channel count).
+_WHITE = (1.0, 1.0, 1.0)
+
 
 def wo_of(mu_o, phi=0.0):
     """Unit outgoing direction with cosine ``mu_o`` at azimuth ``phi``."""
@@ -43,7 +47,7 @@ def weight_stats(strategy, mu_o, r, n, seed):
 
     wo = wo_of(mu_o)
     wi, p = sample_rng(strategy, wo, r, seed, shape=(n,))
-    f = evaluate("eon", wi, wo, r, 1.0)[:, 0]
+    f = evaluate("eon", wi, wo, r, _WHITE)[:, 0]
     ok = p > 0.0
     w = np.where(ok, f * np.maximum(wi[:, 2], 0.0) / np.where(ok, p, 1.0), 0.0)
     var = float(w.var())
@@ -63,7 +67,7 @@ def exact_weight_moments(strategy, mu_o, r, n=16):
 
     def integrand(second):
         def g(wi, wo):
-            f = evaluate("eon", wi, wo, r, 1.0)[..., 0]
+            f = evaluate("eon", wi, wo, r, _WHITE)[..., 0]
             p = pdf(strategy, wo, wi, r)
             ok = p > 0.0
             if not second:

@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from .._plot import pyplot, save
-from ..model import Check, Context, Figure, SectionResult, Table
+from ..model import WHITE, Check, Context, Figure, SectionResult, Table
 
 TITLE = "Albedo: closed forms against the reference tables"
 #: Closed form vs table: the tables' interpolation error is < 3e-6 (stated in each file).
@@ -66,7 +66,7 @@ def _stated(ctx, res):
         ctx.progress(f"stated value {label}")
 
         def brdf(wi, wo, m=m, rough=rough):
-            return od.evaluate(m, wi, wo, rough, 1.0)[..., 0]
+            return od.evaluate(m, wi, wo, rough, WHITE)[..., 0]
 
         q = float(hemisphere_albedo(brdf, mu, 12) if kind == "E" else hemisphere_average_albedo(brdf, 8, n_mu=8))
         tol = 0.5 * 10.0**-dec + 1e-9
@@ -100,7 +100,7 @@ def build(ctx: Context) -> SectionResult:
     res = SectionResult("albedo", TITLE)
     mu = np.linspace(0.01, 1.0, 12 if ctx.quick else 40)
     fracs = np.linspace(0.0, 1.0, 4 if ctx.quick else 9)
-    colours = (1.0, [0.8, 0.5, 0.2], [0.05, 0.3, 0.9])
+    colours = (WHITE, [0.8, 0.5, 0.2], [0.05, 0.3, 0.9])
     rows = []
     for m, info in INFO.items():
         if not info.closed_form_albedo:

@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from ..model import Check, Context, Figure, SectionResult, Table
+from ..model import WHITE, Check, Context, Figure, SectionResult, Table, grey
 
 KEY = "approximations"
 TITLE = "Real-time approximations (Gotanda 2012, table-based energy compensation)"
@@ -110,17 +110,19 @@ def _live_checks(rows):
     p = _at(rows["gotanda_eq27_vs_e25"])
     same(
         "gotanda_eq27_vs_e25",
-        abs(gt.dc_scale_eq27(p["mu_o"], p["sigma"]) - od.directional_albedo("gotanda", p["mu_o"], p["sigma"])[0]),
+        abs(
+            gt.dc_scale_eq27(p["mu_o"], p["sigma"]) - od.directional_albedo("gotanda", p["mu_o"], p["sigma"], WHITE)[0]
+        ),
         "closed-form albedo of the Eq. 25 lobe (od.directional_albedo)",
     )
     p = _at(rows["gotanda_eq25_vs_fullon"])
     s_i = math.sqrt(1 - p["mu_i"] ** 2)
     wi = np.array([s_i * math.cos(p["phi"]), s_i * math.sin(p["phi"]), p["mu_i"]])
     wo = np.array([math.sqrt(1 - p["mu_o"] ** 2), 0.0, p["mu_o"]])
-    full = od.evaluate("full_on", wi, wo, p["sigma"], 0.9)[0] / 0.9
+    full = od.evaluate("full_on", wi, wo, p["sigma"], grey(0.9))[0] / 0.9
     same(
         "gotanda_eq25_vs_fullon",
-        abs(math.pi * (gt.improved(wi, wo, p["sigma"])[0] - full) * p["mu_i"]),
+        abs(math.pi * (gt.improved(wi, wo, p["sigma"], WHITE)[0] - full) * p["mu_i"]),
         "od.evaluate('full_on')",
         1e-6,
     )
@@ -129,7 +131,7 @@ def _live_checks(rows):
         a = _at(rows[rid])["alpha"]
         x, w = np.polynomial.legendre.leggauss(96)
         mu, w = 0.5 * (x + 1), 0.5 * w
-        E = od.directional_albedo("qon", mu, a * math.pi / 2)[:, 0]  # closed form, not the table
+        E = od.directional_albedo("qon", mu, a * math.pi / 2, WHITE)[:, 0]  # closed form, not the table
         Y = (
             0.5 / math.sqrt(math.pi) + 0 * mu,
             math.sqrt(3 / (4 * math.pi)) * mu,
@@ -139,7 +141,7 @@ def _live_checks(rows):
         same(rid, abs(kc.zh_fit_oren_nayar(a)[l] - exact), "QON closed-form albedo (EON Eq. 8), Gauss-Legendre", 1e-3)
     p = _at(rows["kc_tau_factor_albedo"])
     avg = od.average_albedo("qon", p["sigma"])[0]
-    E1 = od.directional_albedo("qon", p["mu_o"], p["sigma"])[0]
+    E1 = od.directional_albedo("qon", p["mu_o"], p["sigma"], WHITE)[0]
     rho = p["rho"]
     same(
         "kc_tau_factor_albedo",
@@ -154,7 +156,7 @@ def _live_checks(rows):
     wi = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], -1)
     wgt = np.outer(0.25 * math.pi * w, math.pi * w) * np.sin(T) * np.cos(T)
     wo = np.array([0.0, 0.0, 1.0])
-    E = float(np.sum(kc.compensated("qon", wi, wo, 1.2, 1.0)[..., 0] * wgt))
+    E = float(np.sum(kc.compensated("qon", wi, wo, 1.2, WHITE)[..., 0] * wgt))
     checks.append(
         Check(
             "K-C on QON: white furnace at mu_o = 1, sigma = 1.2 (live quadrature)",
@@ -185,7 +187,11 @@ def _plots(ctx, figures):
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8))
     for sig, c in ((0.5, "C0"), (1.0, "C1")):
         axes[0].plot(
-            mu, od.directional_albedo("gotanda", mu, sig)[:, 0], c, lw=2, label=f"exact, Eq. 25 lobe, sigma={sig}"
+            mu,
+            od.directional_albedo("gotanda", mu, sig, WHITE)[:, 0],
+            c,
+            lw=2,
+            label=f"exact, Eq. 25 lobe, sigma={sig}",
         )
         axes[0].plot(
             mu, od.reference_albedo("full_on", mu, sig)[:, 0], c, lw=1, ls=":", label=f"exact, fullON, sigma={sig}"

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from .._plot import pyplot, save
-from ..model import Check, Context, Figure, SectionResult, Table
+from ..model import WHITE, Check, Context, Figure, SectionResult, Table, grey
 
 TITLE = "Model properties"
 QUAD = "Gauss-Legendre quadrature of evaluate over the hemisphere (panels at the Oren-Nayar kinks)"
@@ -50,7 +50,7 @@ def _slices(ctx, models):
         for m in models:
             info = INFO[m]
             rough = 0.5 * _rmax(info)
-            f = od.evaluate(m, wi, wo, rough, 0.8)[:, 0]
+            f = od.evaluate(m, wi, wo, rough, grey(0.8))[:, 0]
             ax.plot(x, f, label=m, lw=1.2, ls="--" if m.startswith("qon_") or m == "gotanda" else "-")
         ax.set_title(f"theta_o = {to:g} deg")
         ax.set_xlabel("theta_i (deg); < 0 forward, > 0 back")
@@ -78,7 +78,7 @@ def _albedo_curves(ctx):
         info = INFO[m]
         for frac in (0.25, 0.5, 0.75, 1.0):
             rough = frac * _rmax(info)
-            rho = 0.8 if m == "eon" else 1.0  # at rho = 1 EON is flat at 1 (white furnace)
+            rho = grey(0.8) if m == "eon" else WHITE  # at rho = 1 EON is flat at 1 (white furnace)
             E = od.directional_albedo(m, mu, rough, rho)[:, 0]
             ax.plot(th, E, label=f"{info.roughness_name} = {rough:.3g}")
         ax.set_title(f"{m}: E(theta_o), rho = {0.8 if m == 'eon' else 1}")
@@ -142,7 +142,10 @@ def build(ctx: Context) -> SectionResult:
         else:
             roughs = [0.25 * rmax, 0.5 * rmax, rmax]
         E = np.array(
-            [hemisphere_albedo(lambda a, b, rr=rr: od.evaluate(m, a, b, rr, 1.0)[..., 0], mus, order) for rr in roughs]
+            [
+                hemisphere_albedo(lambda a, b, rr=rr: od.evaluate(m, a, b, rr, WHITE)[..., 0], mus, order)
+                for rr in roughs
+            ]
         )
         k = np.unravel_index(np.argmax(E), E.shape)
         rows.append(

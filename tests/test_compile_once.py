@@ -1,0 +1,195 @@
+"""What a first call compiles: one driver specialisation per model, verb and dtype whatever the
+layout of the caller's arrays, only the asked-for model's kernels, and no simulator in
+``report --quick``.
+
+Each test runs its calls in a fresh process with an empty numba cache (``NUMBA_CACHE_DIR`` a new
+folder), so that what it counts was compiled by those calls and nothing else.
+"""
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: Records every compilation of the child process: the function's module and name, and the
+#: int constants its closure holds (a model driver's model id and channel variant).
+_LISTEN = r"""
+import json, sys
+from numba.core import event
+
+COMPILED = []
+
+
+class _Listener(event.Listener):
+    def on_start(self, e):
+        pass
+
+    def on_end(self, e):
+        f = getattr(e.data["dispatcher"], "py_func", None)
+        if f is None:
+            return
+        cells = {}
+        for name, cell in zip(f.__code__.co_freevars, f.__closure__ or ()):
+            try:
+                v = cell.cell_contents
+            except ValueError:
+                continue
+            if isinstance(v, (bool, int)):
+                cells[name] = v
+        COMPILED.append({"module": f.__module__, "name": f.__qualname__, "cells": cells, "args": str(e.data["args"])})
+
+
+event.register("numba:compile", _Listener())
+"""
+
+
+def _run(body: str, tmp_path, *argv) -> dict:
+    """Run ``body`` after the listener in a child with an empty numba cache; its JSON result."""
+    env = dict(
+        os.environ,
+        NUMBA_CACHE_DIR=str(tmp_path / "numba-cache"),
+        PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""),
+    )
+    out = tmp_path / "out.json"
+    code = _LISTEN + body + f"\njson.dump(RESULT, open({str(out)!r}, 'w'))\n"
+    done = subprocess.run(
+        [sys.executable, "-c", code, *argv], env=env, cwd=tmp_path, capture_output=True, text=True, timeout=600
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    return json.loads(out.read_text())
+
+
+_LAYOUTS = r"""
+import numpy as np
+import openpbr_diffuse as od
+from openpbr_diffuse.models import _kernels as mk
+from openpbr_diffuse.sampling import _kernels as sk
+
+rng = np.random.default_rng(3)
+n = 40
+wi = rng.normal(size=(2 * n, 3)); wi[:, 2] = np.abs(wi[:, 2]); wi /= np.linalg.norm(wi, axis=1, keepdims=True)
+wo = wi[::-1].copy()
+r = rng.uniform(0.0, 1.0, 2 * n)
+rho = rng.uniform(0.0, 1.0, (2 * n, 3))
+frozen = [a.copy() for a in (wi, wo, r, rho)]
+for a in frozen:
+    a.flags.writeable = False
+fortran = [np.asfortranarray(a) for a in (wi, wo, r, rho)]
+variants = [
+    (wi[:n], wo[:n], r[:n], rho[:n]),                 # C-contiguous
+    (wi[::2], wo[::2], r[::2], rho[::2]),             # strided views
+    tuple(frozen),                                    # read-only
+    tuple(fortran),                                   # Fortran order
+    (wi[0], wo[0], 0.5, rho[0]),                      # one row
+    (wi[:n], wo[0], np.float64(0.5), rho[0]),         # tiled direction, numpy scalar
+    (wi[:n, None], wo[None, :n], r[:n, None], rho[:n, None]),  # broadcast outer product
+    (wi[:n].tolist(), wo[:n].tolist(), 1, [0.5, 0.25, 1]),     # lists and Python ints
+]
+for a, b, c, d in variants:
+    od.evaluate("lambert", a, b, c, d)
+    od.directional_albedo("lambert", np.abs(np.asarray(b, float)[..., 2]), c, d)
+    od.sample("cosine", b, c, np.full(np.shape(b)[:-1] + (2,), 0.25))
+f64 = {
+    "evaluate": len(mk.eval_driver(mk.LAMBERT, 3).signatures),
+    "albedo": len(mk.albedo_driver(mk.LAMBERT, 3, False).signatures),
+    "sample": len(sk.sample_driver(sk.COSINE).signatures),
+}
+f32 = [np.asarray(x, np.float32) for x in (wi[:n], wo[:n], r[:n], rho[:n])]
+od.evaluate("lambert", *f32)
+od.evaluate("lambert", f32[0][::2], f32[1][::2], f32[2][::2], f32[3][::2])
+od.directional_albedo("lambert", f32[1][:, 2], f32[2], f32[3])
+od.sample("cosine", f32[1], f32[2], np.full((n, 2), 0.25, np.float32))
+RESULT = {
+    "float64": f64,
+    "both": {
+        "evaluate": len(mk.eval_driver(mk.LAMBERT, 3).signatures),
+        "albedo": len(mk.albedo_driver(mk.LAMBERT, 3, False).signatures),
+        "sample": len(sk.sample_driver(sk.COSINE).signatures),
+    },
+    "drivers": sorted({(c["name"], json.dumps(c["cells"], sort_keys=True)) for c in COMPILED if c["name"].endswith("drive")}),
+}
+"""
+
+
+def test_one_driver_specialisation_per_dtype_whatever_the_layout(tmp_path):
+    """C-contiguous, strided, read-only and Fortran-order arrays, tiled and broadcast inputs,
+    scalars, lists and Python ints all run the same compiled driver: one signature for float64
+    and a second only once float32 is used."""
+    got = _run(_LAYOUTS, tmp_path)
+    assert got["float64"] == {"evaluate": 1, "albedo": 1, "sample": 1}
+    assert got["both"] == {"evaluate": 2, "albedo": 2, "sample": 2}
+    # one driver per verb and model (and one channel variant: every call above has C = 3)
+    names = [name for name, _ in got["drivers"]]
+    assert len(names) == 3, got["drivers"]
+
+
+_ALBEDO_EON = r"""
+from openpbr_diffuse.cli.main import main
+rc = main(["albedo", "eon", "--roughness", "0.5", "--mu", "0.5"])
+RESULT = {"rc": rc, "compiled": COMPILED}
+"""
+
+#: Kernels of the models other than EON that EON's directional albedo does not use (EON's
+#: closed form uses FON's E_F and with it the QON/FON G functions, which are EON's own kernels
+#: as well).
+_OTHER_MODELS = {
+    "openpbr_diffuse.models.lambert",
+    "openpbr_diffuse.models.gotanda",
+    "openpbr_diffuse.models.fujii",
+    "openpbr_diffuse.models.full_on",
+    "openpbr_diffuse.models.van_ouwerkerk",
+}
+
+
+def test_albedo_eon_compiles_only_eon(tmp_path):
+    """The first ``albedo eon`` compiles one driver, EON's, and no other model's kernels
+    (a run-time ``if model == ...`` chain typed every model's branch)."""
+    got = _run(_ALBEDO_EON, tmp_path)
+    assert got["rc"] in (0, None)
+    from openpbr_diffuse.models.registry import INFO
+
+    drivers = [c for c in got["compiled"] if c["name"].endswith("drive")]
+    assert [d["cells"]["model"] for d in drivers] == [INFO["eon"].id], drivers
+    others = sorted({c["module"] + "." + c["name"] for c in got["compiled"] if c["module"] in _OTHER_MODELS})
+    assert not others
+    qon_only = {"qon_albedo", "qon_average_albedo", "qon_terms", "fon_albedo", "fon_terms"}
+    assert not [c for c in got["compiled"] if c["name"] in qon_only]
+    assert not [c for c in got["compiled"] if c["module"].startswith("openpbr_diffuse.nodes")]
+
+
+_QUICK_SIMULATION = r"""
+import tempfile
+from pathlib import Path
+from openpbr_diffuse.report.model import Context
+from openpbr_diffuse.report.runner import run_section
+
+ctx = Context(image_dir=Path(tempfile.mkdtemp()), quick=True)
+runs = [run_section(key, ctx) for key in ("simulation", "layered")]
+RESULT = {
+    "compiled": sorted({c["module"] for c in COMPILED}),
+    "sections": [
+        {"key": r.result.key, "status": r.status, "not_run": r.result.not_run,
+         "checks": [(c.id, c.status, c.not_run) for c in r.result.checks]}
+        for r in runs
+    ],
+}
+"""
+
+
+def test_quick_report_runs_no_simulator(tmp_path):
+    """``report --quick`` leaves the live simulations to the full report: the simulation and
+    layered sections compile nothing of ``openpbr_diffuse.simulation``, and their live checks
+    are listed as not run in --quick (never passed)."""
+    from openpbr_diffuse.report.model import QUICK_NOT_RUN
+
+    got = _run(_QUICK_SIMULATION, tmp_path)
+    assert not [m for m in got["compiled"] if m.startswith("openpbr_diffuse.simulation")], got["compiled"]
+    sim, layered = got["sections"]
+    assert sim["status"] == "pass"  # the checks against the shipped tables ran
+    live = [c for c in sim["checks"] if c[2] == QUICK_NOT_RUN]
+    assert len(live) == 4 and all(status == "not run" for _, status, _ in live)
+    assert layered["status"] == "not run" and layered["not_run"] == QUICK_NOT_RUN
+    assert layered["checks"] and all(c[1] == "not run" and c[2] == QUICK_NOT_RUN for c in layered["checks"])
