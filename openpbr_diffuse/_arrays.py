@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 import numbers
 import os
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 # The parallel kernels run on numba's OpenMP layer (GNU libgomp).  Its idle workers spin
 # for ~300k iterations between parallel regions; on a machine with other busy processes
@@ -30,8 +30,14 @@ from numpy.typing import ArrayLike, DTypeLike, NDArray  # noqa: E402
 
 from ._launch import FULL, compiled, launch  # noqa: E402
 
-if TYPE_CHECKING:
-    from .models.registry import ModelInfo
+
+class RoughnessDomain(Protocol):
+    """What :func:`model_roughness` reads of a model (``models.registry.ModelInfo`` has it)."""
+
+    name: str
+    roughness_name: str
+    roughness_max: float
+
 
 #: ||w| - 1| allowed for a "unit" direction.  Loose enough for float32-normalised input,
 #: tight enough to catch vectors that were never normalised.  The kernels compare |w|^2
@@ -257,7 +263,7 @@ def in_range(
     return a
 
 
-def model_roughness(info: ModelInfo, roughness: ArrayLike, dtype: DTypeLike, check: bool = True) -> NDArray[Any]:
+def model_roughness(info: RoughnessDomain, roughness: ArrayLike, dtype: DTypeLike, check: bool = True) -> NDArray[Any]:
     """Roughness in a lobe model's domain: sigma in [0, max] radians or r in [0, max].
 
     ``info`` is the model's ``models.registry.ModelInfo`` (name, roughness_name, roughness_max).

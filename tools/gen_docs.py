@@ -75,17 +75,7 @@ def import_graph() -> dict[str, set[str]]:
         own = name.split(".")[1]
         is_package = path.name == "__init__.py"
         deps = graph.setdefault(own, set())
-        tree = ast.parse(path.read_text(encoding="utf-8"))
-        typing_only = {  # imports under ``if TYPE_CHECKING:`` name types for the checker only
-            id(n)
-            for block in ast.walk(tree)
-            if isinstance(block, ast.If) and "TYPE_CHECKING" in ast.unparse(block.test)
-            for stmt in block.body
-            for n in ast.walk(stmt)
-        }
-        for node in ast.walk(tree):
-            if id(node) in typing_only:
-                continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
             if isinstance(node, ast.Import):
                 targets = [a.name for a in node.names]
             elif isinstance(node, ast.ImportFrom):
