@@ -179,7 +179,7 @@ def run(args: argparse.Namespace) -> int:
     source = "closed form" if info.closed_form_albedo else "reference table"
     rough_key = None if info.name == "lambert" else info.roughness_name
     if args.json:
-        out = {"model": info.name}
+        out: dict[str, object] = {"model": info.name}
         if rough_key:
             out[rough_key] = roughness
         out.update({"rho": rho.tolist(), "color_mode": color_mode, "source": source})
