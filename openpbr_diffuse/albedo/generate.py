@@ -12,7 +12,7 @@ drives it.  Grid and interpolation: ``openpbr_diffuse.models.tables``.
 import functools
 import math
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -187,8 +187,8 @@ def quadrature_average_terms(model: str, roughness: ArrayLike, n: int = ORDER) -
 
 def compute_table(
     model: str,
-    rows: Sequence[int] | None = None,
-    columns: Sequence[int] | None = None,
+    rows: ArrayLike | None = None,
+    columns: ArrayLike | None = None,
     *,
     n: int = ORDER,
     average: bool = True,
