@@ -21,7 +21,7 @@ import openpbr_diffuse
 
 #: Sub-packages whose hints are still being completed: their modules are not walked (and
 #: names re-exported from them are skipped).  Remove an entry once its package is annotated.
-NOT_YET_ANNOTATED = ("models", "albedo", "sampling", "nodes", "_jit")
+NOT_YET_ANNOTATED = ("_jit",)
 
 #: Private top-level modules whose helpers the rest of the package calls: checked as well.
 CHECKED_PRIVATE = ("_arrays", "_csv", "_launch", "_signals", "_colour")
@@ -128,6 +128,8 @@ def test_missing_hints_finds_what_is_missing(func, expected):
 def test_walk_covers_the_checked_packages():
     walked = {m.__name__.split(".")[1] for m in _modules() if m.__name__ != ROOT}
     for pkg in ("approximations", "spectral", "simulation", "microfacet", "cli", "conformance", "readers"):
+        assert pkg in walked
+    for pkg in ("models", "albedo", "sampling", "nodes"):
         assert pkg in walked
     for pkg in ("report", "graders", *CHECKED_PRIVATE):
         assert pkg in walked

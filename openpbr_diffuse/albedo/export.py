@@ -17,8 +17,10 @@ written into the files' metadata (``openpbr_diffuse:*`` attributes).
 import errno
 import os
 import sys
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .._version import __version__
 from ..models.registry import INFO, MIX_LINEAR, MIX_RHO2, MIX_RHO_MS, model_info
@@ -36,7 +38,7 @@ _MIX_TEXT = {
 }
 
 
-def texel_centres(size):
+def texel_centres(size: int) -> NDArray[np.float64]:
     """(i + 0.5) / size, i = 0 .. size-1."""
     return (np.arange(size) + 0.5) / size
 
@@ -79,7 +81,7 @@ def _blocks(size):
     return [(s, min(size, s + step)) for s in range(0, size, step)]
 
 
-def lut_values(model, size=DEFAULT_SIZE):
+def lut_values(model: str, size: int = DEFAULT_SIZE) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
     """The two textures as arrays: (N, N, 3) directional and (1, N, 3) average, float32."""
     name = model_info(model).name
     size = _check_size(size)
@@ -164,7 +166,9 @@ def _progress_bar(total, desc, progress):
     )
 
 
-def export_lut(model, directory, size=DEFAULT_SIZE, *, progress=False):
+def export_lut(
+    model: str, directory: str | os.PathLike[str], size: int = DEFAULT_SIZE, *, progress: bool | None = False
+) -> tuple[str, str]:
     """Write ``<model>_albedo.exr`` (size x size) and ``<model>_average_albedo.exr`` (size x 1).
 
     The directional texture is computed and written in blocks of rows (~BLOCK_TEXELS
@@ -215,7 +219,7 @@ def export_lut(model, directory, size=DEFAULT_SIZE, *, progress=False):
     return p2, p1
 
 
-def read_exr(path):
+def read_exr(path: str | os.PathLike[str]) -> tuple[NDArray[np.float32], dict[str, Any]]:
     """(pixels (H, W, C) float32, metadata dict of ``openpbr_diffuse:*`` attributes)."""
     import OpenImageIO as oiio
 

@@ -12,8 +12,11 @@ drives it.  Grid and interpolation: ``openpbr_diffuse.models.tables``.
 import functools
 import math
 import os
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .._version import __version__
 from ..models.api import evaluate
@@ -81,7 +84,7 @@ def _solve_terms(name, E, dE, roughness):
 
 
 @functools.cache
-def model_kinks(name):
+def model_kinks(name: str) -> tuple[float, ...]:
     """theta_i of kinks of a model's integrand besides theta_i = theta_o and s = 0.
 
     "eon_approx": the Eq. 14 fit exceeds 1 for mu < 1.3887e-3 (its m = 1 value
@@ -103,7 +106,7 @@ def model_kinks(name):
     return (float(np.arccos(0.5 * (lo + hi))),)
 
 
-def grazing_delta(name):
+def grazing_delta(name: str) -> float:
     """Smallest mu_o of the grazing-limit extrapolation (``hemisphere_albedo``'s delta).
 
     "eon": f_ms has Listing 1's max(eps, 1 - E_F(mu_o)) with 1 - E_F(mu_o) ~ 0.3 r mu_o near
@@ -116,7 +119,7 @@ def grazing_delta(name):
     return 1e-4 if name == "eon" else GRAZING_DELTA
 
 
-def row_kinks(name):
+def row_kinks(name: str) -> tuple[float, ...]:
     """Row coordinates t of kinks of E(mu_o): by reciprocity those of ``model_kinks``."""
     return tuple(float(t_of_mu(math.cos(k))) for k in model_kinks(name))
 
@@ -132,7 +135,9 @@ def _brdf(name, roughness):
     return f
 
 
-def quadrature_terms(model, mu, roughness, n=ORDER):
+def quadrature_terms(
+    model: str, mu: ArrayLike, roughness: ArrayLike, n: int = ORDER
+) -> tuple[NDArray[np.float64], ...]:
     """e_g, e_h and error bound by quadrature at every (mu, roughness) pair of a grid.
 
     Parameters
@@ -165,7 +170,7 @@ def quadrature_terms(model, mu, roughness, n=ORDER):
     return tuple(out)
 
 
-def quadrature_average_terms(model, roughness, n=ORDER):
+def quadrature_average_terms(model: str, roughness: ArrayLike, n: int = ORDER) -> tuple[NDArray[np.float64], ...]:
     """<e_g>, <e_h> and error bound of the average albedo by quadrature, shape (R,)."""
     name = model_info(model).name
     roughness = np.atleast_1d(np.asarray(roughness, dtype=np.float64))
@@ -180,7 +185,15 @@ def quadrature_average_terms(model, roughness, n=ORDER):
     return tuple(out)
 
 
-def compute_table(model, rows=None, columns=None, *, n=ORDER, average=True, progress=None):
+def compute_table(
+    model: str,
+    rows: ArrayLike | None = None,
+    columns: ArrayLike | None = None,
+    *,
+    n: int = ORDER,
+    average: bool = True,
+    progress: Callable[[int, int], object] | None = None,
+) -> dict[str, Any]:
     """Compute (part of) a reference table by quadrature.
 
     Parameters
@@ -202,29 +215,29 @@ def compute_table(model, rows=None, columns=None, *, n=ORDER, average=True, prog
     """
     name = model_info(model).name
     nr = n_columns(name)
-    rows = np.arange(N_THETA + 1) if rows is None else np.asarray(rows, dtype=np.int64)
-    columns = np.arange(nr + 1) if columns is None else np.asarray(columns, dtype=np.int64)
-    t = rows / N_THETA
+    j = np.arange(N_THETA + 1) if rows is None else np.asarray(rows, dtype=np.int64)
+    k_cols = np.arange(nr + 1) if columns is None else np.asarray(columns, dtype=np.int64)
+    t = j / N_THETA
     theta = theta_of_t(t)
     mu = np.cos(theta)
-    mu[rows == N_THETA] = 0.0  # exactly grazing (cos(pi/2) = 6e-17)
-    u = columns / nr if nr else np.zeros(columns.size)
+    mu[j == N_THETA] = 0.0  # exactly grazing (cos(pi/2) = 6e-17)
+    u = k_cols / nr if nr else np.zeros(k_cols.size)
     roughness = roughness_of_u(name, u)
-    res = {
+    res: dict[str, Any] = {
         "order": n,
         "t": t,
         "theta": theta,
         "mu": mu,
         "u": u,
         "roughness": roughness,
-        "e_g": np.empty((rows.size, columns.size)),
-        "e_h": np.empty((rows.size, columns.size)),
-        "err": np.empty((rows.size, columns.size)),
+        "e_g": np.empty((j.size, k_cols.size)),
+        "e_h": np.empty((j.size, k_cols.size)),
+        "err": np.empty((j.size, k_cols.size)),
     }
     if average:
         for key in ("avg_g", "avg_h", "avg_err"):
-            res[key] = np.empty(columns.size)
-    total = columns.size
+            res[key] = np.empty(k_cols.size)
+    total = k_cols.size
     for k in range(0, total, _BLOCK):
         sl = slice(k, k + _BLOCK)
         res["e_g"][:, sl], res["e_h"][:, sl], res["err"][:, sl] = quadrature_terms(name, mu, roughness[sl], n)
@@ -244,7 +257,7 @@ def _fmt_err(v):
     return f"{v:.1e}"
 
 
-def format_table(model, res, meta):
+def format_table(model: str, res: dict[str, Any], meta: dict[str, str]) -> str:
     """CSV text of a computed table (``compute_table`` result) with provenance ``meta``."""
     name = model_info(model).name
     lines = [f"# {k}: {v}" for k, v in meta.items()]
@@ -267,7 +280,7 @@ def format_table(model, res, meta):
     return "\n".join(lines) + "\n"
 
 
-def provenance(model, res, interpolation_error):
+def provenance(model: str, res: dict[str, Any], interpolation_error: float) -> dict[str, str]:
     """The header of a table file (ordered dict of ``key: value``)."""
     name = model_info(model).name
     info = INFO[name]
@@ -324,7 +337,13 @@ def provenance(model, res, interpolation_error):
     return meta
 
 
-def held_out_error(model, table_values, n=ORDER, rows=None, columns=None):
+def held_out_error(
+    model: str,
+    table_values: dict[str, Any],
+    n: int = ORDER,
+    rows: ArrayLike | None = None,
+    columns: ArrayLike | None = None,
+) -> tuple[float, float, NDArray[np.float64]]:
     """Max interpolation error of a grid (``compute_table`` result) at held-out cell centres.
 
     Cell centres (j + 1/2, k + 1/2) are the points farthest from the nodes; the error is
@@ -354,10 +373,12 @@ def held_out_error(model, table_values, n=ORDER, rows=None, columns=None):
     return float(directional.max()), float(average.max()), directional
 
 
-def write_table(model, res, interpolation_error, directory=None):
+def write_table(
+    model: str, res: dict[str, Any], interpolation_error: float, directory: str | os.PathLike[str] | None = None
+) -> str:
     """Write a computed table to ``directory`` (default: the package data directory)."""
     name = model_info(model).name
-    directory = os.fspath(directory) if directory is not None else os.fspath(data_dir())
+    directory = os.fspath(directory) if directory is not None else os.fspath(data_dir())  # type: ignore[call-overload]
     os.makedirs(directory, exist_ok=True)
     path = os.path.join(directory, f"albedo_{name}.csv")
     text = format_table(name, res, provenance(name, res, interpolation_error))

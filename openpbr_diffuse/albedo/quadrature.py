@@ -34,8 +34,11 @@ estimate.
 """
 
 import math
+from collections.abc import Callable
+from typing import Literal, overload
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 HALF_PI = 0.5 * math.pi
 
@@ -54,7 +57,7 @@ _MAX_GRADING = 50
 _AVERAGE_GRADING = 12
 
 
-def gauss_legendre(a, b, n):
+def gauss_legendre(a: ArrayLike, b: ArrayLike, n: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Nodes and weights of the n-point Gauss-Legendre rule on [a, b] (a, b broadcast).
 
     Returns
@@ -151,9 +154,45 @@ def _grazing_weights(mu):
     return np.linalg.solve(A.T, np.eye(4)[0])
 
 
+#: A vectorised BRDF ``brdf(wi, wo)`` (see ``hemisphere_albedo``).
+Brdf = Callable[..., ArrayLike]
+
+
+@overload
 def hemisphere_albedo(
-    brdf, mu_o, n=DEFAULT_ORDER, *, symmetric=True, error=False, delta=GRAZING_DELTA, max_points=MAX_POINTS, kinks=()
-):
+    brdf: Brdf,
+    mu_o: ArrayLike,
+    n: int = ...,
+    *,
+    symmetric: bool = ...,
+    error: Literal[False] = ...,
+    delta: float = ...,
+    max_points: int = ...,
+    kinks: ArrayLike = ...,
+) -> NDArray[np.float64]: ...
+@overload
+def hemisphere_albedo(
+    brdf: Brdf,
+    mu_o: ArrayLike,
+    n: int = ...,
+    *,
+    symmetric: bool = ...,
+    error: Literal[True],
+    delta: float = ...,
+    max_points: int = ...,
+    kinks: ArrayLike = ...,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...
+def hemisphere_albedo(
+    brdf: Brdf,
+    mu_o: ArrayLike,
+    n: int = DEFAULT_ORDER,
+    *,
+    symmetric: bool = True,
+    error: bool = False,
+    delta: float = GRAZING_DELTA,
+    max_points: int = MAX_POINTS,
+    kinks: ArrayLike = (),
+) -> NDArray[np.float64] | tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Directional albedo E(mu_o) = int f(wi, wo) mu_i dwi of any vectorised BRDF.
 
     Parameters
@@ -228,9 +267,38 @@ def hemisphere_albedo(
     return (E, dE) if error else E
 
 
+@overload
 def hemisphere_average_albedo(
-    brdf, n=DEFAULT_ORDER, *, n_mu=DEFAULT_ORDER, symmetric=True, error=False, max_points=MAX_POINTS, kinks=()
-):
+    brdf: Brdf,
+    n: int = ...,
+    *,
+    n_mu: int = ...,
+    symmetric: bool = ...,
+    error: Literal[False] = ...,
+    max_points: int = ...,
+    kinks: ArrayLike = ...,
+) -> NDArray[np.float64]: ...
+@overload
+def hemisphere_average_albedo(
+    brdf: Brdf,
+    n: int = ...,
+    *,
+    n_mu: int = ...,
+    symmetric: bool = ...,
+    error: Literal[True],
+    max_points: int = ...,
+    kinks: ArrayLike = ...,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...
+def hemisphere_average_albedo(
+    brdf: Brdf,
+    n: int = DEFAULT_ORDER,
+    *,
+    n_mu: int = DEFAULT_ORDER,
+    symmetric: bool = True,
+    error: bool = False,
+    max_points: int = MAX_POINTS,
+    kinks: ArrayLike = (),
+) -> NDArray[np.float64] | tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Average albedo <E> = 2 int_0^1 E(mu) mu dmu = (1/pi) int int f mu_i mu_o dwi dwo.
 
     Gauss-Legendre in theta_o with weight 2 cos(theta_o) sin(theta_o), on panels graded

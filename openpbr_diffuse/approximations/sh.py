@@ -249,6 +249,7 @@ def lobe_transfer(
         wo = wo_of(mu_q)[:, None, None, :]
         r = r_f[s:e, None, None]
         rr = rho_f[s:e, None, None, :]
+        f: ArrayLike
         if brdf is None:
             f = models.evaluate(model, wi, wo, r, rr, color_mode=color_mode)
         else:

@@ -172,14 +172,14 @@ def run(args: argparse.Namespace) -> int:
             if args.average:
                 ref = reference_average_albedo(info.name, roughness, rho, color_mode=color_mode)[None]
             else:
-                ref = reference_albedo(info.name, mu, roughness, rho, color_mode=color_mode)
+                ref = reference_albedo(info.name, mu, roughness, rho, color_mode=color_mode)  # type: ignore[arg-type]
         else:  # the value is the table's: compare with the integral it was made from
             ref_source = "quadrature of evaluate"
             ref, ref_error = _quadrature_reference(info.name, mu, roughness, rho, args.average)
     source = "closed form" if info.closed_form_albedo else "reference table"
     rough_key = None if info.name == "lambert" else info.roughness_name
     if args.json:
-        out = {"model": info.name}
+        out: dict[str, object] = {"model": info.name}
         if rough_key:
             out[rough_key] = roughness
         out.update({"rho": rho.tolist(), "color_mode": color_mode, "source": source})

@@ -1,12 +1,16 @@
 """Public lobe-model verbs: ``evaluate``, ``directional_albedo``, ``average_albedo``."""
 
+from collections.abc import Callable, Sequence
+from typing import Any, cast
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .. import _arrays as ar
 from .registry import model_info
 
 
-def _recheck(bad, size, checks):
+def _recheck(bad: int, size: int, checks: Sequence[Callable[[], object]]) -> None:
     """After a kernel with fused value checks: run the full checks to raise their message.
 
     ``bad`` rows failed in the kernel (its output is then discarded); an empty batch ran
@@ -19,7 +23,15 @@ def _recheck(bad, size, checks):
         raise ValueError(f"{bad} rows failed the input checks")
 
 
-def evaluate(model, wi, wo, roughness, rho=1.0, *, color_mode="reference"):
+def evaluate(
+    model: str,
+    wi: ArrayLike,
+    wo: ArrayLike,
+    roughness: ArrayLike,
+    rho: ArrayLike = 1.0,
+    *,
+    color_mode: str = "reference",
+) -> NDArray[Any]:
     """BRDF value f(wi, wo) of a lobe model, without the cosine factor.
 
     Parameters
@@ -82,7 +94,9 @@ def evaluate(model, wi, wo, roughness, rho=1.0, *, color_mode="reference"):
     return out.reshape(lead + (C,))
 
 
-def _albedo(model, mu, roughness, rho, color_mode, average):
+def _albedo(
+    model: str, mu: ArrayLike | None, roughness: ArrayLike, rho: ArrayLike, color_mode: str, average: bool
+) -> NDArray[Any]:
     info = model_info(model)
     tint = ar.white_tint(color_mode)
     if not info.closed_form_albedo:
@@ -91,7 +105,11 @@ def _albedo(model, mu, roughness, rho, color_mode, average):
         return table_albedo(info.name, mu, roughness, rho, average=average, tint=tint)
     dtype = ar.result_dtype(roughness, rho) if average else ar.result_dtype(mu, roughness, rho)
     mu_what = " (cosine of the view angle)"
-    mu = np.zeros((), dtype) if average else ar.in_range("mu", mu, dtype, 0.0, 1.0, mu_what, check=False)
+    mu = (
+        np.zeros((), dtype)
+        if average
+        else ar.in_range("mu", cast(ArrayLike, mu), dtype, 0.0, 1.0, mu_what, check=False)
+    )
     r = ar.model_roughness(info, roughness, dtype, check=False)
     rho = ar.rho_array("rho", rho, dtype, check=False)
     lead = ar.broadcast_leading(mu=mu.shape, roughness=r.shape, rho=rho.shape[:-1])
@@ -111,7 +129,9 @@ def _albedo(model, mu, roughness, rho, color_mode, average):
     return out.reshape(lead + (C,))
 
 
-def directional_albedo(model, mu, roughness, rho=1.0, *, color_mode="reference"):
+def directional_albedo(
+    model: str, mu: ArrayLike, roughness: ArrayLike, rho: ArrayLike = 1.0, *, color_mode: str = "reference"
+) -> NDArray[Any]:
     """Directional albedo E(mu) = integral of f(wi, wo) mu_i dwi over the upper hemisphere.
 
     Closed forms: Lambert E = rho; QON family Eq. 8 (E = A + B G(theta)/pi); FON Eq. 12-13;
@@ -138,7 +158,9 @@ def directional_albedo(model, mu, roughness, rho=1.0, *, color_mode="reference")
     return _albedo(model, mu, roughness, rho, color_mode, average=False)
 
 
-def average_albedo(model, roughness, rho=1.0, *, color_mode="reference"):
+def average_albedo(
+    model: str, roughness: ArrayLike, rho: ArrayLike = 1.0, *, color_mode: str = "reference"
+) -> NDArray[Any]:
     """Cosine-weighted average albedo <E> = 2 int_0^1 E(mu) mu dmu (QON Eq. 9, FON Eq. 15).
 
     Examples

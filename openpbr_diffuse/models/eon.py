@@ -11,18 +11,20 @@ f_EON = f_FON + f_ms with
 single-scattering FON term is the same in both.
 """
 
+from typing import Any
+
 from .._jit import EPS, INV_PI, kernel
-from .fon import E_F, E_F_avg, E_F_avg_of, fon_A, fon_shape_albedo, fon_terms
+from .fon import E_F, E_F_avg, E_F_avg_of, FloatOrArray, fon_A, fon_shape_albedo, fon_terms
 
 
 @kernel
-def rho_ms(rho, avg):
+def rho_ms(rho: FloatOrArray, avg: FloatOrArray) -> Any:
     """Multiple-scattering albedo rho_ms (Eq. 18) for <E_F> = ``avg``."""
     return rho * rho * avg / (1.0 - rho * (1.0 - avg))
 
 
 @kernel
-def eon_terms(mu_i, mu_o, s, r, approx):
+def eon_terms(mu_i: float, mu_o: float, s: float, r: float, approx: bool) -> tuple[float, float, float]:
     """Return (g, h, <E_F>) with f_EON = rho g + rho_ms(rho, <E_F>) h."""
     avg = E_F_avg(r)
     g = fon_terms(mu_i, mu_o, s, r)
@@ -31,7 +33,7 @@ def eon_terms(mu_i, mu_o, s, r, approx):
 
 
 @kernel
-def eon_albedo_fit(r):
+def eon_albedo_fit(r: float) -> tuple[float, float, float]:
     """(A_F, B_F = r A_F, s_h): the part of the exact E_EON(mu) (Eq. 20) that depends on r
     alone, for ``eon_albedo_at`` (once per material when r is fixed): E_F = A_F + B_F G_F/pi
     (Eq. 12-13) and e_h = max(eps, 1 - E_F) s_h, s_h = (1 - <E_F>) / max(eps, 1 - <E_F>)."""
@@ -41,14 +43,14 @@ def eon_albedo_fit(r):
 
 
 @kernel
-def eon_albedo_at(mu, A, B, s_h):
+def eon_albedo_at(mu: float, A: float, B: float, s_h: float) -> tuple[float, float]:
     """(e_g, e_h) of E_EON(mu) = rho e_g + rho_ms e_h (Eq. 20) from ``eon_albedo_fit``."""
     e = fon_shape_albedo(mu, A, B)
     return e, max(EPS, 1.0 - e) * s_h
 
 
 @kernel
-def eon_albedo_terms(mu, r, approx):
+def eon_albedo_terms(mu: float, r: float, approx: bool) -> tuple[float, float, float]:
     """Return (e_g, e_h, <E_F>) with E_EON(mu) = rho e_g + rho_ms e_h.
 
     e_g = E_F(mu) is the albedo of the FON term.  Integrating f_ms over the hemisphere
@@ -69,7 +71,7 @@ def eon_albedo_terms(mu, r, approx):
 
 
 @kernel
-def eon_average_terms(r, approx):
+def eon_average_terms(r: float, approx: bool) -> tuple[float, float, float]:
     """Return (<e_g>, <e_h>, <E_F>) of the average albedo <E_EON> = rho <e_g> + rho_ms <e_h>."""
     avg = E_F_avg(r)
     avg_used = E_F_avg_of(r, approx)

@@ -12,21 +12,21 @@ from .fon import fon_shape_albedo, fon_shape_average, s_over_t
 
 
 @kernel
-def fujii_coeffs(sigma):
+def fujii_coeffs(sigma: float) -> tuple[float, float, float]:
     """Return (A0, B, K): A = A0 + K rho."""
     s2 = sigma * sigma
     return 1.0 - 0.5 * s2 / (s2 + 0.33), 0.45 * s2 / (s2 + 0.09), 0.17 * s2 / (s2 + 0.13)
 
 
 @kernel
-def fujii_terms(mu_i, mu_o, s, sigma):
+def fujii_terms(mu_i: float, mu_o: float, s: float, sigma: float) -> tuple[float, float]:
     """Return (g, h) with f = rho g + rho^2 h."""
     A0, B, K = fujii_coeffs(sigma)
     return (A0 + B * s_over_t(mu_i, mu_o, s)) * INV_PI, K * INV_PI
 
 
 @kernel
-def fujii_albedo_terms(mu, sigma, average):
+def fujii_albedo_terms(mu: float, sigma: float, average: bool) -> tuple[float, float]:
     """(e_g, e_h) of E = rho e_g + rho^2 e_h (or of <E>): FON's shape, E = A + B G_F/pi + K rho."""
     A0, B, K = fujii_coeffs(sigma)
     if average:

@@ -24,7 +24,7 @@ TAN_MAX = 1.633123935319537e16
 
 
 @kernel
-def half_sum_tan(c_a, s_a, c_b, s_b):
+def half_sum_tan(c_a: float, s_a: float, c_b: float, s_b: float) -> float:
     """tan((alpha + beta)/2) from the cosines and sines of alpha and beta, without libm.
 
     With x = alpha + beta, tan(x/2) = sin x / (1 + cos x) = (1 - cos x) / sin x; the first
@@ -39,7 +39,7 @@ def half_sum_tan(c_a, s_a, c_b, s_b):
 
 
 @kernel
-def full_on_terms(mu_i, mu_o, s, sigma):
+def full_on_terms(mu_i: float, mu_o: float, s: float, sigma: float) -> tuple[float, float]:
     """Return (g, h) with f = rho g + rho^2 h.
 
     alpha and beta come from the polynomial ``_jit.acos`` and tan((alpha + beta)/2) from

@@ -18,26 +18,26 @@ from .._jit import INV_PI, kernel
 from .fon import fon_shape_albedo, fon_shape_average, s_over_t
 
 
-def sigma_from_shininess(shininess):
+def sigma_from_shininess(shininess: float) -> float:
     """Eq. 21: sigma = sqrt(2 / shininess)."""
     return math.sqrt(2.0 / shininess)
 
 
 @kernel
-def gotanda_AB(sigma):
+def gotanda_AB(sigma: float) -> tuple[float, float]:
     s2 = sigma * sigma
     return 1.0 - 0.5 * s2 / (s2 + 0.65), 0.45 * s2 / (s2 + 0.09)
 
 
 @kernel
-def gotanda_terms(mu_i, mu_o, s, sigma):
+def gotanda_terms(mu_i: float, mu_o: float, s: float, sigma: float) -> float:
     """f / rho of Eq. 25."""
     A, B = gotanda_AB(sigma)
     return (A + B * s_over_t(mu_i, mu_o, s)) * INV_PI
 
 
 @kernel
-def gotanda_albedo(mu, sigma, average):
+def gotanda_albedo(mu: float, sigma: float, average: bool) -> float:
     """E(mu) / rho (or <E> / rho): the lobe has FON's shape, E = A + B G_F/pi (Eq. 12-13, 15)."""
     A, B = gotanda_AB(sigma)
     if average:

@@ -50,7 +50,7 @@ INFO = {m[0]: ModelInfo(m[0], i, *m[1:]) for i, m in enumerate(_MODELS)}
 MODELS = tuple(INFO)
 
 
-def model_info(model):
+def model_info(model: object) -> ModelInfo:
     """Look a model up by name; ValueError/TypeError naming ``model`` otherwise."""
     if not isinstance(model, str):
         raise TypeError(f"model must be a string, one of {', '.join(MODELS)}; got {type(model).__name__}")

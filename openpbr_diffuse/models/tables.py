@@ -22,17 +22,25 @@ Grid (tensor product, interpolated by 4-point Lagrange cubics in (t, u)):
   spacing (proportional to |sigma - 0.3i|) equalises the interpolation error.
 """
 
+from __future__ import annotations
+
 import functools
 import importlib.resources
 import math
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .. import _arrays as ar
 from .._launch import row_blocks
 from .eon import rho_ms
 from .fon import E_F_avg
 from .registry import INFO, MIX_RHO2, MIX_RHO_MS, model_info
+
+if TYPE_CHECKING:
+    from importlib.abc import Traversable
 
 HALF_PI = 0.5 * math.pi
 
@@ -48,11 +56,11 @@ ROUNDING = 0.5 * 10.0**-DECIMALS
 REGENERATE = "python tools/make_tables.py"
 
 
-def data_dir():
+def data_dir() -> Traversable:
     return importlib.resources.files("openpbr_diffuse") / "data"
 
 
-def table_path(model):
+def table_path(model: str) -> Traversable:
     """Path of the shipped table file of ``model``."""
     return data_dir() / f"albedo_{model_info(model).name}.csv"
 
@@ -60,23 +68,23 @@ def table_path(model):
 # --------------------------------------------------------------------------- grids
 
 
-def theta_of_t(t):
+def theta_of_t(t: ArrayLike) -> NDArray[np.float64]:
     """Row map theta(t) = (pi/2) (1 - (1 - t)^3), t in [0, 1]."""
     return HALF_PI * (1.0 - (1.0 - np.asarray(t, dtype=np.float64)) ** 3)
 
 
-def t_of_mu(mu):
+def t_of_mu(mu: ArrayLike) -> NDArray[np.float64]:
     """Inverse row map: t(mu) = 1 - (1 - arccos(mu) / (pi/2))^(1/3)."""
     x = 1.0 - np.arccos(np.clip(mu, 0.0, 1.0)) / HALF_PI
     return 1.0 - np.cbrt(np.maximum(x, 0.0))
 
 
-def is_sigma_model(name):
+def is_sigma_model(name: str) -> bool:
     """True for models whose roughness is sigma in radians (the sinh column map)."""
     return INFO[name].roughness_name == "sigma"
 
 
-def roughness_of_u(name, u):
+def roughness_of_u(name: str, u: ArrayLike) -> NDArray[np.float64]:
     """Column map: roughness(u), u in [0, 1]."""
     u = np.asarray(u, dtype=np.float64)
     info = INFO[name]
@@ -87,7 +95,7 @@ def roughness_of_u(name, u):
     return u * info.roughness_max
 
 
-def u_of_roughness(name, roughness):
+def u_of_roughness(name: str, roughness: ArrayLike) -> NDArray[np.float64]:
     """Inverse column map."""
     r = np.asarray(roughness, dtype=np.float64)
     info = INFO[name]
@@ -98,7 +106,7 @@ def u_of_roughness(name, roughness):
     return r / info.roughness_max
 
 
-def n_columns(name):
+def n_columns(name: str) -> int:
     """Roughness intervals of a model's table (Lambert's albedo ignores roughness: 0)."""
     return 0 if name == "lambert" else N_ROUGH
 
@@ -106,7 +114,7 @@ def n_columns(name):
 # --------------------------------------------------------------------------- rho dependence
 
 
-def mix_weight(name, rho, roughness):
+def mix_weight(name: str, rho: ArrayLike, roughness: ArrayLike) -> NDArray[np.float64]:
     """m(rho) of f = rho g + m(rho) h (registry MIX_*): 0, rho^2, or rho_ms (EON Eq. 18)."""
     kind = INFO[name].mix
     rho = np.asarray(rho, dtype=np.float64)
@@ -121,7 +129,9 @@ def mix_weight(name, rho, roughness):
 # --------------------------------------------------------------------------- interpolation
 
 
-def _cubic(s, n, kinks=()):
+def _cubic(
+    s: NDArray[np.float64], n: int, kinks: Sequence[float] = ()
+) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
     """Stencil start i0 and 4-point Lagrange weights at continuous index s in [0, n].
 
     ``kinks`` (continuous indices) are points where the tabulated function has a kink: a
@@ -146,7 +156,9 @@ def _cubic(s, n, kinks=()):
     return i0, w
 
 
-def interpolate_grid(values, t, u, t_kinks=()):
+def interpolate_grid(
+    values: NDArray[np.float64], t: ArrayLike, u: ArrayLike, t_kinks: Sequence[float] = ()
+) -> NDArray[np.float64]:
     """Tensor-product cubic interpolation of values[j, k] on uniform t_j = j/NT, u_k = k/NU.
 
     A single column (NU = 0) is constant in u.  t, u broadcast; result has their shape.
@@ -166,7 +178,7 @@ def interpolate_grid(values, t, u, t_kinks=()):
     return out
 
 
-def interpolate_line(values, u):
+def interpolate_line(values: ArrayLike, u: ArrayLike) -> NDArray[np.float64]:
     """Cubic interpolation of values[k] on u_k = k/NU (constant when NU = 0)."""
     values = np.asarray(values)
     nu = values.shape[0] - 1
@@ -198,7 +210,19 @@ class AlbedoTable:
         rho in [0, 1], including quadrature and rounding error).
     """
 
-    def __init__(self, model, meta, grid):
+    t: NDArray[np.float64]
+    theta: NDArray[np.float64]
+    mu: NDArray[np.float64]
+    u: NDArray[np.float64]
+    roughness: NDArray[np.float64]
+    e_g: NDArray[np.float64]
+    e_h: NDArray[np.float64]
+    err: NDArray[np.float64]
+    avg_g: NDArray[np.float64]
+    avg_h: NDArray[np.float64]
+    avg_err: NDArray[np.float64]
+
+    def __init__(self, model: str, meta: dict[str, str], grid: dict[str, NDArray[np.float64]]) -> None:
         self.model = model
         self.meta = meta
         for key, value in grid.items():
@@ -207,22 +231,23 @@ class AlbedoTable:
         self.interpolation_error = float(meta.get("interpolation_error", "nan").split()[0])
         self.row_kinks = tuple(float(v) for v in meta.get("row_kinks", "").split()[:1] if v != "none")
 
-    def directional_terms(self, mu, roughness):
+    def directional_terms(self, mu: ArrayLike, roughness: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """(e_g, e_h) interpolated at (mu, roughness) (broadcast, float64, validated)."""
         t = t_of_mu(mu)
         u = u_of_roughness(self.model, roughness)
         return (interpolate_grid(self.e_g, t, u, self.row_kinks), interpolate_grid(self.e_h, t, u, self.row_kinks))
 
-    def average_terms(self, roughness):
+    def average_terms(self, roughness: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """(<e_g>, <e_h>) interpolated at roughness."""
         u = u_of_roughness(self.model, roughness)
         return interpolate_line(self.avg_g, u), interpolate_line(self.avg_h, u)
 
 
-def parse_table(model, text):
+def parse_table(model: str, text: str) -> AlbedoTable:
     """Parse CSV text into an ``AlbedoTable``; checks the grid against this module's maps."""
     name = model_info(model).name
-    meta, data = {}, {}
+    meta: dict[str, str] = {}
+    data: dict[str, list[list[str]]] = {}
     header = None
     for line in text.splitlines():
         if not line.strip():
@@ -251,12 +276,12 @@ def parse_table(model, text):
     if not np.allclose(roughness, roughness_of_u(name, u), rtol=0, atol=2 * ROUNDING):
         raise ValueError(f"{name}: table roughness columns do not match the grid map")
 
-    def block(key):
+    def block(key: str) -> NDArray[np.float64]:
         if key not in data:
             return np.zeros((N_THETA + 1, nr + 1))
         return np.array([[float(c) for c in r[3:]] for r in data[key]])
 
-    def line(key):
+    def averages(key: str) -> NDArray[np.float64]:
         if key not in data:
             return np.zeros(nr + 1)
         return np.array([float(c) for c in data[key][0][3:]])
@@ -277,15 +302,15 @@ def parse_table(model, text):
         "e_g": block("e_g"),
         "e_h": block("e_h"),
         "err": block("err"),
-        "avg_g": line("avg_g"),
-        "avg_h": line("avg_h"),
-        "avg_err": line("avg_err"),
+        "avg_g": averages("avg_g"),
+        "avg_h": averages("avg_h"),
+        "avg_err": averages("avg_err"),
     }
     return AlbedoTable(name, meta, grid)
 
 
 @functools.cache
-def load_table(model):
+def load_table(model: str) -> AlbedoTable:
     """The shipped ``AlbedoTable`` of ``model`` (read once, cached)."""
     name = model_info(model).name
     path = table_path(name)
@@ -305,7 +330,9 @@ def load_table(model):
 _CHUNK = 1 << 14
 
 
-def table_albedo(name, mu, roughness, rho, average=False, tint=False):
+def table_albedo(
+    name: str, mu: ArrayLike | None, roughness: ArrayLike, rho: ArrayLike, average: bool = False, tint: bool = False
+) -> NDArray[Any]:
     """E (or <E> when ``average``) of a model from its reference table.
 
     Parameters
@@ -329,7 +356,7 @@ def table_albedo(name, mu, roughness, rho, average=False, tint=False):
     info = model_info(name)
     dtype = ar.result_dtype(roughness, rho) if average else ar.result_dtype(mu, roughness, rho)
     if not average:
-        mu = ar.in_range("mu", mu, dtype, 0.0, 1.0, " (cosine of the view angle)")
+        mu = ar.in_range("mu", cast(ArrayLike, mu), dtype, 0.0, 1.0, " (cosine of the view angle)")
     r = ar.model_roughness(info, roughness, dtype)
     rho = ar.rho_array("rho", rho, dtype)
     table = load_table(info.name)
@@ -337,14 +364,14 @@ def table_albedo(name, mu, roughness, rho, average=False, tint=False):
         lead = ar.broadcast_leading(roughness=r.shape, rho=rho.shape[:-1])
         mu = r  # not read
     else:
-        lead = ar.broadcast_leading(mu=mu.shape, roughness=r.shape, rho=rho.shape[:-1])
+        lead = ar.broadcast_leading(mu=mu.shape, roughness=r.shape, rho=rho.shape[:-1])  # type: ignore[union-attr]
     C = rho.shape[-1]
     out = np.empty(lead + (C,), dtype=dtype)
     flat_out = out.reshape(-1, C)
     # block by block (``_launch.row_blocks``): broadcast inputs are gathered one block of
     # rows at a time and the float64 interpolation temporaries stay a fixed size, so the
     # extra memory is a few blocks whatever the broadcast shapes
-    views = (np.broadcast_to(mu, lead), np.broadcast_to(r, lead), np.broadcast_to(rho, lead + (C,)))
+    views = (np.broadcast_to(mu, lead), np.broadcast_to(r, lead), np.broadcast_to(rho, lead + (C,)))  # type: ignore[arg-type]
     for s, e, index in row_blocks(lead, _CHUNK):
         mu_b, r64, rho64 = (np.asarray(v[index], dtype=np.float64).reshape(e - s, -1) for v in views)
         if average:

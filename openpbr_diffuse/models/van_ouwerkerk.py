@@ -12,7 +12,7 @@ from .._jit import INV_PI, kernel, max_mu
 
 
 @kernel
-def van_ouwerkerk_terms(lx, ly, lz, vx, vy, vz, sigma):
+def van_ouwerkerk_terms(lx: float, ly: float, lz: float, vx: float, vy: float, vz: float, sigma: float) -> float:
     """f / rho for light direction l = wi and view direction v = wo (normal = +z)."""
     s2 = sigma * sigma
     A = 1.0 - 0.5 * s2 / (s2 + 0.33)

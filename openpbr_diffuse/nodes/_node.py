@@ -7,26 +7,30 @@ tangents supplied by the renderer) default to None and are keyword-only.
 """
 
 import inspect
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
 from .. import _arrays as ar
-from .materialx_defs import nodedef_inputs
+from .materialx_defs import InputDef, nodedef_inputs
 
 
 class NodeMeta(type):
     """Gives node classes a ``__signature__`` computed (lazily) from their nodedef."""
 
     @property
-    def __signature__(cls):
-        return cls.signature()
+    def __signature__(cls) -> inspect.Signature:
+        return cls.signature()  # type: ignore[attr-defined]  # each node class defines it
 
 
 def _geomprop(idef):
     return bool(idef.defaultgeomprop) and idef.default is None
 
 
-def node_signature(nodedef, options=(), keyword_only=False):
+def node_signature(
+    nodedef: str, options: Sequence[tuple[str, object]] = (), keyword_only: bool = False
+) -> inspect.Signature:
     """inspect.Signature of a node: the nodedef inputs (library order, geomprops last and
     keyword-only) followed by keyword-only ``options`` ((name, default) pairs)."""
     defs = nodedef_inputs(nodedef)
@@ -49,7 +53,7 @@ def _range(name, arr, lo, hi, n):
         ar.in_range(name, comp, np.float64, a, b, f"{what}, the range of the MaterialX nodedef")
 
 
-def convert_input(idef, value):
+def convert_input(idef: InputDef, value: Any) -> Any:
     """Validate and convert one input value against its nodedef entry.
 
     float -> float64 array (...); colorN/vectorN -> (..., N) (a scalar is repeated; a
@@ -89,7 +93,7 @@ def convert_input(idef, value):
     return value
 
 
-def is_default(idef, value):
+def is_default(idef: InputDef, value: object) -> bool:
     """True if a converted value equals the nodedef default everywhere (geomprops: not given)."""
     if _geomprop(idef):
         return value is None
@@ -98,7 +102,7 @@ def is_default(idef, value):
     return value == idef.default
 
 
-def bind_inputs(cls, args, kwargs):
+def bind_inputs(cls: Any, args: Sequence[object], kwargs: Mapping[str, object]) -> dict[str, Any]:
     """Bind a node constructor call to its signature; unknown names -> ValueError naming them."""
     sig = cls.signature()
     unknown = sorted(set(kwargs) - set(sig.parameters))

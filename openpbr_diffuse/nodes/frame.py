@@ -10,6 +10,7 @@ used: continuous except across n.z = 0 and exact in floating point up to roundin
 """
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 
 class Frame:
@@ -21,7 +22,10 @@ class Frame:
         Unit normals (validated by the caller).
     """
 
-    def __init__(self, normal=None):
+    t: NDArray[np.float64]
+    b: NDArray[np.float64]
+
+    def __init__(self, normal: ArrayLike | None = None) -> None:
         self.normal = None if normal is None else np.asarray(normal, dtype=np.float64)
         if self.normal is None:
             return
@@ -34,10 +38,10 @@ class Frame:
         self.b = np.stack([b, sign + y * y * a, -y], axis=-1)
 
     @property
-    def is_local(self):
+    def is_local(self) -> bool:
         return self.normal is None
 
-    def to_local(self, w):
+    def to_local(self, w: NDArray[np.float64]) -> NDArray[np.float64]:
         """World directions (..., 3) -> local (..., 3) = (w.t, w.b, w.n)."""
         if self.normal is None:
             return w
@@ -50,7 +54,7 @@ class Frame:
             axis=-1,
         )
 
-    def to_world(self, w):
+    def to_world(self, w: NDArray[np.float64]) -> NDArray[np.float64]:
         """Local directions (..., 3) -> world: x t + y b + z n."""
         if self.normal is None:
             return w

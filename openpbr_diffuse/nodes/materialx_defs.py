@@ -13,6 +13,7 @@ import functools
 import json
 import os
 from dataclasses import dataclass
+from typing import Any
 
 #: The nodedefs the shading nodes mirror (the snapshot holds exactly these).
 NODEDEFS = ("ND_oren_nayar_diffuse_bsdf", "ND_open_pbr_surface_surfaceshader")
@@ -44,7 +45,7 @@ class InputDef:
     uisoftmax: object
 
 
-def parse_value(type_name, text):
+def parse_value(type_name: str, text: str | None) -> float | int | bool | str | tuple[float, ...] | None:
     """A MaterialX value string of ``type_name`` as a Python value (None for '')."""
     if text is None or text == "":
         return None
@@ -121,7 +122,7 @@ def _to_def(rec):
     )
 
 
-def nodedef_inputs(name, *, source="auto"):
+def nodedef_inputs(name: str, *, source: str = "auto") -> dict[str, InputDef]:
     """Inputs of a nodedef, in library order, as ``{input name: InputDef}``.
 
     Parameters
@@ -150,11 +151,11 @@ def nodedef_inputs(name, *, source="auto"):
     return {r["name"]: _to_def(r) for r in recs[name]["inputs"]}
 
 
-def nodedef_source():
+def nodedef_source() -> str:
     """Where ``nodedef_inputs(..., source='auto')`` reads from (a short description)."""
     return _records(True)[1]
 
 
-def snapshot_records():
+def snapshot_records() -> tuple[dict[str, Any], str]:
     """The nodedef records as written to the snapshot (used by the snapshot tool)."""
     return _records_from_materialx()

@@ -73,11 +73,14 @@ Python numbers and 3-tuples skips NumPy's input conversion (same checks, same va
 
 import dataclasses
 import functools
+import inspect
 import math
 import warnings
-from typing import NamedTuple
+from collections.abc import Iterable, Mapping
+from typing import Any, NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .. import _arrays as ar
 from ..microfacet import ggx
@@ -154,7 +157,7 @@ class _Flags(NamedTuple):
     vndf: bool
 
 
-def pack_parameters(p, changed=None):
+def pack_parameters(p: Mapping[str, Any], changed: Iterable[str] | None = None) -> tuple[NDArray[np.float64], int, int]:
     """(parameter rows (..., N_PARAMS), active-lobe mask, warning bits) of the compiled path
     from the converted inputs ``p`` (float arrays (...), colours (..., 3)): the derived
     values of the reference graph, computed once per material (``_surface_kernels.pack_drive``).
@@ -178,7 +181,7 @@ def pack_parameters(p, changed=None):
 
 
 #: offset and width of each RAW input in the flat row
-_RAW_AT = {}
+_RAW_AT: dict[str, tuple[int, int]] = {}
 for _n, _w in sk.RAW:
     _RAW_AT[_n] = (sum(w for _, w in sk.RAW[: len(_RAW_AT)]), _w)
 
@@ -370,15 +373,15 @@ class OpenPBRSurface(metaclass=NodeMeta):
     NODEDEF = "ND_open_pbr_surface_surfaceshader"
 
     @classmethod
-    def signature(cls):
+    def signature(cls) -> inspect.Signature:
         return _signature(cls.NODEDEF)
 
     @classmethod
-    def defaults(cls):
+    def defaults(cls) -> dict[str, object]:
         """Default value of every input, by name (None: supplied by the renderer)."""
         return {n: d.default for n, d in _interface(cls.NODEDEF).checked.items()}
 
-    def __init__(self, **kwargs):
+    def __init__(self, **kwargs: Any) -> None:
         iface = _interface(self.NODEDEF)
         if not iface.accepted.issuperset(kwargs):
             bind_inputs(type(self), (), kwargs)  # raises, naming the unknown names
@@ -428,11 +431,11 @@ class OpenPBRSurface(metaclass=NodeMeta):
         self._flags = _flags(mask, self.diffuse_model, self.selection, self.multiscatter, self.specular_sampling)
 
     @property
-    def ignored_inputs(self):
+    def ignored_inputs(self) -> dict[str, Any]:
         """{name: value} of the set inputs this model does not use (thin film, emission, ...)."""
         return dict(self._ignored)
 
-    def _local(self, name, w):
+    def _local(self, name: str, w: ArrayLike) -> NDArray[np.float64]:
         # one float64 direction (a renderer's query): the same unit check as
         # ``_arrays.directions``, without its array machinery
         if type(w) is np.ndarray and w.shape == (3,) and w.dtype == np.float64:
@@ -447,7 +450,7 @@ class OpenPBRSurface(metaclass=NodeMeta):
         return ar.broadcast_leading(material=self.params.shape[:-1], **shapes)
 
     # ------------------------------------------------------------------ verbs
-    def lobes(self, wo):
+    def lobes(self, wo: ArrayLike) -> list[Lobe]:
         """The active lobes at wo: list of ``Lobe(name, weight, albedo, probability)``.
 
         Probabilities sum to 1 and are proportional to |w_k * E_k| (see ``selection``).
@@ -459,7 +462,7 @@ class OpenPBRSurface(metaclass=NodeMeta):
             W, E, P = np.moveaxis(W, -2, 0), np.moveaxis(E, -2, 0), np.moveaxis(P, -1, 0)  # lobe axis first
         return [_new_lobe((LOBE_NAMES[k], W[k], E[k], P[k, ...])) for k in self._slots]
 
-    def lobe_eval(self, name, wi, wo):
+    def lobe_eval(self, name: str, wi: ArrayLike, wo: ArrayLike) -> NDArray[Any]:
         """The BSDF f_k of one lobe (its weight w_k not applied), shape (..., 3).
 
         ``eval`` is sum_k w_k f_k over ``lobes``; ``Lobe.albedo`` is the albedo of f_k.
@@ -471,7 +474,7 @@ class OpenPBRSurface(metaclass=NodeMeta):
         lead = self._lead(wi=wi.shape[:-1], wo=wo.shape[:-1])
         return sd.eval_rows(self._flags, self.params, wi, wo, lead, LOBE_NAMES.index(name)).astype(dtype, copy=False)
 
-    def eval(self, wi, wo):
+    def eval(self, wi: ArrayLike, wo: ArrayLike) -> NDArray[Any]:
         """BSDF value sum_k w_k(wo) f_k(wi, wo) without the cosine factor, shape (..., 3).
 
         wi below the surface is valid: the transmission and translucency lobes live there
@@ -482,20 +485,20 @@ class OpenPBRSurface(metaclass=NodeMeta):
         lead = self._lead(wi=wi.shape[:-1], wo=wo.shape[:-1])
         return sd.eval_rows(self._flags, self.params, wi, wo, lead).astype(dtype, copy=False)
 
-    def albedo(self, wo):
+    def albedo(self, wo: ArrayLike) -> NDArray[Any]:
         """Directional albedo sum_k w_k E_k(wo) (reflected and transmitted), shape (..., 3)."""
         dtype = ar.result_dtype(wo)
         wo = self._local("wo", wo)
         return sd.albedo_rows(self._flags, self.params, wo, self._lead(wo=wo.shape[:-1])).astype(dtype, copy=False)
 
-    def pdf(self, wo, wi):
+    def pdf(self, wo: ArrayLike, wi: ArrayLike) -> NDArray[Any]:
         """One-sample mixture pdf sum_k P_k(wo) pdf_k(wi | wo) (solid angle, whole sphere)."""
         dtype = ar.result_dtype(wo, wi)
         wo, wi = self._local("wo", wo), self._local("wi", wi)
         lead = self._lead(wo=wo.shape[:-1], wi=wi.shape[:-1])
         return sd.pdf_rows(self._flags, self.params, wo, wi, lead).astype(dtype, copy=False)
 
-    def sample(self, wo, u):
+    def sample(self, wo: ArrayLike, u: ArrayLike) -> tuple[NDArray[Any], NDArray[Any]]:
         """Pick a lobe with probability P_k and sample it: returns (wi, pdf).
 
         Parameters
@@ -527,6 +530,6 @@ class OpenPBRSurface(metaclass=NodeMeta):
         wi, pdf = sd.sample_rows(self._flags, self.params, wo, u, lead)
         return self.frame.to_world(wi).astype(dtype, copy=False), pdf.astype(dtype, copy=False)
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         set_ = {n: v for n, v in self.inputs.items() if not is_default(nodedef_inputs(self.NODEDEF)[n], v)}
         return f"OpenPBRSurface({', '.join(f'{n}={np.asarray(v).tolist()}' for n, v in set_.items())})"

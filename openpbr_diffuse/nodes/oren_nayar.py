@@ -12,7 +12,11 @@ The node's BSDF is weight * f(color) (RGB).  Directions are world-space when a `
 is given (the local frame is built from it, ``frame.Frame``), else local (normal +z).
 """
 
+import inspect
+from typing import Any
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .. import _arrays as ar
 from .. import sampling
@@ -53,10 +57,10 @@ class OrenNayarDiffuseBSDF(metaclass=NodeMeta):
     NODEDEF = "ND_oren_nayar_diffuse_bsdf"
 
     @classmethod
-    def signature(cls):
+    def signature(cls) -> inspect.Signature:
         return node_signature(cls.NODEDEF)
 
-    def __init__(self, *args, **kwargs):
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
         values = bind_inputs(type(self), args, kwargs)
         defs = nodedef_inputs(self.NODEDEF)
         conv = {name: convert_input(defs[name], v) for name, v in values.items()}
@@ -78,7 +82,7 @@ class OrenNayarDiffuseBSDF(metaclass=NodeMeta):
         self.frame = Frame(self.normal)
 
     @property
-    def inputs(self):
+    def inputs(self) -> dict[str, Any]:
         """The node's input values by MaterialX name."""
         return {
             "weight": self.weight,
@@ -89,12 +93,12 @@ class OrenNayarDiffuseBSDF(metaclass=NodeMeta):
         }
 
     @property
-    def model(self):
+    def model(self) -> str:
         """The lobe model of ``openpbr_diffuse.models``: "eon" or "qon"."""
         return "eon" if self.energy_compensation else "qon"
 
     @property
-    def strategy(self):
+    def strategy(self) -> str:
         """The sampling strategy of ``openpbr_diffuse.sampling``: "eon" or "cosine"."""
         return "eon" if self.energy_compensation else "cosine"
 
@@ -106,7 +110,7 @@ class OrenNayarDiffuseBSDF(metaclass=NodeMeta):
         return self.frame.to_local(ar.directions(name, w, np.float64))
 
     # ------------------------------------------------------------------ verbs
-    def eval(self, wi, wo):
+    def eval(self, wi: ArrayLike, wo: ArrayLike) -> NDArray[Any]:
         """BSDF value weight * f(wi, wo) without the cosine factor, shape (..., 3).
 
         f = 0 when either direction is at or below the surface.
@@ -115,7 +119,7 @@ class OrenNayarDiffuseBSDF(metaclass=NodeMeta):
         f = evaluate(self.model, self._local("wi", wi), self._local("wo", wo), self.roughness, self.color)
         return (self.weight[..., None] * f).astype(dtype, copy=False)
 
-    def albedo(self, wo):
+    def albedo(self, wo: ArrayLike) -> NDArray[Any]:
         """Directional albedo weight * E(mu_o) (closed form, EON Eq. 20 / QON Eq. 8), (..., 3).
 
         0 for wo at or below the horizon (the BSDF is 0 there).
@@ -125,7 +129,7 @@ class OrenNayarDiffuseBSDF(metaclass=NodeMeta):
         E = directional_albedo(self.model, np.clip(mu, 0.0, 1.0), self.roughness, self.color)
         return np.where((mu > 0.0)[..., None], self.weight[..., None] * E, 0.0).astype(dtype, copy=False)
 
-    def sample(self, wo, u):
+    def sample(self, wo: ArrayLike, u: ArrayLike) -> tuple[NDArray[Any], NDArray[Any]]:
         """Sample wi given wo with u (..., 2) in [0, 1): returns (wi, pdf).
 
         wi is world-space if the node has a normal.  pdf = 0 marks "no sample" (wo below
@@ -137,13 +141,13 @@ class OrenNayarDiffuseBSDF(metaclass=NodeMeta):
         )
         return self.frame.to_world(wi).astype(dtype, copy=False), p.astype(dtype, copy=False)
 
-    def pdf(self, wo, wi):
+    def pdf(self, wo: ArrayLike, wi: ArrayLike) -> NDArray[Any]:
         """Solid-angle pdf of ``sample`` producing wi given wo."""
         dtype = ar.result_dtype(wo, wi)
         p = sampling.pdf(self.strategy, self._local("wo", wo), self._local("wi", wi), self._sampling_roughness())
         return p.astype(dtype, copy=False)
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         return (
             f"OrenNayarDiffuseBSDF(weight={self.weight.tolist()}, color={self.color.tolist()}, "
             f"roughness={self.roughness.tolist()}, energy_compensation={self.energy_compensation}"

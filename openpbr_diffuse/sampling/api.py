@@ -1,18 +1,20 @@
 """Public sampling verbs: ``sample``, ``pdf`` and ``sample_rng``."""
 
 import numbers
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, DTypeLike, NDArray
 
 from .. import _arrays as ar
 from .registry import STRATEGIES, strategy_info  # noqa: F401  (STRATEGIES re-exported)
 
 
-def _roughness(roughness, dtype):
+def _roughness(roughness: ArrayLike, dtype: DTypeLike) -> NDArray[Any]:
     return ar.in_range("roughness", roughness, dtype, 0.0, 1.0, " (EON's r, a weight)")
 
 
-def sample(strategy, wo, roughness, u):
+def sample(strategy: str, wo: ArrayLike, roughness: ArrayLike, u: ArrayLike) -> tuple[NDArray[Any], NDArray[Any]]:
     """Draw incident directions wi given wo, with the caller's uniform numbers u.
 
     Parameters
@@ -76,7 +78,7 @@ def sample(strategy, wo, roughness, u):
     return sample_rows(info.id, wo, r, u, lead, dtype)
 
 
-def pdf(strategy, wo, wi, roughness):
+def pdf(strategy: str, wo: ArrayLike, wi: ArrayLike, roughness: ArrayLike) -> NDArray[Any]:
     """Solid-angle pdf of sampling wi given wo with ``strategy``.
 
     Parameters
@@ -119,7 +121,13 @@ def pdf(strategy, wo, wi, roughness):
     return pdf_rows(info.id, wo, wi, r, lead, dtype)
 
 
-def sample_rng(strategy, wo, roughness, rng=None, shape=None):
+def sample_rng(
+    strategy: str,
+    wo: ArrayLike,
+    roughness: ArrayLike,
+    rng: np.random.Generator | np.random.SeedSequence | np.random.BitGenerator | int | None = None,
+    shape: int | tuple[int, ...] | None = None,
+) -> tuple[NDArray[Any], NDArray[Any]]:
     """``sample`` with u drawn from a numpy Generator (reproducible with a seed).
 
     Parameters
@@ -158,7 +166,7 @@ def sample_rng(strategy, wo, roughness, rng=None, shape=None):
     if shape is not None:
         dims = (shape,) if isinstance(shape, numbers.Integral) else shape
         try:
-            dims = tuple(dims)
+            dims = tuple(dims)  # type: ignore[arg-type]  # an int shape was wrapped (numbers.Integral)
         except TypeError:
             raise TypeError(f"shape must be a tuple of non-negative ints, got {type(shape).__name__}") from None
         if not all(isinstance(d, numbers.Integral) and not isinstance(d, bool) and d >= 0 for d in dims):

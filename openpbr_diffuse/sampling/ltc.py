@@ -48,7 +48,7 @@ def _ltc_parts(mu, r):
 
 
 @kernel
-def ltc_coeffs(mu, r):
+def ltc_coeffs(mu: float, r: float) -> tuple[float, float, float, float]:
     """Return (a, b, c, d) of the LTC matrix M (Eq. 25) for mu = mu_o, roughness r (Listing 2)."""
     a, bn, bd, c, dn, dd = _ltc_parts(mu, r)
     inv = 1.0 / (bd * dd)  # both denominators are < 0 on [0, 1]: one division for b and d
@@ -56,7 +56,7 @@ def ltc_coeffs(mu, r):
 
 
 @kernel
-def cltc_coeffs(mu, r):
+def cltc_coeffs(mu: float, r: float) -> tuple[float, float, float, float, float]:
     """(a, b, c, d, s): ``ltc_coeffs`` and the CLTC's clip fraction s, taken from d's numerator
     and denominator (``clip_fraction_of``) so that s does not wait for d's division (the EON
     sampler's chain of square roots and divisions is a row's latency in the surface's scalar
@@ -67,7 +67,7 @@ def cltc_coeffs(mu, r):
 
 
 @kernel
-def ltc_frame(ox, oy):
+def ltc_frame(ox: float, oy: float) -> tuple[float, float]:
     """Return X = (X.x, X.y) of the LTC frame of wo (Y = (-X.y, X.x), Z = +z)."""
     l2 = ox * ox + oy * oy
     il = 1.0 / math.sqrt(l2)  # inf at the normal, discarded below (selects, not branches)
@@ -76,32 +76,34 @@ def ltc_frame(ox, oy):
 
 
 @kernel
-def to_frame(Xx, Xy, wx, wy):
+def to_frame(Xx: float, Xy: float, wx: float, wy: float) -> tuple[float, float]:
     """Local (x, y) -> LTC-frame (x, y) (z is shared)."""
     return Xx * wx + Xy * wy, Xx * wy - Xy * wx
 
 
 @kernel
-def from_frame(Xx, Xy, lx, ly):
+def from_frame(Xx: float, Xy: float, lx: float, ly: float) -> tuple[float, float]:
     """LTC-frame (x, y) -> local (x, y): X lx + Y ly."""
     return Xx * lx - Xy * ly, Xy * lx + Xx * ly
 
 
 @kernel
-def clip_fraction_of(dn, dd):
+def clip_fraction_of(dn: float, dd: float) -> float:
     """s = (1 + vz)/2, vz = 1/sqrt(1 + d^2): cosine mass kept by the CLTC clipping (Eq. 28), for
     d = dn / dd (vz = |dd| / sqrt(dn^2 + dd^2): no division by dd first)."""
     return 0.5 * (1.0 + abs(dd) / math.sqrt(dn * dn + dd * dd))
 
 
 @kernel
-def clip_fraction(d):
+def clip_fraction(d: float) -> float:
     """s = (1 + vz)/2, vz = 1/sqrt(1 + d^2): cosine mass kept by the CLTC clipping (Eq. 28)."""
     return clip_fraction_of(d, 1.0)
 
 
 @kernel
-def ltc_sample_local(a, b, c, d, s, u1, u2):
+def ltc_sample_local(
+    a: float, b: float, c: float, d: float, s: float, u1: float, u2: float
+) -> tuple[float, float, float, float]:
     """Return (x, y, z, pdf) of an (optionally clipped) LTC sample in the LTC frame.
 
     ``s`` = 1 gives the plain LTC, ``s = clip_fraction(d)`` the CLTC of Listing 3: Heitz's
@@ -137,7 +139,7 @@ def ltc_sample_local(a, b, c, d, s, u1, u2):
 
 
 @kernel
-def ltc_pdf_local(a, b, c, d, s, wx, wy, wz):
+def ltc_pdf_local(a: float, b: float, c: float, d: float, s: float, wx: float, wy: float, wz: float) -> float:
     """Density of the (clipped) LTC at the unit LTC-frame direction w: (det/|h|^2)^2 max(h.z, 0)/(pi s).
 
     h = adj(M) w (the adjugate keeps M^-1 free of a division); h.z <= 0 means w is

@@ -43,7 +43,7 @@ def _reduce(x, f, stage):
 
 
 @kernel
-def pow_tenth(r):
+def pow_tenth(r: float) -> float:
     """r^0.1 for r in [0, 1], to 5e-15 relative, without a libm call (keeps loops vectorisable).
 
     Range reduction by selects: r = 2^-e x with x in [2^-1/8, 1] (exponent stages 2^-1000
@@ -84,14 +84,16 @@ def pow_tenth(r):
 
 
 @kernel
-def uniform_probability(mu, r_tenth):
+def uniform_probability(mu: float, r_tenth: float) -> float:
     """P_u = r^0.1 (0.162925 + mu (-0.372058 + (0.538233 - 0.290822 mu) mu)) (Listing 4),
     given r_tenth = r^0.1 (``pow_tenth(r)``: once per material when r is fixed)."""
     return r_tenth * (0.162925 + mu * (-0.372058 + (0.538233 - 0.290822 * mu) * mu))
 
 
 @kernel
-def eon_sample(Xx, Xy, mu, r, r_tenth, u1, u2):
+def eon_sample(
+    Xx: float, Xy: float, mu: float, r: float, r_tenth: float, u1: float, u2: float
+) -> tuple[float, float, float, float]:
     """Return (x, y, z, pdf) in the local frame: Listing 4 for the LTC frame X of wo
     (r_tenth = r^0.1, ``pow_tenth(r)``).
 
@@ -119,7 +121,7 @@ def eon_sample(Xx, Xy, mu, r, r_tenth, u1, u2):
 
 
 @kernel
-def eon_pdf(lx, ly, lz, mu, r, r_tenth):
+def eon_pdf(lx: float, ly: float, lz: float, mu: float, r: float, r_tenth: float) -> float:
     """P_u/(2 pi) + P_c pdf_CLTC at the LTC-frame direction (lx, ly, lz), lz > 0
     (r_tenth = r^0.1, ``pow_tenth(r)``)."""
     a, b, c, d, s = cltc_coeffs(mu, r)

@@ -26,21 +26,23 @@ Examples
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 #: rho = 1 as RGB: the same values as a scalar rho, and the driver the report's other sections
 #: compile (a model's driver is compiled per channel count).
 _WHITE = (1.0, 1.0, 1.0)
 
 
-def wo_of(mu_o, phi=0.0):
+def wo_of(mu_o: float, phi: float = 0.0) -> NDArray[np.float64]:
     """Unit outgoing direction with cosine ``mu_o`` at azimuth ``phi``."""
     s = math.sqrt(max(0.0, 1.0 - mu_o * mu_o))
     return np.array([s * math.cos(phi), s * math.sin(phi), mu_o])
 
 
-def weight_stats(strategy, mu_o, r, n, seed):
+def weight_stats(strategy: str, mu_o: float, r: float, n: int, seed: int | None) -> tuple[float, float, float, float]:
     """(variance, max, mean, standard error of the mean) of the throughput weight, n samples."""
     from ..models import evaluate
     from .api import sample_rng
@@ -54,7 +56,7 @@ def weight_stats(strategy, mu_o, r, n, seed):
     return var, float(w.max()), float(w.mean()), math.sqrt(var / n)
 
 
-def exact_weight_moments(strategy, mu_o, r, n=16):
+def exact_weight_moments(strategy: str, mu_o: float, r: float, n: int = 16) -> tuple[float, float]:
     """(mean, variance) of the throughput weight by quadrature, no sampling.
 
     mean = int_{pdf > 0} f mu_i dwi, second moment = int_{pdf > 0} (f mu_i)^2 / pdf dwi,
@@ -65,8 +67,8 @@ def exact_weight_moments(strategy, mu_o, r, n=16):
     from ..models import evaluate
     from .api import pdf
 
-    def integrand(second):
-        def g(wi, wo):
+    def integrand(second: bool) -> Callable[[NDArray[np.float64], NDArray[np.float64]], NDArray[np.float64]]:
+        def g(wi: NDArray[np.float64], wo: NDArray[np.float64]) -> NDArray[np.float64]:
             f = evaluate("eon", wi, wo, r, _WHITE)[..., 0]
             p = pdf(strategy, wo, wi, r)
             ok = p > 0.0
@@ -88,7 +90,9 @@ def _gl_nodes(edges, nq):
     return 0.5 * (lo + hi) + 0.5 * (hi - lo) * x, 0.5 * (hi - lo) * w
 
 
-def bin_mass(strategy, wo, r, z_edges, phi_edges, nq=6):
+def bin_mass(
+    strategy: str, wo: ArrayLike, r: ArrayLike, z_edges: ArrayLike, phi_edges: ArrayLike, nq: int = 6
+) -> NDArray[np.float64]:
     """Integral of ``pdf`` over each (cos theta, phi) bin (Gauss-Legendre nq x nq per bin)."""
     from .api import pdf
 
@@ -102,7 +106,7 @@ def bin_mass(strategy, wo, r, z_edges, phi_edges, nq=6):
     return np.einsum("ijab,ia,jb->ij", p, zw, pw)
 
 
-def pdf_mass(strategy, mu_o, r, res=(48, 96)):
+def pdf_mass(strategy: str, mu_o: float, r: float, res: tuple[int, int] = (48, 96)) -> float:
     """Integral of ``pdf`` over the hemisphere (the whole sphere for "ltc")."""
     sphere = strategy == "ltc"
     z = np.linspace(-1.0 if sphere else 0.0, 1.0, (2 if sphere else 1) * res[0] + 1)
@@ -110,7 +114,7 @@ def pdf_mass(strategy, mu_o, r, res=(48, 96)):
     return float(bin_mass(strategy, wo_of(mu_o, 0.7), r, z, phi).sum())
 
 
-def pearson_chi2(observed, expected, min_expected=5.0):
+def pearson_chi2(observed: ArrayLike, expected: ArrayLike, min_expected: float = 5.0) -> tuple[float, float, int]:
     """(p-value, chi2, dof) of Pearson's goodness-of-fit statistic, sparse bins pooled.
 
     Mitsuba 3's rule (``mitsuba.chi2``): bins sorted by expected count; consecutive bins
@@ -148,7 +152,9 @@ def pearson_chi2(observed, expected, min_expected=5.0):
     return float(stats.chi2.sf(chi2, dof)), float(chi2), dof
 
 
-def chi2_test(strategy, mu_o, r, n, seed, res=(16, 32)):
+def chi2_test(
+    strategy: str, mu_o: float, r: float, n: int, seed: int | None, res: tuple[int, int] = (16, 32)
+) -> tuple[float, float, int, float]:
     """(p-value, chi2, dof, binned pdf mass) of n samples of ``strategy`` against its pdf."""
     from .api import sample_rng
 

@@ -34,7 +34,7 @@ STRATEGIES = tuple(INFO)
 COSINE, UNIFORM, LTC, LTC_NONNEG, CLTC, EON = (INFO[n].id for n in STRATEGIES)
 
 
-def strategy_info(strategy):
+def strategy_info(strategy: object) -> StrategyInfo:
     """Look a strategy up by name; ValueError/TypeError naming ``strategy`` otherwise."""
     if not isinstance(strategy, str):
         raise TypeError(f"strategy must be a string, one of {', '.join(STRATEGIES)}; got {type(strategy).__name__}")

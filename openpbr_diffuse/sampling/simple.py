@@ -20,7 +20,7 @@ _SQRT_HALF = math.sqrt(0.5)
 
 
 @kernel
-def cos_sin_2pi(u):
+def cos_sin_2pi(u: float) -> tuple[float, float]:
     """Return (cos 2 pi u, sin 2 pi u) for u in [0, 1), to a few ulp (absolute).
 
     Why not ``math.cos``/``math.sin``: a libm call keeps LLVM from vectorising the batch
@@ -69,7 +69,7 @@ def cos_sin_2pi(u):
 
 
 @kernel
-def cosine_sample_local(u1, u2):
+def cosine_sample_local(u1: float, u2: float) -> tuple[float, float, float, float]:
     """Return (x, y, z, pdf) of a cosine-weighted direction in the LTC frame; pdf = z/pi.
 
     R = sqrt(u1), phi = 2 pi u2, (x, y) = (-R cos phi, R sin phi), z = sqrt(1 - u1).
@@ -81,13 +81,13 @@ def cosine_sample_local(u1, u2):
 
 
 @kernel
-def cosine_pdf(z):
+def cosine_pdf(z: float) -> float:
     """Cosine-weighted hemisphere pdf mu_i/pi (Eq. 21)."""
     return max(z, 0.0) * INV_PI
 
 
 @kernel
-def uniform_sample(u1, u2):
+def uniform_sample(u1: float, u2: float) -> tuple[float, float, float, float]:
     """Return (x, y, z, pdf) of a uniform hemisphere direction: z = u1, phi = 2 pi u2, pdf = 1/(2 pi)."""
     z = u1
     st = math.sqrt(max(0.0, 1.0 - z * z))
