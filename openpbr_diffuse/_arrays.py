@@ -34,9 +34,12 @@ from ._launch import FULL, compiled, launch  # noqa: E402
 class RoughnessDomain(Protocol):
     """What :func:`model_roughness` reads of a model (``models.registry.ModelInfo`` has it)."""
 
-    name: str
-    roughness_name: str
-    roughness_max: float
+    @property
+    def name(self) -> str: ...
+    @property
+    def roughness_name(self) -> str: ...
+    @property
+    def roughness_max(self) -> float: ...
 
 
 #: ||w| - 1| allowed for a "unit" direction.  Loose enough for float32-normalised input,
