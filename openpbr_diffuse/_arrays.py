@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike, DTypeLike, NDArray  # noqa: E402
 from ._launch import FULL, compiled, launch  # noqa: E402
 
 
-class RoughnessDomain(Protocol):
+class _RoughnessDomain(Protocol):
     """What :func:`model_roughness` reads of a model (``models.registry.ModelInfo`` has it)."""
 
     @property
@@ -266,7 +266,7 @@ def in_range(
     return a
 
 
-def model_roughness(info: RoughnessDomain, roughness: ArrayLike, dtype: DTypeLike, check: bool = True) -> NDArray[Any]:
+def model_roughness(info: _RoughnessDomain, roughness: ArrayLike, dtype: DTypeLike, check: bool = True) -> NDArray[Any]:
     """Roughness in a lobe model's domain: sigma in [0, max] radians or r in [0, max].
 
     ``info`` is the model's ``models.registry.ModelInfo`` (name, roughness_name, roughness_max).
