@@ -109,6 +109,19 @@ def test_evaluate_many_equals_one_by_one():
         assert many["diffuse_probability"][k] == pytest.approx(one["diffuse"]["probability"][0])
 
 
+def test_reported_albedo_is_the_surface_albedo():
+    """``evaluate``'s albedo (the sum of the lobes' w_k E_k) equals the node's own albedo
+    driver, a separately compiled sum, at several view angles; and the diffuse lobe's
+    contribution is one of its terms."""
+    theta_o = [0.0, 30.0, 60.0, 85.0, 89.5]
+    for m in _all():
+        node = m.node()
+        out = evaluate(m, [30.0] * 5, theta_o, [180.0] * 5)
+        wo = np.stack([np.sin(np.radians(theta_o)), np.zeros(5), np.cos(np.radians(theta_o))], axis=-1)
+        np.testing.assert_allclose(out["albedo"], node.albedo(wo), rtol=1e-13, atol=1e-15, err_msg=m.path)
+        assert np.all(np.asarray(out["diffuse"]["contribution"]) <= np.asarray(out["albedo"]) + 1e-15), m.path
+
+
 @pytest.mark.slow
 def test_found_after_non_editable_install_from_another_directory(tmp_path):
     src = tmp_path / "src"

@@ -75,9 +75,25 @@ def evaluate(
         return out
     wi, wo = directions(ti, to, ph)
     out["brdf"] = np.asarray(node.eval(wi, wo)).tolist()
-    out["albedo"] = np.asarray(node.albedo(wo)).tolist()
-    out["diffuse"], out["lobes"] = diffuse_lobe(node, wo)
+    albedo, out["diffuse"], out["lobes"] = _albedo_and_lobes(node, wo)
+    out["albedo"] = albedo.tolist()
     return out
+
+
+def _albedo_and_lobes(
+    node: OpenPBRSurface | OrenNayarDiffuseBSDF, wo: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], dict[str, Any], list[dict[str, Any]]]:
+    """(directional albedo, diffuse lobe, lobe listing) at wo.  A surface's albedo is the sum
+    of its lobes' w_k E_k (what ``OpenPBRSurface.albedo`` returns, to rounding), so one
+    compiled verb gives all three: a command's first run compiles one driver less."""
+    diffuse, listing = diffuse_lobe(node, wo)
+    if not hasattr(node, "lobes"):
+        return np.asarray(diffuse["contribution"], dtype=np.float64), diffuse, listing
+    n = wo.shape[0] if wo.ndim > 1 else 1
+    total = np.zeros((n, 3))
+    for lb in node.lobes(wo):
+        total += np.broadcast_to(lb.weight, (n, 3)) * np.broadcast_to(lb.albedo, (n, 3))
+    return total, diffuse, listing
 
 
 def diffuse_lobe(
@@ -180,8 +196,7 @@ def evaluate_many(
         # directions broadcast to one row per material (the nodes' inputs are (n,) / (n, 3))
         wig, wog = np.broadcast_to(wi, (len(idx), 3)), np.broadcast_to(wo, (len(idx), 3))
         out["brdf"][idx] = node.eval(wig, wog)
-        out["albedo"][idx] = node.albedo(wog)
-        d, _ = diffuse_lobe(node, wog)
+        out["albedo"][idx], d, _ = _albedo_and_lobes(node, wog)
         out["diffuse_weight"][idx] = d["weight"]
         out["diffuse_probability"][idx] = d["probability"]
     return out
