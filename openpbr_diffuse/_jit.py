@@ -18,6 +18,8 @@ llvmlite is built without Intel SVML, so numba has no vector ``acos`` of its own
 """
 
 import math
+from collections.abc import Callable, Sequence
+from typing import Any
 
 import numba
 
@@ -52,7 +54,7 @@ HALF_PI = 0.5 * math.pi
 
 
 @kernel
-def max_mu(mu_i, mu_o):
+def max_mu(mu_i: float, mu_o: float) -> float:
     """max(mu_i, mu_o), floored at ``MU_FLOOR``: the denominator of QON's and FON's s/t."""
     return max(max(mu_i, mu_o), MU_FLOOR)
 
@@ -98,7 +100,7 @@ def _asin_small(y):
 
 
 @kernel
-def acos(x):
+def acos(x: float) -> float:
     """arccos(x) for x in [-1, 1], in float64, to ~1 ulp; a drop-in for ``math.acos``.
 
     |x| <= 1/2: pi/2 - asin(x); |x| > 1/2: 2 asin(sqrt((1 - |x|)/2)) (1 - |x| is exact
@@ -113,7 +115,7 @@ def acos(x):
     return t if x >= 0.0 else PI - t
 
 
-def stack_buffer(size, dtype=numba.float64):
+def stack_buffer(size: int, dtype: Any = numba.float64) -> Any:
     """A compiled function returning a 1-D array of ``size`` elements (uninitialised) in the
     stack frame of the compiled function that calls it, as ``np.empty(size)`` would on the
     heap.
@@ -165,7 +167,9 @@ def _opaque_intrinsic():
 opaque = _opaque_intrinsic()
 
 
-def unrolled(name, argnames, body_of, env, module):
+def unrolled(
+    name: str, argnames: Sequence[str], body_of: Callable[[int], str], env: dict[str, Any], module: str
+) -> Callable[..., Any]:
     """A function ``name(*argnames)`` for compiled code whose body is generated, while its
     caller is typed, from the value of its first argument, a compile-time constant (a
     literal int): ``body_of(value)`` returns the body's Python source (over ``argnames``
@@ -179,7 +183,7 @@ def unrolled(name, argnames, body_of, env, module):
     from numba.extending import overload
 
     args = ", ".join(argnames)
-    names = {"__name__": module}
+    names: dict[str, Any] = {"__name__": module}
     exec(f"def {name}({args}):\n    raise NotImplementedError('compiled only')\n", names)
     stub = names[name]
 
@@ -196,7 +200,7 @@ def unrolled(name, argnames, body_of, env, module):
     return stub
 
 
-def by_constant(name, argnames, table, module):
+def by_constant(name: str, argnames: Sequence[str], table: Sequence[Any], module: str) -> Callable[..., Any]:
     """``name(k, *rest)`` in compiled code calls ``table[k](*rest)``, k a compile-time constant
     (``unrolled``): the dispatch of a family of functions with one signature."""
     rest = ", ".join(argnames[1:])

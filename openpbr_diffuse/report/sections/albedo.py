@@ -39,8 +39,8 @@ def _fit_error(ctx, n_mu, n_r):
     return mu, r, exact, fit
 
 
-#: Values stated in spec/models.md ("Values checked here", independent quadrature) and the
-#: EON paper: (label, model, kind, mu, roughness, value, decimals).
+#: Values stated in the EON paper [Portsmouth2025] and checked by independent quadrature:
+#: (label, model, kind, mu, roughness, value, decimals).
 STATED = (
     ("E_F(mu = 1, r = 1)", "fon", "E", 1.0, 1.0, 0.776522, 6),
     ("E_F(mu = 0.7, r = 1)", "fon", "E", 0.7, 1.0, 0.817888, 6),
@@ -78,7 +78,7 @@ def _stated(ctx, res):
                 tol,
                 "==",
                 expected=value,
-                reference="spec/models.md 'Values checked here' (EON paper values)",
+                reference="EON paper values (Portsmouth et al. 2025), checked by independent quadrature",
                 detail="quadrature of evaluate; tolerance: half a unit of the last stated digit",
             )
         )
