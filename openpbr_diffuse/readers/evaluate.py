@@ -86,14 +86,44 @@ def _albedo_and_lobes(
     """(directional albedo, diffuse lobe, lobe listing) at wo.  A surface's albedo is the sum
     of its lobes' w_k E_k (what ``OpenPBRSurface.albedo`` returns, to rounding), so one
     compiled verb gives all three: a command's first run compiles one driver less."""
-    diffuse, listing = diffuse_lobe(node, wo)
     if not hasattr(node, "lobes"):
+        diffuse, listing = diffuse_lobe(node, wo)
         return np.asarray(diffuse["contribution"], dtype=np.float64), diffuse, listing
     n = wo.shape[0] if wo.ndim > 1 else 1
+    lobes = node.lobes(wo)
+    diffuse, listing = _diffuse_of(lobes, n)
     total = np.zeros((n, 3))
-    for lb in node.lobes(wo):
+    for lb in lobes:
         total += np.broadcast_to(lb.weight, (n, 3)) * np.broadcast_to(lb.albedo, (n, 3))
     return total, diffuse, listing
+
+
+def _diffuse_of(lobes: Sequence[Any], n: int) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+    """``diffuse_lobe``'s answer from a surface's ``lobes(wo)`` at n rows."""
+    listing = [{"name": lb.name, "probability": np.broadcast_to(lb.probability, (n,)).tolist()} for lb in lobes]
+    d = next((lb for lb in lobes if lb.name == "diffuse"), None)
+    if d is None:
+        zero = np.zeros((n, 3))
+        return (
+            {
+                "weight": zero.tolist(),
+                "albedo": zero.tolist(),
+                "probability": [0.0] * n,
+                "contribution": zero.tolist(),
+            },
+            listing,
+        )
+    w = np.broadcast_to(d.weight, (n, 3))
+    E = np.broadcast_to(d.albedo, (n, 3))
+    return (
+        {
+            "weight": w.tolist(),
+            "albedo": E.tolist(),
+            "probability": np.broadcast_to(d.probability, (n,)).tolist(),
+            "contribution": (w * E).tolist(),
+        },
+        listing,
+    )
 
 
 def diffuse_lobe(
@@ -102,31 +132,7 @@ def diffuse_lobe(
     """({weight, albedo, probability, contribution}, [{name, probability}]) of a node at wo."""
     n = wo.shape[0] if wo.ndim > 1 else 1
     if hasattr(node, "lobes"):
-        lobes = node.lobes(wo)
-        listing = [{"name": lb.name, "probability": np.broadcast_to(lb.probability, (n,)).tolist()} for lb in lobes]
-        d = next((lb for lb in lobes if lb.name == "diffuse"), None)
-        if d is None:
-            zero = np.zeros((n, 3))
-            return (
-                {
-                    "weight": zero.tolist(),
-                    "albedo": zero.tolist(),
-                    "probability": [0.0] * n,
-                    "contribution": zero.tolist(),
-                },
-                listing,
-            )
-        w = np.broadcast_to(d.weight, (n, 3))
-        E = np.broadcast_to(d.albedo, (n, 3))
-        return (
-            {
-                "weight": w.tolist(),
-                "albedo": E.tolist(),
-                "probability": np.broadcast_to(d.probability, (n,)).tolist(),
-                "contribution": (w * E).tolist(),
-            },
-            listing,
-        )
+        return _diffuse_of(node.lobes(wo), n)
     # OrenNayarDiffuseBSDF: one lobe, weight * f(color)
     E = np.broadcast_to(node.albedo(wo), (n, 3))
     w = np.broadcast_to(np.asarray(node.weight, dtype=np.float64)[..., None] * np.ones(3), (n, 3))
