@@ -28,6 +28,7 @@ import numba  # noqa: E402
 import numpy as np  # noqa: E402
 from numpy.typing import ArrayLike, DTypeLike, NDArray  # noqa: E402
 
+from ._jit import predicate  # noqa: E402
 from ._launch import FULL, compiled, launch  # noqa: E402
 
 
@@ -119,10 +120,9 @@ _U = numba.uint64
 
 # The per-value predicates, written once: the check passes below use them, and so do the
 # batch kernels that fuse the checks into their own loop (``check=False`` below).
-_predicate = numba.njit(cache=True, error_model="numpy", forceinline=True)
 
 
-@_predicate
+@predicate
 def is_unit(x: float, y: float, z: float) -> bool:
     """|w| within ``UNIT_TOL`` of 1 (as |w|^2 in [(1 - tol)^2, (1 + tol)^2], float64);
     False for NaN or Inf."""
@@ -131,7 +131,7 @@ def is_unit(x: float, y: float, z: float) -> bool:
     return (n2 >= _N2_LO) & (n2 <= _N2_HI)  # NaN compares false
 
 
-@_predicate
+@predicate
 def is_within(x: float, lo: float, hi: float, lo_open: bool, hi_open: bool) -> bool:
     """x finite and in [lo, hi] (open ends on request); compares in the type of x, lo, hi.
 

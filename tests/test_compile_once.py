@@ -193,3 +193,37 @@ def test_quick_report_runs_no_simulator(tmp_path):
     assert len(live) == 4 and all(status == "not run" for _, status, _ in live)
     assert layered["status"] == "not run" and layered["not_run"] == QUICK_NOT_RUN
     assert layered["checks"] and all(c[1] == "not run" and c[2] == QUICK_NOT_RUN for c in layered["checks"])
+
+
+_KERNEL_BOTH_WAYS = r"""
+import math
+import numpy as np
+from openpbr_diffuse import directional_albedo
+from openpbr_diffuse._jit import acos
+from openpbr_diffuse.models import eon
+
+order = sys.argv[1]
+RESULT = {}
+if order == "python-first":
+    RESULT["python"] = [acos(0.3), eon.rho_ms(0.5, 0.7)]
+RESULT["compiled"] = float(np.ravel(directional_albedo("eon", np.array([0.5]), 0.7, 0.5))[0])
+if order == "compiled-first":
+    RESULT["python"] = [acos(0.3), eon.rho_ms(0.5, 0.7)]
+RESULT["reference"] = [math.acos(0.3), eon.rho_ms.py_func(0.5, 0.7)]
+RESULT["options"] = {k: v for k, v in eon.rho_ms.targetoptions.items() if k.startswith("no_c")}
+"""
+
+
+def test_kernels_called_from_python_and_from_compiled_code_share_a_cache(tmp_path):
+    """A kernel is compiled for compiled callers without numba's CPython entry point; a call
+    from Python uses a twin compiled with one.  Both orders of first use, in one cache that
+    the second process reads: no process may load the other kind's machine code (calling an
+    entry point that is not there would crash the interpreter)."""
+    first = _run(_KERNEL_BOTH_WAYS, tmp_path, "python-first")
+    again = _run(_KERNEL_BOTH_WAYS, tmp_path, "compiled-first")
+    for r in (first, again):
+        assert r["options"] == {"no_cpython_wrapper": True, "no_cfunc_wrapper": True}
+        assert abs(r["python"][0] - r["reference"][0]) <= 4e-16
+        assert r["python"][1] == r["reference"][1]
+        assert r["compiled"] == again["compiled"] == first["compiled"]
+    assert (first["compiled"] > 0.0) and (first["compiled"] < 0.5)
