@@ -5,8 +5,9 @@ Used by the lobe models (``models``), the samplers (``sampling``), the microface
 it lives at the top of the package so that none of them reaches into another's private
 module.  Each formula of the paper is written once, as a scalar function compiled by
 numba (``kernel``: compiled for compiled callers only, without the CPython entry point
-numba would build for each; a Python call uses a twin that has one); the batch drivers (``models/_kernels.py``, ``sampling/_kernels.py``)
-loop over arrays in parallel and call them.  The same functions are what the tests verify: there is no second NumPy copy.
+numba would build for each; a Python call uses a twin that has one); the batch drivers
+(``models/_kernels.py``, ``sampling/_kernels.py``) loop over arrays and call them.  The
+same functions are what the tests verify: there is no second NumPy copy.
 
 ``fastmath`` is restricted to flags that keep IEEE semantics for NaN/Inf (the input checks
 and the ``max(eps, .)`` guards of Listing 1 rely on them) but allow contraction and
