@@ -9,6 +9,13 @@ broadcast over leading axes with the colour channel axis last.
 from . import _signals
 
 _signals.install_for_start_up()  # the command line only: Ctrl-C while importing exits cleanly
+if _signals.is_command_line():
+    # numba colours the message of every typing attempt that fails, and its compiler makes
+    # thousands while it types a function (each a colorama set-up and tear-down): a few per
+    # cent of a command's first run.  The command line shows none of those messages.
+    import os as _os
+
+    _os.environ.setdefault("NUMBA_DISABLE_ERROR_MESSAGE_HIGHLIGHTING", "1")
 from ._version import __version__  # noqa: E402
 from .albedo.tables import reference_albedo, reference_average_albedo
 from .models import COLOR_MODES, MODELS, average_albedo, directional_albedo, evaluate

@@ -28,8 +28,8 @@ import numba  # noqa: E402
 import numpy as np  # noqa: E402
 from numpy.typing import ArrayLike, DTypeLike, NDArray  # noqa: E402
 
-from ._jit import predicate  # noqa: E402
-from ._launch import FULL, compiled, launch  # noqa: E402
+from ._jit import driver, predicate  # noqa: E402
+from ._launch import FULL, launch  # noqa: E402
 
 
 class _RoughnessDomain(Protocol):
@@ -143,7 +143,7 @@ def is_within(x: float, lo: float, hi: float, lo_open: bool, hi_open: bool) -> b
     return (abs(x) < np.inf) & above & below  # NaN fails every comparison
 
 
-@compiled
+@driver
 def _not_unit_rows(w):
     bad = 0
     for i in range(w.shape[0] // 3):
@@ -205,7 +205,7 @@ def directions(name: str, value: ArrayLike, dtype: DTypeLike, check: bool = True
     return w
 
 
-@compiled
+@driver
 def _outside_values(lo, hi, lo_open, hi_open, a):
     bad = 0
     for i in range(a.shape[0]):

@@ -50,7 +50,9 @@ def _kernel_dispatcher() -> type:
                 g = types.FunctionType(f.__code__, f.__globals__, f.__name__, f.__defaults__, f.__closure__)
                 g.__qualname__ = f.__qualname__ + "__python"
                 g.__module__, g.__doc__ = f.__module__, f.__doc__
-                options = {k: v for k, v in self.targetoptions.items() if not k.startswith("no_c")}
+                # with the entry points, and with reference counting: from Python a formula
+                # may be called with arrays (array expressions allocate their results)
+                options = {k: v for k, v in self.targetoptions.items() if not k.startswith("no_c") and k != "_nrt"}
                 twin = self.__dict__["_python_twin"] = numba.njit(cache=True, **options)(g)
             return twin
 
@@ -77,9 +79,24 @@ def _compiled_only(**options: Any) -> Callable[[Callable[..., Any]], Any]:
     return decorate
 
 
+#: numba's reference counting (NRT) off: a function compiled with ``_nrt=False`` (a numba
+#: target option) allocates no array, and numba emits none of the increments and decrements
+#: of array references it otherwise emits for every array-valued variable.  ``block``, the
+#: ``serial`` packing loop and the batch ``driver`` loops only read and write arrays their
+#: caller owns (or stack buffers), so they need none, and lowering them is that much less
+#: work: a cold ``eval`` of a material measured ~10 % less CPU (tools/bench.py --cold).  A
+#: function that did allocate fails to compile under them instead of running.
+NO_NRT: dict[str, Any] = {"_nrt": False}
+
 #: Decorator for scalar formula functions: compiled for the batch drivers that call them and
-#: inlined there by LLVM (``forceinline``); callable from Python too (``Kernel``).
+#: inlined there by LLVM (``forceinline``); callable from Python too (``Kernel``), where a
+#: formula may also be given arrays (NumPy broadcasting; numba allocates the results).
 kernel = _compiled_only(fastmath=FASTMATH, error_model="numpy", forceinline=True)
+
+#: Decorator for the kernels over buffers (the surface's block passes and the functions
+#: reading a material's parameter row, ``nodes._surface_*``): as ``kernel``, without NRT.
+#: From Python (tests) they run as ``kernel`` does, through a twin with NRT.
+block = _compiled_only(fastmath=FASTMATH, error_model="numpy", forceinline=True, **NO_NRT)
 
 #: Decorator for the per-value input predicates (``_arrays``): as ``kernel``, strict IEEE
 #: arithmetic (their NaN and Inf comparisons are the point).
@@ -90,13 +107,53 @@ predicate = _compiled_only(error_model="numpy", forceinline=True)
 #: literal argument of its call sites).
 inline = numba.njit(inline="always")
 
+
+def _helper() -> Callable[[Callable[..., Any]], Any]:
+    from numba.extending import register_jitable
+
+    return register_jitable(error_model="numpy", forceinline=True)
+
+
+#: Decorator for the tiny integer helpers called from every pass (scratch indices, block
+#: bounds, lobe bits): typed without their arguments' literal values, so compiled once per
+#: process for all call sites (numba's ``register_jitable``), and inlined by LLVM.  (Inlined
+#: in numba's IR instead, as ``inline`` does, each of their hundreds of call sites cost a
+#: copy of the helper's IR to type and lower.)
+helper = _helper()
+
+#: Decorator for the batch drivers of the models and the samplers (``models._kernels``,
+#: ``sampling._kernels``) and the input checks' counting loops (``_arrays``), which
+#: ``_launch.launch`` runs: serial loops that release the GIL, cached; numpy's error model
+#: (x/0 gives inf, not an exception) so that rows below the horizon can be computed and then
+#: discarded without a branch.
+driver = numba.njit(nogil=True, cache=True, fastmath=FASTMATH, error_model="numpy", **NO_NRT)
+
 #: Decorator for the block runners of the surface's verbs (``nodes._surface_drivers``):
 #: cached, ``nogil`` (the launcher's pool runs them on several threads at once), serial.
+#: With NRT: their scratch is a stack array (``stack_buffer``), an array returned by a
+#: compiled function, which numba only types with it.
 runner = numba.njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
 
 #: Decorator for a compiled loop that is neither a formula nor a runner (the packing of a
 #: material's inputs, ``nodes._surface_kernels.pack_drive``): cached, strict IEEE arithmetic.
-serial = numba.njit(cache=True, error_model="numpy")
+serial = numba.njit(cache=True, error_model="numpy", **NO_NRT)
+
+#: Decorators for the random walks of the microsurface simulators (``simulation``): the
+#: per-path loops (``walk``) and the steps they inline in numba's IR (``walk_step``).  No
+#: fastmath: the walks rely on IEEE comparisons free of inf and NaN at grazing angles, and
+#: their speed comes from the per-path loop, not from vectorisation.  With NRT: a walk
+#: allocates its tallies.
+walk = numba.njit(cache=True, nogil=True)
+walk_step = numba.njit(cache=True, nogil=True, inline="always")
+
+#: Decorator for a scalar formula's NumPy form (``microfacet.fresnel``): a ufunc, typed on
+#: first call and cached.
+ufunc = numba.vectorize(cache=True)
+
+#: Decorator for a loop that allocates its result and sums into it with reassociation
+#: allowed (every fastmath flag; the spherical-harmonic projection of
+#: ``approximations.sh``).
+reduction = numba.njit(cache=True, fastmath=True)
 
 PI = math.pi
 INV_PI = 1.0 / math.pi

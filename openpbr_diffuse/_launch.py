@@ -27,13 +27,6 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from ._jit import FASTMATH
-
-#: Batch drivers: serial loops that release the GIL (``launch`` runs them on the pool),
-#: cached; numpy's error model (x/0 gives inf, not an exception) so that rows below the
-#: horizon can be computed and then discarded without a branch.
-compiled = numba.njit(nogil=True, cache=True, fastmath=FASTMATH, error_model="numpy")
-
 #: Below this many rows a surface call runs on the calling thread alone: handing runs to the
 #: pool costs tens of microseconds, more than a small batch (the surface's rows cost 30-80 ns).
 SERIAL_ROWS = 4096

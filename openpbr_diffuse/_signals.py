@@ -42,19 +42,30 @@ def _exit_now(signum: int, frame: object) -> None:
     os._exit(128 + signum)
 
 
-def install_for_start_up() -> None:
-    """While the command line is still importing (nothing written yet), a signal exits at once.
+def is_command_line() -> bool:
+    """Whether this process is the command line: ``openpbr-diffuse``, or ``python -m
+    openpbr_diffuse``, whose ``sys.argv[0]`` is ``-m`` while the package is imported.
 
-    Called from the package's ``__init__``; acts only when the process is the command line
-    (``openpbr-diffuse``, or ``python -m openpbr_diffuse`` whose ``sys.argv[0]`` is ``-m`` while
-    the package is imported), so that a Ctrl-C during the imports ends the command with one
-    line and exit 128 + signum instead of a traceback.  :func:`install` replaces it.
+    Example
+    -------
+    >>> is_command_line()   # a test or an interpreter session
+    False
     """
     import os
     import sys
 
     argv0 = sys.argv[0] if sys.argv else ""
-    if argv0 != "-m" and os.path.basename(argv0) != "openpbr-diffuse":
+    return argv0 == "-m" or os.path.basename(argv0) == "openpbr-diffuse"
+
+
+def install_for_start_up() -> None:
+    """While the command line is still importing (nothing written yet), a signal exits at once.
+
+    Called from the package's ``__init__``; acts only when the process is the command line
+    (``is_command_line``), so that a Ctrl-C during the imports ends the command with one
+    line and exit 128 + signum instead of a traceback.  :func:`install` replaces it.
+    """
+    if not is_command_line():
         return
     if threading.current_thread() is not threading.main_thread():
         return

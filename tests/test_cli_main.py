@@ -39,3 +39,25 @@ def test_usage_error_of_a_subcommand_is_one_line_under_python_m():
     )
     assert run.returncode == 2, run.stderr
     assert run.stderr.count("\n") == 1 and "Traceback" not in run.stderr
+
+
+@pytest.mark.parametrize(("setting", "colours"), [(None, False), ("", True)])
+def test_the_command_line_does_not_colour_numbas_typing_messages(setting, colours):
+    """The command line turns off numba's message highlighting (it would colour thousands of
+    failed typing attempts while compiling), unless the user's environment says otherwise."""
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_DISABLE_ERROR_MESSAGE_HIGHLIGHTING"}
+    if setting is not None:
+        env["NUMBA_DISABLE_ERROR_MESSAGE_HIGHLIGHTING"] = setting
+    code = (
+        "import sys; sys.argv = ['-m']; import openpbr_diffuse, numba.core.errors as e; "
+        "print(type(e.termcolor()).__name__)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout
+    import importlib.util
+
+    colours = colours and importlib.util.find_spec("colorama") is not None  # numba colours with colorama only
+    assert out.strip() == ("HighlightColorScheme" if colours else "NOPColorScheme")

@@ -136,3 +136,46 @@ def test_no_private_module_of_a_sibling_package(name):
             if part.startswith("_") and k > 0:
                 owner = parts[:k]  # the package that holds the private module
                 assert own[: len(owner)] == owner, f"{name} imports {dep}, private to {'.'.join(owner)}"
+
+
+def _numba_calls(tree):
+    """The ``numba.njit`` / ``numba.jit`` / ``numba.vectorize`` calls and decorators of a module."""
+    names = {"njit", "jit", "vectorize", "guvectorize", "cfunc", "generated_jit"}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id == "numba":
+            if node.attr in names:
+                yield node
+        elif isinstance(node, ast.ImportFrom) and node.module == "numba":
+            for alias in node.names:
+                if alias.name in names:
+                    yield node
+
+
+def test_every_compile_decorator_is_made_in_jit():
+    """The compile settings live in one module (``_jit``): the others decorate with its names."""
+    found = {
+        name: [n.lineno for n in _numba_calls(ast.parse(path.read_text()))]
+        for name, path in MODULES.items()
+        if name != "openpbr_diffuse._jit"
+    }
+    assert {k: v for k, v in found.items() if v} == {}
+    assert list(_numba_calls(ast.parse(MODULES["openpbr_diffuse._jit"].read_text())))  # the test sees them
+
+
+def test_the_decorators_without_reference_counting_compile_without_it():
+    """``block``, ``driver`` and ``serial`` are built without numba's reference
+    counting; ``kernel`` (a formula may be given arrays from Python), the surface's runners
+    (stack arrays), ``reduction`` and ``walk`` (they allocate) keep it, as does a block kernel's
+    Python twin."""
+    from openpbr_diffuse import _jit
+    from openpbr_diffuse.models.eon import rho_ms
+    from openpbr_diffuse.nodes._surface_kernels import _pack_weights, pack_drive
+
+    assert _pack_weights.targetoptions["_nrt"] is False
+    assert "_nrt" not in _pack_weights.python_twin.targetoptions
+    assert "_nrt" not in rho_ms.targetoptions
+    assert pack_drive.targetoptions["_nrt"] is False
+    for deco in (_jit.driver, _jit.serial):
+        assert deco(lambda x: x).targetoptions["_nrt"] is False
+    for deco in (_jit.runner, _jit.reduction, _jit.walk):
+        assert "_nrt" not in deco(lambda x: x).targetoptions

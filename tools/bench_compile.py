@@ -6,7 +6,9 @@
 Runs the command in this process with an empty numba cache (a new ``NUMBA_CACHE_DIR``
 unless one is set) and prints, per compiled function, its compile time without that of
 the functions it compiles in turn ("self"), with them ("tot"), and its number of
-specialisations ("xN"), most expensive first.
+specialisations ("xN"), most expensive first.  ``SIGS=PATTERN`` also prints the argument
+types of each specialisation of the functions whose name contains PATTERN (why a function
+compiles more than once).
 """
 
 import collections
@@ -28,6 +30,8 @@ def main(argv: list) -> int:
     os.environ.setdefault("NUMBA_CACHE_DIR", tempfile.mkdtemp(prefix="numba-profile-"))
     from numba.core import event
 
+    sigs = os.environ.get("SIGS", "")
+    signatures = collections.defaultdict(list)
     stack = collections.defaultdict(list)
     self_s, total_s, count = collections.Counter(), collections.Counter(), collections.Counter()
 
@@ -44,6 +48,8 @@ def main(argv: list) -> int:
             self_s[key] += d - child
             total_s[key] += d
             count[key] += 1
+            if sigs and sigs in key:
+                signatures[key].append(e.data.get("args"))
             if s:
                 s[-1][1] += d
 
@@ -62,6 +68,10 @@ def main(argv: list) -> int:
     )
     for k, v in self_s.most_common(int(os.environ.get("TOP", "30"))):
         print(f"{v:7.2f} self {total_s[k]:7.2f} tot  x{count[k]:<3d} {k}", file=sys.stderr)
+    for k, args in signatures.items():
+        print(f"{k}:", file=sys.stderr)
+        for a in args:
+            print(f"    {a}", file=sys.stderr)
     return rc or 0
 
 

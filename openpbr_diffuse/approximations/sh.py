@@ -263,9 +263,9 @@ def lobe_transfer(
 
 
 def _project_kernel():
-    import numba
+    from .._jit import reduction
 
-    @numba.njit(cache=True, fastmath=True)
+    @reduction
     def project(wi, weight, f):
         """sum_q Y_k(wi_q) weight_q f_qc per row: the hot loop of ``lobe_transfer``."""
         N, Q, C = f.shape

@@ -17,11 +17,10 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._jit import kernel
+from .._jit import kernel, ufunc
 
 #: cos(theta) of the F82-tint reference angle, mu_bar = 1/7 (theta ~ 81.8 degrees).
 MU_BAR = 1.0 / 7.0
@@ -111,46 +110,44 @@ def f82(c: float, F0: float, a: float) -> float:
 
 # --------------------------------------------------------------------------- NumPy forms
 
-_vectorize = numba.vectorize(cache=True)
 
-
-@_vectorize
+@ufunc
 def fresnel_dielectric(c, eta):
     """``dielectric`` as a ufunc."""
     return dielectric(c, eta)
 
 
-@_vectorize
+@ufunc
 def f0_of_eta(eta):
     """``f0`` as a ufunc."""
     return f0(eta)
 
 
-@_vectorize
+@ufunc
 def modulated_ior_parameter(specular_weight, ior):
     """``modulated_x`` as a ufunc."""
     return modulated_x(specular_weight, ior)
 
 
-@_vectorize
+@ufunc
 def eta_of_parameter(x):
     """``eta_of_x`` as a ufunc."""
     return eta_of_x(x)
 
 
-@_vectorize
+@ufunc
 def fresnel_schlick(c, F0):
     """``schlick`` as a ufunc."""
     return schlick(c, F0)
 
 
-@_vectorize
+@ufunc
 def f82_coefficient(F0, tint):
     """``f82_a`` as a ufunc."""
     return f82_a(F0, tint)
 
 
-@_vectorize
+@ufunc
 def _f82(c, F0, a):
     return f82(c, F0, a)
 

@@ -29,8 +29,8 @@ from numba import errors, types
 from numba.extending import overload
 
 from .._arrays import is_unit, is_within
-from .._jit import kernel
-from .._launch import _F, _U, compiled, launch, rows
+from .._jit import driver, kernel
+from .._launch import _F, _U, launch, rows
 from .eon import eon_albedo_terms, eon_average_terms, eon_terms, rho_ms
 from .fon import fon_albedo, fon_terms
 from .fujii import fujii_albedo_terms, fujii_terms
@@ -263,7 +263,7 @@ def eval_driver(model, C):
     kind = _MIX[model]
     nc = _channels(C)
 
-    @compiled
+    @driver
     def drive(tint, rlo, rhi, wi, wo, r, rho, out):
         n = r.shape[0]
         bad = 0
@@ -296,7 +296,7 @@ def albedo_driver(model, C, average):
     nc = 0 if average else _channels(C)  # <E> is not a batch hot path: one variant per model
     which = 1 if average else 0  # an int: numba types a captured int as a literal
 
-    @compiled
+    @driver
     def drive(tint, rlo, rhi, mu, r, rho, out):
         n = r.shape[0]
         bad = 0

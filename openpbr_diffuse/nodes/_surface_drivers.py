@@ -30,7 +30,7 @@ import math
 import numba
 import numpy as np
 
-from .._jit import inline, kernel, opaque, runner, stack_buffer
+from .._jit import block, helper, inline, opaque, runner, stack_buffer
 from .._launch import _U, SERIAL_ROWS, executor, launch, rows
 from ._surface_kernels import (
     COAT,
@@ -92,7 +92,7 @@ def _local_params(p):
     return q
 
 
-@kernel
+@block
 def _each_sampler(vndf, p, ps, s0, f, idx, cnt):
     """``sample_pass`` of every sampler that some row of the block uses (vndf a constant of the
     GGX pass: ``sample_reflection`` branches on it)."""
@@ -109,7 +109,7 @@ def _each_sampler(vndf, p, ps, s0, f, idx, cnt):
         sample_pass(opaque(S_SHEEN), opaque(vndf), p, ps, s0, f, idx, cnt)
 
 
-@kernel
+@block
 def _choose(ud, u, s0, m, mb, f):
     if ud == 3:
         load_u_pass(3, u, s0, m, f)
@@ -126,13 +126,13 @@ def _choose(ud, u, s0, m, mb, f):
 # driver share one compiled body.
 
 
-@inline
+@helper
 def _block_range(t, nt, n):
     nb = (n + B - 1) // B
     return t * nb // nt, (t + 1) * nb // nt
 
 
-@inline
+@helper
 def _block(b, n):
     """Block b of n rows: its first row s0, its rows m and the rows its passes run over."""
     s0 = b * B

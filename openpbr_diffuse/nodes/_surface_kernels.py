@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from .._jit import INV_PI, by_constant, kernel, serial
+from .._jit import INV_PI, block, by_constant, opaque, serial
 from ..microfacet import fresnel
 from ..microfacet import kernels as mf
 from ..microfacet.sheen import sheen_albedo_fit, sheen_density, sheen_sample
@@ -159,7 +159,7 @@ INPUT, N_RAW = layout("Input", RAW)
 W_SPEC_TIR, W_COAT_TIR, W_F82_NEGATIVE = 1, 2, 4
 
 
-@kernel
+@block
 def _axes(out, q, v, n, kind):
     """Node index and Catmull-Rom weights of v on a table axis, into out[q:q + 5]."""
     i, t = node_at(v, n, kind)
@@ -171,14 +171,14 @@ def _axes(out, q, v, n, kind):
     out[q + 4] = w3
 
 
-@kernel
+@block
 def _table_axes(out, q, r, x, nCr, nRr, nRx):
     _axes(out, q, r, nCr, R_AXIS)
     _axes(out, q + 5, r, nRr, R_AXIS)
     _axes(out, q + 10, x, nRx, X_AXIS)
 
 
-@kernel
+@block
 def _curve(out, q, t, R):
     """out[q + m] = the dielectric ratio table at the (roughness, x) of the axes at out[t:]
     for every padded mu node m (the same tensor-product Catmull-Rom, summed over two axes)."""
@@ -191,7 +191,7 @@ def _curve(out, q, t, R):
         out[q + m] = v
 
 
-@kernel
+@block
 def _conductor_curve(out, q, t, C, c):
     """out[q + m] = basis albedo c of the conductor table at the roughness whose node and
     weights are out[t:t + 5], for every padded mu node m."""
@@ -205,7 +205,7 @@ def _conductor_curve(out, q, t, C, c):
         )
 
 
-@kernel
+@block
 def _pack_weights(out, o):
     """The material part K_k[c] of every lobe's weight (PARAM.K), following the reference graph
     (open_pbr_surface.mtlx): the base attenuated by the coat (PARAM.BASE_MUL); metal /
@@ -218,15 +218,15 @@ def _pack_weights(out, o):
     for c in range(3):
         base = out[o + PARAM.BASE_MUL + c]
         diel = base * (1.0 - M)
-        opaque = diel * (1.0 - T)
+        solid = diel * (1.0 - T)  # neither metal nor transmission
         color = out[o + PARAM.SSS_COLOR + c]
         K = (
-            opaque * (1.0 - S) * out[o + PARAM.BASE_WEIGHT],  # DIFFUSE
+            solid * (1.0 - S) * out[o + PARAM.BASE_WEIGHT],  # DIFFUSE
             diel * out[o + PARAM.SPEC_COLOR + c],  # SPECULAR
             base * M * out[o + PARAM.SPEC_WEIGHT],  # METAL
             diel * T,  # TRANSMISSION
-            opaque * S * 0.5 * color * (1.0 - g) if thin else opaque * S,  # SUBSURFACE
-            opaque * S * 0.5 * color * (1.0 + g),  # SUBSURFACE_T
+            solid * S * 0.5 * color * (1.0 - g) if thin else solid * S,  # SUBSURFACE
+            solid * S * 0.5 * color * (1.0 + g),  # SUBSURFACE_T
             out[o + PARAM.COAT_W],  # COAT
             out[o + PARAM.FUZZ_W] * out[o + PARAM.FUZZ_COLOR + c],
         )  # FUZZ
@@ -354,10 +354,10 @@ def _pack_drive(raw, out, CT, RT):
         _table_axes(out, o + PARAM.TAB_C, r_c, xc, nCr, nRr, nRx)
         _curve(out, o + PARAM.CURVE_S, o + PARAM.TAB_S, RT)
         _curve(out, o + PARAM.CURVE_C, o + PARAM.TAB_C, RT)
-        _conductor_curve(out, o + PARAM.E1S, o + PARAM.TAB_S, CT, 0)
-        _conductor_curve(out, o + PARAM.E5S, o + PARAM.TAB_S, CT, 1)
-        _conductor_curve(out, o + PARAM.E6S, o + PARAM.TAB_S, CT, 2)
-        _conductor_curve(out, o + PARAM.E1C, o + PARAM.TAB_C, CT, 0)
+        _conductor_curve(out, o + PARAM.E1S, o + PARAM.TAB_S, CT, opaque(0))
+        _conductor_curve(out, o + PARAM.E5S, o + PARAM.TAB_S, CT, opaque(1))
+        _conductor_curve(out, o + PARAM.E6S, o + PARAM.TAB_S, CT, opaque(2))
+        _conductor_curve(out, o + PARAM.E1C, o + PARAM.TAB_C, CT, opaque(0))
         _pack_weights(out, o)
         # lobes that can be non-zero
         diel = 1.0 - M
@@ -385,12 +385,12 @@ def _pack_drive(raw, out, CT, RT):
 pack_drive = serial(_pack_drive)
 
 
-@kernel
+@block
 def cubic_at(p, b, w0, w1, w2, w3):
     return w0 * p[b] + w1 * p[b + 1] + w2 * p[b + 2] + w3 * p[b + 3]
 
 
-@kernel
+@block
 def layer_albedos(p, o, e1, e5, e6, q, mu, x, ms):
     """(E1, E5, E6, E) of a GGX layer from its curves collapsed per material: the conductor
     basis at p[o + e1], p[o + e5], p[o + e6] (PARAM.E*), the dielectric ratio at p[o + q]
@@ -408,7 +408,7 @@ def layer_albedos(p, o, e1, e5, e6, q, mu, x, ms):
     return E1, E5, E6, E * mf.multiscatter(x * x, E1, ms)
 
 
-@kernel
+@block
 def diffuse_albedo_terms(dmodel, p, o, mu):
     """(e_g, e_h) of the diffuse lobe's albedo rho e_g + m(rho) e_h (channel-free): EON
     Eq. 20 (m = rho_ms), QON Eq. 8 or Lambert (m = 0), from the material's fits (PARAM.EON_FIT,
@@ -420,7 +420,7 @@ def diffuse_albedo_terms(dmodel, p, o, mu):
     return 1.0, 0.0
 
 
-@kernel
+@block
 def diffuse_albedo(dmodel, rho, rms, eg, eh):
     """One channel of the diffuse albedo from ``diffuse_albedo_terms``; rms = rho_ms(rho)."""
     if dmodel == D_EON:
@@ -428,14 +428,14 @@ def diffuse_albedo(dmodel, rho, rms, eg, eh):
     return rho * eg
 
 
-@kernel
+@block
 def metal_albedo(p, o, c, E1, E5, E6, ms):
     """F82-tint GGX albedo F0 (E1 - E5) + E5 - a E6 (times the multiple-scattering factor)."""
     F0 = p[o + PARAM.METAL_F0 + c]
     return (F0 * (E1 - E5) + E5 - p[o + PARAM.METAL_A + c] * E6) * mf.multiscatter(F0, E1, ms)
 
 
-@kernel
+@block
 def layer_factor(k, Tu, Tb, Tf):
     """L_k, the part of lobe k's weight that depends on wo: w_k[c] = L_k K_k[c].
 
@@ -460,7 +460,7 @@ def layer_factor(k, Tu, Tb, Tf):
 LayerState = collections.namedtuple("LayerState", ("E1s", "E5s", "E6s", "Es", "Ec", "Ef", "eg", "eh", "Eq"))
 
 
-@kernel
+@block
 def lobe_albedo(k, c, p, o, dmodel, ms, st):
     """E_k(wo), the directional albedo of lobe slot k in channel c, from the row's
     ``LayerState`` ``st``."""
@@ -481,13 +481,13 @@ def lobe_albedo(k, c, p, o, dmodel, ms, st):
     return st.Ef
 
 
-@kernel
+@block
 def _norm_or_max(mx, a, b, c):
     """|(a, b, c)| (RGB length), or its largest component's magnitude when ``mx``."""
     return max(max(abs(a), abs(b)), abs(c)) if mx else math.sqrt(a * a + b * b + c * c)
 
 
-@kernel
+@block
 def lobe_score(k, sel, p, o, ms, L, st):
     """The selection score s_k = |w_k E_k| of lobe slot k (L = its ``layer_factor``; st: the
     row's ``LayerState``): the RGB
@@ -514,9 +514,9 @@ def lobe_score(k, sel, p, o, ms, L, st):
         )
         s = _norm_or_max(True, d0, d1, d2) if mx else math.sqrt(max(q2, 0.0))
     elif k == METAL:
-        m0 = p[q] * metal_albedo(p, o, 0, st.E1s, st.E5s, st.E6s, ms)
-        m1 = p[q + 1] * metal_albedo(p, o, 1, st.E1s, st.E5s, st.E6s, ms)
-        m2 = p[q + 2] * metal_albedo(p, o, 2, st.E1s, st.E5s, st.E6s, ms)
+        m0 = p[q] * metal_albedo(p, o, opaque(0), st.E1s, st.E5s, st.E6s, ms)
+        m1 = p[q + 1] * metal_albedo(p, o, opaque(1), st.E1s, st.E5s, st.E6s, ms)
+        m2 = p[q + 2] * metal_albedo(p, o, opaque(2), st.E1s, st.E5s, st.E6s, ms)
         s = _norm_or_max(True, m0, m1, m2) if mx else _norm_or_max(False, m0, m1, m2)
     else:
         cl, cm = p[o + PARAM.SC + 2 * k], p[o + PARAM.SC + 2 * k + 1]
@@ -534,7 +534,7 @@ def lobe_score(k, sel, p, o, ms, L, st):
     return 1.0 if sel == SEL_UNIFORM else abs(L) * s
 
 
-@kernel
+@block
 def diffuse_gh(dmodel, p, o, iz, oz, s):
     """(g, h) of the diffuse lobe's BSDF f = rho g + rho_ms h, channel-free: EON Eq. 16-19,
     QON Eq. 1 (the material's A, B: PARAM.QON_AB) or Lambert (h = 0 for both)."""
@@ -550,7 +550,7 @@ def diffuse_gh(dmodel, p, o, iz, oz, s):
 # ``lobe_f``); ``lobe_f`` picks one by the lobe id.
 
 
-@kernel
+@block
 def f_diffuse(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
     up = (iz > 0.0) & (oz > 0.0)
     s = ix * ox + iy * oy + iz * oz - iz * oz
@@ -564,14 +564,14 @@ def f_diffuse(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
     )
 
 
-@kernel
+@block
 def f_specular(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
     x = p[o + PARAM.X_S]
     v = m * fresnel.dielectric(c, p[o + PARAM.ETA_S]) * mf.multiscatter(x * x, E1s, ms)
     return v, v, v
 
 
-@kernel
+@block
 def f_metal(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
     F0r, F0g, F0b = p[o + PARAM.METAL_F0], p[o + PARAM.METAL_F0 + 1], p[o + PARAM.METAL_F0 + 2]
     return (
@@ -581,7 +581,7 @@ def f_metal(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
     )
 
 
-@kernel
+@block
 def f_transmission(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
     """The GGX lobe mirrored below the surface, normalised by E1."""
     mt, _ = mf.reflection(ix, iy, -iz, ox, oy, oz, p[o + PARAM.ALPHA_S])
@@ -589,7 +589,7 @@ def f_transmission(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef)
     return mt * p[o + PARAM.TRANS_TINT], mt * p[o + PARAM.TRANS_TINT + 1], mt * p[o + PARAM.TRANS_TINT + 2]
 
 
-@kernel
+@block
 def f_subsurface(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
     """QON when thin-walled (its reflection half), else Lambert."""
     up = (iz > 0.0) & (oz > 0.0)
@@ -601,13 +601,13 @@ def f_subsurface(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
     return p[o + PARAM.SSS_COLOR] * g, p[o + PARAM.SSS_COLOR + 1] * g, p[o + PARAM.SSS_COLOR + 2] * g
 
 
-@kernel
+@block
 def f_subsurface_t(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
     g = INV_PI if (iz < 0.0) & (oz > 0.0) else 0.0
     return p[o + PARAM.SSS_COLOR] * g, p[o + PARAM.SSS_COLOR + 1] * g, p[o + PARAM.SSS_COLOR + 2] * g
 
 
-@kernel
+@block
 def f_coat(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
     mc, cc = mf.reflection(ix, iy, iz, ox, oy, oz, p[o + PARAM.ALPHA_C])
     x = p[o + PARAM.X_C]
@@ -615,7 +615,7 @@ def f_coat(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
     return v, v, v
 
 
-@kernel
+@block
 def f_fuzz(p, o, ix, iy, iz, ox, oy, oz, dmodel, ms, m, c, E1s, E1c, Ef):
     up = (iz > 0.0) & (oz > 0.0)
     Xx, Xy = ltc_frame(ox, oy)
@@ -644,12 +644,12 @@ lobe_f = by_constant(
 )
 
 
-@kernel
+@block
 def diffuse_uses_eon_sampler(k, dmodel):
     return k == DIFFUSE and dmodel == D_EON
 
 
-@kernel
+@block
 def lobe_pdf(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, vndf, pdf_s):
     """Solid-angle pdf of ``lobe_sample`` producing wi given wo (wo above the horizon);
     ``pdf_s``: the GGX reflection pdf at the base specular's alpha (specular and metal)."""
@@ -674,7 +674,7 @@ def lobe_pdf(k, p, o, ix, iy, iz, ox, oy, oz, dmodel, vndf, pdf_s):
     return pdf_s
 
 
-@kernel
+@block
 def uses_base_ggx(active):
     return (active & ((1 << SPECULAR) | (1 << METAL))) != 0
 
@@ -690,7 +690,7 @@ N_SAMPLERS = 4
 Z_MIN = float(np.finfo(np.float64).tiny)
 
 
-@kernel
+@block
 def sampler_of(k, dmodel):
     """The sampler of lobe slot k."""
     if k == DIFFUSE:
@@ -702,7 +702,7 @@ def sampler_of(k, dmodel):
     return S_GGX
 
 
-@kernel
+@block
 def lobe_sample(sampler, k, p, o, ox, oy, oz, u1, u2, vndf):
     """(x, y, z, ok): a direction from lobe slot k (a float: the row's chosen lobe) drawn by its
     ``sampler`` (a constant of the caller's loop; the lobe only selects the GGX width and the

@@ -18,7 +18,7 @@ Parameters: ``ps`` is the parameter stride, a compile-time constant of each driv
 material per row (``par``).
 """
 
-from .._jit import inline, kernel, opaque, unrolled
+from .._jit import block, helper, opaque, unrolled
 from .._launch import _U
 from ..microfacet import kernels as mf
 from ..microfacet.sheen import sheen_albedo_at
@@ -79,13 +79,13 @@ ROWS = (
 ROW, NROWS = layout("Row", ROWS)
 
 
-@inline
+@helper
 def at(row, r):
     """Index of entry r of scratch row ``row``."""
     return _U(row) * _U(B) + _U(r)
 
 
-@inline
+@helper
 def span(m):
     """The rows the passes of a block of m rows run over: B for a whole block (a constant trip
     count), else m rounded up to the vector width (a short call, lobes(wo) of one row, does
@@ -93,13 +93,13 @@ def span(m):
     return B if m == B else (m + 3) // 4 * 4
 
 
-@inline
+@helper
 def par(ps, s0, r):
     """Offset of the parameters of row s0 + r: 0 for one material (ps = 0), else a row's own."""
     return _U(s0 + r) * _U(ps)
 
 
-@inline
+@helper
 def active_count(active):
     """K: the number of active lobe slots."""
     K = 0
@@ -108,7 +108,7 @@ def active_count(active):
     return K
 
 
-@inline
+@helper
 def is_on(active, k):
     return (active & (1 << k)) != 0
 
@@ -116,7 +116,7 @@ def is_on(active, k):
 # --------------------------------------------------------------------------- state of mu_o
 
 
-@kernel
+@block
 def load_pass(d, s0, m, f, row):
     """Rows s0 .. s0 + m of the (n*3) direction buffer d into scratch rows row .. row + 2; the
     rest of the block (m < B: the last block) is padded with the normal, so that every other
@@ -132,7 +132,7 @@ def load_pass(d, s0, m, f, row):
         f[at(row + 2, r)] = 1.0
 
 
-@kernel
+@block
 def load_u_pass(ud, u, s0, m, f):
     """ROW.U0 = u[0] and, with 3 columns, ROW.U1, ROW.U2 = u[1], u[2]; with 2, ROW.U2 = u[1] (ROW.U1 is then u0
     rescaled, ``choose_pass``).  Padded with 1/2 beyond row m."""
@@ -150,13 +150,13 @@ def load_u_pass(ud, u, s0, m, f):
         f[at(ROW.U2, r)] = 0.5
 
 
-@inline
+@helper
 def fill_pass(f, row, m, v):
     for r in range(m):
         f[at(row, r)] = v
 
 
-@kernel
+@block
 def state_passes(lobes, active, dmodel, ms, albedos, basis, p, ps, s0, m, f):
     """The per-row values of mu_o shared by every lobe: the layer albedos (ROW.E1S, ROW.ES, and ROW.E5S,
     ROW.E6S when ``basis``; ROW.E1C, ROW.EC; ROW.EF), the layer factors (ROW.TU, ROW.TB, ROW.TF) and, when ``albedos``,
@@ -219,7 +219,7 @@ def state_passes(lobes, active, dmodel, ms, albedos, basis, p, ps, s0, m, f):
         fill_pass(f, ROW.EQ, m, 1.0)
 
 
-@kernel
+@block
 def diffuse_albedo_pass(dmodel, p, ps, s0, m, f):
     for r in range(m):
         eg, eh = diffuse_albedo_terms(dmodel, p, par(ps, s0, r), f[at(ROW.MU, r)])
@@ -227,7 +227,7 @@ def diffuse_albedo_pass(dmodel, p, ps, s0, m, f):
         f[at(ROW.EH, r)] = eh
 
 
-@inline
+@helper
 def state_at(f, r):
     """The ``LayerState`` of row r, from the state rows of the scratch."""
     return LayerState(
@@ -243,20 +243,20 @@ def state_at(f, r):
     )
 
 
-@kernel
+@block
 def albedo_of(k, c, p, o, f, r, ms):
     """E_k in channel c at row r (``lobe_albedo`` on the state rows).  The diffuse albedo uses
     EON's form rho e_g + rho_ms e_h for every model: e_h = 0 for QON and Lambert."""
     return lobe_albedo(k, c, p, o, D_EON, ms, state_at(f, r))
 
 
-@kernel
+@block
 def factor_of(k, f, r):
     """L_k at row r (``layer_factor`` on the state rows)."""
     return layer_factor(k, f[at(ROW.TU, r)], f[at(ROW.TB, r)], f[at(ROW.TF, r)])
 
 
-@kernel
+@block
 def score_pass(k, dmodel, sel, p, ps, s0, m, f, ms):
     """ROW.PR + k = s_k, the selection score of lobe slot k (``lobe_score``), at every row
     (dmodel: unused; the diffuse score uses EON's form of the albedo, as ``albedo_of``)."""
@@ -297,7 +297,7 @@ def lobe_loop(name, pass_, literal):
 each_score = lobe_loop("each_score", score_pass, literal=False)
 
 
-@kernel
+@block
 def probability_pass(lobes, active, sel, p, ps, s0, m, f, ms):
     """PR + k: the selection probability P_k = s_k / sum_j s_j of every lobe slot k (uniform
     over the active slots when every score is 0 -- a black surface -- or wo is below the
@@ -321,7 +321,7 @@ def probability_pass(lobes, active, sel, p, ps, s0, m, f, ms):
 # --------------------------------------------------------------------------- lobes
 
 
-@kernel
+@block
 def ggx_pass(active, p, ps, s0, m, f):
     """ROW.GM, ROW.GC: the base specular's GGX reflection (without Fresnel) and wo.h, shared by the
     specular and metal lobes."""
@@ -342,7 +342,7 @@ def ggx_pass(active, p, ps, s0, m, f):
         f[at(ROW.GC, r)] = c
 
 
-@kernel
+@block
 def ggx_pdf_pass(active, vndf, p, ps, s0, m, f):
     """ROW.GP: the base specular's GGX reflection pdf at wi (specular and metal lobes)."""
     if not uses_base_ggx(active):
@@ -361,7 +361,7 @@ def ggx_pdf_pass(active, vndf, p, ps, s0, m, f):
         )
 
 
-@kernel
+@block
 def eval_lobe_pass(k, dmodel, weighted, ms, p, ps, s0, m, f):
     """ROW.A0..A2 += w_k f_k, or f_k unweighted (``weighted`` False: one lobe's own BSDF, added
     to zeros), at every row of the block."""
@@ -392,7 +392,7 @@ def eval_lobe_pass(k, dmodel, weighted, ms, p, ps, s0, m, f):
         f[at(ROW.A2, r)] += (L * p[q + 2] if weighted else 1.0) * f2
 
 
-@kernel
+@block
 def pdf_lobe_pass(k, dmodel, track, vndf, p, ps, s0, m, f):
     """ROW.Q += P_k pdf_k(wi | wo) (a lobe with P_k = 0 adds nothing, whatever its pdf); when
     ``track``, ROW.MINE = pdf_k on the rows that chose lobe k."""
@@ -418,7 +418,7 @@ def pdf_lobe_pass(k, dmodel, track, vndf, p, ps, s0, m, f):
             f[at(ROW.MINE, r)] = pk if f[at(ROW.CH, r)] == k else f[at(ROW.MINE, r)]
 
 
-@kernel
+@block
 def choose_pass(ud, m, f):
     """ROW.CH: the lobe whose interval of the CDF (slot order) holds u0 (ROW.U0); ROW.U1: its sampler's
     first input, u[1] (ud = 3, loaded) or u0 rescaled within the chosen interval,
@@ -450,7 +450,7 @@ def choose_pass(ud, m, f):
             f[at(ROW.U1, r)] = min(max((u0 - lo) / Pc, 0.0), U_MAX)
 
 
-@kernel
+@block
 def compact(dmodel, m, f, idx, cnt):
     """idx[s B : s B + cnt[s]]: the rows of the block whose chosen lobe is drawn by sampler s
     (``sampler_of``), in order."""
@@ -462,7 +462,7 @@ def compact(dmodel, m, f, idx, cnt):
         cnt[s] += 1
 
 
-@kernel
+@block
 def sample_pass(sampler, vndf, p, ps, s0, f, idx, cnt):
     """ROW.IX..IZ, ROW.OK of the rows drawn by ``sampler``: their lobes' samples at (ROW.U1, ROW.U2).  The
     rows' inputs are gathered into contiguous scratch rows, sampled there (a vectorised
@@ -504,7 +504,7 @@ def sample_pass(sampler, vndf, p, ps, s0, f, idx, cnt):
         f[at(ROW.OK, r)] = f[at(ROW.TOK, t)]
 
 
-@kernel
+@block
 def lobe_outputs_pass(k, on, ms, p, ps, s0, m, f, W, E, P):
     """Lobe slot k's weight w_k (RGB), albedo E_k (RGB, 0 below the horizon) and probability
     at every row, into the (n*8*3), (n*8*3), (n*8) outputs; zeros for an inactive slot."""
@@ -521,7 +521,7 @@ def lobe_outputs_pass(k, on, ms, p, ps, s0, m, f, W, E, P):
         P[b] = f[at(ROW.PR + k, r)] if on else 0.0
 
 
-@kernel
+@block
 def albedo_lobe_pass(k, dmodel, ms, p, ps, s0, m, f):
     """ROW.A0..A2 += w_k E_k of lobe slot k (dmodel: unused, see ``albedo_of``)."""
     for r in range(m):
@@ -533,7 +533,7 @@ def albedo_lobe_pass(k, dmodel, ms, p, ps, s0, m, f):
         f[at(ROW.A2, r)] += L * p[q + 2] * albedo_of(k, opaque(2), p, o, f, r, ms)
 
 
-@kernel
+@block
 def rgb_out_pass(s0, m, f, out):
     """out[3 (s0 + r) + c] = A_c, 0 where wo is below the horizon."""
     for r in range(m):

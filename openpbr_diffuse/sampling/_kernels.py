@@ -1,8 +1,8 @@
 """Batch drivers: one serial ``nogil`` loop per verb (``sample``, ``pdf``), specialised per strategy.
 
 The formulas are the scalar functions of ``simple``, ``ltc`` and ``mis``, inlined here.
-As for the lobe models (``models/_kernels.py``; ``compiled``, ``rows`` and ``launch`` come
-from ``_launch``), a driver is compiled for one strategy id, a compile-time
+As for the lobe models (``models/_kernels.py``; the ``driver`` decorator comes from
+``_jit``, ``rows`` and ``launch`` from ``_launch``), a driver is compiled for one strategy id, a compile-time
 constant, over flat C-contiguous buffers; the scalar functions are branch-free (selects)
 and call no libm function, so LLVM vectorises the loop (AVX2/AVX-512).  Arithmetic is
 float64 for both dtypes (float32 results are the float64 ones rounded).
@@ -12,8 +12,8 @@ import functools
 
 import numpy as np
 
-from .._jit import kernel
-from .._launch import _F, _U, compiled, launch, rows
+from .._jit import driver, kernel
+from .._launch import _F, _U, launch, rows
 from .ltc import (
     clip_fraction,
     from_frame,
@@ -70,7 +70,7 @@ def sample_driver(strategy):
       boundary (the horizon), a few ulp below 0 -- so it moves a direction by rounding only.
     """
 
-    @compiled
+    @driver
     def drive(z_min, wo, r, u, wi, pdf):
         for i in range(r.shape[0]):
             j = _U(i) * _U(3)
@@ -112,7 +112,7 @@ def sample_driver(strategy):
 def pdf_driver(strategy):
     """``drive(wo, wi, r, out)``: out (n,) = ``strategy_pdf`` of wi given wo."""
 
-    @compiled
+    @driver
     def drive(wo, wi, r, out):
         for i in range(r.shape[0]):
             j = _U(i) * _U(3)

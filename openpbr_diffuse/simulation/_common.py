@@ -1,4 +1,4 @@
-"""Pieces shared by both microgeometries: numba settings, sampling, and per-path tallies.
+"""Pieces shared by both microgeometries: sampling, and per-path tallies.
 
 Conventions of the whole sub-package: local macro frame with the normal +z; ``wi`` (towards
 the light) and ``wo`` (towards the viewer) point away from the surface.  A path starts as
@@ -13,13 +13,9 @@ result depends only on that key, never on which worker or thread ran it.
 
 import math
 
-import numba
 import numpy as np
 
-#: njit settings for the walk kernels (no fastmath: the walks rely on inf/NaN-free IEEE
-#: comparisons at grazing angles, and speed comes from the per-path loop, not vectorisation).
-jit = numba.njit(cache=True, nogil=True)
-inline = numba.njit(cache=True, nogil=True, inline="always")
+from .._jit import walk, walk_step
 
 PI = math.pi
 INV_PI = 1.0 / math.pi
@@ -29,13 +25,13 @@ HALF_PI = 0.5 * math.pi
 N_ORDERS = 3
 
 
-@inline
+@walk_step
 def order_class(k):
     """Index of the order class of the k-th bounce (k >= 1): 0, 1 or 2 (k >= 3)."""
     return min(k, N_ORDERS) - 1
 
 
-@inline
+@walk_step
 def onb(nx, ny, nz):
     """Orthonormal tangents (t, b) of the unit normal n (Duff et al. 2017, branchless)."""
     sign = 1.0 if nz >= 0.0 else -1.0
@@ -44,7 +40,7 @@ def onb(nx, ny, nz):
     return (1.0 + sign * nx * nx * a, sign * b, -sign * nx, b, sign + ny * ny * a, -ny)
 
 
-@inline
+@walk_step
 def cosine_about(nx, ny, nz):
     """A direction drawn with density cos(theta)/pi about the unit normal n."""
     u1 = np.random.random()
@@ -58,13 +54,13 @@ def cosine_about(nx, ny, nz):
     return (x * tx + y * bx + z * nx, x * ty + y * by + z * ny, x * tz + y * bz + z * nz)
 
 
-@inline
+@walk_step
 def cosine_hemisphere():
     """A direction above the macro surface with density mu/pi (cosine-weighted)."""
     return cosine_about(0.0, 0.0, 1.0)
 
 
-@jit
+@walk
 def tally_path(k, escaped, rho, path_nee, alb_s1, alb_s2, nee_s1, nee_s2):
     """Add one finished path to the chunk sums.
 

@@ -4,8 +4,9 @@ One compiled kernel per microgeometry (so that using one compiles only its own w
 
 import numpy as np
 
+from .._jit import walk
 from . import smith, vcavity
-from ._common import N_ORDERS, cosine_hemisphere, jit, tally_path
+from ._common import N_ORDERS, cosine_hemisphere, tally_path
 
 #: geometry name -> Smith slope distribution (None: V-cavity)
 GEOMETRY_IDS = {"vcavity": -1, "smith-beckmann": smith.BECKMANN, "smith-ggx": smith.GGX}
@@ -21,7 +22,7 @@ _DOC = """Trace ``n_paths`` paths from ``wi`` (or cosine-distributed wi if ``ran
     """
 
 
-@jit
+@walk
 def _buffers(m, C):
     return (
         np.zeros((N_ORDERS, C)),
@@ -34,7 +35,7 @@ def _buffers(m, C):
     )
 
 
-@jit
+@walk
 def run_chunk_vcavity(sigma, wi, random_wi, wo, rho, n_paths, seed, max_bounces):
     np.random.seed(seed)
     m, C = wo.shape[0], rho.shape[0]
@@ -52,7 +53,7 @@ def run_chunk_vcavity(sigma, wi, random_wi, wo, rho, n_paths, seed, max_bounces)
     return alb_s1, alb_s2, nee_s1, nee_s2, stats
 
 
-@jit
+@walk
 def run_chunk_smith(alpha, dist, wi, random_wi, wo, rho, n_paths, seed, max_bounces):
     np.random.seed(seed)
     m, C = wo.shape[0], rho.shape[0]

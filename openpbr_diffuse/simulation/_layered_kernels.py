@@ -33,12 +33,13 @@ import math
 
 import numpy as np
 
+from .._jit import walk, walk_step
 from ..microfacet.fresnel import dielectric
 from ..microfacet.kernels import ggx_visible_normal
 from ..models.eon import eon_terms, rho_ms
 from ..sampling.ltc import ltc_frame
 from ..sampling.mis import eon_sample, pow_tenth
-from ._common import INV_PI, cosine_about, cosine_hemisphere, inline, jit
+from ._common import INV_PI, cosine_about, cosine_hemisphere
 from .smith import GGX, sample_height, sample_visible_normal
 
 LAMBERT = 0
@@ -50,7 +51,7 @@ RR_WEIGHT = 0.05
 MAX_INTERFACE_EVENTS = 256
 
 
-@inline
+@walk_step
 def refract(ix, iy, iz, mx, my, mz, c, e):
     """Refraction of the direction i (pointing away from the facet, i.m = c > 0) through
     the facet m into the medium of relative index e; None-free: caller checks TIR."""
@@ -60,7 +61,7 @@ def refract(ix, iy, iz, mx, my, mz, c, e):
     return a * mx - ix / e, a * my - iy / e, a * mz - iz / e
 
 
-@inline
+@walk_step
 def rough_interface(dx, dy, dz, outside, alpha, eta):
     """Walk a ray travelling along d through the rough dielectric microsurface.
 
@@ -98,7 +99,7 @@ def rough_interface(dx, dy, dz, outside, alpha, eta):
     return dx, dy, dz, outside, MAX_INTERFACE_EVENTS, True
 
 
-@inline
+@walk_step
 def smith_base(dx, dy, dz, alpha, max_bounces):
     """Walk the Smith GGX microsurface of Lambertian microfacets (Heitz et al. 2016, as
     ``smith.walk``) from the direction of travel d; returns (wx, wy, wz, k, escaped): the
@@ -116,7 +117,7 @@ def smith_base(dx, dy, dz, alpha, max_bounces):
         dx, dy, dz = cosine_about(mx, my, mz)
 
 
-@inline
+@walk_step
 def base_f(base, vx, vy, vz, wx, wy, wz, r, rho, c):
     """Base BRDF f(v, w) (no cosine) in channel c, v and w pointing up from the base."""
     if base == LAMBERT:
@@ -126,7 +127,7 @@ def base_f(base, vx, vy, vz, wx, wy, wz, r, rho, c):
     return rho[c] * g + rho_ms(rho[c], avg) * hh
 
 
-@jit
+@walk
 def run_chunk_layered(alpha, eta, tau, base, r, rho, wi, random_wi, wo, n_paths, seed, max_bounces):
     """Trace ``n_paths`` paths from ``wi`` (cosine-distributed if ``random_wi``).
 

@@ -35,21 +35,22 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from .._jit import walk_step
 from ..microfacet.kernels import ggx_visible_normal
-from ._common import INV_PI, cosine_about, inline, order_class
+from ._common import INV_PI, cosine_about, order_class
 
 BECKMANN = 0
 GGX = 1
 _SQRT_PI = math.sqrt(math.pi)
 
 
-@inline
+@walk_step
 def C1(h: float) -> float:
     """Cumulative uniform height distribution on [-1, 1] (h = inf above the surface)."""
     return min(max(0.5 * (h + 1.0), 0.0), 1.0)
 
 
-@inline
+@walk_step
 def lam(wz: float, alpha: float, dist: int) -> float:
     """Smith Lambda(w) of a direction with cosine ``wz`` (any sign), isotropic alpha."""
     s = math.sqrt(max(0.0, 1.0 - wz * wz))
@@ -65,7 +66,7 @@ def lam(wz: float, alpha: float, dist: int) -> float:
     return 0.5 * (-1.0 + sgn * math.hypot(1.0, s * alpha / abs(wz)))
 
 
-@inline
+@walk_step
 def G1(wz: float, h: float, alpha: float, dist: int) -> float:
     """Probability that a ray leaving height h along w escapes (0 downwards)."""
     if wz <= 0.0:
@@ -79,7 +80,7 @@ def G1(wz: float, h: float, alpha: float, dist: int) -> float:
     return c**L
 
 
-@inline
+@walk_step
 def sample_height(wz: float, h: float, alpha: float, dist: int) -> float:
     """Height of the next intersection along w from h, or inf when the ray escapes."""
     U = np.random.random()
@@ -99,7 +100,7 @@ def sample_height(wz: float, h: float, alpha: float, dist: int) -> float:
     return 2.0 * min(c, 1.0) - 1.0
 
 
-@inline
+@walk_step
 def _beckmann_visible_slope_x(cos_t, sin_t):
     """x-slope of a visible normal, alpha = 1, view in the xz-plane at angle theta.
 
@@ -140,7 +141,7 @@ def _beckmann_visible_slope_x(cos_t, sin_t):
     return x
 
 
-@inline
+@walk_step
 def sample_visible_normal(vx: float, vy: float, vz: float, alpha: float, dist: int) -> tuple[float, float, float]:
     """A microfacet normal drawn from D_v(m) ~ <v, m>_+ D(m) (v may point downwards)."""
     if dist == GGX:
@@ -168,7 +169,7 @@ def sample_visible_normal(vx: float, vy: float, vz: float, alpha: float, dist: i
     return -px * il, -py * il, il
 
 
-@inline
+@walk_step
 def walk(
     wi_x: float,
     wi_y: float,

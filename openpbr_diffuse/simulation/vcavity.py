@@ -37,7 +37,8 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from ._common import HALF_PI, INV_PI, PI, cosine_about, inline, order_class
+from .._jit import walk_step
+from ._common import HALF_PI, INV_PI, PI, cosine_about, order_class
 
 #: Slope angles closer to pi/2 than this are redrawn (a vertical facet has no opening).
 _THETA_MAX = HALF_PI - 1e-9
@@ -45,7 +46,7 @@ _THETA_MAX = HALF_PI - 1e-9
 _FLAT = 1e-12
 
 
-@inline
+@walk_step
 def sample_slope(sigma: float) -> float:
     """theta_a with density ~ exp(-theta^2 / (2 sigma^2)) sin(theta) on [0, pi/2).
 
@@ -58,7 +59,7 @@ def sample_slope(sigma: float) -> float:
             return t
 
 
-@inline
+@walk_step
 def _nee(k, px, pz, nx, nz, st, ct, h, side, wo_g, rk, path_nee):
     """Next-event contributions of a bounce on facet ``side`` (1 = left, 2 = right) at p."""
     m = wo_g.shape[0]
@@ -87,7 +88,7 @@ def _nee(k, px, pz, nx, nz, st, ct, h, side, wo_g, rk, path_nee):
             path_nee[j, q, c] += rk[c] * g
 
 
-@inline
+@walk_step
 def walk(
     wi_x: float,
     wi_y: float,
