@@ -25,6 +25,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 import numba
+import numpy as np
 
 FASTMATH = {"contract", "arcp", "nsz", "afn"}
 
@@ -36,8 +37,9 @@ def _kernel_dispatcher() -> type:
         """A numba dispatcher compiled for compiled callers only, without the CPython and C
         entry points that numba builds by default for every function (measured: 40 one-line
         functions and their caller compile in 2.0 s instead of 3.3 s).  A call from Python
-        goes to a twin of the function compiled with them (``python_twin``), cached under
-        its own name, so that neither ever loads the other's machine code."""
+        goes to a twin of the function compiled with them (``python_twin``), cached on disk
+        under its own name (the compiled-only form is not cached, ``_compiled_only``), so
+        that neither ever loads the other's machine code."""
 
         def __call__(self, *args: Any, **kws: Any) -> Any:
             return self.python_twin(*args, **kws)
@@ -63,20 +65,50 @@ _Kernel = _kernel_dispatcher()
 
 
 def _compiled_only(**options: Any) -> Callable[[Callable[..., Any]], Any]:
-    """A decorator compiling (cached) for compiled callers with these numba options, as a
-    ``Kernel`` dispatcher: no CPython or C entry points (the per-function part of numba's
-    compile time that a function only called from compiled code never uses)."""
+    """A decorator compiling for compiled callers with these numba options, as a ``Kernel``
+    dispatcher: no CPython or C entry points (the per-function part of numba's compile time
+    that a function only called from compiled code never uses).
+
+    Not cached on disk: a compiled caller links its callees' code into its own, so the
+    cached drivers and runners that inline a kernel hold it already, and a process that
+    loads them never compiles the kernel.  Caching each kernel as well cost a cold start
+    a cache lookup and a write per specialisation (measured: 40 one-line functions and
+    their caller compile in 1.55 s uncached, 1.98 s cached).  The Python twin is cached."""
 
     def decorate(f: Callable[..., Any]) -> Any:
         if numba.config.DISABLE_JIT:  # type: ignore[attr-defined]
             return f
-        disp = _Kernel(
+        return _Kernel(
             py_func=f, locals={}, targetoptions=dict(options, no_cpython_wrapper=True, no_cfunc_wrapper=True)
         )
-        disp.enable_caching()
-        return disp
 
     return decorate
+
+
+def elementwise(f: Any, *args: Any) -> Any:
+    """``f(*args)`` for a scalar formula ``f`` (a ``kernel``) called from Python with arrays:
+    the arguments broadcast together, passed to ``f`` as flat C-contiguous float64 arrays,
+    and the result (an array, or a tuple of them) reshaped to the broadcast shape.
+
+    Why: numba compiles a function once per distinct argument type, and an array's type
+    holds its dimension count, layout and writability, so a formula called with arrays of
+    a few shapes (a table's 2-D grid, a broadcast view) compiled once for each, a third of
+    a second apiece; flattened, every call uses one specialisation.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from openpbr_diffuse.models.eon import rho_ms
+    >>> elementwise(rho_ms, np.full((2, 3), 0.5), 0.7).shape
+    (2, 3)
+    """
+    arrays = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in args))
+    shape = arrays[0].shape if arrays else ()
+    flat = [np.array(a, dtype=np.float64, order="C").reshape(-1) for a in arrays]
+    out = f(*flat)
+    if isinstance(out, tuple):
+        return tuple(np.asarray(o).reshape(shape) for o in out)
+    return np.asarray(out).reshape(shape)
 
 
 #: numba's reference counting (NRT) off: a function compiled with ``_nrt=False`` (a numba
@@ -87,6 +119,16 @@ def _compiled_only(**options: Any) -> Callable[[Callable[..., Any]], Any]:
 #: work: a cold ``eval`` of a material measured ~10 % less CPU (tools/bench.py --cold).  A
 #: function that did allocate fails to compile under them instead of running.
 NO_NRT: dict[str, Any] = {"_nrt": False}
+
+#: Without numba's C entry point (``cfunc`` wrapper), which numba builds for every compiled
+#: function and which only a caller through a raw C function pointer uses: the package's
+#: compiled functions are called from Python (the CPython entry point) or from compiled
+#: code (a direct call).  Each wrapper is a small function numba lowers and LLVM compiles.
+NO_CFUNC: dict[str, Any] = {"no_cfunc_wrapper": True}
+
+#: Without either entry point: for functions only compiled code calls (the overloads of
+#: ``helper`` and ``unrolled``; ``kernel`` and ``block`` get the same from ``Kernel``).
+NO_WRAPPERS: dict[str, Any] = {"no_cfunc_wrapper": True, "no_cpython_wrapper": True}
 
 #: Decorator for scalar formula functions: compiled for the batch drivers that call them and
 #: inlined there by LLVM (``forceinline``); callable from Python too (``Kernel``), where a
@@ -111,7 +153,7 @@ inline = numba.njit(inline="always")
 def _helper() -> Callable[[Callable[..., Any]], Any]:
     from numba.extending import register_jitable
 
-    return register_jitable(error_model="numpy", forceinline=True)
+    return register_jitable(error_model="numpy", forceinline=True, **NO_WRAPPERS)
 
 
 #: Decorator for the tiny integer helpers called from every pass (scratch indices, block
@@ -126,25 +168,26 @@ helper = _helper()
 #: ``_launch.launch`` runs: serial loops that release the GIL, cached; numpy's error model
 #: (x/0 gives inf, not an exception) so that rows below the horizon can be computed and then
 #: discarded without a branch.
-driver = numba.njit(nogil=True, cache=True, fastmath=FASTMATH, error_model="numpy", **NO_NRT)
+driver = numba.njit(nogil=True, cache=True, fastmath=FASTMATH, error_model="numpy", **NO_NRT, **NO_CFUNC)
 
 #: Decorator for the block runners of the surface's verbs (``nodes._surface_drivers``):
-#: cached, ``nogil`` (the launcher's pool runs them on several threads at once), serial.
-#: With NRT: their scratch is a stack array (``stack_buffer``), an array returned by a
-#: compiled function, which numba only types with it.
-runner = numba.njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
+#: cached, ``nogil`` (the launcher's pool runs them on several threads at once), serial,
+#: without NRT (their scratch is a ``stack_buffer`` pointer; they allocate nothing).
+runner = numba.njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy", **NO_NRT, **NO_CFUNC)
 
 #: Decorator for a compiled loop that is neither a formula nor a runner (the packing of a
 #: material's inputs, ``nodes._surface_kernels.pack_drive``): cached, strict IEEE arithmetic.
-serial = numba.njit(cache=True, error_model="numpy", **NO_NRT)
+serial = numba.njit(cache=True, error_model="numpy", **NO_NRT, **NO_CFUNC)
 
 #: Decorators for the random walks of the microsurface simulators (``simulation``): the
-#: per-path loops (``walk``) and the steps they inline in numba's IR (``walk_step``).  No
-#: fastmath: the walks rely on IEEE comparisons free of inf and NaN at grazing angles, and
-#: their speed comes from the per-path loop, not from vectorisation.  With NRT: a walk
-#: allocates its tallies.
-walk = numba.njit(cache=True, nogil=True)
-walk_step = numba.njit(cache=True, nogil=True, inline="always")
+#: per-path loops (``walk``) and the steps they call (``walk_step``: compiled for compiled
+#: callers only, as ``kernel``, and inlined by LLVM; inlined in numba's IR instead, each of
+#: their call sites was a copy to type and lower, and the layered walk compiled in 5.6 s
+#: instead of 1.8 s, same results bit for bit).  No fastmath: the walks rely on IEEE
+#: comparisons free of inf and NaN at grazing angles, and their speed comes from the
+#: per-path loop, not from vectorisation.  With NRT: a walk allocates its tallies.
+walk = numba.njit(cache=True, nogil=True, **NO_CFUNC)
+walk_step = _compiled_only(forceinline=True)
 
 #: Decorator for a scalar formula's NumPy form (``microfacet.fresnel``): a ufunc, typed on
 #: first call and cached.
@@ -230,16 +273,22 @@ def acos(x: float) -> float:
 
 
 def stack_buffer(size: int, dtype: Any = numba.float64) -> Any:
-    """A compiled function returning a 1-D array of ``size`` elements (uninitialised) in the
+    """A compiled function returning a buffer of ``size`` elements (uninitialised) in the
     stack frame of the compiled function that calls it, as ``np.empty(size)`` would on the
-    heap.
+    heap: a typed pointer, indexed as an array is (``buf[i]``; no bounds, no negative
+    indices, no length).
 
     What it is for: LLVM knows that such a buffer aliases no other pointer, so a loop that
     stores into it can keep the loads of its other arrays out of the loop (hoisted, when their
     addresses do not change) and vectorise; with a heap buffer it must assume that the stores
     may change them.  The surface's block drivers keep their scratch and their copy of one
     material's parameters in such buffers (``nodes._surface_drivers``).  ``size`` is a
-    constant: the frame is sized when the function is compiled (keep it to some kilobytes)."""
+    constant: the frame is sized when the function is compiled (keep it to some kilobytes).
+
+    A pointer rather than an array (``numba.carray`` of it): numba lowers each index of an
+    array through a proxy of the array's whole structure, hundreds of times in the
+    surface's passes, and a pointer index as one address computation (measured: a cold
+    ``eval`` of a material ~1 s less CPU); the runners then need no reference counting."""
     from numba.core import cgutils
     from numba.extending import intrinsic
 
@@ -250,11 +299,31 @@ def stack_buffer(size: int, dtype: Any = numba.float64) -> Any:
 
         return numba.types.CPointer(dtype)(), codegen
 
-    @numba.njit(inline="always")
-    def buffer():
-        return numba.carray(_alloca(), size)
+    return _alloca
 
-    return buffer
+
+def _pointer_intrinsic():
+    from numba.core import cgutils
+    from numba.extending import intrinsic
+
+    @intrinsic
+    def pointer_of(typingctx, a):
+        """The data pointer of a C-contiguous 1-D array ``a`` (compiled code only): indexed
+        as ``a`` is, and lowered as cheaply as a ``stack_buffer``.  For a function that
+        indexes its array arguments many times (the packing of a material's parameters);
+        the array must outlive every use of the pointer (an argument of the caller does)."""
+        if not (isinstance(a, numba.types.Array) and a.ndim == 1 and a.layout == "C"):
+            return None
+
+        def codegen(context, builder, signature, args):
+            return cgutils.create_struct_proxy(signature.args[0])(context, builder, value=args[0]).data
+
+        return numba.types.CPointer(a.dtype)(a), codegen
+
+    return pointer_of
+
+
+pointer_of = _pointer_intrinsic()
 
 
 def _opaque_intrinsic():
@@ -310,7 +379,7 @@ def unrolled(
         return ns["impl"]
 
     typer = eval(f"lambda {args}: implementation({args})", {"implementation": implementation, "__name__": module})
-    overload(stub, inline="always", prefer_literal=True)(typer)
+    overload(stub, inline="always", prefer_literal=True, jit_options=NO_WRAPPERS)(typer)  # type: ignore[arg-type]
     return stub
 
 

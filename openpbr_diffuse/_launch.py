@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import concurrent.futures
 import itertools
+import math
 import os
 import threading
 from collections.abc import Callable, Iterable, Iterator, Sequence
@@ -99,7 +100,7 @@ def rows(a: NDArray[Any], lead: tuple[int, ...], k: int | None = None) -> tuple[
     full, width = (lead, 1) if k is None else (lead + (k,), k)
     if a.size == width:
         buf, mode = np.ascontiguousarray(a).reshape(-1), TILED
-    elif a.size == int(np.prod(full)) and a.flags.c_contiguous:  # same size: nothing to broadcast
+    elif a.size == math.prod(full) and a.flags.c_contiguous:  # same size: nothing to broadcast
         buf, mode = a.reshape(-1), FULL
     else:
         buf, mode = np.broadcast_to(a.reshape(a.shape + (1,)) if k is None else a, lead + (width,)), BROADCAST

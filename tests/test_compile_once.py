@@ -12,6 +12,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+
 ROOT = Path(__file__).resolve().parents[1]
 
 #: Records every compilation of the child process: the function's module and name, and the
@@ -94,7 +96,7 @@ for a, b, c, d in variants:
     od.sample("cosine", b, c, np.full(np.shape(b)[:-1] + (2,), 0.25))
 f64 = {
     "evaluate": len(mk.eval_driver(mk.LAMBERT, 3).signatures),
-    "albedo": len(mk.albedo_driver(mk.LAMBERT, 3, False).signatures),
+    "albedo": len(mk.albedo_driver(mk.LAMBERT, 3).signatures),
     "sample": len(sk.sample_driver(sk.COSINE).signatures),
 }
 f32 = [np.asarray(x, np.float32) for x in (wi[:n], wo[:n], r[:n], rho[:n])]
@@ -106,7 +108,7 @@ RESULT = {
     "float64": f64,
     "both": {
         "evaluate": len(mk.eval_driver(mk.LAMBERT, 3).signatures),
-        "albedo": len(mk.albedo_driver(mk.LAMBERT, 3, False).signatures),
+        "albedo": len(mk.albedo_driver(mk.LAMBERT, 3).signatures),
         "sample": len(sk.sample_driver(sk.COSINE).signatures),
     },
     "drivers": sorted({(c["name"], json.dumps(c["cells"], sort_keys=True)) for c in COMPILED if c["name"].endswith("drive")}),
@@ -227,3 +229,37 @@ def test_kernels_called_from_python_and_from_compiled_code_share_a_cache(tmp_pat
         assert r["python"][1] == r["reference"][1]
         assert r["compiled"] == again["compiled"] == first["compiled"]
     assert (first["compiled"] > 0.0) and (first["compiled"] < 0.5)
+
+
+_EVALUATE_A_MATERIAL = r"""
+from openpbr_diffuse.readers import load_materials
+from openpbr_diffuse.readers.evaluate import evaluate
+from openpbr_diffuse.readers.preview import render_image
+
+m = next(m for m in load_materials(sys.argv[1]) if m.supported)
+r = evaluate(m, [10.0, 30.0], [20.0, 40.0], [180.0, 90.0])
+render_image(m, 16, supersample=1)
+RESULT = {
+    "runners": sorted(
+        {c["name"].split(".")[0] for c in COMPILED if c["module"].endswith("_surface_drivers") and "_run." in c["name"]}
+    ),
+    "albedo": r["albedo"],
+    "brdf": r["brdf"],
+}
+"""
+
+
+def test_a_materials_evaluation_compiles_one_surface_runner(tmp_path):
+    """The readers' evaluation of a material and its preview (BSDF, lobes, albedo) compile the
+    one ``lobes`` runner (the lobes and, in the same pass, the BSDF), not the ``eval`` and
+    ``albedo`` runners too, and give what those verbs give."""
+    from openpbr_diffuse.readers import load_materials
+    from openpbr_diffuse.readers.evaluate import directions
+
+    path = str(ROOT / "materials" / "clay_rough.mtlx")
+    r = _run(_EVALUATE_A_MATERIAL, tmp_path, path)
+    assert r["runners"] == ["_lobes_run"]
+    node = next(m for m in load_materials(path) if m.supported).node()
+    wi, wo = directions(np.array([10.0, 30.0]), np.array([20.0, 40.0]), np.array([180.0, 90.0]))
+    np.testing.assert_allclose(r["albedo"], node.albedo(wo), rtol=1e-13)
+    np.testing.assert_allclose(r["brdf"], node.eval(wi, wo), rtol=1e-13)

@@ -163,10 +163,10 @@ def test_every_compile_decorator_is_made_in_jit():
 
 
 def test_the_decorators_without_reference_counting_compile_without_it():
-    """``block``, ``driver`` and ``serial`` are built without numba's reference
-    counting; ``kernel`` (a formula may be given arrays from Python), the surface's runners
-    (stack arrays), ``reduction`` and ``walk`` (they allocate) keep it, as does a block kernel's
-    Python twin."""
+    """``block``, ``driver``, ``serial`` and the surface's ``runner`` (its scratch is a stack
+    pointer) are built without numba's reference counting; ``kernel`` (a formula may be given
+    arrays from Python), ``reduction`` and ``walk`` (they allocate) keep it, as does a block
+    kernel's Python twin.  None of the cached entry points builds numba's C wrapper."""
     from openpbr_diffuse import _jit
     from openpbr_diffuse.models.eon import rho_ms
     from openpbr_diffuse.nodes._surface_kernels import _pack_weights, pack_drive
@@ -175,7 +175,9 @@ def test_the_decorators_without_reference_counting_compile_without_it():
     assert "_nrt" not in _pack_weights.python_twin.targetoptions
     assert "_nrt" not in rho_ms.targetoptions
     assert pack_drive.targetoptions["_nrt"] is False
-    for deco in (_jit.driver, _jit.serial):
+    for deco in (_jit.driver, _jit.serial, _jit.runner):
         assert deco(lambda x: x).targetoptions["_nrt"] is False
-    for deco in (_jit.runner, _jit.reduction, _jit.walk):
+    for deco in (_jit.reduction, _jit.walk):
         assert "_nrt" not in deco(lambda x: x).targetoptions
+    for deco in (_jit.driver, _jit.serial, _jit.runner, _jit.walk):
+        assert deco(lambda x: x).targetoptions["no_cfunc_wrapper"] is True

@@ -21,7 +21,7 @@ def test_no_driver_is_compiled_parallel():
     from openpbr_diffuse.models import _kernels as mk
     from openpbr_diffuse.sampling import _kernels as sk
 
-    for drive in (mk.eval_driver(mk.EON, 3), mk.albedo_driver(mk.QON, 1, False), sk.sample_driver(1)):
+    for drive in (mk.eval_driver(mk.EON, 3), mk.albedo_driver(mk.QON, 1), sk.sample_driver(1)):
         assert drive.targetoptions.get("nogil") and not drive.targetoptions.get("parallel")
 
 

@@ -28,12 +28,13 @@ the exact ZH coefficients only with this map — see the README errata); beta = 
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _arrays as ar
+from .._jit import elementwise
 from . import sh
 
 #: The post's fitted ratio of successive scattering orders (Pt. 1, "varying diffuse reflectance").
@@ -116,8 +117,7 @@ def exact_rho_factor(rho: ArrayLike, average_albedo: ArrayLike) -> NDArray[np.fl
 
     rho = ar.rho_array("rho", rho, np.float64)
     avg = ar.in_range("average_albedo", average_albedo, np.float64, 0.0, 1.0, " (<E>)", lo_open=True)
-    rho_b, avg_b = np.broadcast_arrays(rho, np.asarray(avg)[..., None])
-    return rho_ms(np.ascontiguousarray(rho_b), np.ascontiguousarray(avg_b))
+    return cast("NDArray[np.float64]", elementwise(rho_ms, rho, np.asarray(avg)[..., None]))
 
 
 def _factor(kind, rho, avg):

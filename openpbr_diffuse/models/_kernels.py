@@ -23,13 +23,14 @@ first use (``functools.cache``) and compiled lazily per dtype; numba caches them
 """
 
 import functools
+import math
 
 import numpy as np
 from numba import errors, types
 from numba.extending import overload
 
 from .._arrays import is_unit, is_within
-from .._jit import driver, kernel
+from .._jit import driver, kernel, pointer_of
 from .._launch import _F, _U, launch, rows
 from .eon import eon_albedo_terms, eon_average_terms, eon_terms, rho_ms
 from .fon import fon_albedo, fon_terms
@@ -225,11 +226,12 @@ def checked_rho(rho, c, ok):
 
 
 @kernel
-def write_row(nc, kind, tint, up, rho, out, i, n, g, h, avg, ok):
+def write_row(nc, kind, tint, up, rho, out, i, m, g, h, avg, ok):
     """Shade row i into ``out`` for every channel; returns ``ok`` and-ed with the rho checks.
 
-    ``nc`` is the driver's compile-time channel variant (3, 1, or 0 = any count), so after
-    inlining only one branch is left and the RGB and grey loops are straight-line code.
+    ``nc`` is the driver's compile-time channel variant (3, 1, or 0 = any count, ``m``
+    channels a row), so after inlining only one branch is left and the RGB and grey loops
+    are straight-line code.  ``rho`` and ``out`` are arrays or their data pointers.
     """
     if nc == 3:
         c = _U(i) * _U(3)
@@ -243,7 +245,6 @@ def write_row(nc, kind, tint, up, rho, out, i, n, g, h, avg, ok):
         p, ok = checked_rho(rho, _U(i), ok)
         out[i] = shade(kind, tint, up, p, g, h, avg)
     else:
-        m = rho.shape[0] // n
         c = _U(i) * _U(m)
         for k in range(m):
             p, ok = checked_rho(rho, c + _U(k), ok)
@@ -264,8 +265,12 @@ def eval_driver(model, C):
     nc = _channels(C)
 
     @driver
-    def drive(tint, rlo, rhi, wi, wo, r, rho, out):
-        n = r.shape[0]
+    def drive(tint, rlo, rhi, wi_rows, wo_rows, r_rows, rho_rows, out_rows):
+        n = r_rows.shape[0]
+        m = rho_rows.shape[0] // max(n, 1)
+        # indexed through their data pointers (``_jit.pointer_of``: cheaper to compile)
+        wi, wo, r = pointer_of(wi_rows), pointer_of(wo_rows), pointer_of(r_rows)
+        rho, out = pointer_of(rho_rows), pointer_of(out_rows)
         bad = 0
         for i in range(n):
             j = _U(i) * _U(3)
@@ -277,7 +282,7 @@ def eval_driver(model, C):
             ok = is_unit(ix, iy, iz) & is_unit(ox, oy, oz) & is_within(ri, _F(rlo), _F(rhi), False, False)
             g, h, avg = lobe_terms(model, ix, iy, iz, ox, oy, oz, ri)
             up = (iz > 0.0) & (oz > 0.0)  # f = 0 when either direction is below the horizon
-            ok = write_row(nc, kind, tint, up, rho, out, i, n, g, h, avg, ok)
+            ok = write_row(nc, kind, tint, up, rho, out, i, m, g, h, avg, ok)
             bad += 0 if ok else 1
         return bad
 
@@ -285,30 +290,38 @@ def eval_driver(model, C):
 
 
 @functools.cache
-def albedo_driver(model, C, average):
-    """The ``directional_albedo`` (or ``average_albedo``) loop.
+def albedo_driver(model, C):
+    """The ``directional_albedo`` and ``average_albedo`` loops of one model and channel count.
 
-    ``drive(tint, rlo, rhi, mu, r, rho, out) -> bad`` with the input checks fused as in
-    ``eval_driver`` (mu in [0, 1]).  E(mu) at mu = 0 is the limit mu -> 0; with
-    ``average`` mu is neither read nor checked.
+    ``drive(tint, average, rlo, rhi, mu, r, rho, out) -> bad`` with the input checks fused
+    as in ``eval_driver`` (mu in [0, 1]).  E(mu) at mu = 0 is the limit mu -> 0; with
+    ``average`` (a run-time flag: one compiled function holds both loops, each typed with
+    its own closed form) mu is neither read nor checked.
     """
     kind = _MIX[model]
-    nc = 0 if average else _channels(C)  # <E> is not a batch hot path: one variant per model
-    which = 1 if average else 0  # an int: numba types a captured int as a literal
+    nc = _channels(C)
 
     @driver
-    def drive(tint, rlo, rhi, mu, r, rho, out):
-        n = r.shape[0]
+    def drive(tint, average, rlo, rhi, mu_rows, r_rows, rho_rows, out_rows):
+        n = r_rows.shape[0]
+        m = rho_rows.shape[0] // max(n, 1)
+        mu, r = pointer_of(mu_rows), pointer_of(r_rows)  # as in ``eval_driver``
+        rho, out = pointer_of(rho_rows), pointer_of(out_rows)
         bad = 0
+        if average:
+            for i in range(n):
+                ri = _F(r[i])
+                ok = is_within(ri, _F(rlo), _F(rhi), False, False)
+                eg, eh, avg = albedo_terms(model, 0.0, ri, 1)
+                ok = write_row(nc, kind, tint, True, rho, out, i, m, eg, eh, avg, ok)
+                bad += 0 if ok else 1
+            return bad
         for i in range(n):
             ri = _F(r[i])
-            ok = is_within(ri, _F(rlo), _F(rhi), False, False)
-            m_i = 0.0
-            if not average:
-                m_i = _F(mu[i])
-                ok = ok & is_within(m_i, 0.0, 1.0, False, False)
-            eg, eh, avg = albedo_terms(model, m_i, ri, which)
-            ok = write_row(nc, kind, tint, True, rho, out, i, n, eg, eh, avg, ok)
+            m_i = _F(mu[i])
+            ok = is_within(ri, _F(rlo), _F(rhi), False, False) & is_within(m_i, 0.0, 1.0, False, False)
+            eg, eh, avg = albedo_terms(model, m_i, ri, 0)
+            ok = write_row(nc, kind, tint, True, rho, out, i, m, eg, eh, avg, ok)
             bad += 0 if ok else 1
         return bad
 
@@ -322,7 +335,7 @@ def evaluate_rows(model, tint, rlo, rhi, wi, wo, r, rho, lead, C, dtype):
     ``_arrays`` checks (roughness in [rlo, rhi]); when that is not 0 the output is garbage
     and the caller must raise (by running the full checks).
     """
-    n = int(np.prod(lead))
+    n = math.prod(lead)
     out = np.empty(n * C, dtype=dtype)
     wi, twi = rows(wi, lead, 3)
     wo, two = rows(wo, lead, 3)
@@ -341,15 +354,15 @@ def evaluate_rows(model, tint, rlo, rhi, wi, wo, r, rho, lead, C, dtype):
 
 def albedo_rows(model, tint, average, rlo, rhi, mu, r, rho, lead, C, dtype):
     """E(mu) (or <E>) for arrays broadcasting to ``lead``; (flat output, failed rows) as ``evaluate_rows``."""
-    n = int(np.prod(lead))
+    n = math.prod(lead)
     out = np.empty(n * C, dtype=dtype)
     r, tr = rows(r, lead)
     mu, tmu = (r, tr) if average else rows(mu, lead)  # average: mu is not read
     rho, trho = rows(rho, lead, C)
     t = np.dtype(dtype).type
     bad = launch(
-        albedo_driver(model, C, average),
-        (tint, t(rlo), t(rhi)),
+        albedo_driver(model, C),
+        (tint, bool(average), t(rlo), t(rhi)),
         [(mu, 1, tmu), (r, 1, tr), (rho, C, trho)],
         [(out, C)],
         n,

@@ -34,6 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _arrays as ar
+from .._jit import elementwise
 from .._launch import row_blocks
 from .eon import rho_ms
 from .fon import E_F_avg
@@ -121,8 +122,7 @@ def mix_weight(name: str, rho: ArrayLike, roughness: ArrayLike) -> NDArray[np.fl
     if kind == MIX_RHO2:
         return rho * rho
     if kind == MIX_RHO_MS:
-        avg = E_F_avg(np.asarray(roughness, dtype=np.float64))
-        return rho_ms(rho, avg)
+        return cast("NDArray[np.float64]", elementwise(rho_ms, rho, elementwise(E_F_avg, roughness)))
     return np.zeros(np.broadcast_shapes(rho.shape, np.shape(roughness)))
 
 

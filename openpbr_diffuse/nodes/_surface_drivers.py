@@ -140,28 +140,6 @@ def _block(b, n):
     return s0, m, span(m)
 
 
-def _lobes_run(ps, lobes, dmodel):
-    @runner
-    def lobes_run(t, nt, active, sel, ms, p, wo, W, E, P):
-        """W, E (n*8*3), P (n*8): weight, albedo and probability of every lobe slot."""
-        n = wo.shape[0] // 3
-        f = _scratch()
-        if ps == 0:  # one material: a local copy (ps is a constant: the other branch is pruned)
-            q = _local_params(p)
-        else:  # a material per row: read where they are
-            q = p
-        b0, b1 = _block_range(t, nt, n)
-        for b in range(b0, b1):
-            s0, m, mb = _block(b, n)
-            load_pass(wo, s0, m, f, ROW.OX)
-            state_passes(opaque(lobes), active, opaque(dmodel), ms, opaque(True), opaque(True), q, ps, s0, mb, f)
-            probability_pass(lobes, active, sel, q, ps, s0, mb, f, ms)
-            for k in range(N_LOBES):
-                lobe_outputs_pass(k, is_on(active, k), ms, q, ps, s0, m, f, W, E, P)
-
-    return lobes_run
-
-
 def _albedo_run(ps, lobes, dmodel):
     @runner
     def albedo_run(t, nt, active, ms, p, wo, out):
@@ -211,6 +189,39 @@ def _eval_run(ps, lobes, dmodel):
             rgb_out_pass(s0, m, f, out)
 
     return eval_run
+
+
+def _lobes_run(ps, lobes, dmodel):
+    @runner
+    def lobes_run(t, nt, active, sel, ms, with_f, p, wi, wo, W, E, P, out):
+        """W, E (n*8*3), P (n*8): weight, albedo and probability of every lobe slot at wo;
+        with ``with_f`` also out (n*3) = sum_k w_k f_k(wi, wo) as ``eval_run`` gives it: a
+        material's lobes and its BSDF from one pass over the rows (the state of mu_o is
+        computed once for both), and one runner compiled for both uses."""
+        n = wo.shape[0] // 3
+        f = _scratch()
+        if ps == 0:  # one material: a local copy (ps is a constant: the other branch is pruned)
+            q = _local_params(p)
+        else:  # a material per row: read where they are
+            q = p
+        b0, b1 = _block_range(t, nt, n)
+        for b in range(b0, b1):
+            s0, m, mb = _block(b, n)
+            load_pass(wo, s0, m, f, ROW.OX)
+            state_passes(opaque(lobes), active, opaque(dmodel), ms, opaque(True), opaque(True), q, ps, s0, mb, f)
+            probability_pass(lobes, active, sel, q, ps, s0, mb, f, ms)
+            for k in range(N_LOBES):
+                lobe_outputs_pass(k, is_on(active & lobes, k), ms, q, ps, s0, m, f, W, E, P)
+            if with_f:
+                load_pass(wi, s0, m, f, ROW.IX)
+                ggx_pass(active, q, ps, s0, mb, f)
+                fill_pass(f, ROW.A0, mb, 0.0)
+                fill_pass(f, ROW.A1, mb, 0.0)
+                fill_pass(f, ROW.A2, mb, 0.0)
+                each_eval(lobes, active, dmodel, True, ms, q, ps, s0, mb, f)
+                rgb_out_pass(s0, m, f, out)
+
+    return lobes_run
 
 
 def _pdf_run(ps, lobes, dmodel):
@@ -415,22 +426,26 @@ def _run(builds, flags, head, params, lead, dirs, outs):
         )
 
 
-def lobes_rows(flags, params, wo, lead):
-    """(W (..., 8, 3), E (..., 8, 3), P (..., 8)) for float64 arrays broadcasting to ``lead``."""
+def lobes_rows(flags, params, wo, lead, wi=None):
+    """(W (..., 8, 3), E (..., 8, 3), P (..., 8)) for float64 arrays broadcasting to ``lead``,
+    and with ``wi`` the BSDF f (..., 3) at (wi, wo) as a fourth array (one pass for both)."""
     n = math.prod(lead)
     W = np.empty(n * N_LOBES * 3)
     E = np.empty(n * N_LOBES * 3)
     P = np.empty(n * N_LOBES)
+    out = np.empty(n * 3)
+    with_f = wi is not None
     _run(
         LOBES,
         flags,
-        (flags.active, flags.sel, flags.ms),
+        (flags.active, flags.sel, flags.ms, with_f),
         params,
         lead,
-        [(wo, 3)],
-        [(W, N_LOBES * 3), (E, N_LOBES * 3), (P, N_LOBES)],
+        [(wi if with_f else wo, 3), (wo, 3)],  # without wi the runner does not read it
+        [(W, N_LOBES * 3), (E, N_LOBES * 3), (P, N_LOBES), (out, 3)],
     )
-    return W.reshape(lead + (N_LOBES, 3)), E.reshape(lead + (N_LOBES, 3)), P.reshape(lead + (N_LOBES,))
+    lobes = W.reshape(lead + (N_LOBES, 3)), E.reshape(lead + (N_LOBES, 3)), P.reshape(lead + (N_LOBES,))
+    return (*lobes, out.reshape(lead + (3,))) if with_f else lobes
 
 
 def albedo_rows(flags, params, wo, lead):

@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from .._jit import INV_PI, block, by_constant, opaque, serial
+from .._jit import INV_PI, block, by_constant, opaque, pointer_of, serial
 from ..microfacet import fresnel
 from ..microfacet import kernels as mf
 from ..microfacet.sheen import sheen_albedo_fit, sheen_density, sheen_sample
@@ -256,10 +256,12 @@ def _pack_weights(out, o):
     out[o + PARAM.DQ], out[o + PARAM.DQ + 1], out[o + PARAM.DQ + 2] = a, b, d
 
 
-def _pack_drive(raw, out, CT, RT):
+def _pack_drive(raw_rows, out_rows, CT, RT):
     """Pack rows of RAW inputs into parameter rows (the reference graph's derived values);
-    returns (mask of the lobes active in some row, warning bits)."""
-    m = raw.shape[0] // N_RAW
+    returns (mask of the lobes active in some row, warning bits).  Both row buffers are
+    indexed through their data pointers (``_jit.pointer_of``: cheaper to compile)."""
+    m = raw_rows.shape[0] // N_RAW
+    raw, out = pointer_of(raw_rows), pointer_of(out_rows)
     mask = 0
     warn = 0
     nCr, nRr, nRx = CT.shape[0] - 2, RT.shape[0] - 2, RT.shape[1] - 2

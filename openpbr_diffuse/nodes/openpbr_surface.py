@@ -457,7 +457,31 @@ class OpenPBRSurface(metaclass=NodeMeta):
         """
         wo = self._local("wo", wo)
         lead = self._lead(wo=wo.shape[:-1])
-        W, E, P = sd.lobes_rows(self._flags, self.params, wo, lead)
+        return self._lobe_list(lead, *sd.lobes_rows(self._flags, self.params, wo, lead))
+
+    def lobes_and_eval(self, wi: ArrayLike, wo: ArrayLike) -> tuple[list[Lobe], NDArray[Any]]:
+        """(``lobes(wo)``, ``eval(wi, wo)``) computed in one pass over the rows: what a
+        material's evaluation needs (its lobes, its albedo sum_k w_k E_k, its BSDF), with
+        the shared per-row state of wo computed once.  Equal to the two calls' results to
+        rounding (the same formulas, compiled into one driver); the lobes' arrays have the
+        leading shape of wi, wo and the material broadcast together, as ``eval``'s result.
+
+        Example
+        -------
+        >>> import numpy as np
+        >>> s = OpenPBRSurface(base_color=(0.8, 0.5, 0.3))
+        >>> wo = np.array([0.0, 0.0, 1.0])
+        >>> lobes, f = s.lobes_and_eval(wo, wo)
+        >>> bool(np.allclose(f, s.eval(wo, wo), rtol=1e-14)), [lb.name for lb in lobes]
+        (True, ['diffuse', 'specular'])
+        """
+        dtype = ar.result_dtype(wi, wo)
+        wi, wo = self._local("wi", wi), self._local("wo", wo)
+        lead = self._lead(wi=wi.shape[:-1], wo=wo.shape[:-1])
+        W, E, P, f = sd.lobes_rows(self._flags, self.params, wo, lead, wi)
+        return self._lobe_list(lead, W, E, P), f.astype(dtype, copy=False)
+
+    def _lobe_list(self, lead, W, E, P):
         if lead:
             W, E, P = np.moveaxis(W, -2, 0), np.moveaxis(E, -2, 0), np.moveaxis(P, -1, 0)  # lobe axis first
         return [_new_lobe((LOBE_NAMES[k], W[k], E[k], P[k, ...])) for k in self._slots]

@@ -74,28 +74,32 @@ def evaluate(
     if node is None:
         return out
     wi, wo = directions(ti, to, ph)
-    out["brdf"] = np.asarray(node.eval(wi, wo)).tolist()
-    albedo, out["diffuse"], out["lobes"] = _albedo_and_lobes(node, wo)
+    brdf, albedo, out["diffuse"], out["lobes"] = brdf_and_lobes(node, wi, wo)
+    out["brdf"] = brdf.tolist()
     out["albedo"] = albedo.tolist()
     return out
 
 
-def _albedo_and_lobes(
-    node: OpenPBRSurface | OrenNayarDiffuseBSDF, wo: NDArray[np.float64]
-) -> tuple[NDArray[np.float64], dict[str, Any], list[dict[str, Any]]]:
-    """(directional albedo, diffuse lobe, lobe listing) at wo.  A surface's albedo is the sum
-    of its lobes' w_k E_k (what ``OpenPBRSurface.albedo`` returns, to rounding), so one
-    compiled verb gives all three: a command's first run compiles one driver less."""
-    if not hasattr(node, "lobes"):
+def brdf_and_lobes(
+    node: OpenPBRSurface | OrenNayarDiffuseBSDF, wi: NDArray[np.float64], wo: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64], dict[str, Any], list[dict[str, Any]]]:
+    """(BSDF at (wi, wo), directional albedo at wo, diffuse lobe, lobe listing) of a node.
+
+    A surface's come from one compiled pass (``OpenPBRSurface.lobes_and_eval``), its albedo
+    the sum of its lobes' w_k E_k (what ``OpenPBRSurface.albedo`` returns, to rounding): a
+    command's first run compiles one surface driver where it compiled three (eval, lobes,
+    albedo)."""
+    if not hasattr(node, "lobes_and_eval"):
         diffuse, listing = diffuse_lobe(node, wo)
-        return np.asarray(diffuse["contribution"], dtype=np.float64), diffuse, listing
+        brdf = np.asarray(node.eval(wi, wo), dtype=np.float64)
+        return brdf, np.asarray(diffuse["contribution"], dtype=np.float64), diffuse, listing
     n = wo.shape[0] if wo.ndim > 1 else 1
-    lobes = node.lobes(wo)
+    lobes, brdf = node.lobes_and_eval(wi, wo)
     diffuse, listing = _diffuse_of(lobes, n)
     total = np.zeros((n, 3))
     for lb in lobes:
         total += np.broadcast_to(lb.weight, (n, 3)) * np.broadcast_to(lb.albedo, (n, 3))
-    return total, diffuse, listing
+    return np.asarray(brdf, dtype=np.float64), total, diffuse, listing
 
 
 def _diffuse_of(lobes: Sequence[Any], n: int) -> tuple[dict[str, Any], list[dict[str, Any]]]:
@@ -201,11 +205,10 @@ def evaluate_many(
         node = stacked_node([materials[i] for i in idx])
         # directions broadcast to one row per material (the nodes' inputs are (n,) / (n, 3))
         wig, wog = np.broadcast_to(wi, (len(idx), 3)), np.broadcast_to(wo, (len(idx), 3))
-        out["brdf"][idx] = node.eval(wig, wog)
-        out["albedo"][idx], d, _ = _albedo_and_lobes(node, wog)
+        out["brdf"][idx], out["albedo"][idx], d, _ = brdf_and_lobes(node, wig, wog)
         out["diffuse_weight"][idx] = d["weight"]
         out["diffuse_probability"][idx] = d["probability"]
     return out
 
 
-__all__ = ["directions", "evaluate", "evaluate_many", "diffuse_lobe", "stacked_node"]
+__all__ = ["brdf_and_lobes", "directions", "evaluate", "evaluate_many", "diffuse_lobe", "stacked_node"]

@@ -17,6 +17,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .evaluate import brdf_and_lobes
+
 if TYPE_CHECKING:
     from .material import Material
 
@@ -68,8 +70,8 @@ def render_image(material: Material, size: int = 256, supersample: int = 2) -> N
     inside = r2 < 1.0
     n = np.stack([x[inside], y[inside], np.sqrt(1.0 - r2[inside])], axis=1)
     wi, wo = local_directions(n)
-    lit = np.where(wi[:, 2:3] > 0.0, node.eval(wi, wo) * np.pi * wi[:, 2:3], 0.0)
-    furnace = node.albedo(wo)
+    f, furnace, _, _ = brdf_and_lobes(node, wi, wo)  # one compiled pass for both halves
+    lit = np.where(wi[:, 2:3] > 0.0, f * np.pi * wi[:, 2:3], 0.0)
     out = np.zeros((S, 2 * S, 4))
     left = np.zeros((S, S, 3))
     right = np.zeros((S, S, 3))

@@ -51,6 +51,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from .. import _signals
 from . import output
 from .model import Check, Context, SectionResult, slug
 
@@ -378,9 +379,13 @@ def run_report(
             f"(sections: {', '.join(section_pkg.SECTIONS)}; see --list-checks)"
         )
     out = output.check_target(out, paths)  # before any work: never replace what this tool did not write
-    tmp = output.staging_dir(out)
+    tmp = None
     t0 = time.perf_counter()
     try:
+        # made with the termination signals held: one that arrives meanwhile is delivered
+        # once ``tmp`` names the folder, inside this ``try``, whose handler removes it
+        with _signals.blocked():
+            tmp = output.staging_dir(out)
         image_dir = tmp / IMAGE_DIR
         image_dir.mkdir()
         run = ReportRun(under_test=under_test)
@@ -407,7 +412,8 @@ def run_report(
         (tmp / "index.html").write_text(render_html(doc, image_dir), encoding="utf-8")
         output.publish(tmp, out, paths)
     except BaseException:
-        output.discard(tmp)
+        if tmp is not None:
+            output.discard(tmp)
         raise
     run.out_dir = out
     return run

@@ -9,10 +9,11 @@ float64 for both dtypes (float32 results are the float64 ones rounded).
 """
 
 import functools
+import math
 
 import numpy as np
 
-from .._jit import driver, kernel
+from .._jit import driver, kernel, pointer_of
 from .._launch import _F, _U, launch, rows
 from .ltc import (
     clip_fraction,
@@ -71,8 +72,12 @@ def sample_driver(strategy):
     """
 
     @driver
-    def drive(z_min, wo, r, u, wi, pdf):
-        for i in range(r.shape[0]):
+    def drive(z_min, wo_rows, r_rows, u_rows, wi_rows, pdf_rows):
+        n = r_rows.shape[0]
+        # indexed through their data pointers (``_jit.pointer_of``: cheaper to compile)
+        wo, r, u = pointer_of(wo_rows), pointer_of(r_rows), pointer_of(u_rows)
+        wi, pdf = pointer_of(wi_rows), pointer_of(pdf_rows)
+        for i in range(n):
             j = _U(i) * _U(3)
             k = _U(i) * _U(2)
             ox = _F(wo[j])
@@ -113,8 +118,10 @@ def pdf_driver(strategy):
     """``drive(wo, wi, r, out)``: out (n,) = ``strategy_pdf`` of wi given wo."""
 
     @driver
-    def drive(wo, wi, r, out):
-        for i in range(r.shape[0]):
+    def drive(wo_rows, wi_rows, r_rows, out_rows):
+        n = r_rows.shape[0]
+        wo, wi, r, out = pointer_of(wo_rows), pointer_of(wi_rows), pointer_of(r_rows), pointer_of(out_rows)
+        for i in range(n):
             j = _U(i) * _U(3)
             out[i] = strategy_pdf(
                 strategy,
@@ -132,7 +139,7 @@ def pdf_driver(strategy):
 
 def sample_rows(strategy, wo, r, u, lead, dtype):
     """(wi, pdf) for validated arrays broadcasting to ``lead``, shapes lead + (3,) and lead."""
-    n = int(np.prod(lead))
+    n = math.prod(lead)
     wi = np.empty(lead + (3,), dtype=dtype)
     p = np.empty(lead, dtype=dtype)
     wo, two = rows(wo, lead, 3)
@@ -151,7 +158,7 @@ def sample_rows(strategy, wo, r, u, lead, dtype):
 
 def pdf_rows(strategy, wo, wi, r, lead, dtype):
     """pdf for validated arrays broadcasting to ``lead``, shape lead."""
-    n = int(np.prod(lead))
+    n = math.prod(lead)
     out = np.empty(lead, dtype=dtype)
     wo, two = rows(wo, lead, 3)
     wi, twi = rows(wi, lead, 3)

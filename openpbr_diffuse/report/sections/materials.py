@@ -41,12 +41,11 @@ def _fmt(v):
 
 def _albedo_curves(node, n_mu):
     """theta_o (deg), the material's albedo E (n, 3) and the diffuse lobe's weight x albedo."""
-    from ...readers.evaluate import diffuse_lobe
+    from ...readers.evaluate import brdf_and_lobes
 
     theta = np.linspace(0.0, 89.0, n_mu)
     wo = np.stack([np.sin(np.radians(theta)), np.zeros_like(theta), np.cos(np.radians(theta))], axis=-1)
-    E = np.asarray(node.albedo(wo))
-    d, _ = diffuse_lobe(node, wo)
+    _, E, d, _ = brdf_and_lobes(node, wo, wo)
     return theta, E, np.asarray(d["contribution"])
 
 
@@ -238,7 +237,7 @@ def build(ctx: Context) -> SectionResult:
         )
         wi, wo = directions(THETA_O, np.linspace(0.0, 85.0, 12), 180.0)
         if hasattr(node, "lobes"):
-            total = sum(np.asarray(lb.probability) for lb in node.lobes(wo))
+            total = sum(np.asarray(lb.probability) for lb in node.lobes_and_eval(wi, wo)[0])
             res.checks.append(
                 Check(
                     f"{m.path}: lobe selection probabilities sum to 1",
