@@ -309,7 +309,8 @@ def _pointer_intrinsic():
     @intrinsic
     def pointer_of(typingctx, a):
         """The data pointer of a C-contiguous 1-D array ``a`` (compiled code only): indexed
-        as ``a`` is, and lowered as cheaply as a ``stack_buffer``.  For a function that
+        as ``a`` is (no bounds, no negative indices), and lowered as cheaply as a
+        ``stack_buffer``.  For a function that
         indexes its array arguments many times (the packing of a material's parameters);
         the array must outlive every use of the pointer (an argument of the caller does)."""
         if not (isinstance(a, numba.types.Array) and a.ndim == 1 and a.layout == "C"):

@@ -19,6 +19,8 @@ import threading
 
 SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n))
 _received: list[int] = []
+#: > 0 inside :class:`blocked`: the handler records a signal and raises nothing
+_deferred = 0
 
 
 class Terminated(KeyboardInterrupt):
@@ -31,6 +33,8 @@ class Terminated(KeyboardInterrupt):
 
 def _handler(signum: int, frame: object) -> None:
     _received.append(signum)
+    if _deferred:
+        return
     raise Terminated(signum)
 
 
@@ -97,15 +101,24 @@ def check() -> None:
 class blocked:
     """Context manager: hold SIGINT/SIGTERM/SIGHUP during a short critical step.
 
-    Signals that arrive meanwhile are delivered when the block ends.
+    No signal raises inside the block.  The main thread's mask holds them, and the kernel
+    delivers one held so when the block ends; but in a process with other threads (the
+    package's thread pool) the kernel may deliver a signal to one of those instead, and
+    Python then runs the handler in the main thread at once: the handler itself only
+    records a signal that arrives inside a block (:func:`received`, :func:`check`), so
+    that the step is never cut short.  Call :func:`check` after the block to act on it.
     """
 
     def __enter__(self) -> blocked:
+        global _deferred
         self._old = None
+        _deferred += 1
         if hasattr(signal, "pthread_sigmask") and threading.current_thread() is threading.main_thread():
             self._old = signal.pthread_sigmask(signal.SIG_BLOCK, SIGNALS)
         return self
 
     def __exit__(self, *exc: object) -> None:
+        global _deferred
         if self._old is not None:
             signal.pthread_sigmask(signal.SIG_SETMASK, self._old)
+        _deferred -= 1

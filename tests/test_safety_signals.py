@@ -75,3 +75,33 @@ def test_cli_signal_exit_status_one_line(tmp_path, signum):
         p.stderr.close()
     assert code == 128 + signum
     assert len(err.strip().splitlines()) == 1 and "interrupted" in err and "Traceback" not in err
+
+
+def test_signal_while_the_staging_folder_is_made_leaves_nothing(tmp_path, monkeypatch):
+    """A signal that arrives just after the staging folder exists (here: sent by the folder's
+    own creation) is delivered once the run owns the folder, which it then removes: no
+    ``.NAME.tmp-*`` is left behind and the run ends with ``Terminated``."""
+    import os
+
+    from openpbr_diffuse import _signals
+    from openpbr_diffuse.report import output
+    from openpbr_diffuse.report.runner import run_report
+
+    made = output.staging_dir
+
+    def staging_dir_then_signal(out):
+        tmp = made(out)
+        os.kill(os.getpid(), signal.SIGTERM)
+        return tmp
+
+    monkeypatch.setattr(output, "staging_dir", staging_dir_then_signal)
+    saved = {s: signal.getsignal(s) for s in _signals.SIGNALS}
+    try:
+        _signals.install()
+        with pytest.raises(_signals.Terminated):
+            run_report([str(MATERIAL)], tmp_path / "rep", progress=False, sections=["approximations"])
+    finally:
+        for s, h in saved.items():
+            signal.signal(s, h)
+    assert _no_leftovers(tmp_path)
+    assert not (tmp_path / "rep").exists()
