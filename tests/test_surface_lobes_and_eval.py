@@ -9,30 +9,16 @@ model, one material or a material per row, one row or many (a partial last block
 
 import numpy as np
 import pytest
+from test_surface_stack import STACKS
 
 from openpbr_diffuse.nodes import OpenPBRSurface
 from openpbr_diffuse.readers.evaluate import brdf_and_lobes
 
+#: the base surface, a metal, and the layered stacks of ``test_surface_stack``
 MATERIALS = {
     "base": dict(base_color=(0.8, 0.5, 0.3), base_diffuse_roughness=0.7, specular_roughness=0.4),
     "metal": dict(base_color=(0.9, 0.6, 0.2), base_metalness=0.6, specular_roughness=0.3),
-    "coated_fuzzy": dict(
-        base_color=(0.6, 0.4, 0.3),
-        coat_weight=0.7,
-        coat_roughness=0.2,
-        fuzz_weight=0.5,
-        fuzz_roughness=0.4,
-    ),
-    "everything": dict(
-        base_color=(0.7, 0.6, 0.5),
-        base_metalness=0.3,
-        base_diffuse_roughness=0.8,
-        subsurface_weight=0.3,
-        transmission_weight=0.2,
-        coat_weight=0.5,
-        fuzz_weight=0.4,
-    ),
-    "thin_walled": dict(subsurface_weight=0.6, subsurface_color=(0.9, 0.5, 0.4), geometry_thin_walled=True),
+    **STACKS,
 }
 
 

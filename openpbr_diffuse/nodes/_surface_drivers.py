@@ -210,7 +210,7 @@ def _lobes_run(ps, lobes, dmodel):
             load_pass(wo, s0, m, f, ROW.OX)
             state_passes(opaque(lobes), active, opaque(dmodel), ms, opaque(True), opaque(True), q, ps, s0, mb, f)
             probability_pass(lobes, active, sel, q, ps, s0, mb, f, ms)
-            for k in range(N_LOBES):
+            for k in range(N_LOBES):  # & lobes: a constant, so LLVM drops the slots outside the set
                 lobe_outputs_pass(k, is_on(active & lobes, k), ms, q, ps, s0, m, f, W, E, P)
             if with_f:
                 load_pass(wi, s0, m, f, ROW.IX)
