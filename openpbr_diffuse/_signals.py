@@ -101,24 +101,27 @@ def check() -> None:
 class blocked:
     """Context manager: hold SIGINT/SIGTERM/SIGHUP during a short critical step.
 
-    No signal raises inside the block.  The main thread's mask holds them, and the kernel
-    delivers one held so when the block ends; but in a process with other threads (the
-    package's thread pool) the kernel may deliver a signal to one of those instead, and
-    Python then runs the handler in the main thread at once: the handler itself only
-    records a signal that arrives inside a block (:func:`received`, :func:`check`), so
-    that the step is never cut short.  Call :func:`check` after the block to act on it.
+    A signal that arrives meanwhile raises nothing inside the block and is delivered when
+    the block ends (as :class:`Terminated`, unless the block ends with an exception of its
+    own).  The main thread's mask holds the signals; but in a process with other threads
+    (the package's thread pool) the kernel may hand a signal to one of those, and Python
+    then runs the handler in the main thread at once, mask or not: so the handler itself
+    only records a signal that arrives inside a block, and the block's end raises it.
     """
 
     def __enter__(self) -> blocked:
         global _deferred
         self._old = None
+        self._seen = len(_received)
         _deferred += 1
         if hasattr(signal, "pthread_sigmask") and threading.current_thread() is threading.main_thread():
             self._old = signal.pthread_sigmask(signal.SIG_BLOCK, SIGNALS)
         return self
 
-    def __exit__(self, *exc: object) -> None:
+    def __exit__(self, exc_type: object, *exc: object) -> None:
         global _deferred
         if self._old is not None:
             signal.pthread_sigmask(signal.SIG_SETMASK, self._old)
         _deferred -= 1
+        if exc_type is None and not _deferred and len(_received) > self._seen:
+            raise Terminated(_received[-1])

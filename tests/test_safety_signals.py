@@ -105,3 +105,43 @@ def test_signal_while_the_staging_folder_is_made_leaves_nothing(tmp_path, monkey
             signal.signal(s, h)
     assert _no_leftovers(tmp_path)
     assert not (tmp_path / "rep").exists()
+
+
+def test_a_signal_inside_a_held_step_is_raised_when_the_step_ends():
+    """Inside ``_signals.blocked`` a signal raises nothing (the step runs to its end, even
+    with worker threads alive that the kernel may hand it to); the block's end raises it as
+    ``Terminated``, unless the block ends with an exception of its own."""
+    import os
+    import threading
+
+    from openpbr_diffuse import _signals
+
+    saved = {s: signal.getsignal(s) for s in _signals.SIGNALS}
+    stop = threading.Event()
+    worker = threading.Thread(target=stop.wait)  # a thread the kernel may deliver to
+    worker.start()
+    try:
+        _signals.install()
+
+        def signal_and_wait_for_the_handler(signum):
+            seen = len(_signals._received)
+            os.kill(os.getpid(), signum)
+            deadline = time.monotonic() + 10.0
+            while len(_signals._received) == seen and time.monotonic() < deadline:
+                time.sleep(0.001)  # the handler runs here, inside the block
+            return len(_signals._received) > seen
+
+        with pytest.raises(_signals.Terminated) as caught:
+            with _signals.blocked():
+                handled = signal_and_wait_for_the_handler(signal.SIGTERM)
+                finished = True  # reached: the handler raised nothing inside the block
+        assert handled and finished and caught.value.signum == signal.SIGTERM
+        with pytest.raises(RuntimeError):  # the step's own error wins
+            with _signals.blocked():
+                assert signal_and_wait_for_the_handler(signal.SIGHUP)
+                raise RuntimeError("the step failed")
+    finally:
+        stop.set()
+        worker.join()
+        for s, h in saved.items():
+            signal.signal(s, h)
