@@ -52,10 +52,11 @@ def _kernel_dispatcher() -> type:
                 g = types.FunctionType(f.__code__, f.__globals__, f.__name__, f.__defaults__, f.__closure__)
                 g.__qualname__ = f.__qualname__ + "__python"
                 g.__module__, g.__doc__ = f.__module__, f.__doc__
-                # with the entry points, and with reference counting: from Python a formula
-                # may be called with arrays (array expressions allocate their results)
+                # with the CPython entry point (not the C one: nothing calls a twin through a
+                # C function pointer), and with reference counting: from Python a formula may
+                # be called with arrays (array expressions allocate their results)
                 options = {k: v for k, v in self.targetoptions.items() if not k.startswith("no_c") and k != "_nrt"}
-                twin = self.__dict__["_python_twin"] = numba.njit(cache=True, **options)(g)
+                twin = self.__dict__["_python_twin"] = numba.njit(cache=True, **options, **NO_CFUNC)(g)
             return twin
 
     return Kernel

@@ -263,3 +263,58 @@ def test_a_materials_evaluation_compiles_one_surface_runner(tmp_path):
     wi, wo = directions(np.array([10.0, 30.0]), np.array([20.0, 40.0]), np.array([180.0, 90.0]))
     np.testing.assert_allclose(r["albedo"], node.albedo(wo), rtol=1e-13)
     np.testing.assert_allclose(r["brdf"], node.eval(wi, wo), rtol=1e-13)
+
+
+_THREE_DIFFUSE_MODELS = r"""
+import numpy as np
+from openpbr_diffuse import OpenPBRSurface
+
+rng = np.random.default_rng(5)
+wi, wo = rng.normal(size=(2, 300, 3))
+wi[:, 2], wo[:, 2] = np.abs(wi[:, 2]), np.abs(wo[:, 2])
+wi /= np.linalg.norm(wi, axis=1)[:, None]
+wo /= np.linalg.norm(wo, axis=1)[:, None]
+base = dict(base_color=(0.8, 0.5, 0.3), base_diffuse_roughness=0.7, base_metalness=0.3, specular_roughness=0.4)
+out = {}
+for model in ("eon", "qon", "lambert"):
+    s = OpenPBRSurface(**base, diffuse_model=model)
+    lobes, f = s.lobes_and_eval(wi, wo)
+    out[model] = {"f": f.tolist(), "E": sum(l.weight * l.albedo for l in lobes).tolist()}
+RESULT = {
+    "lobes_runners": [c["cells"] for c in COMPILED if c["name"].startswith("_lobes_run.")],
+    "out": out,
+    "wi": wi.tolist(),
+    "wo": wo.tolist(),
+}
+"""
+
+
+def test_one_lobes_runner_serves_every_diffuse_model(tmp_path):
+    """Materials of the same lobe set with EON, QON and Lambert diffuse lobes compile one
+    ``lobes`` runner (the diffuse model is a run-time argument of it), and each model's
+    lobes and BSDF equal those of the ``eval`` and ``albedo`` runners, which are compiled
+    with the model a constant (a second compilation of the passes)."""
+    from openpbr_diffuse import OpenPBRSurface
+
+    r = _run(_THREE_DIFFUSE_MODELS, tmp_path)
+    assert len(r["lobes_runners"]) == 1, r["lobes_runners"]
+    wi, wo = np.array(r["wi"]), np.array(r["wo"])
+    base = dict(base_color=(0.8, 0.5, 0.3), base_diffuse_roughness=0.7, base_metalness=0.3, specular_roughness=0.4)
+    for model, got in r["out"].items():
+        s = OpenPBRSurface(**base, diffuse_model=model)
+        np.testing.assert_allclose(got["f"], s.eval(wi, wo), rtol=1e-13, atol=1e-300, err_msg=model)
+        np.testing.assert_allclose(got["E"], s.albedo(wo), rtol=1e-13, err_msg=model)
+    # the three models differ (the run-time argument reaches the diffuse lobe)
+    assert not np.allclose(r["out"]["eon"]["f"], r["out"]["qon"]["f"])
+    assert not np.allclose(r["out"]["qon"]["f"], r["out"]["lambert"]["f"])
+
+
+def test_spectral_channel_counts_share_one_albedo_driver():
+    """A model's albedo driver for any channel count other than 1 and 3 is one compiled
+    function (the colour-shift section's 81- and 85-sample spectra)."""
+    from openpbr_diffuse.models import _kernels as mk
+
+    assert mk.albedo_driver(mk.EON, 81) is mk.albedo_driver(mk.EON, 85) is mk.albedo_driver(mk.EON, 7)
+    assert mk.eval_driver(mk.EON, 81) is mk.eval_driver(mk.EON, 85)
+    assert mk.albedo_driver(mk.EON, 3) is not mk.albedo_driver(mk.EON, 81)
+    assert mk.albedo_driver(mk.EON, 1) is not mk.albedo_driver(mk.EON, 3)

@@ -252,9 +252,22 @@ def write_row(nc, kind, tint, up, rho, out, i, m, g, h, avg, ok):
     return ok
 
 
-@functools.cache
 def eval_driver(model, C):
-    """The ``evaluate`` loop for one model id and channel count (see ``_channels``).
+    """The ``evaluate`` loop for one model id and channel count C (one driver for every C
+    other than 1 and 3: see ``_channels``)."""
+    return _eval_driver(model, _channels(C))
+
+
+def albedo_driver(model, C):
+    """The ``directional_albedo`` / ``average_albedo`` loop for one model id and channel
+    count C (one driver for every C other than 1 and 3: the 81 and 85 samples of two
+    spectral grids share it)."""
+    return _albedo_driver(model, _channels(C))
+
+
+@functools.cache
+def _eval_driver(model, nc):
+    """The ``evaluate`` loop for one model id and channel variant ``nc`` (``_channels``).
 
     ``drive(tint, rlo, rhi, wi, wo, r, rho, out) -> bad``: wi, wo flat (N*3,), r (N,),
     rho (N*C,), out (N*C,); ``bad`` counts the rows whose inputs fail the ``_arrays``
@@ -262,7 +275,6 @@ def eval_driver(model, C):
     are fused into the loop rather than run as separate passes over the inputs.
     """
     kind = _MIX[model]
-    nc = _channels(C)
 
     @driver
     def drive(tint, rlo, rhi, wi_rows, wo_rows, r_rows, rho_rows, out_rows):
@@ -290,8 +302,8 @@ def eval_driver(model, C):
 
 
 @functools.cache
-def albedo_driver(model, C):
-    """The ``directional_albedo`` and ``average_albedo`` loops of one model and channel count.
+def _albedo_driver(model, nc):
+    """The ``directional_albedo`` and ``average_albedo`` loops of one model and channel variant.
 
     ``drive(tint, average, rlo, rhi, mu, r, rho, out) -> bad`` with the input checks fused
     as in ``eval_driver`` (mu in [0, 1]).  E(mu) at mu = 0 is the limit mu -> 0; with
@@ -299,7 +311,6 @@ def albedo_driver(model, C):
     its own closed form) mu is neither read nor checked.
     """
     kind = _MIX[model]
-    nc = _channels(C)
 
     @driver
     def drive(tint, average, rlo, rhi, mu_rows, r_rows, rho_rows, out_rows):

@@ -16,7 +16,8 @@ thread count nor on how a call is split at multiples of ``B`` rows (the same com
 runs the same blocks).
 
 Each driver is built per parameter stride (0: one material for every row; N_PARAMS: a
-material per row), lobe set and diffuse model, compile-time constants, on first use, with
+material per row), lobe set and diffuse model (the ``lobes`` driver: stride and lobe set),
+compile-time constants, on first use, with
 ``nogil``: a call of fewer than
 ``SERIAL_ROWS`` rows runs it on the calling thread, a larger one runs it over runs of blocks
 on the package's thread pool (``_Builds``).
@@ -191,13 +192,18 @@ def _eval_run(ps, lobes, dmodel):
     return eval_run
 
 
-def _lobes_run(ps, lobes, dmodel):
+def _lobes_run(ps, lobes):
     @runner
-    def lobes_run(t, nt, active, sel, ms, with_f, p, wi, wo, W, E, P, out):
+    def lobes_run(t, nt, active, dmodel, sel, ms, with_f, p, wi, wo, W, E, P, out):
         """W, E (n*8*3), P (n*8): weight, albedo and probability of every lobe slot at wo;
         with ``with_f`` also out (n*3) = sum_k w_k f_k(wi, wo) as ``eval_run`` gives it: a
         material's lobes and its BSDF from one pass over the rows (the state of mu_o is
-        computed once for both), and one runner compiled for both uses."""
+        computed once for both), and one runner compiled for both uses.
+
+        The diffuse model is a run-time argument here (one runner per lobe set serves
+        every model: a process that reads materials of several models compiles it once);
+        the EON diffuse lobe's BSDF pass is typed with the model a constant, so that its
+        loop vectorises as in ``eval_run``."""
         n = wo.shape[0] // 3
         f = _scratch()
         if ps == 0:  # one material: a local copy (ps is a constant: the other branch is pruned)
@@ -208,7 +214,7 @@ def _lobes_run(ps, lobes, dmodel):
         for b in range(b0, b1):
             s0, m, mb = _block(b, n)
             load_pass(wo, s0, m, f, ROW.OX)
-            state_passes(opaque(lobes), active, opaque(dmodel), ms, opaque(True), opaque(True), q, ps, s0, mb, f)
+            state_passes(opaque(lobes), active, dmodel, ms, opaque(True), opaque(True), q, ps, s0, mb, f)
             probability_pass(lobes, active, sel, q, ps, s0, mb, f, ms)
             for k in range(N_LOBES):  # & lobes: a constant, so LLVM drops the slots outside the set
                 lobe_outputs_pass(k, is_on(active & lobes, k), ms, q, ps, s0, m, f, W, E, P)
@@ -218,7 +224,10 @@ def _lobes_run(ps, lobes, dmodel):
                 fill_pass(f, ROW.A0, mb, 0.0)
                 fill_pass(f, ROW.A1, mb, 0.0)
                 fill_pass(f, ROW.A2, mb, 0.0)
-                each_eval(lobes, active, dmodel, True, ms, q, ps, s0, mb, f)
+                if dmodel == D_EON:
+                    each_eval(lobes, active, D_EON, True, ms, q, ps, s0, mb, f)
+                else:
+                    each_eval(lobes, active, dmodel, True, ms, q, ps, s0, mb, f)
                 rgb_out_pass(s0, m, f, out)
 
     return lobes_run
@@ -316,7 +325,9 @@ class _Builds:
 
     A runner is built per parameter stride (0: one material; N_PARAMS: a material per row),
     lobe set (``LOBE_SETS``) and diffuse model, all three constants it closes over (plain
-    ints: a closure over them is found in numba's cache), on first use.  ``one`` and
+    ints: a closure over them is found in numba's cache), on first use; with
+    ``model_at_run_time`` (the ``lobes`` verb) per stride and lobe set only, the diffuse
+    model being an argument of the runner.  ``one`` and
     ``each`` are the base surface's runners with the EON diffuse lobe.
 
     The runners are compiled with ``nogil``, and a large call runs them on the package's
@@ -325,17 +336,21 @@ class _Builds:
     re-optimises as it inlines it -- a minute of a cold start -- and its OpenMP threads,
     once idle, took up to milliseconds to wake on the test VM.)"""
 
-    def __init__(self, factory):
+    def __init__(self, factory, model_at_run_time=False):
         self.factory = factory
+        self.model_at_run_time = model_at_run_time
         self.runners = {}
         self.one, self.each = self.runner(False, BASE, D_EON), self.runner(True, BASE, D_EON)
 
     def runner(self, per_row, active, dmodel):
         """The runner of a call's lobes ``active`` (bit mask) and diffuse model."""
-        key = (per_row, lobe_set(active), dmodel)
+        if self.model_at_run_time:
+            key = (per_row, lobe_set(active))
+        else:
+            key = (per_row, lobe_set(active), dmodel)
         run = self.runners.get(key)
         if run is None:
-            run = self.runners[key] = self.factory(N_PARAMS if per_row else 0, key[1], dmodel)
+            run = self.runners[key] = self.factory(N_PARAMS if per_row else 0, *key[1:])
         return run
 
     def __call__(self, run, n, *args):
@@ -350,7 +365,7 @@ class _Builds:
             job.result()
 
 
-LOBES = _Builds(_lobes_run)
+LOBES = _Builds(_lobes_run, model_at_run_time=True)
 ALBEDO = _Builds(_albedo_run)
 EVAL = _Builds(_eval_run)
 PDF = _Builds(_pdf_run)
@@ -438,7 +453,7 @@ def lobes_rows(flags, params, wo, lead, wi=None):
     _run(
         LOBES,
         flags,
-        (flags.active, flags.sel, flags.ms, with_f),
+        (flags.active, flags.dmodel, flags.sel, flags.ms, with_f),
         params,
         lead,
         [(wi if with_f else wo, 3), (wo, 3)],  # without wi the runner does not read it

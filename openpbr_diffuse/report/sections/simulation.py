@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..model import Check, Context, Figure, SectionResult, Table, skipped_in_quick
+from ..model import Check, Context, Figure, SectionResult, Table, grey, skipped_in_quick
 
 TITLE = "Physical ground truth: simulated rough Lambertian microsurfaces"
 KEY = "simulation"
@@ -133,7 +133,7 @@ def plot_all(
         wi, wo = gr.slice_directions(np.radians(np.full(200, 60.0)), np.radians(np.linspace(-89, 89, 200)))
         for r in brows:
             if r["geometry"] == geom and np.isclose(r["roughness"], target):
-                f = evaluate(r["model"], wi, wo, r["model_roughness"], [gr.BRDF_RHO])[:, 0]
+                f = evaluate(r["model"], wi, wo, r["model_roughness"], grey(gr.BRDF_RHO))[:, 0]  # RGB: one driver
                 axes[j].plot(
                     np.linspace(-89, 89, 200),
                     f,
