@@ -241,3 +241,12 @@ def test_cli_as_a_module_exits_2_without_traceback(tmp_path):
     for argv in (["check"], ["check", str(tmp_path / "missing.csv")]):
         p = subprocess.run([sys.executable, "-m", "openpbr_diffuse.cli.main", *argv], capture_output=True, text=True)
         assert p.returncode == 2 and "Traceback" not in p.stderr and p.stderr.count("\n") == 1
+
+
+@pytest.mark.parametrize("floor", [0.002, 0.0047, 0.01])
+def test_mu_floor_fit_recovers_the_floor(floor, vectors):
+    """The fitted floor of an implementation that clamps mu (typed independently in
+    ``_hand_impl``) is the floor it used, to the 4 digits the diagnosis states."""
+    g = grade(vectors, hand.answer(vectors, np.float64, mu_floor=floor))
+    assert g.diagnosis == "mu_floor", g.diagnosis_detail
+    assert f"mu' = max(mu, {floor:.4g})" in g.diagnosis_detail, g.diagnosis_detail
