@@ -103,17 +103,29 @@ def test_report_json_schema(quick_report):
         assert set(s) == SECTION_KEYS
         for f in s["figures"]:
             assert (out / f["file"]).is_file()
-    from openpbr_diffuse.report.model import QUICK_NOT_RUN
+    from openpbr_diffuse.models.registry import INFO
+    from openpbr_diffuse.report.model import QUICK_MODELS, QUICK_NOT_RUN, QUICK_STRATEGIES
+    from openpbr_diffuse.sampling import STRATEGIES
 
     for c in doc["checks"]:
         assert set(c) == CHECK_KEYS and c["reference"]
-        if c["status"] == "not run":  # the live simulations: the full report runs them
+        if c["status"] == "not run":  # the full report runs them
             assert c["not_run"] == QUICK_NOT_RUN and c["passed"] is False
-            assert c["section"] in ("simulation", "layered")
+            assert c["section"] in ("simulation", "layered", "models", "albedo", "sampling", "approximations")
         else:
             assert c["passed"] is True and c["status"] == "pass"
     skipped = {c["section"] for c in doc["checks"] if c["status"] == "not run"}
-    assert skipped == {"simulation", "layered"} and doc["evidence"]["n_not_run"] == 8
+    assert skipped == {"simulation", "layered", "models", "albedo", "sampling", "approximations"}
+    assert doc["evidence"]["n_not_run"] == sum(c["status"] == "not run" for c in doc["checks"])
+    # --quick: the lobe models and samplers outside its sets are listed, by name, as not run
+    run = [c for c in doc["checks"] if c["status"] == "pass"]
+    for m in INFO:
+        listed = [c for c in doc["checks"] if c["section"] == "models" and c["name"].startswith(m + ":")]
+        assert listed and all((c["status"] == "pass") == (m in QUICK_MODELS) for c in listed), m
+    for s in STRATEGIES:
+        listed = [c for c in doc["checks"] if c["name"].startswith(f"chi-square {s},")]
+        assert listed and all((c["status"] == "pass") == (s in QUICK_STRATEGIES) for c in listed), s
+    assert len(run) > 40
     ids = [c["id"] for c in doc["checks"]]
     assert len(set(ids)) == len(ids) and all(i.startswith(c["section"] + ".") for i, c in zip(ids, doc["checks"]))
     titles = [s["title"] for s in doc["sections"]]
@@ -277,3 +289,9 @@ def test_default_report_passes(tmp_path):
     assert main(["report", "--out", str(out), "--no-progress"]) == 0
     page = parse(out / "index.html")
     assert list(page.sections) == list(SECTIONS) and all(s != "fail" for s in page.sections.values())
+    # every check --quick lists as not run is one the full report runs, under the same id
+    full = {c["id"]: c for c in json.loads((out / "report.json").read_text())["checks"]}
+    quick = tmp_path / "quick"
+    assert main(["report", "--quick", "--out", str(quick), "--no-progress"]) == 0
+    not_run = [c["id"] for c in json.loads((quick / "report.json").read_text())["checks"] if c["status"] == "not run"]
+    assert not_run and all(full[i]["status"] == "pass" for i in not_run), [i for i in not_run if i not in full]

@@ -43,7 +43,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument(
         "--quick",
         action="store_true",
-        help="smaller grids and sample counts; the live simulations are listed as not run (the full report runs them)",
+        help="smaller grids and sample counts; the live simulations, the lobe models outside the "
+        "conformance vectors' five and the samplers other than cosine and EON are listed as not run "
+        "(the full report runs them)",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     g = p.add_argument_group("the implementation under test")

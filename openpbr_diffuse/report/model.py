@@ -75,6 +75,17 @@ class Check:
 QUICK_NOT_RUN = "not run in --quick: run `openpbr-diffuse report` for it"
 
 
+#: The lobe models ``report --quick`` checks: the conformance vectors' models (EON, its Eq. 14
+#: form, FON, QON, Lambert: the lobes OpenPBR and MaterialX define).  The full report checks
+#: every model of the registry; the quick one lists the other models' checks as not run.  Each
+#: model's verbs are batch drivers of their own to compile, so a first quick run compiles half.
+QUICK_MODELS = ("lambert", "qon", "fon", "eon", "eon_approx")
+
+#: The sampling strategies ``report --quick`` checks: those of the OpenPBR surface's diffuse
+#: lobe (EON's CLTC + uniform mixture, and cosine sampling for the other diffuse models).
+QUICK_STRATEGIES = ("cosine", "eon")
+
+
 #: rho of a grey or white surface as an RGB triple.  The report calls the lobe models with
 #: three channels everywhere (its colours are RGB): a model's driver is compiled for one
 #: channel count, and a scalar rho beside an RGB one would compile every model twice.
@@ -161,3 +172,12 @@ class Context:
     quick: bool = False
     progress: Callable[[str], None] = lambda message: None
     extra: dict[str, Any] = field(default_factory=dict)
+
+
+def in_quick(ctx: Context, names: tuple, quick_names: tuple) -> tuple:
+    """The names a section runs: all of ``names``, or (``ctx.quick``) those in ``quick_names``.
+
+    >>> in_quick(Context(Path("."), quick=True), ("eon", "full_on"), QUICK_MODELS)
+    ('eon',)
+    """
+    return tuple(n for n in names if not ctx.quick or n in quick_names)

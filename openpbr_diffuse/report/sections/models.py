@@ -15,9 +15,11 @@ from typing import Any
 import numpy as np
 
 from .._plot import pyplot, save
-from ..model import WHITE, Check, Context, Figure, SectionResult, Table, grey
+from ..model import QUICK_MODELS, WHITE, Check, Context, Figure, SectionResult, Table, grey, in_quick, skipped_in_quick
 
 TITLE = "Model properties"
+RECIPROCITY = "evaluate with the arguments swapped"
+LAMBERT_LIMIT = "rho / pi"
 QUAD = "Gauss-Legendre quadrature of evaluate over the hemisphere (panels at the Oren-Nayar kinks)"
 
 
@@ -70,7 +72,7 @@ def _albedo_curves(ctx):
     from ...models.registry import INFO
 
     plt = pyplot()
-    models = ("qon", "fon", "eon", "full_on")
+    models = in_quick(ctx, ("qon", "fon", "eon", "full_on"), QUICK_MODELS)
     fig, axes = plt.subplots(1, len(models), figsize=(16, 4), sharey=True)
     th = np.linspace(0.0, 89.9, 60 if ctx.quick else 180)
     mu = np.cos(np.radians(th))
@@ -91,6 +93,17 @@ def _albedo_curves(ctx):
     return save(fig, ctx, "models_albedo.png")
 
 
+def _quick_not_run(m, info):
+    """The checks of model ``m`` that ``build`` makes, listed as not run (``report --quick``)."""
+    checks = [
+        (f"{m}: reciprocity f(wi, wo) = f(wo, wi)", RECIPROCITY),
+        (f"{m}: Lambert limit at roughness 0", LAMBERT_LIMIT),
+    ]
+    if info.energy_conserving:
+        checks.append((f"{m}: energy conservation, max albedo at rho = 1", QUAD))
+    return [skipped_in_quick(name, reference) for name, reference in checks]
+
+
 def build(ctx: Context) -> SectionResult:
     import openpbr_diffuse as od
 
@@ -105,7 +118,11 @@ def build(ctx: Context) -> SectionResult:
     mus = np.array([0.0, 0.3, 1.0] if ctx.quick else [0.0, 0.01, 0.05, 0.1, 0.2, 0.35, 0.5, 0.7, 0.85, 1.0])
     order = 5 if ctx.quick else 6
     rows: list[list[Any]] = []
+    run = in_quick(ctx, tuple(INFO), QUICK_MODELS)
     for m, info in INFO.items():
+        if m not in run:  # --quick: the model's checks listed as not run (the full report runs them)
+            res.checks.extend(_quick_not_run(m, info))
+            continue
         ctx.progress(f"model {m}")
         rmax = _rmax(info)
         r = rng.uniform(0.0, rmax, n)
@@ -118,7 +135,7 @@ def build(ctx: Context) -> SectionResult:
                 recip,
                 1e-12,
                 "<=",
-                reference="evaluate with the arguments swapped",
+                reference=RECIPROCITY,
                 detail=f"max |difference| / max f over {n} random pairs, roughness, rho",
             )
         )
@@ -131,7 +148,7 @@ def build(ctx: Context) -> SectionResult:
                 float(rel.max()),
                 1e-6,
                 "<=",
-                reference="rho / pi",
+                reference=LAMBERT_LIMIT,
                 detail="max |pi f / rho - 1| (EON: the 1e-7 guards of Listing 1)",
             )
         )
@@ -210,12 +227,16 @@ def build(ctx: Context) -> SectionResult:
     ctx.progress("plots")
     res.figures.append(
         Figure(
-            _slices(ctx, tuple(INFO)),
-            "BRDF slices in the plane of incidence, all models (EON paper Fig. 2): rho = 0.8, "
-            "r = 0.5 for FON/EON, sigma = pi/4 for the sigma models",
+            _slices(ctx, run),
+            f"BRDF slices in the plane of incidence, {'the quick run' if ctx.quick else 'all'} models (EON "
+            "paper Fig. 2): rho = 0.8, r = 0.5 for FON/EON, sigma = pi/4 for the sigma models",
         )
     )
     res.figures.append(
-        Figure(_albedo_curves(ctx), "Directional albedo curves (EON paper Fig. 5): rho = 1, EON at rho = 0.8")
+        Figure(
+            _albedo_curves(ctx),
+            "Directional albedo curves (EON paper Fig. 5): rho = 1, EON at rho = 0.8"
+            + (" (full ON: in the full report)" if ctx.quick else ""),
+        )
     )
     return res

@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from .._plot import pyplot, save
-from ..model import Check, Context, Figure, SectionResult, Table
+from ..model import QUICK_STRATEGIES, Check, Context, Figure, SectionResult, Table, in_quick, skipped_in_quick
 
 TITLE = "Sampling: chi-square, normalisation, variance (Fig. 10-12)"
 ALPHA = 0.01
@@ -23,12 +23,15 @@ AUTHORS_THETA = 0.5 * math.pi * np.linspace(0.0, 0.999, 64)
 CURVE_THETA = (0, 30, 45, 60, 70, 75, 80, 84, 86, 88, 88.854, 89.427, 89.91)
 
 
+_CHI2_REF = "bin integrals of pdf (Gauss-Legendre 6x6 per bin), 16 x 32 bins"
+
+
 def _chi2(ctx, res):
     from ...sampling import STRATEGIES
     from ...sampling.quality import chi2_test
 
     points = ((0.02, 1.0),) if ctx.quick else ((0.02, 1.0), (0.3, 1.0), (0.9, 1.0), (0.3, 0.3))
-    cases = [(s, mu, r) for s in STRATEGIES for mu, r in points]
+    cases = [(s, mu, r) for s in in_quick(ctx, STRATEGIES, QUICK_STRATEGIES) for mu, r in points]
     sidak = 1.0 - (1.0 - ALPHA) ** (1.0 / len(cases))
     n = 20_000 if ctx.quick else 40_000
     rows = []
@@ -42,10 +45,14 @@ def _chi2(ctx, res):
                 p,
                 sidak,
                 ">=",
-                reference="bin integrals of pdf (Gauss-Legendre 6x6 per bin), 16 x 32 bins",
+                reference=_CHI2_REF,
                 detail=f"chi2 = {chi2:.1f} for {dof} dof; Sidak level for {len(cases)} tests at alpha = {ALPHA}",
             )
         )
+    for s in STRATEGIES:
+        if s not in in_quick(ctx, STRATEGIES, QUICK_STRATEGIES):  # --quick: listed as not run
+            for mu, r in points:
+                res.checks.append(skipped_in_quick(f"chi-square {s}, mu_o = {mu:g}, r = {r:g}: p-value", _CHI2_REF))
     res.tables.append(
         Table(
             "Chi-square goodness of fit of sample() against pdf()",
@@ -61,7 +68,8 @@ def _normalisation(ctx, res):
 
     worst = 0.0
     where = ""
-    for s in STRATEGIES:
+    strategies = in_quick(ctx, STRATEGIES, QUICK_STRATEGIES)
+    for s in strategies:
         for mu in (0.02, 0.5, 1.0):
             for r in (0.3, 1.0):
                 m = pdf_mass(s, mu, r, res=(24, 48) if ctx.quick else (48, 96))
@@ -74,7 +82,8 @@ def _normalisation(ctx, res):
             1e-3,
             "<=",
             reference="Gauss-Legendre quadrature of pdf over the hemisphere (sphere for 'ltc')",
-            detail=f"every strategy, mu_o in (0.02, 0.5, 1), r in (0.3, 1); worst at {where}",
+            detail=f"{'the strategies ' + ', '.join(strategies) if ctx.quick else 'every strategy'}, mu_o in "
+            f"(0.02, 0.5, 1), r in (0.3, 1); worst at {where}",
         )
     )
 
@@ -88,10 +97,11 @@ def _curves(ctx, res):
     thetas = tuple(sorted(set(CURVE_THETA[::2] + (CURVE_THETA[-1],)))) if ctx.quick else CURVE_THETA
     data = {}
     k = 0
+    strategies = in_quick(ctx, STRATEGIES, QUICK_STRATEGIES)
     for r in rs:
         ctx.progress(f"variance curves r={r}")
         for th in thetas:
-            for s in STRATEGIES:
+            for s in strategies:
                 data[(r, th, s)] = weight_stats(s, math.cos(math.radians(th)), r, n, 7 + k)
                 k += 1
     plt = pyplot()
@@ -105,7 +115,7 @@ def _curves(ctx, res):
         "eon": ("tab:green", "-"),
     }
     for i, r in enumerate(rs):
-        for s in STRATEGIES:
+        for s in strategies:
             color, ls = styles[s]
             for j, q in enumerate((0, 1, 2)):
                 axes[i, j].plot(
