@@ -14,7 +14,11 @@ from __future__ import annotations
 import os
 import pickle
 import sys
+from pathlib import Path
 
+#: this file, which the parent runs as a script (``limits.script_command``): a run imports
+#: numpy and wgpu, not the package and numba
+CHILD = Path(__file__).resolve()
 WORKGROUP = 64
 
 

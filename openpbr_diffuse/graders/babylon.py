@@ -417,7 +417,8 @@ def _wgsl_source(folder: Path, key: str) -> str:
 def _run_wgsl(source_text: str, inputs: np.ndarray, n_out: int, label: str) -> np.ndarray:
     """Run a WGSL compute shader (10 floats in, ``n_out`` out per row) in a child under the limits."""
     import pickle
-    import sys
+
+    from . import _wgsl_child
 
     inputs = np.ascontiguousarray(inputs, np.float32)
     job = {
@@ -427,14 +428,8 @@ def _run_wgsl(source_text: str, inputs: np.ndarray, n_out: int, label: str) -> n
         "rows": inputs.shape[0],
         "inputs": inputs.tobytes(),
     }
-    root = str(Path(__file__).resolve().parents[2])
-    env = dict(os.environ)
-    env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
     run = limits.run_limited(
-        [sys.executable, "-m", "openpbr_diffuse.graders._wgsl_child"],
-        input=pickle.dumps(job),
-        label=f"{label} (WGSL through wgpu)",
-        env=env,
+        limits.script_command(_wgsl_child.CHILD), input=pickle.dumps(job), label=f"{label} (WGSL through wgpu)"
     )
     err = [line for line in run.stderr.decode(errors="replace").splitlines() if "XDG_RUNTIME_DIR" not in line]
     if run.returncode != 0:

@@ -15,7 +15,6 @@ import hashlib
 import os
 import pickle
 import re
-import sys
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from . import limits
+from ._gl_child import CHILD, FRAGMENT_WIDTH, LOCAL_SIZE, create_context
 from .errors import GraderUnavailable
 
 #: (relative, absolute) tolerance for values computed in GLSL on llvmpipe.  acos's absolute
@@ -38,12 +38,6 @@ TOLERANCE_REASON = (
 )
 _INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$', re.MULTILINE)
 _CONTEXT = None
-LOCAL_SIZE = 64
-FRAGMENT_WIDTH = 256
-_VERTEX = """#version 430
-in vec2 grader_xy;
-void main() { gl_Position = vec4(grader_xy, 0.0, 1.0); }
-"""
 
 
 def gl_context() -> Any:
@@ -51,16 +45,9 @@ def gl_context() -> Any:
     global _CONTEXT
     if _CONTEXT is None:
         try:
-            import moderngl
-        except ImportError as exc:
-            raise GraderUnavailable("moderngl is not installed: pip install moderngl") from exc
-        try:
-            _CONTEXT = moderngl.create_standalone_context(backend="egl", require=430)  # type: ignore[arg-type]  # the stub types every setting as a dict
-        except Exception as exc:  # moderngl raises plain Exception for a missing driver
-            raise GraderUnavailable(
-                "no OpenGL 4.3 context through EGL (" + str(exc).splitlines()[0] + "): install Mesa's "
-                "software driver, e.g. apt-get install libgl1-mesa-dri libegl1 libegl-mesa0"
-            ) from exc
+            _CONTEXT = create_context()
+        except RuntimeError as exc:
+            raise GraderUnavailable(str(exc)) from exc
     return _CONTEXT
 
 
@@ -170,16 +157,12 @@ class Kernel:
             "uniforms": dict(self.uniforms),
             "inputs": inputs.tobytes(),
         }
-        root = str(Path(__file__).resolve().parents[2])
-        env = dict(os.environ)
-        env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
         run = limits.run_limited(
-            [sys.executable, "-m", "openpbr_diffuse.graders._gl_child"],
-            input=pickle.dumps(job),
-            label=f"{label} (GLSL on llvmpipe)",
-            env=env,
+            limits.script_command(CHILD), input=pickle.dumps(job), label=f"{label} (GLSL on llvmpipe)"
         )
         err = run.stderr.decode(errors="replace").strip()
+        if run.returncode == 4:  # no GL context in the child
+            raise GraderUnavailable(err.splitlines()[-1] if err else "no OpenGL 4.3 context through EGL")
         if run.returncode == 3:
             raise GraderUnavailable(
                 f"{label} does not compile on {gl_version()}: {err.splitlines()[-1] if err else ''} "
@@ -197,24 +180,6 @@ class Kernel:
         if out.size != rows * self.n_out:
             raise GraderUnavailable(f"{label}: the GL child wrote {out.size} values, expected {rows * self.n_out}")
         return out.reshape(rows, self.n_out).copy()
-
-
-def _draw_rows(ctx, program, rows):
-    """One fragment per row: a full-screen quad over a FRAGMENT_WIDTH x ceil(rows/width) target."""
-    height = (rows + FRAGMENT_WIDTH - 1) // FRAGMENT_WIDTH
-    target = ctx.renderbuffer((FRAGMENT_WIDTH, height), components=4, dtype="f1")
-    fbo = ctx.framebuffer(color_attachments=[target])
-    quad = ctx.buffer(np.array([-1, -1, 1, -1, -1, 1, 1, 1], dtype=np.float32).tobytes())
-    vao = ctx.vertex_array(program, [(quad, "2f", "grader_xy")])
-    try:
-        fbo.use()
-        vao.render(mode=ctx.TRIANGLE_STRIP)
-        ctx.finish()
-    finally:
-        vao.release()
-        quad.release()
-        fbo.release()
-        target.release()
 
 
 def sampler_functions(
