@@ -92,7 +92,7 @@ def test_memory_limit_applies_in_the_child() -> None:
     assert limits.memory_message(run.stderr) or b"MemoryError" in run.stderr
 
 
-def test_glsl_runs_in_a_killable_child(tmp_path: Path) -> None:
+def _gl_or_skip():
     pytest.importorskip("moderngl")
     from openpbr_diffuse.graders import glsl
 
@@ -100,19 +100,76 @@ def test_glsl_runs_in_a_killable_child(tmp_path: Path) -> None:
         glsl.gl_version()
     except GraderUnavailable as exc:
         pytest.skip(str(exc))
+    return glsl
+
+
+def _worker_pids() -> list[int]:
+    return [int(p.split(":")[0]) for p in _processes_with("_gpu_child.py") if " gl" in p]
+
+
+def test_glsl_runs_in_a_killable_child(tmp_path: Path) -> None:
+    """A run past the time limit is killed with its child's process group; the next run
+    starts a new child."""
     import numpy as np
 
+    glsl = _gl_or_skip()
     k = glsl.Kernel(code="float twice(float x) { return 2.0 * x; }", n_in=1, n_out=1, body="OUT(0) = twice(IN(0));")
     assert np.allclose(k.run(np.arange(5, dtype=np.float32)).ravel(), 2 * np.arange(5))
     old = limits.TIMEOUT
+    limits.stop_workers()  # the next run starts a child, which takes longer than the limit
     try:
-        limits.set_limits(timeout=0.05)  # shorter than the child's start: it is killed
-        with pytest.raises(GraderUnavailable, match="GLSL on llvmpipe.*did not finish"):
+        limits.set_limits(timeout=0.05)
+        with pytest.raises(GraderUnavailable, match="GLSL on llvmpipe.*did not finish within 0.05 s"):
             k.run(np.arange(5, dtype=np.float32), label="twice")
     finally:
         limits.set_limits(timeout=old)
     time.sleep(0.2)
-    assert _processes_with("_gl_child.py") == []
+    assert _processes_with("_gpu_child.py") == []
+    assert np.allclose(k.run(np.arange(3, dtype=np.float32)).ravel(), 2 * np.arange(3))  # a new child
+
+
+def test_glsl_runs_share_one_child_that_is_restarted_when_it_dies() -> None:
+    """Runs one after the other go to one child (its GL context made once); a child that was
+    killed between runs is reported by no run and replaced by a new one."""
+    import signal
+
+    import numpy as np
+
+    glsl = _gl_or_skip()
+    k = glsl.Kernel(code="float twice(float x) { return 2.0 * x; }", n_in=1, n_out=1, body="OUT(0) = twice(IN(0));")
+    assert np.allclose(k.run(np.arange(4, dtype=np.float32)).ravel(), 2 * np.arange(4))
+    first = _worker_pids()
+    assert np.allclose(k.run(np.arange(6, dtype=np.float32)).ravel(), 2 * np.arange(6))
+    assert len(first) == 1 and _worker_pids() == first
+    os.kill(first[0], signal.SIGKILL)
+    time.sleep(0.2)
+    assert np.allclose(k.run(np.arange(2, dtype=np.float32)).ravel(), 2 * np.arange(2))
+    again = _worker_pids()
+    assert len(again) == 1 and again != first
+
+
+def test_a_worker_that_dies_in_a_job_reports_it_and_the_memory_limit_applies() -> None:
+    """A worker whose job exceeds the memory limit dies: the request returns its failure (as
+    a run of its own would) and the next request starts a new child."""
+    code = (
+        "import struct, sys; i, o = sys.stdin.buffer, sys.stdout.buffer\n"
+        "while True:\n"
+        "    h = i.read(8)\n"
+        "    if len(h) < 8: break\n"
+        "    d = i.read(struct.unpack('<Q', h)[0])\n"
+        "    if d == b'hog': b = bytearray(2**31)\n"
+        "    o.write(struct.pack('<iQ', 0, len(d)) + d); o.flush()\n"
+    )
+    w = limits.Worker([sys.executable, "-c", code], "echo")
+    try:
+        assert w.request(b"one", label="echo", memory=2**30).stdout == b"one"
+        pid = w.proc.pid
+        run = w.request(b"hog", label="echo", memory=2**30)
+        assert run.returncode != 0 and (limits.memory_message(run.stderr) or b"MemoryError" in run.stderr)
+        assert w.request(b"two", label="echo", memory=2**30).stdout == b"two"
+        assert w.proc.pid != pid
+    finally:
+        w.stop()
 
 
 @pytest.mark.parametrize("name", ["lambda", "lambda x: x", "f(x)", "a b", "f;g", "", "1f", "main"])

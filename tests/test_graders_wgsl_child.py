@@ -13,3 +13,16 @@ def test_missing_wgpu_is_named(tmp_path, monkeypatch):
     monkeypatch.setenv("PYTHONPATH", str(tmp_path))
     with pytest.raises(GraderUnavailable, match=r"label \(WGSL\): ModuleNotFoundError: No module named 'wgpu'"):
         babylon._run_wgsl("@compute @workgroup_size(64) fn main() {}", np.zeros((2, 10)), 3, "label")
+
+
+def test_missing_wgpu_is_named_when_a_child_already_runs(tmp_path, monkeypatch):
+    """The WGSL child serves a process's runs one after the other; a changed environment (here
+    one that hides wgpu) starts a new one, as a child per run would see it."""
+    from openpbr_diffuse.graders import limits
+
+    try:  # a child with the real wgpu (it may have no adapter here: only the environment matters)
+        babylon._run_wgsl("@compute @workgroup_size(64) fn main() {}", np.zeros((2, 10)), 3, "label")
+    except GraderUnavailable:
+        pass
+    test_missing_wgpu_is_named(tmp_path, monkeypatch)
+    limits.stop_workers()

@@ -36,7 +36,7 @@ run for that light type (their presence in the installed package is checked, see
 
 The WGSL copies (``ShadersWGSL/ShadersInclude``) of the function and of the directional, point
 and spot lights' functions run as a WGSL compute shader through ``wgpu`` (PyPI) on Mesa's Vulkan
-driver (lavapipe), in a child process under the limits of user code (:mod:`._wgsl_child`); their
+driver (lavapipe), in a child process under the limits of user code (:mod:`._gpu_child`); their
 ``#define``/``#if`` lines, which Babylon's shader processor resolves, are resolved by the C
 preprocessor.  The paths that need textures (area light: LTC samplers; filtered environment: a
 cube map sampler) are graded in GLSL only.
@@ -418,7 +418,7 @@ def _run_wgsl(source_text: str, inputs: np.ndarray, n_out: int, label: str) -> n
     """Run a WGSL compute shader (10 floats in, ``n_out`` out per row) in a child under the limits."""
     import pickle
 
-    from . import _wgsl_child
+    from ._gpu_child import CHILD
 
     inputs = np.ascontiguousarray(inputs, np.float32)
     job = {
@@ -428,8 +428,8 @@ def _run_wgsl(source_text: str, inputs: np.ndarray, n_out: int, label: str) -> n
         "rows": inputs.shape[0],
         "inputs": inputs.tobytes(),
     }
-    run = limits.run_limited(
-        limits.script_command(_wgsl_child.CHILD), input=pickle.dumps(job), label=f"{label} (WGSL through wgpu)"
+    run = limits.worker(limits.script_command(CHILD, "wgsl"), "WGSL").request(
+        pickle.dumps(job), label=f"{label} (WGSL through wgpu)"
     )
     err = [line for line in run.stderr.decode(errors="replace").splitlines() if "XDG_RUNTIME_DIR" not in line]
     if run.returncode != 0:

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from . import limits
-from ._gl_child import CHILD, FRAGMENT_WIDTH, LOCAL_SIZE, create_context
+from ._gpu_child import CHILD, FRAGMENT_WIDTH, LOCAL_SIZE, NO_COMPILE, NO_DEVICE, create_context
 from .errors import GraderUnavailable
 
 #: (relative, absolute) tolerance for values computed in GLSL on llvmpipe.  acos's absolute
@@ -142,8 +142,9 @@ class Kernel:
     def run(self, inputs: np.ndarray, label: str = "shader") -> np.ndarray:
         """Run on ``inputs`` (rows, n_in) and return (rows, n_out) float32 results.
 
-        The shader is compiled and run in a child process (``_gl_child``) under the limits of
-        user code (:mod:`.limits`): a shader that never ends is killed with its process group.
+        The shader is compiled and run in a child process (``_gpu_child``, the process's GL
+        worker: one child for every run, its GL context made once) under the limits of user
+        code (:mod:`.limits`): a shader that never ends is killed with its process group.
         """
         inputs = np.ascontiguousarray(inputs, dtype=np.float32).reshape(-1, self.n_in)
         rows = inputs.shape[0]
@@ -157,13 +158,13 @@ class Kernel:
             "uniforms": dict(self.uniforms),
             "inputs": inputs.tobytes(),
         }
-        run = limits.run_limited(
-            limits.script_command(CHILD), input=pickle.dumps(job), label=f"{label} (GLSL on llvmpipe)"
+        run = limits.worker(limits.script_command(CHILD, "gl"), "GL").request(
+            pickle.dumps(job), label=f"{label} (GLSL on llvmpipe)"
         )
         err = run.stderr.decode(errors="replace").strip()
-        if run.returncode == 4:  # no GL context in the child
+        if run.returncode == NO_DEVICE:
             raise GraderUnavailable(err.splitlines()[-1] if err else "no OpenGL 4.3 context through EGL")
-        if run.returncode == 3:
+        if run.returncode == NO_COMPILE:
             raise GraderUnavailable(
                 f"{label} does not compile on {gl_version()}: {err.splitlines()[-1] if err else ''} "
                 "(file 1 = the subject's code, 2 = the grader's wrapper)"

@@ -17,13 +17,20 @@ The limits are module settings, changed by ``check --timeout SECONDS``:
 
 from __future__ import annotations
 
+import atexit
 import math
 import os
 import re
+import select
 import signal
+import struct
 import subprocess
 import sys
+import tempfile
+import threading
+import time
 from collections.abc import Sequence
+from typing import Any
 
 from .errors import GraderUnavailable
 
@@ -145,16 +152,17 @@ def kill_group(proc: subprocess.Popen) -> None:
         pass
 
 
-def script_command(path: os.PathLike[str] | str) -> list[str]:
-    """The command that runs the Python file ``path`` as ``__main__`` in a child, without
-    importing the package it belongs to (``python -m package.module`` would import the
-    package first: numba and the models, 0.4 s of a GL child's 0.55 s) and without putting
-    the file's folder on ``sys.path`` (where its sibling modules would shadow others).
+def script_command(path: os.PathLike[str] | str, *args: str) -> list[str]:
+    """The command that runs the Python file ``path`` as ``__main__`` (``sys.argv[1:]`` =
+    ``args``) in a child, without importing the package it belongs to (``python -m
+    package.module`` would import the package first: numba and the models, 0.4 s of a GL
+    child's 0.55 s) and without putting the file's folder on ``sys.path`` (where its sibling
+    modules would shadow others).
 
-    >>> script_command("/x/child.py")[1:3]
-    ['-c', "import runpy; runpy.run_path('/x/child.py', run_name='__main__')"]
+    >>> script_command("/x/child.py", "gl")[1:]
+    ['-c', "import runpy; runpy.run_path('/x/child.py', run_name='__main__')", 'gl']
     """
-    return [sys.executable, "-c", f"import runpy; runpy.run_path({str(path)!r}, run_name='__main__')"]
+    return [sys.executable, "-c", f"import runpy; runpy.run_path({str(path)!r}, run_name='__main__')", *args]
 
 
 def run_limited(
@@ -199,6 +207,154 @@ def run_limited(
     except (ProcessLookupError, PermissionError):
         pass
     return subprocess.CompletedProcess(list(cmd), proc.returncode, out, err)
+
+
+class Worker:
+    """A child process that runs jobs one after the other under the limits of user code.
+
+    Started on the first :meth:`request` with ``cmd`` (through the same wrapper as
+    :func:`run_limited`: its own session, ``RLIMIT_AS``, the current environment), it reads length-prefixed job frames
+    on stdin and answers each with a status and a payload (the protocol of ``_gpu_child``).
+    The time limit is per job: a job that has not answered within it is killed with the
+    child's whole process group, as is the child when the parent is interrupted while it
+    waits; a child that died (a crash, the memory limit) is reported once, as
+    :func:`run_limited` reports a failed run, and started again for the next job.  The child
+    ends when its stdin closes: with the parent, or at :meth:`stop` (run at exit).
+
+    Example
+    -------
+    A child that answers one job with its payload reversed:
+
+    >>> code = ("import struct, sys; i, o = sys.stdin.buffer, sys.stdout.buffer; "
+    ...         "n = struct.unpack('<Q', i.read(8))[0]; d = i.read(n); "
+    ...         "o.write(struct.pack('<iQ', 0, n) + d[::-1]); o.flush()")
+    >>> w = Worker([sys.executable, "-c", code], "reverse")
+    >>> w.request(b"abc", label="reverse").stdout
+    b'cba'
+    >>> w.stop()
+    """
+
+    def __init__(self, cmd: Sequence[str], name: str) -> None:
+        self.cmd, self.name = list(cmd), name
+        self.proc: subprocess.Popen | None = None
+        self.memory: int | None = None
+        self.env: dict[str, str] | None = None
+        self._stderr: Any = None
+        self._lock = threading.Lock()
+
+    def _start(self, memory: int, env: dict[str, str]) -> subprocess.Popen:
+        self._stderr = tempfile.TemporaryFile()
+        self.proc = subprocess.Popen(
+            [sys.executable, "-c", _WRAPPER, str(int(memory)), *self.cmd],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=self._stderr,
+            start_new_session=True,
+            env=env,
+        )
+        self.memory, self.env = memory, env
+        return self.proc
+
+    def stop(self) -> None:
+        """End the child (and its group) if it runs."""
+        if self.proc is not None:
+            for stream in (self.proc.stdin, self.proc.stdout):
+                try:
+                    stream.close()  # type: ignore[union-attr]
+                except OSError:
+                    pass
+            kill_group(self.proc)
+            self.proc = None
+        if self._stderr is not None:
+            self._stderr.close()
+            self._stderr = None
+
+    def _stderr_text(self) -> bytes:
+        self._stderr.seek(0)
+        return self._stderr.read()[-20000:]
+
+    def request(
+        self, payload: bytes, *, label: str, timeout: float | None = None, memory: int | None = None
+    ) -> subprocess.CompletedProcess:
+        """Send one job; return its answer as a CompletedProcess: ``returncode`` the job's status
+        (0, or the child's failure status when it died: then ``stderr`` is the child's), and
+        ``stdout`` the payload.  A job past the time limit raises GraderUnavailable, as
+        :func:`run_limited`."""
+        timeout = TIMEOUT if timeout is None else timeout
+        memory = MEMORY if memory is None else memory
+        env = dict(os.environ)
+        with self._lock:
+            proc = self.proc
+            # a child runs under the limits and environment of its first job: another memory
+            # limit or a changed environment starts a new one, as a run of its own would see
+            if proc is None or proc.poll() is not None or self.memory != memory or self.env != env:
+                self.stop()
+                proc = self._start(memory, env)
+            deadline = time.monotonic() + timeout
+            try:
+                try:
+                    proc.stdin.write(_JOB_LENGTH.pack(len(payload)) + payload)  # type: ignore[union-attr]
+                    proc.stdin.flush()  # type: ignore[union-attr]
+                    status, n = _ANSWER.unpack(_read_until(proc, _ANSWER.size, deadline))
+                    data = _read_until(proc, n, deadline)
+                except (BrokenPipeError, EOFError):  # the child died
+                    try:
+                        code = proc.wait(timeout=max(0.0, deadline - time.monotonic()))
+                    except subprocess.TimeoutExpired:
+                        raise TimeoutError from None
+                    err = self._stderr_text()
+                    self.stop()
+                    return subprocess.CompletedProcess(self.cmd, code if code else 1, b"", err)
+            except TimeoutError:
+                self.stop()
+                raise GraderUnavailable(
+                    f"{label} did not finish within {timeout:g} s (the time limit of user code; "
+                    "raise it with --timeout SECONDS): killed"
+                ) from None
+            except BaseException:
+                self.stop()
+                raise
+            if status != 0:
+                return subprocess.CompletedProcess(self.cmd, status, b"", data)
+            return subprocess.CompletedProcess(self.cmd, 0, data, b"")
+
+
+_JOB_LENGTH = struct.Struct("<Q")
+_ANSWER = struct.Struct("<iQ")
+_WORKERS: dict[tuple[str, ...], Worker] = {}
+
+
+def _read_until(proc: subprocess.Popen, n: int, deadline: float) -> bytes:
+    """n bytes from the child's stdout before ``deadline`` (TimeoutError), or EOFError when it
+    closes first."""
+    fd = proc.stdout.fileno()  # type: ignore[union-attr]
+    chunks, got = [], 0
+    while got < n:
+        left = deadline - time.monotonic()
+        if left <= 0 or not select.select([fd], [], [], left)[0]:
+            raise TimeoutError
+        chunk = os.read(fd, min(n - got, 1 << 20))
+        if not chunk:
+            raise EOFError
+        chunks.append(chunk)
+        got += len(chunk)
+    return b"".join(chunks)
+
+
+def worker(cmd: Sequence[str], name: str) -> Worker:
+    """The process's :class:`Worker` for ``cmd`` (made on first use, stopped at exit)."""
+    key = tuple(cmd)
+    w = _WORKERS.get(key)
+    if w is None:
+        w = _WORKERS[key] = Worker(cmd, name)
+    return w
+
+
+@atexit.register
+def stop_workers() -> None:
+    """End every :class:`Worker` child of the process (run at exit)."""
+    for w in _WORKERS.values():
+        w.stop()
 
 
 def memory_message(stderr: bytes | str) -> bool:
