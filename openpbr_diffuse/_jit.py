@@ -186,9 +186,13 @@ serial = numba.njit(cache=True, error_model="numpy", **NO_NRT, **NO_CFUNC)
 #: their call sites was a copy to type and lower, and the layered walk compiled in 5.6 s
 #: instead of 1.8 s, same results bit for bit).  No fastmath: the walks rely on IEEE
 #: comparisons free of inf and NaN at grazing angles, and their speed comes from the
-#: per-path loop, not from vectorisation.  With NRT: a walk allocates its tallies.
-walk = numba.njit(cache=True, nogil=True, **NO_CFUNC)
-walk_step = _compiled_only(forceinline=True)
+#: per-path loop, not from vectorisation.  With NRT: a walk allocates its tallies.  numpy's
+#: error model, as every other compiled loop of the package: a division is one instruction,
+#: not a test for a zero divisor and a ZeroDivisionError path (the walks compile in 6 % less
+#: time, results bit for bit the same: ``simulate_albedo`` V-cavity and a GGX-over-EON
+#: layered albedo, 2026-12-05).
+walk = numba.njit(cache=True, nogil=True, error_model="numpy", **NO_CFUNC)
+walk_step = _compiled_only(forceinline=True, error_model="numpy")
 
 #: Decorator for a scalar formula's NumPy form (``microfacet.fresnel``): a ufunc, typed on
 #: first call and cached.
