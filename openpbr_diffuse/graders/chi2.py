@@ -3,7 +3,7 @@
 Directions are binned over (cos theta, phi) on the upper hemisphere; the expected count of each
 bin is n times the integral of the pdf over the bin (Gauss-Legendre in both coordinates, the
 pdf called on the nodes — here, the implementation's own pdf).  Bins expected to hold fewer than
-5 samples are pooled, and the p-value comes from scipy.stats.chi2.
+5 samples are pooled, and the p-value is the chi-square survival function (scipy.special.chdtrc).
 
 Examples
 --------
