@@ -250,3 +250,30 @@ def test_mu_floor_fit_recovers_the_floor(floor, vectors):
     g = grade(vectors, hand.answer(vectors, np.float64, mu_floor=floor))
     assert g.diagnosis == "mu_floor", g.diagnosis_detail
     assert f"mu' = max(mu, {floor:.4g})" in g.diagnosis_detail, g.diagnosis_detail
+
+
+def test_remembered_predictions_give_the_grades_of_fresh_ones(vectors, monkeypatch):
+    """The fixed deviations' predictions are remembered per rows' contents: grading several
+    implementations on the same rows, on a subset, or on rows changed in place gives what
+    predicting afresh gives, and the same rows are predicted once."""
+    from openpbr_diffuse.conformance import grade as g
+
+    outs = [hand.answer(vectors, np.float32, **DEVIATION_IMPLEMENTATIONS[n]) for n in ("white_tint", "ldotv_clamped")]
+    sub = vectors.subset(vectors.model == "eon")
+
+    def summary(r):
+        return r.diagnosis, r.diagnosis_detail, sorted(r.candidates.items())
+
+    g._PREDICTIONS.clear()
+    first = [summary(grade(vectors, o)) for o in outs] + [summary(grade(sub, outs[0][vectors.model == "eon"]))]
+    n_kept = len(g._PREDICTIONS)
+    again = [summary(grade(vectors, o)) for o in outs] + [summary(grade(sub, outs[0][vectors.model == "eon"]))]
+    assert len(g._PREDICTIONS) == n_kept  # nothing predicted twice
+    monkeypatch.setattr(g, "_PREDICTIONS_KEPT", 0)  # nothing remembered
+    fresh = [summary(grade(vectors, o)) for o in outs] + [summary(grade(sub, outs[0][vectors.model == "eon"]))]
+    assert first == again == fresh
+    assert first[0][0] == "white_tint" and first[1][0] == "ldotv_clamped"
+    # rows with other contents (a rougher copy) are predicted for themselves
+    rough = vectors.subset(np.arange(len(vectors)))
+    rough.roughness[:] = np.where(np.isnan(rough.roughness), np.nan, np.minimum(rough.roughness * 1.5, 1.0))
+    assert g._rows_key(rough) != g._rows_key(vectors)

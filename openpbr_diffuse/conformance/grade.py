@@ -33,6 +33,7 @@ True
 
 from __future__ import annotations
 
+import collections
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -268,25 +269,58 @@ def _swapped(vectors):
     )
 
 
+def _rows_key(vectors):
+    """A digest of the rows' contents (what a deviation's prediction depends on)."""
+    import hashlib
+
+    h = hashlib.blake2b(digest_size=16)
+    for a in (vectors.wi, vectors.wo, vectors.mu, vectors.roughness, vectors.rho):
+        h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
+    for a in (vectors.kind, vectors.model):
+        h.update("\0".join(map(str, a)).encode())
+    return h.digest()
+
+
+#: Predictions of the fixed (unfitted) deviation variants, by (rows digest, predictor, swapped):
+#: they depend on the rows only, and a program grading several implementations on the same
+#: vectors (the report's known-deviation table, the graders) predicts each once.
+_PREDICTIONS: collections.OrderedDict = collections.OrderedDict()
+_PREDICTIONS_KEPT = 256
+
+
+def _prediction(predictor, vectors, key, swapped):
+    k = (key, id(predictor), swapped)
+    pred = _PREDICTIONS.get(k)
+    if pred is None:
+        pred = predictor(_swapped(vectors) if swapped else vectors)
+        pred.flags.writeable = False
+        _PREDICTIONS[k] = pred
+        while len(_PREDICTIONS) > _PREDICTIONS_KEPT:
+            _PREDICTIONS.popitem(last=False)
+    else:
+        _PREDICTIONS.move_to_end(k)
+    return pred
+
+
 def _variants(vectors, out, ref, rel, ab):
     """Yield (name, label, prediction) of every deviation variant (fitted ones fitted to
-    ``out``; fixed, non-reciprocal ones also with wi and wo swapped)."""
+    ``out``; fixed, non-reciprocal ones also with wi and wo swapped).  The fixed variants'
+    predictions are read-only arrays, remembered per rows' contents (``_prediction``)."""
     from .deviations import DEVIATIONS, Fitted
 
     weight = 1.0 / (ab + rel * np.abs(ref))
-    swapped = None
+    key = _rows_key(vectors)
     for name, dev in DEVIATIONS.items():
         for label, predictor in dev.variants:
             if isinstance(predictor, Fitted):
                 param, pred = predictor.fit(vectors, out, ref, weight)
                 yield name, predictor.label(param), pred
                 continue
-            pred = predictor(vectors)
+            pred = _prediction(predictor, vectors, key, False)
             yield name, label, pred
             if not (vectors.kind == "brdf").any():
                 continue
-            swapped = _swapped(vectors) if swapped is None else swapped
-            pred_s = predictor(swapped)
+            pred_s = _prediction(predictor, vectors, key, True)
             both = np.isfinite(pred) & np.isfinite(pred_s)
             if (_normalised(pred_s, pred, rel, ab)[both] > 1.0).any():
                 yield f"{name}+wi_wo_swapped", f"{label}, with wi and wo swapped", pred_s
