@@ -1,6 +1,30 @@
 """Matplotlib helpers for the report sections (Agg backend, imported lazily)."""
 
+import contextlib
+from collections.abc import Iterator
 from pathlib import Path
+
+#: The report's figures' settings: titles at a fixed height above the axes (no axis of the
+#: report has ticks on top, which is all that matplotlib's automatic title placement looks
+#: for, at the price of measuring every tick label at every draw: a tenth of the figures'
+#: drawing time).
+STYLE = {"axes.titley": 1.0, "axes.titlepad": 6.0}
+
+
+@contextlib.contextmanager
+def style() -> Iterator[None]:
+    """The report's matplotlib settings (``STYLE``) for the figures made inside the block,
+    restored after it.
+
+    >>> with style():
+    ...     import matplotlib
+    ...     matplotlib.rcParams["axes.titley"]
+    1.0
+    """
+    import matplotlib
+
+    with matplotlib.rc_context(STYLE):
+        yield
 
 
 def pyplot():

@@ -52,7 +52,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .. import _signals
-from . import output
+from . import _plot, output
 from .model import Check, Context, SectionResult, slug
 
 if TYPE_CHECKING:
@@ -398,10 +398,11 @@ def run_report(
                 quick=quick,
                 progress=lambda message: bar.set_postfix_str(str(message)[:60], refresh=True),
             )
-            for key in keys:
-                bar.set_description(key)
-                run.sections.append(run_section(key, ctx, select))
-                bar.update(1)
+            with _plot.style():
+                for key in keys:
+                    bar.set_description(key)
+                    run.sections.append(run_section(key, ctx, select))
+                    bar.update(1)
         finally:
             bar.close()
         doc = build_document(
