@@ -208,7 +208,7 @@ def _plots(ctx, figures):
         axes[0].plot(mu, gt.dc_scale_eq27(mu, sig), c, ls="--", label="Eq. 27")
         axes[0].plot(mu, gt.dc_scale_eq28(mu, sig), c, ls="-.", label="Eq. 28")
         m = np.linspace(0.0, 1.0, 11)
-        T = sh.lobe_transfer("gotanda", m, sig, 1.0, n=12)[:, :, 0]
+        T = sh.lobe_transfer("gotanda", m, sig, WHITE, n=12)[:, :, 0]  # RGB, as every model call of the report
         axes[1].plot(m, T[:, 2] / (2 / 3 * sh.C1), c, lw=2, label=f"exact along N, sigma={sig}")
         axes[1].plot(m, T[:, 3] / (2 / 3 * sh.C1), c, lw=1, ls=":", label="exact, tangential part")
         axes[1].plot(mu, gt.linear_scale_eq29(mu, sig), c, ls="--", label="Eq. 29")
