@@ -35,13 +35,16 @@ def test_cpp_compile_error_names_the_line(capsys, tmp_path):
 
 
 def test_no_egl(capsys, monkeypatch, tmp_path):
-    moderngl = pytest.importorskip("moderngl")
-
-    def no_context(**kwargs):
-        raise Exception("libEGL.so.1: cannot open shared object file")
-
-    monkeypatch.setattr(glsl, "_CONTEXT", None)
-    monkeypatch.setattr(moderngl, "create_standalone_context", no_context)
+    """No EGL in the GL child (a moderngl whose context fails, first on its import path):
+    one line naming what to install, exit 2."""
+    pytest.importorskip("moderngl")
+    fake = tmp_path / "fake"
+    fake.mkdir()
+    (fake / "moderngl.py").write_text(
+        "def create_standalone_context(**kwargs):\n    raise Exception('libEGL.so.1: cannot open shared object file')\n"
+    )
+    monkeypatch.setenv("PYTHONPATH", str(fake))
+    monkeypatch.setattr(glsl, "_VERSION", None)
     src = tmp_path / "f.glsl"
     src.write_text("vec3 f(vec3 wi, vec3 wo, float r, vec3 rho) { return rho; }\n")
     status, err = run(capsys, "--glsl", str(src), "--function", "f")

@@ -22,7 +22,7 @@ The GL set-up the parent shares (the context, the fragment stage's row layout) i
 and imported by :mod:`.glsl`.
 
 GLSL jobs: ``source``, ``stage`` ("compute" or "fragment"), ``n_out``, ``rows``, ``uniforms``,
-``inputs`` (float32 bytes).  WGSL jobs: ``source``, ``n_in``, ``n_out``, ``rows``, ``inputs``;
+``inputs`` (float32 bytes); or ``info`` (True), answered with "GL_RENDERER / GL_VERSION".  WGSL jobs: ``source``, ``n_in``, ``n_out``, ``rows``, ``inputs``;
 the shader reads ``grader_in`` (binding 0) and writes ``grader_out`` (binding 1), ``WORKGROUP``
 rows per workgroup.  On a machine without a GPU, wgpu's Vulkan backend runs on Mesa's lavapipe
 (Debian ``mesa-vulkan-drivers``).
@@ -116,6 +116,8 @@ class GL:
             except RuntimeError as exc:
                 raise Unavailable(NO_DEVICE, str(exc)) from exc
         ctx = self.ctx
+        if job.get("info"):  # the context's renderer and version
+            return f"{ctx.info['GL_RENDERER']} / {ctx.info['GL_VERSION']}".encode()
         try:
             if job["stage"] == "compute":
                 shader = ctx.compute_shader(job["source"])

@@ -51,10 +51,26 @@ def gl_context() -> Any:
     return _CONTEXT
 
 
+_VERSION: str | None = None
+
+
+def _gl_worker() -> limits.Worker:
+    """The process's GL child (``_gpu_child gl``), which runs every GLSL job."""
+    return limits.worker(limits.script_command(CHILD, "gl"), "GL")
+
+
 def gl_version() -> str:
-    """``GL_RENDERER / GL_VERSION`` of the context the GLSL runs on."""
-    info = gl_context().info
-    return f"{info['GL_RENDERER']} / {info['GL_VERSION']}"
+    """``GL_RENDERER / GL_VERSION`` of the context the GLSL runs on, as the GL child reports it
+    (the process makes no GL context of its own for it); GraderUnavailable without one."""
+    global _VERSION
+    if _VERSION is None:
+        run = _gl_worker().request(pickle.dumps({"info": True}), label="reading the GL version")
+        err = run.stderr.decode(errors="replace").strip()
+        if run.returncode != 0:
+            last = err.splitlines()[-1] if err else f"status {run.returncode}"
+            raise GraderUnavailable(last if run.returncode == NO_DEVICE else f"the GL child failed: {last}")
+        _VERSION = run.stdout.decode()
+    return _VERSION
 
 
 def resolve_includes(path: Path, search: tuple[Path, ...] = (), _seen: set | None = None) -> str:
@@ -158,9 +174,7 @@ class Kernel:
             "uniforms": dict(self.uniforms),
             "inputs": inputs.tobytes(),
         }
-        run = limits.worker(limits.script_command(CHILD, "gl"), "GL").request(
-            pickle.dumps(job), label=f"{label} (GLSL on llvmpipe)"
-        )
+        run = _gl_worker().request(pickle.dumps(job), label=f"{label} (GLSL on llvmpipe)")
         err = run.stderr.decode(errors="replace").strip()
         if run.returncode == NO_DEVICE:
             raise GraderUnavailable(err.splitlines()[-1] if err else "no OpenGL 4.3 context through EGL")
