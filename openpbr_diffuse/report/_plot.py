@@ -3,12 +3,13 @@
 import contextlib
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 #: The report's figures' settings: titles at a fixed height above the axes (no axis of the
 #: report has ticks on top, which is all that matplotlib's automatic title placement looks
 #: for, at the price of measuring every tick label at every draw: a tenth of the figures'
 #: drawing time).
-STYLE = {"axes.titley": 1.0, "axes.titlepad": 6.0}
+STYLE: dict[str, Any] = {"axes.titley": 1.0, "axes.titlepad": 6.0}
 
 
 @contextlib.contextmanager
@@ -23,7 +24,7 @@ def style() -> Iterator[None]:
     """
     import matplotlib
 
-    with matplotlib.rc_context(STYLE):
+    with matplotlib.rc_context(STYLE):  # type: ignore[arg-type]  # the stub lists each rcParams key as a literal
         yield
 
 
