@@ -33,6 +33,7 @@ O(delta^3) for an albedo smooth in mu); the same fit on 2 delta .. 16 delta give
 estimate.
 """
 
+import functools
 import math
 from collections.abc import Callable
 from typing import Literal, overload
@@ -65,21 +66,30 @@ def gauss_legendre(a: ArrayLike, b: ArrayLike, n: int) -> tuple[NDArray[np.float
     nodes, weights : ndarray, shape broadcast(a, b) + (n,)
         A zero-width panel has zero weights.
     """
-    x, w = np.polynomial.legendre.leggauss(n)
+    x, w = _leggauss(n)
     a = np.asarray(a, dtype=np.float64)[..., None]
     b = np.asarray(b, dtype=np.float64)[..., None]
     half = 0.5 * (b - a)
     return 0.5 * (a + b) + half * x, half * w
 
 
+@functools.lru_cache(maxsize=64)
+def _leggauss(n: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``numpy.polynomial.legendre.leggauss(n)``, computed once per n (read-only arrays)."""
+    x, w = np.polynomial.legendre.leggauss(n)
+    x.flags.writeable = w.flags.writeable = False
+    return x, w
+
+
+#: 2^k - 1 for k = 1 .. _MAX_GRADING
+_GRADES = 2.0 ** np.arange(1, _MAX_GRADING + 1) - 1.0
+
+
 def _graded_count(theta_o):
     """Number K of sub-panels of [0, theta_o]: 1 + #{k >= 1 : theta_o - d (2^k - 1) > 0}."""
     t = np.asarray(theta_o, dtype=np.float64)
     d = 2.0 * (HALF_PI - t)
-    k = np.ones(t.shape, dtype=np.int64)
-    for j in range(1, _MAX_GRADING + 1):
-        k += t - d * (2.0**j - 1.0) > 0.0
-    return k
+    return 1 + np.count_nonzero(t[..., None] - d[..., None] * _GRADES > 0.0, axis=-1).astype(np.int64)
 
 
 def _theta_breaks(theta_o, kinks):
