@@ -396,6 +396,12 @@ WGSL_BODIES = {
 
 def _wgsl_source(folder: Path, key: str) -> str:
     """The WGSL include modules, preprocessed (EON diffuse model, physical falloff), and the harness."""
+    return _wgsl_includes(folder) + _WGSL_MAIN.replace("BODY", WGSL_BODIES[key])
+
+
+@lru_cache(maxsize=8)
+def _wgsl_includes(folder: Path) -> str:
+    """The WGSL include modules after the C preprocessor: the same text for every WGSL path."""
     if shutil.which("cpp") is None:
         raise GraderUnavailable(
             "cpp (the C preprocessor, for Babylon's #if lines in WGSL) is missing: apt-get install g++"
@@ -411,7 +417,7 @@ def _wgsl_source(folder: Path, key: str) -> str:
     )
     if run.returncode != 0:
         raise GraderUnavailable(f"cpp could not preprocess Babylon's WGSL: {run.stderr.decode(errors='replace')[:200]}")
-    return run.stdout.decode() + _WGSL_MAIN.replace("BODY", WGSL_BODIES[key])
+    return run.stdout.decode()
 
 
 def _run_wgsl(source_text: str, inputs: np.ndarray, n_out: int, label: str) -> np.ndarray:
