@@ -318,3 +318,21 @@ def test_spectral_channel_counts_share_one_albedo_driver():
     assert mk.eval_driver(mk.EON, 81) is mk.eval_driver(mk.EON, 85)
     assert mk.albedo_driver(mk.EON, 3) is not mk.albedo_driver(mk.EON, 81)
     assert mk.albedo_driver(mk.EON, 1) is not mk.albedo_driver(mk.EON, 3)
+
+
+_LAYERED_OVER_LAMBERT = r"""
+from openpbr_diffuse.simulation.layered import LayeredSurface, simulate_layered_albedo
+
+for surface in (LayeredSurface("smooth", 1.5, coat_color=0.8), LayeredSurface("ggx", 1.5, 0.25)):
+    simulate_layered_albedo(surface, [0.4], rho=[0.8, 1.0], paths=500, seed=1, workers=1)
+RESULT = {"compiled": sorted({c["name"] for c in COMPILED})}
+"""
+
+
+def test_a_layered_walk_compiles_its_own_base_only(tmp_path):
+    """The layered simulator's chunk kernel is compiled per base: walks over a Lambertian base
+    (smooth and rough interfaces) compile neither the Smith microsurface's walk nor the EON
+    sampler."""
+    compiled = _run(_LAYERED_OVER_LAMBERT, tmp_path)["compiled"]
+    assert any(n.startswith("chunk_kernel.") for n in compiled), compiled
+    assert not [n for n in compiled if n in ("smith_base", "eon_sample")], compiled

@@ -29,6 +29,7 @@ crossing is weighted by its transmittance.
 - Russian roulette on the largest channel weight below ``RR_WEIGHT`` (unbiased).
 """
 
+import functools
 import math
 
 import numpy as np
@@ -127,150 +128,165 @@ def base_f(base, vx, vy, vz, wx, wy, wz, r, rho, c):
     return rho[c] * g + rho_ms(rho[c], avg) * hh
 
 
-@walk
 def run_chunk_layered(alpha, eta, tau, base, r, rho, wi, random_wi, wo, n_paths, seed, max_bounces):
-    """Trace ``n_paths`` paths from ``wi`` (cosine-distributed if ``random_wi``).
+    """``chunk_kernel(base)`` run on the other arguments (see there)."""
+    return chunk_kernel(base)(alpha, eta, tau, r, rho, wi, random_wi, wo, n_paths, seed, max_bounces)
 
-    Returns
-    -------
-    s1, s2 : (3, C) sums of the per-path albedo estimates and their squares, for the
-        specular part, the diffuse part and the total
-    nee_s1, nee_s2 : (m, C) sums of the per-path NEE estimates of the diffuse f(wi, wo_j)
-        and their squares (zeros for a rough interface)
-    stats : (4,) int64: paths, base events, paths cut at ``max_bounces``, interface walks cut
-    """
-    np.random.seed(seed)
-    C = rho.shape[0]
-    m = wo.shape[0]
-    s1 = np.zeros((3, C))
-    s2 = np.zeros((3, C))
-    nee_s1 = np.zeros((m, C))
-    nee_s2 = np.zeros((m, C))
-    stats = np.zeros(4, dtype=np.int64)
-    w = np.empty(C)
-    diff = np.empty(C)
-    pn = np.zeros((m, C))
-    smooth = alpha <= 0.0
-    # NEE connections: refracted wo (inside, pointing up) and its per-channel factor
-    wt = np.zeros((m, 3))
-    kt = np.zeros((m, C))
-    if smooth:
-        for j in range(m):
-            oz = wo[j, 2]
-            if oz <= 0.0:
-                continue
-            st = math.sqrt(max(0.0, 1.0 - oz * oz)) / eta
-            sp = math.sqrt(max(0.0, 1.0 - oz * oz))
-            tz = math.sqrt(max(0.0, 1.0 - st * st))
-            sc = st / sp if sp > 0.0 else 0.0
-            wt[j, 0], wt[j, 1], wt[j, 2] = wo[j, 0] * sc, wo[j, 1] * sc, tz
-            for c in range(C):
-                kt[j, c] = (1.0 - dielectric(oz, eta)) * math.exp(-tau[c] / tz) / (eta * eta)
-    r10 = pow_tenth(r)
-    wx, wy, wz = wi[0], wi[1], wi[2]
-    for _ in range(n_paths):
-        if random_wi:
-            wx, wy, wz = cosine_hemisphere()
-        stats[0] += 1
-        for c in range(C):
-            diff[c] = 0.0
-            w[c] = 1.0
-        spec = 0.0
-        inside = True
+
+@functools.cache
+def chunk_kernel(base):
+    """The chunk kernel of one base (LAMBERT, EON or SMITH), a compile-time constant: a walk
+    compiles its own base's scattering only (the report's layered checks, over Lambert, do
+    not compile the Smith microsurface's walk nor the EON sampler)."""
+    if base not in (LAMBERT, EON, SMITH):
+        raise ValueError(f"base: expected LAMBERT, EON or SMITH ({LAMBERT}, {EON}, {SMITH}), got {base!r}")
+
+    @walk
+    def run_chunk(alpha, eta, tau, r, rho, wi, random_wi, wo, n_paths, seed, max_bounces):
+        """Trace ``n_paths`` paths from ``wi`` (cosine-distributed if ``random_wi``).
+
+        Returns
+        -------
+        s1, s2 : (3, C) sums of the per-path albedo estimates and their squares, for the
+            specular part, the diffuse part and the total
+        nee_s1, nee_s2 : (m, C) sums of the per-path NEE estimates of the diffuse f(wi, wo_j)
+            and their squares (zeros for a rough interface)
+        stats : (4,) int64: paths, base events, paths cut at ``max_bounces``, interface walks cut
+        """
+        np.random.seed(seed)
+        C = rho.shape[0]
+        m = wo.shape[0]
+        s1 = np.zeros((3, C))
+        s2 = np.zeros((3, C))
+        nee_s1 = np.zeros((m, C))
+        nee_s2 = np.zeros((m, C))
+        stats = np.zeros(4, dtype=np.int64)
+        w = np.empty(C)
+        diff = np.empty(C)
+        pn = np.zeros((m, C))
+        smooth = alpha <= 0.0
+        # NEE connections: refracted wo (inside, pointing up) and its per-channel factor
+        wt = np.zeros((m, 3))
+        kt = np.zeros((m, C))
         if smooth:
-            F = dielectric(wz, eta)
-            spec = F
-            st = math.sqrt(max(0.0, 1.0 - wz * wz)) / eta
-            sp = math.sqrt(max(0.0, 1.0 - wz * wz))
-            sc = st / sp if sp > 0.0 else 0.0
-            dx, dy, dz = -wx * sc, -wy * sc, -math.sqrt(max(0.0, 1.0 - st * st))
-            for c in range(C):
-                w[c] = 1.0 - F
-        else:
-            dx, dy, dz, up, _, cut = rough_interface(-wx, -wy, -wz, True, alpha, eta)
-            stats[3] += 1 if cut else 0
-            if up:
-                spec = 1.0
-                inside = False
-        k = 0
-        while inside:
-            # down through the slab to the base
-            mu = -dz
-            for c in range(C):
-                w[c] *= math.exp(-tau[c] / mu) if mu > 0.0 else 0.0
-            k += 1
-            if k > max_bounces:
-                stats[2] += 1
-                break
-            vx, vy, vz = -dx, -dy, -dz
             for j in range(m):
-                if wt[j, 2] == 0.0:
+                oz = wo[j, 2]
+                if oz <= 0.0:
                     continue
+                st = math.sqrt(max(0.0, 1.0 - oz * oz)) / eta
+                sp = math.sqrt(max(0.0, 1.0 - oz * oz))
+                tz = math.sqrt(max(0.0, 1.0 - st * st))
+                sc = st / sp if sp > 0.0 else 0.0
+                wt[j, 0], wt[j, 1], wt[j, 2] = wo[j, 0] * sc, wo[j, 1] * sc, tz
                 for c in range(C):
-                    pn[j, c] += w[c] * base_f(base, vx, vy, vz, wt[j, 0], wt[j, 1], wt[j, 2], r, rho, c) * kt[j, c]
-            # scatter at the base
-            if base == LAMBERT:
-                ux, uy, uz = cosine_hemisphere()
-                for c in range(C):
-                    w[c] *= rho[c]
-            elif base == SMITH:
-                ux, uy, uz, kb, esc = smith_base(dx, dy, dz, r, max_bounces)
-                if not esc or uz <= 0.0:
-                    stats[2] += 0 if esc else 1
-                    break
-                for c in range(C):
-                    w[c] *= rho[c] ** kb
-            else:
-                Xx, Xy = ltc_frame(vx, vy)
-                ux, uy, uz, p = eon_sample(
-                    Xx, Xy, min(max(vz, 0.0), 1.0), r, r10, np.random.random(), np.random.random()
-                )
-                if uz <= 0.0 or p <= 0.0:
-                    break
-                for c in range(C):
-                    w[c] *= base_f(base, vx, vy, vz, ux, uy, uz, r, rho, c) * uz / p
-            # up through the slab
-            wmax = 0.0
+                    kt[j, c] = (1.0 - dielectric(oz, eta)) * math.exp(-tau[c] / tz) / (eta * eta)
+        r10 = pow_tenth(r)
+        wx, wy, wz = wi[0], wi[1], wi[2]
+        for _ in range(n_paths):
+            if random_wi:
+                wx, wy, wz = cosine_hemisphere()
+            stats[0] += 1
             for c in range(C):
-                w[c] *= math.exp(-tau[c] / uz)
-                wmax = max(wmax, w[c])
-            if wmax <= 0.0:
-                break
-            if wmax < RR_WEIGHT:
-                q = wmax / RR_WEIGHT
-                if np.random.random() >= q:
-                    break
-                for c in range(C):
-                    w[c] /= q
-            # the interface from inside
+                diff[c] = 0.0
+                w[c] = 1.0
+            spec = 0.0
+            inside = True
             if smooth:
-                F = dielectric(uz, 1.0 / eta)
+                F = dielectric(wz, eta)
+                spec = F
+                st = math.sqrt(max(0.0, 1.0 - wz * wz)) / eta
+                sp = math.sqrt(max(0.0, 1.0 - wz * wz))
+                sc = st / sp if sp > 0.0 else 0.0
+                dx, dy, dz = -wx * sc, -wy * sc, -math.sqrt(max(0.0, 1.0 - st * st))
                 for c in range(C):
-                    diff[c] += w[c] * (1.0 - F)
-                    w[c] *= F
-                if F <= 0.0:
-                    break
-                dx, dy, dz = ux, uy, -uz
+                    w[c] = 1.0 - F
             else:
-                dx, dy, dz, up, _, cut = rough_interface(ux, uy, uz, False, alpha, eta)
+                dx, dy, dz, up, _, cut = rough_interface(-wx, -wy, -wz, True, alpha, eta)
                 stats[3] += 1 if cut else 0
                 if up:
-                    for c in range(C):
-                        diff[c] += w[c]
+                    spec = 1.0
+                    inside = False
+            k = 0
+            while inside:
+                # down through the slab to the base
+                mu = -dz
+                for c in range(C):
+                    w[c] *= math.exp(-tau[c] / mu) if mu > 0.0 else 0.0
+                k += 1
+                if k > max_bounces:
+                    stats[2] += 1
                     break
-        stats[1] += min(k, max_bounces)
-        for c in range(C):
-            tot = spec + diff[c]
-            s1[0, c] += spec
-            s2[0, c] += spec * spec
-            s1[1, c] += diff[c]
-            s2[1, c] += diff[c] * diff[c]
-            s1[2, c] += tot
-            s2[2, c] += tot * tot
-        for j in range(m):
+                vx, vy, vz = -dx, -dy, -dz
+                for j in range(m):
+                    if wt[j, 2] == 0.0:
+                        continue
+                    for c in range(C):
+                        pn[j, c] += w[c] * base_f(base, vx, vy, vz, wt[j, 0], wt[j, 1], wt[j, 2], r, rho, c) * kt[j, c]
+                # scatter at the base
+                if base == LAMBERT:
+                    ux, uy, uz = cosine_hemisphere()
+                    for c in range(C):
+                        w[c] *= rho[c]
+                elif base == SMITH:
+                    ux, uy, uz, kb, esc = smith_base(dx, dy, dz, r, max_bounces)
+                    if not esc or uz <= 0.0:
+                        stats[2] += 0 if esc else 1
+                        break
+                    for c in range(C):
+                        w[c] *= rho[c] ** kb
+                else:
+                    Xx, Xy = ltc_frame(vx, vy)
+                    ux, uy, uz, p = eon_sample(
+                        Xx, Xy, min(max(vz, 0.0), 1.0), r, r10, np.random.random(), np.random.random()
+                    )
+                    if uz <= 0.0 or p <= 0.0:
+                        break
+                    for c in range(C):
+                        w[c] *= base_f(base, vx, vy, vz, ux, uy, uz, r, rho, c) * uz / p
+                # up through the slab
+                wmax = 0.0
+                for c in range(C):
+                    w[c] *= math.exp(-tau[c] / uz)
+                    wmax = max(wmax, w[c])
+                if wmax <= 0.0:
+                    break
+                if wmax < RR_WEIGHT:
+                    q = wmax / RR_WEIGHT
+                    if np.random.random() >= q:
+                        break
+                    for c in range(C):
+                        w[c] /= q
+                # the interface from inside
+                if smooth:
+                    F = dielectric(uz, 1.0 / eta)
+                    for c in range(C):
+                        diff[c] += w[c] * (1.0 - F)
+                        w[c] *= F
+                    if F <= 0.0:
+                        break
+                    dx, dy, dz = ux, uy, -uz
+                else:
+                    dx, dy, dz, up, _, cut = rough_interface(ux, uy, uz, False, alpha, eta)
+                    stats[3] += 1 if cut else 0
+                    if up:
+                        for c in range(C):
+                            diff[c] += w[c]
+                        break
+            stats[1] += min(k, max_bounces)
             for c in range(C):
-                v = pn[j, c]
-                nee_s1[j, c] += v
-                nee_s2[j, c] += v * v
-                pn[j, c] = 0.0
-    return s1, s2, nee_s1, nee_s2, stats
+                tot = spec + diff[c]
+                s1[0, c] += spec
+                s2[0, c] += spec * spec
+                s1[1, c] += diff[c]
+                s2[1, c] += diff[c] * diff[c]
+                s1[2, c] += tot
+                s2[2, c] += tot * tot
+            for j in range(m):
+                for c in range(C):
+                    v = pn[j, c]
+                    nee_s1[j, c] += v
+                    nee_s2[j, c] += v * v
+                    pn[j, c] = 0.0
+        return s1, s2, nee_s1, nee_s2, stats
+
+    return run_chunk
