@@ -160,7 +160,7 @@ def test_a_worker_that_dies_in_a_job_reports_it_and_the_memory_limit_applies() -
         "    if d == b'hog': b = bytearray(2**31)\n"
         "    o.write(struct.pack('<iQ', 0, len(d)) + d); o.flush()\n"
     )
-    w = limits.Worker([sys.executable, "-c", code], "echo")
+    w = limits.Worker([sys.executable, "-c", code])
     try:
         assert w.request(b"one", label="echo", memory=2**30).stdout == b"one"
         pid = w.proc.pid

@@ -22,8 +22,8 @@ The GL set-up the parent shares (the context, the fragment stage's row layout) i
 and imported by :mod:`.glsl`.
 
 GLSL jobs: ``source``, ``stage`` ("compute" or "fragment"), ``n_out``, ``rows``, ``uniforms``,
-``inputs`` (float32 bytes); or ``info`` (True), answered with "GL_RENDERER / GL_VERSION".  WGSL jobs: ``source``, ``n_in``, ``n_out``, ``rows``, ``inputs``;
-the shader reads ``grader_in`` (binding 0) and writes ``grader_out`` (binding 1), ``WORKGROUP``
+``inputs`` (float32 bytes); or ``info`` (True), answered with "GL_RENDERER / GL_VERSION".
+WGSL jobs: ``source``, ``n_in``, ``n_out``, ``rows``, ``inputs``; the shader reads ``grader_in`` (binding 0) and writes ``grader_out`` (binding 1), ``WORKGROUP``
 rows per workgroup.  On a machine without a GPU, wgpu's Vulkan backend runs on Mesa's lavapipe
 (Debian ``mesa-vulkan-drivers``).
 """
@@ -184,21 +184,25 @@ class WGSL:
         buf_out = device.create_buffer(
             size=padded * n_out * 4, usage=wgpu.BufferUsage.STORAGE | wgpu.BufferUsage.COPY_SRC
         )
-        group = device.create_bind_group(
-            layout=pipe.get_bind_group_layout(0),
-            entries=[{"binding": 0, "resource": {"buffer": buf_in}}, {"binding": 1, "resource": {"buffer": buf_out}}],
-        )
-        encoder = device.create_command_encoder()
-        compute = encoder.begin_compute_pass()
-        compute.set_pipeline(pipe)
-        compute.set_bind_group(0, group)
-        compute.dispatch_workgroups(padded // WORKGROUP)
-        compute.end()
-        device.queue.submit([encoder.finish()])
-        out = bytes(device.queue.read_buffer(buf_out))[: rows * n_out * 4]
-        buf_in.destroy()
-        buf_out.destroy()
-        return out
+        try:  # the device outlives the job: its buffers are released whatever happens
+            group = device.create_bind_group(
+                layout=pipe.get_bind_group_layout(0),
+                entries=[
+                    {"binding": 0, "resource": {"buffer": buf_in}},
+                    {"binding": 1, "resource": {"buffer": buf_out}},
+                ],
+            )
+            encoder = device.create_command_encoder()
+            compute = encoder.begin_compute_pass()
+            compute.set_pipeline(pipe)
+            compute.set_bind_group(0, group)
+            compute.dispatch_workgroups(padded // WORKGROUP)
+            compute.end()
+            device.queue.submit([encoder.finish()])
+            return bytes(device.queue.read_buffer(buf_out))[: rows * n_out * 4]
+        finally:
+            buf_in.destroy()
+            buf_out.destroy()
 
 
 def _read(stream: Any, n: int) -> bytes | None:

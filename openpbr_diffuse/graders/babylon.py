@@ -434,7 +434,7 @@ def _run_wgsl(source_text: str, inputs: np.ndarray, n_out: int, label: str) -> n
         "rows": inputs.shape[0],
         "inputs": inputs.tobytes(),
     }
-    run = limits.worker(limits.script_command(CHILD, "wgsl"), "WGSL").request(
+    run = limits.worker(limits.script_command(CHILD, "wgsl")).request(
         pickle.dumps(job), label=f"{label} (WGSL through wgpu)"
     )
     err = [line for line in run.stderr.decode(errors="replace").splitlines() if "XDG_RUNTIME_DIR" not in line]

@@ -56,7 +56,7 @@ _VERSION: str | None = None
 
 def _gl_worker() -> limits.Worker:
     """The process's GL child (``_gpu_child gl``), which runs every GLSL job."""
-    return limits.worker(limits.script_command(CHILD, "gl"), "GL")
+    return limits.worker(limits.script_command(CHILD, "gl"))
 
 
 def gl_version() -> str:

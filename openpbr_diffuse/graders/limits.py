@@ -23,7 +23,6 @@ import os
 import re
 import select
 import signal
-import struct
 import subprocess
 import sys
 import tempfile
@@ -32,6 +31,7 @@ import time
 from collections.abc import Sequence
 from typing import Any
 
+from ._gpu_child import ANSWER_HEADER, JOB_HEADER
 from .errors import GraderUnavailable
 
 #: default wall-time limit of one compile or one run of user code, seconds
@@ -213,8 +213,9 @@ class Worker:
     """A child process that runs jobs one after the other under the limits of user code.
 
     Started on the first :meth:`request` with ``cmd`` (through the same wrapper as
-    :func:`run_limited`: its own session, ``RLIMIT_AS``, the current environment), it reads length-prefixed job frames
-    on stdin and answers each with a status and a payload (the protocol of ``_gpu_child``).
+    :func:`run_limited`: its own session, ``RLIMIT_AS``, the current environment), it reads
+    length-prefixed job frames on stdin and answers each with a status and a payload (the
+    protocol of ``_gpu_child``: ``JOB_HEADER``, ``ANSWER_HEADER``).
     The time limit is per job: a job that has not answered within it is killed with the
     child's whole process group, as is the child when the parent is interrupted while it
     waits; a child that died (a crash, the memory limit) is reported once, as
@@ -228,14 +229,14 @@ class Worker:
     >>> code = ("import struct, sys; i, o = sys.stdin.buffer, sys.stdout.buffer; "
     ...         "n = struct.unpack('<Q', i.read(8))[0]; d = i.read(n); "
     ...         "o.write(struct.pack('<iQ', 0, n) + d[::-1]); o.flush()")
-    >>> w = Worker([sys.executable, "-c", code], "reverse")
+    >>> w = Worker([sys.executable, "-c", code])
     >>> w.request(b"abc", label="reverse").stdout
     b'cba'
     >>> w.stop()
     """
 
-    def __init__(self, cmd: Sequence[str], name: str) -> None:
-        self.cmd, self.name = list(cmd), name
+    def __init__(self, cmd: Sequence[str]) -> None:
+        self.cmd = list(cmd)
         self.proc: subprocess.Popen | None = None
         self.memory: int | None = None
         self.env: dict[str, str] | None = None
@@ -293,9 +294,9 @@ class Worker:
             deadline = time.monotonic() + timeout
             try:
                 try:
-                    proc.stdin.write(_JOB_LENGTH.pack(len(payload)) + payload)  # type: ignore[union-attr]
+                    proc.stdin.write(JOB_HEADER.pack(len(payload)) + payload)  # type: ignore[union-attr]
                     proc.stdin.flush()  # type: ignore[union-attr]
-                    status, n = _ANSWER.unpack(_read_until(proc, _ANSWER.size, deadline))
+                    status, n = ANSWER_HEADER.unpack(_read_until(proc, ANSWER_HEADER.size, deadline))
                     data = _read_until(proc, n, deadline)
                 except (BrokenPipeError, EOFError):  # the child died
                     try:
@@ -319,8 +320,6 @@ class Worker:
             return subprocess.CompletedProcess(self.cmd, 0, data, b"")
 
 
-_JOB_LENGTH = struct.Struct("<Q")
-_ANSWER = struct.Struct("<iQ")
 _WORKERS: dict[tuple[str, ...], Worker] = {}
 
 
@@ -341,12 +340,12 @@ def _read_until(proc: subprocess.Popen, n: int, deadline: float) -> bytes:
     return b"".join(chunks)
 
 
-def worker(cmd: Sequence[str], name: str) -> Worker:
+def worker(cmd: Sequence[str]) -> Worker:
     """The process's :class:`Worker` for ``cmd`` (made on first use, stopped at exit)."""
     key = tuple(cmd)
     w = _WORKERS.get(key)
     if w is None:
-        w = _WORKERS[key] = Worker(cmd, name)
+        w = _WORKERS[key] = Worker(cmd)
     return w
 
 

@@ -128,11 +128,6 @@ def base_f(base, vx, vy, vz, wx, wy, wz, r, rho, c):
     return rho[c] * g + rho_ms(rho[c], avg) * hh
 
 
-def run_chunk_layered(alpha, eta, tau, base, r, rho, wi, random_wi, wo, n_paths, seed, max_bounces):
-    """``chunk_kernel(base)`` run on the other arguments (see there)."""
-    return chunk_kernel(base)(alpha, eta, tau, r, rho, wi, random_wi, wo, n_paths, seed, max_bounces)
-
-
 @functools.cache
 def chunk_kernel(base):
     """The chunk kernel of one base (LAMBERT, EON or SMITH), a compile-time constant: a walk

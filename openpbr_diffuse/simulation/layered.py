@@ -169,11 +169,11 @@ def _chunk_seed(seed: int, kind: str, surface: LayeredSurface, key: ArrayLike, c
 
 def _run_task(task):
     """One chunk (module-level so that Dask workers can import it)."""
-    from ._layered_kernels import EON, LAMBERT, SMITH, run_chunk_layered
+    from ._layered_kernels import EON, LAMBERT, SMITH, chunk_kernel
 
     alpha, eta, tau, base, r, rho, wi, random_wi, wo, n, seed = task
     b = {"lambert": LAMBERT, "eon": EON, "smith-ggx": SMITH}[base]
-    return run_chunk_layered(alpha, eta, tau, b, r, rho, wi, random_wi, wo, n, seed, MAX_BOUNCES)
+    return chunk_kernel(b)(alpha, eta, tau, r, rho, wi, random_wi, wo, n, seed, MAX_BOUNCES)
 
 
 def _execute(tasks, workers, client, scheduler):

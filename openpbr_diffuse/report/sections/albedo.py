@@ -113,7 +113,9 @@ def build(ctx: Context) -> SectionResult:
             continue
         if ctx.quick and m not in QUICK_MODELS:  # listed as not run (the full report runs them)
             for kind in ("directional", "average"):
-                res.checks.append(skipped_in_quick(f"{m}: {kind} albedo, closed form vs table", f"data/albedo_{m}.csv"))
+                res.checks.append(
+                    skipped_in_quick(f"{m}: {kind} albedo, closed form vs table", f"data/{table_path(m).name}")
+                )
             continue
         ctx.progress(f"albedo {m}")
         table = load_table(m)

@@ -84,6 +84,13 @@ def _at(row):
     return {k.strip(): float(v) for k, v in (p.split("=") for p in row["at"].split(","))}
 
 
+#: The live checks of the Gotanda rows (not run by ``report --quick``) and what they compare with.
+_GOTANDA_LIVE = {
+    "gotanda_eq27_vs_e25": "closed-form albedo of the Eq. 25 lobe (od.directional_albedo)",
+    "gotanda_eq25_vs_fullon": "od.evaluate('full_on')",
+}
+
+
 def _live_checks(rows, quick=False):
     """Recompute a few rows at their worst points with independent code paths (``quick``: the
     rows of models outside ``QUICK_MODELS`` listed as not run)."""
@@ -109,10 +116,7 @@ def _live_checks(rows, quick=False):
         )
 
     if quick:  # the Gotanda and full Oren-Nayar models' drivers are the full report's to compile
-        for rid, ref in (
-            ("gotanda_eq27_vs_e25", "closed-form albedo of the Eq. 25 lobe (od.directional_albedo)"),
-            ("gotanda_eq25_vs_fullon", "od.evaluate('full_on')"),
-        ):
+        for rid, ref in _GOTANDA_LIVE.items():
             checks.append(skipped_in_quick(f"{rid}: live recomputation at the stated worst point", ref))
     else:
         p = _at(rows["gotanda_eq27_vs_e25"])
@@ -122,7 +126,7 @@ def _live_checks(rows, quick=False):
                 gt.dc_scale_eq27(p["mu_o"], p["sigma"])
                 - od.directional_albedo("gotanda", p["mu_o"], p["sigma"], WHITE)[0]
             ),
-            "closed-form albedo of the Eq. 25 lobe (od.directional_albedo)",
+            _GOTANDA_LIVE["gotanda_eq27_vs_e25"],
         )
         p = _at(rows["gotanda_eq25_vs_fullon"])
         s_i = math.sqrt(1 - p["mu_i"] ** 2)
@@ -132,7 +136,7 @@ def _live_checks(rows, quick=False):
         same(
             "gotanda_eq25_vs_fullon",
             abs(math.pi * (gt.improved(wi, wo, p["sigma"], WHITE)[0] - full) * p["mu_i"]),
-            "od.evaluate('full_on')",
+            _GOTANDA_LIVE["gotanda_eq25_vs_fullon"],
             1e-6,
         )
     for l in range(3):
