@@ -4,6 +4,7 @@ way tests/test_report_page.py drives it) and read what the first screen shows.""
 from pathlib import Path
 
 import pytest
+from _system import need
 from test_report_page import CHROMIUM, FLAGS
 
 
@@ -13,8 +14,7 @@ def first_screen(html: Path, selector: str = "#headline", width: int = 1280, hei
     requests, "images": [(src, complete, naturalWidth)]}.  Skips when playwright or Chromium
     is absent."""
     sync_api = pytest.importorskip("playwright.sync_api")
-    if not Path(CHROMIUM).exists():
-        pytest.skip("chromium not installed (apt-get install chromium)")
+    need("chromium")
     errors, failed = [], []
     with sync_api.sync_playwright() as p:
         browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS)

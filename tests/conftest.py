@@ -29,3 +29,20 @@ def rng():
 @pytest.fixture(params=od.MODELS)
 def model(request):
     return request.param
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    """Under OPENPBR_DIFFUSE_REQUIRE_SYSTEM (set by .ci/run) a skip for a missing system program
+    (reason starting with tests/_system.PREFIX) is a failure: CI installs every program."""
+    import _system
+
+    outcome = yield
+    rep = outcome.get_result()
+    if not (rep.skipped and _system.required()):
+        return
+    longrepr = rep.longrepr
+    text = longrepr[2] if isinstance(longrepr, tuple) and len(longrepr) == 3 else str(longrepr)
+    if _system.PREFIX in text:
+        rep.outcome = "failed"
+        rep.longrepr = f"{text} -- {_system.REQUIRE_ENV} is set, so a missing system program fails the run"

@@ -2,11 +2,11 @@
 over without --force; blank rows are skipped; JSON rows take `out` without a columns list."""
 
 import json
-import shutil
 import subprocess
 
 import numpy as np
 import pytest
+from _system import requires
 
 from openpbr_diffuse.cli.main import main
 from openpbr_diffuse.conformance.deviations import reference
@@ -61,7 +61,7 @@ def test_template_signatures_and_placeholder(tmp_path, kind, sig):
     assert all(s in text for s in sig) and "PLACEHOLDER" in text
 
 
-@pytest.mark.skipif(shutil.which("g++") is None, reason="no g++")
+@requires("glm")
 def test_cpp_template_compiles_and_is_lambert(tmp_path):
     """Compiled with a main of its own: f = rho/pi, E = rho, the sample's pdf is mu/pi."""
     path = tmp_path / "t.cpp"

@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from _system import need
 
 import openpbr_diffuse
 
@@ -54,6 +55,7 @@ def test_pages_render_in_chromium_with_search_and_no_console_error(site, page):
     from test_report_page import CHROMIUM, FLAGS
 
     sync_api = pytest.importorskip("playwright.sync_api")
+    need("chromium")
     handler = functools.partial(http.server.SimpleHTTPRequestHandler, directory=str(site))
     handler.log_message = lambda *a, **k: None  # type: ignore[attr-defined]
     server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)

@@ -9,9 +9,9 @@ is the deviation that was written in.
 
 import json
 import re
-import shutil
 
 import pytest
+from _system import requires
 
 from openpbr_diffuse.cli.main import main
 
@@ -149,18 +149,8 @@ def by_quantity(result):
     return {q["quantity"]: q for q in result["quantities"]}
 
 
-def _gl_available():
-    try:
-        from openpbr_diffuse.graders.glsl import gl_context
-
-        gl_context()
-        return True
-    except Exception:
-        return False
-
-
-needs_gl = pytest.mark.skipif(not _gl_available(), reason="no OpenGL 4.3 through EGL (Mesa llvmpipe)")
-needs_cxx = pytest.mark.skipif(shutil.which("g++") is None, reason="no g++")
+needs_gl = requires("gl")
+needs_cxx = requires("glm")
 
 
 @pytest.fixture(scope="module")

@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pytest
 from _quad import hemisphere_grid
+from _system import need
 
 from openpbr_diffuse.conformance.vectors import default_vectors
 from openpbr_diffuse.graders import babylon, load
@@ -60,12 +61,14 @@ def _predict_ldotv_zero(wi, wo, r, rho):
 
 @pytest.fixture(scope="module")
 def folder():
+    need("babylonjs")
     return babylon.package_folder()
 
 
 @pytest.fixture(scope="module")
 def graded(folder):
     """Every path's grade, by label (the slow part: 11 shader runs)."""
+    need("gl", "vulkan")
     s = babylon.subject(folder)
     result = grade_subject(s, quantities=("brdf", "albedo"))
     return s, {q.quantity: q for q in result.quantities}

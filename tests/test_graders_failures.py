@@ -1,6 +1,7 @@
 """Clear failures: a missing piece is one line on stderr naming it and how to get it, exit 2."""
 
 import pytest
+from _system import need
 
 from openpbr_diffuse.cli.main import main
 from openpbr_diffuse.graders import glsl
@@ -27,7 +28,7 @@ def test_no_compiler(capsys, monkeypatch, tmp_path):
 
 
 def test_cpp_compile_error_names_the_line(capsys, tmp_path):
-    pytest.importorskip("shutil").which("g++") or pytest.skip("no g++")
+    need("glm")
     src = tmp_path / "broken.hpp"
     src.write_text("glm::vec3 f(glm::vec3 a, glm::vec3 b, float r, glm::vec3 c) { return undefined_name; }\n")
     status, err = run(capsys, "--cpp", str(src), "--function", "f")
@@ -55,7 +56,7 @@ def test_shader_compile_error(capsys, tmp_path):
     try:
         glsl.gl_context()
     except GraderUnavailable:
-        pytest.skip("no OpenGL through EGL")
+        need("gl")
     src = tmp_path / "broken.glsl"
     src.write_text("vec3 f(vec3 wi, vec3 wo, float r, vec3 rho) { return rho * undefined_name; }\n")
     status, err = run(capsys, "--glsl", str(src), "--function", "f")

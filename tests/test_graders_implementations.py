@@ -15,22 +15,11 @@ tests/test_subjects_deviations.py).
 
 import numpy as np
 import pytest
+from _system import requires
 
 from openpbr_diffuse.graders import grade_implementation, load
-from openpbr_diffuse.graders.errors import GraderUnavailable
 
-
-def _gl():
-    try:
-        from openpbr_diffuse.graders.glsl import gl_context
-
-        gl_context()
-        return True
-    except GraderUnavailable:
-        return False
-
-
-needs_gl = pytest.mark.skipif(not _gl(), reason="no OpenGL 4.3 through EGL")
+needs_gl = requires("gl")
 
 
 def quantities(result):
@@ -61,20 +50,8 @@ def test_materialx_glsl_clamps_ldotv(graded):
     assert not r.passed
 
 
-def _bpy_available():
-    try:
-        from openpbr_diffuse.graders.cycles import bpy_version
-
-        bpy_version()
-        return True
-    except GraderUnavailable:
-        return False
-
-
 @pytest.mark.slow
-@pytest.mark.skipif(
-    not _bpy_available(), reason="bpy not installed (pip install bpy, or set OPENPBR_DIFFUSE_BPY_PYTHON)"
-)
+@requires("bpy")
 def test_cycles_has_an_extra_rho_on_f_ms():
     from openpbr_diffuse.conformance.deviations import DEVIATIONS, reference
     from openpbr_diffuse.conformance.vectors import default_vectors

@@ -1,10 +1,9 @@
 """The runners themselves: include resolution, llvmpipe's acos error behind the GLSL tolerance,
 and the C++ harness cache."""
 
-import shutil
-
 import numpy as np
 import pytest
+from _system import requires
 
 from openpbr_diffuse.graders import cpp, glsl
 from openpbr_diffuse.graders.errors import GraderUnavailable
@@ -26,15 +25,7 @@ def test_includes_resolve_next_to_the_file_then_on_the_search_path(tmp_path):
         glsl.resolve_includes(tmp_path / "bad.glsl")
 
 
-def _gl():
-    try:
-        glsl.gl_context()
-        return True
-    except GraderUnavailable:
-        return False
-
-
-@pytest.mark.skipif(not _gl(), reason="no OpenGL 4.3 through EGL")
+@requires("gl")
 def test_llvmpipe_acos_error_is_within_the_stated_bound():
     """The GLSL tolerance assumes |acos_gl - acos| <= 1.6e-4 (ecosystem.md); measure it."""
     x = np.linspace(-1.0, 1.0, 200_001).astype(np.float32)
@@ -49,7 +40,7 @@ def test_llvmpipe_acos_error_is_within_the_stated_bound():
     )
 
 
-@pytest.mark.skipif(shutil.which("g++") is None, reason="no g++")
+@requires("glm")
 def test_cpp_harness_is_cached_by_source_hash(tmp_path, monkeypatch):
     monkeypatch.setenv("OPENPBR_DIFFUSE_CACHE", str(tmp_path / "cache"))
     src = tmp_path / "f.hpp"

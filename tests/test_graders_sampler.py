@@ -13,14 +13,13 @@ two wrong ones with the diagnosis named, and count NaN / below-horizon samples.
 """
 
 import json
-import shutil
 from xml.etree import ElementTree as ET
 
 import pytest
+from _system import requires
 
 from openpbr_diffuse.cli.main import main
 from openpbr_diffuse.graders import generic
-from openpbr_diffuse.graders.errors import GraderUnavailable
 from openpbr_diffuse.graders.grading import (
     SAMPLER_MASS_TOL,
     grade_sampler,
@@ -170,20 +169,10 @@ float cos_pdf(glm::vec3 wo, glm::vec3 wi, float r) { return std::fmax(wi.z, 0.0f
 float uniform_pdf(glm::vec3 wo, glm::vec3 wi, float r) { return wi.z >= 0.0f ? 1.0f / (2.0f * T_PI) : 0.0f; }
 """
 
-needs_cxx = pytest.mark.skipif(shutil.which("g++") is None, reason="no g++ (.ci/run installs it)")
+needs_cxx = requires("glm")
 
 
-def _gl():
-    try:
-        from openpbr_diffuse.graders import glsl
-
-        glsl.gl_context()
-        return True
-    except (GraderUnavailable, ImportError):
-        return False
-
-
-needs_gl = pytest.mark.skipif(not _gl(), reason="no OpenGL 4.3 through EGL (.ci/run installs Mesa)")
+needs_gl = requires("gl")
 
 
 @pytest.fixture(scope="module")

@@ -2,13 +2,13 @@
 report.json's schema, escaping, atomic replacement, exit codes."""
 
 import json
-import shutil
 import sys
 import types
 from html.parser import HTMLParser
 from pathlib import Path
 
 import pytest
+from _system import CHROMIUM, need
 
 from openpbr_diffuse.cli.main import main
 from openpbr_diffuse.report import runner
@@ -239,7 +239,6 @@ def test_unusable_input_exits_2(tmp_path, capsys):
     assert not (tmp_path / "r").exists()
 
 
-CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 FLAGS = [
     "--headless",
     "--no-sandbox",
@@ -255,8 +254,7 @@ def test_page_opens_in_chromium_without_errors(quick_report):
     """The page in headless Chromium (Debian's /usr/bin/chromium via playwright): no console
     error, no failed request, every image decoded; a screenshot is saved beside the page."""
     sync_api = pytest.importorskip("playwright.sync_api")
-    if not Path(CHROMIUM).exists():
-        pytest.skip("chromium not installed (apt-get install chromium)")
+    need("chromium")
     out, _ = quick_report
     url = (out / "index.html").resolve().as_uri()
     console, failed = [], []

@@ -5,29 +5,17 @@ the first screen, seen in headless Chromium, and exits 1; the conforming one con
 """
 
 import json
-import shutil
 
 import _subject_mutants as sm
 import pytest
 from _browser import first_screen
+from _system import requires
 
 from openpbr_diffuse.cli.main import main
 from openpbr_diffuse.conformance.grade import NOT_EXPLAINED
 
-
-def _gl_available():
-    from openpbr_diffuse.graders.errors import GraderUnavailable
-    from openpbr_diffuse.graders.glsl import gl_context
-
-    try:
-        gl_context()
-        return True
-    except GraderUnavailable:
-        return False
-
-
-needs_gl = pytest.mark.skipif(not _gl_available(), reason="no OpenGL 4.3 through EGL (Mesa llvmpipe)")
-needs_cxx = pytest.mark.skipif(shutil.which("g++") is None, reason="no g++")
+needs_gl = requires("gl")
+needs_cxx = requires("glm")
 #: the implementation's verdicts only (no evidence section): the quick cases that need no page
 ONLY_IMPLEMENTATION = ["--select", "implementation.*"]
 

@@ -4,13 +4,12 @@ where EON is claimed; the first screen (in headless Chromium), exit codes, JUnit
 --list-checks and "not run" sections."""
 
 import json
-import shutil
 import sys
 import types
-from pathlib import Path
 from xml.etree import ElementTree as ET
 
 import pytest
+from _system import CHROMIUM, need, reason
 
 from openpbr_diffuse.cli.main import main
 from openpbr_diffuse.report import runner
@@ -92,7 +91,7 @@ def _could_not_run(out):
 def test_wrong_glsl_does_not_conform_and_is_named(wrong):
     out, status = wrong
     if _could_not_run(out):
-        pytest.skip("no OpenGL 4.3 context here")
+        pytest.skip(reason("gl"))
     assert status == 1
     doc = json.loads((out / "report.json").read_text())
     ut = doc["implementation"]
@@ -121,7 +120,7 @@ def test_correct_glsl_conforms(glsl, tmp_path):
         ]
     )
     if _could_not_run(out):
-        pytest.skip("no OpenGL 4.3 context here")
+        pytest.skip(reason("gl"))
     doc = json.loads((out / "report.json").read_text())
     assert [v["status"] for v in doc["implementation"]["verdicts"]] == ["conforms", "conforms"], doc["implementation"][
         "verdicts"
@@ -132,7 +131,6 @@ def test_correct_glsl_conforms(glsl, tmp_path):
     )
 
 
-CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 FLAGS = [
     "--headless",
     "--no-sandbox",
@@ -146,11 +144,10 @@ FLAGS = [
 
 def test_first_screen_in_chromium_says_does_not_conform(wrong):
     sync_api = pytest.importorskip("playwright.sync_api")
-    if not Path(CHROMIUM).exists():
-        pytest.skip("chromium not installed")
+    need("chromium")
     out, _ = wrong
     if _could_not_run(out):
-        pytest.skip("no OpenGL 4.3 context here")
+        pytest.skip(reason("gl"))
     with sync_api.sync_playwright() as p:
         browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS)
         try:
@@ -268,8 +265,7 @@ def test_code_that_does_not_compile_could_not_run(tmp_path, capsys):
 
 
 def test_cpp_fon_for_eon_does_not_conform(tmp_path):
-    if shutil.which("g++") is None:
-        pytest.skip("g++ not installed")
+    need("glm")
     src = tmp_path / "mine.cpp"
     src.write_text("""
 #include <cmath>

@@ -14,31 +14,19 @@ independent NumPy implementation of ``_hand_impl`` at that tolerance.
 
 import dataclasses
 import json
-import shutil
 
 import _hand_impl as hand
 import _subject_mutants as sm
 import numpy as np
 import pytest
+from _system import requires
 
 from openpbr_diffuse.cli.main import main
 from openpbr_diffuse.conformance.grade import NOT_EXPLAINED
 from openpbr_diffuse.conformance.vectors import default_vectors
 
-
-def _gl_available():
-    from openpbr_diffuse.graders.errors import GraderUnavailable
-    from openpbr_diffuse.graders.glsl import gl_context
-
-    try:
-        gl_context()
-        return True
-    except GraderUnavailable:
-        return False
-
-
-needs_gl = pytest.mark.skipif(not _gl_available(), reason="no OpenGL 4.3 through EGL (Mesa llvmpipe)")
-needs_cxx = pytest.mark.skipif(shutil.which("g++") is None, reason="no g++")
+needs_gl = requires("gl")
+needs_cxx = requires("glm")
 LANGUAGES = [pytest.param("glsl", marks=needs_gl), pytest.param("cpp", marks=needs_cxx)]
 
 

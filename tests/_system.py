@@ -1,0 +1,141 @@
+"""System programs the tests use, in one place: what each is, how to install it, and one skip.
+
+On a user's machine a test that needs a missing system program (Chromium, g++ and GLM, Mesa's
+EGL/llvmpipe, Mesa's Vulkan driver, node and npm) is skipped with one line that names what to
+install.  ``.ci/run`` installs all of them and sets ``OPENPBR_DIFFUSE_REQUIRE_SYSTEM=1``: under
+it such a skip is a failure (``conftest.py`` turns every skip whose reason starts with
+:data:`PREFIX` into one), so nothing is skipped there for lack of a program.
+
+    from _system import requires, need
+    @requires("gl")
+    def test_runs_glsl(): ...
+    def test_page():
+        need("chromium")
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+#: every system-program skip reason starts with this (conftest.py recognises it)
+PREFIX = "needs a system program:"
+#: set by .ci/run: a system-program skip is a failure
+REQUIRE_ENV = "OPENPBR_DIFFUSE_REQUIRE_SYSTEM"
+
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+
+
+@functools.cache
+def _gl_ok() -> bool:
+    """An OpenGL 4.3 context through EGL (Mesa llvmpipe), asked of a child process so that a
+    missing driver cannot crash the test process."""
+    code = "from openpbr_diffuse.graders.glsl import gl_context; gl_context()"
+    try:
+        r = subprocess.run([sys.executable, "-c", code], capture_output=True, timeout=120)
+    except (OSError, subprocess.TimeoutExpired):
+        return False
+    return r.returncode == 0
+
+
+@functools.cache
+def _glm_ok() -> bool:
+    return any(Path(d, "glm", "glm.hpp").is_file() for d in ("/usr/include", "/usr/local/include"))
+
+
+@functools.cache
+def _vulkan_ok() -> bool:
+    """wgpu finds an adapter (Mesa's lavapipe without a GPU), asked of a child process."""
+    code = "import wgpu; wgpu.gpu.request_adapter_sync(power_preference='high-performance')"
+    try:
+        r = subprocess.run([sys.executable, "-c", code], capture_output=True, timeout=120)
+    except (OSError, subprocess.TimeoutExpired):
+        return False
+    return r.returncode == 0
+
+
+@functools.cache
+def _babylon_ok() -> bool:
+    from openpbr_diffuse.graders import babylon
+    from openpbr_diffuse.graders.errors import GraderUnavailable
+
+    try:
+        babylon.package_folder()
+    except GraderUnavailable:
+        return False
+    return True
+
+
+@functools.cache
+def _bpy_ok() -> bool:
+    from openpbr_diffuse.graders import cycles
+    from openpbr_diffuse.graders.errors import GraderUnavailable
+
+    try:
+        cycles.bpy_version()
+    except GraderUnavailable:
+        return False
+    return True
+
+
+#: name -> (what it is, how to install it, availability test)
+PROGRAMS = {
+    "chromium": ("Chromium", "apt-get install chromium", lambda: Path(CHROMIUM).exists()),
+    "g++": ("g++", "apt-get install g++", lambda: shutil.which("g++") is not None),
+    "gcc": ("gcc", "apt-get install gcc", lambda: shutil.which("gcc") is not None),
+    "glm": ("g++ and GLM", "apt-get install g++ libglm-dev", lambda: shutil.which("g++") is not None and _glm_ok()),
+    "gl": (
+        "OpenGL 4.3 through EGL (Mesa llvmpipe)",
+        "apt-get install libgl1-mesa-dri libegl1 libegl-mesa0",
+        _gl_ok,
+    ),
+    "vulkan": ("a Vulkan driver for wgpu (Mesa lavapipe)", "apt-get install mesa-vulkan-drivers", _vulkan_ok),
+    "babylonjs": (
+        "Babylon.js (npm @babylonjs/core)",
+        "npm install --prefix ~/.cache/openpbr-diffuse/npm @babylonjs/core",
+        _babylon_ok,
+    ),
+    "bpy": (
+        "Blender's bpy in a Python of its own",
+        "python3.11 -m venv bpy-env && bpy-env/bin/pip install bpy; export OPENPBR_DIFFUSE_BPY_PYTHON=$PWD/bpy-env/bin/python",
+        _bpy_ok,
+    ),
+    "node": ("node and npm", "apt-get install nodejs npm", lambda: bool(shutil.which("node") and shutil.which("npm"))),
+}
+
+
+def available(name: str) -> bool:
+    """Whether the system program ``name`` (a key of :data:`PROGRAMS`) is usable here."""
+    return bool(PROGRAMS[name][2]())
+
+
+def reason(name: str) -> str:
+    """The one-line skip reason for a missing ``name``."""
+    what, install, _ = PROGRAMS[name]
+    return f"{PREFIX} {what} is not installed ({install})"
+
+
+def requires(*names: str) -> pytest.MarkDecorator:
+    """A skipif marker: skip (one line naming what to install) unless every program is usable.
+
+    Availability is asked once per program and session (a child process for GL and Vulkan)."""
+    missing = [n for n in names if not available(n)]
+    return pytest.mark.skipif(bool(missing), reason="; ".join(reason(n) for n in missing) or "available")
+
+
+def need(*names: str) -> None:
+    """Inside a test or fixture: skip (or fail under :data:`REQUIRE_ENV`) unless every program is usable."""
+    for n in names:
+        if not available(n):
+            pytest.skip(reason(n))
+
+
+def required() -> bool:
+    """Whether a missing system program fails the run (``.ci/run``) instead of skipping."""
+    return os.environ.get(REQUIRE_ENV, "") not in ("", "0")
