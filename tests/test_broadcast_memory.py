@@ -83,7 +83,7 @@ def test_lut_export_memory_is_bounded_and_shows_progress(tmp_path, capsys):
     export_lut("eon", tmp_path, 8)
     tracemalloc.start()
     try:
-        export_lut("eon", tmp_path, 1024, progress=True)
+        export_lut("eon", tmp_path, 1024, progress=True, force=True)
         top = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()

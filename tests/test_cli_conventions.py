@@ -140,12 +140,14 @@ def test_ctrl_c_is_one_line_exit_130(tmp_path):
         stderr=subprocess.PIPE,
         env=env,
     )
-    target = tmp_path / "full_on_albedo.exr"  # created when writing starts: inside the command
+    # the texture's temporary sibling appears when writing starts: inside the command
     deadline = time.monotonic() + 120
-    while not target.exists() and p.poll() is None and time.monotonic() < deadline:
+    while not list(tmp_path.glob(".full_on_albedo.exr.*")) and p.poll() is None and time.monotonic() < deadline:
         time.sleep(0.05)
     assert p.poll() is None, "the export ended before it could be interrupted"
     p.send_signal(signal.SIGINT)
     out, err = p.communicate(timeout=120)
     assert p.returncode == 130, err
     assert err.decode().strip() == "openpbr-diffuse: interrupted"
+    left = sorted(p.name for p in tmp_path.iterdir())
+    assert left == [], left  # no half-written texture, no temporary file

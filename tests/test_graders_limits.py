@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import time
@@ -104,7 +105,8 @@ def _gl_or_skip():
 
 
 def _worker_pids() -> list[int]:
-    return [int(p.split(":")[0]) for p in _processes_with("_gpu_child.py") if " gl" in p]
+    """The GL children (not their supervisors, whose command line holds theirs)."""
+    return [int(p.split(":")[0]) for p in _processes_with("_gpu_child.py") if " gl" in p and "_supervisor.py" not in p]
 
 
 def test_glsl_runs_in_a_killable_child(tmp_path: Path) -> None:
@@ -207,3 +209,135 @@ def test_cycles_message_says_how_to_make_a_separate_python() -> None:
     assert "python3.11 -m venv bpy-env" in cycles._INSTALL
     assert "bpy-env/bin/pip install bpy" in cycles._INSTALL
     assert "OPENPBR_DIFFUSE_BPY_PYTHON=$PWD/bpy-env/bin/python" in cycles._INSTALL
+
+
+def test_each_limit_is_the_lower_of_the_asked_and_the_callers(tmp_path: Path) -> None:
+    """Under a caller's soft RLIMIT_AS of 2 GiB and hard 3 GiB (below the 4 GiB asked), user
+    code gets 2 GiB, soft and hard, and no core files; asking more raises nothing."""
+    code = (
+        "from openpbr_diffuse.graders import limits; "
+        "r = limits.run_limited(['sh', '-c', 'ulimit -S -v; ulimit -H -v; ulimit -c'], label='limits'); "
+        "print(r.returncode, r.stdout.decode().split(), r.stderr.decode())"
+    )
+    run = subprocess.run(
+        ["prlimit", f"--as={2 * 2**30}:{3 * 2**30}", sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        env=dict(os.environ, PYTHONPATH=str(ROOT)),
+        timeout=60,
+        check=False,
+    )
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.split("]")[0] + "]" == f"0 ['{2 * 2**20}', '{2 * 2**20}', '0']"
+
+
+def test_the_run_ends_as_its_program_did() -> None:
+    assert limits.run_limited(["sh", "-c", "exit 3"], label="three").returncode == 3
+    assert limits.run_limited(["sh", "-c", "kill -SEGV $$"], label="segv").returncode == -signal.SIGSEGV
+    run = limits.run_limited(["sh", "-c", "echo out; echo err >&2"], label="echo")
+    assert (run.returncode, run.stdout, run.stderr) == (0, b"out\n", b"err\n")
+
+
+def test_a_program_that_cannot_start_is_one_line() -> None:
+    run = limits.run_limited(["/nonexistent/program"], label="missing")
+    assert run.returncode == 127
+    assert run.stderr.decode().splitlines() == ["cannot run /nonexistent/program: No such file or directory"]
+
+
+NOBODY_PYTHON = Path("/usr/bin/python3")
+
+
+@pytest.mark.skipif(
+    os.geteuid() != 0 or shutil.which("setpriv") is None or not NOBODY_PYTHON.is_file(),
+    reason="needs root, setpriv (util-linux) and /usr/bin/python3 to run as the user nobody",
+)
+def test_a_non_root_run_cannot_fork_past_its_process_limit() -> None:
+    """RLIMIT_NPROC = the user's threads + NPROC_EXTRA: a run of the user nobody forking 200
+    sleepers gets at most NPROC_EXTRA of them, and none is left after the run."""
+    program = (
+        "import os, time\n"
+        "pids = []\n"
+        "for _ in range(200):\n"
+        "    try:\n"
+        "        pid = os.fork()\n"
+        "    except OSError:\n"
+        "        break\n"
+        "    if pid == 0:\n"
+        "        time.sleep(30)\n"
+        "        os._exit(0)\n"
+        "    pids.append(pid)\n"
+        "print(*pids)\n"
+    )
+    supervised = [
+        *(str(NOBODY_PYTHON), "-I", "-S", str(limits.SUPERVISOR)),
+        *(str(os.getpid()), "20", str(2**30), str(limits.NPROC_EXTRA)),
+        *(str(NOBODY_PYTHON), "-c", program),
+    ]
+    run = subprocess.run(
+        ["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups", *supervised],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        cwd="/",
+        check=False,
+    )
+    assert run.returncode == 0, run.stderr
+    pids = [int(p) for p in run.stdout.split()]
+    assert 0 < len(pids) <= limits.NPROC_EXTRA
+    assert [p for p in pids if Path(f"/proc/{p}").exists()] == []
+
+
+def test_messages_name_a_lower_limit_in_force(monkeypatch: pytest.MonkeyPatch) -> None:
+    """When the caller's own RLIMIT_AS is the lower limit, a failure for memory (or a GL
+    context that cannot be made) names it and the floor, in one line."""
+    import resource
+
+    from openpbr_diffuse.graders import glsl
+
+    soft, hard = resource.getrlimit(resource.RLIMIT_AS)
+    mine = 2**40  # 1 TiB: far above what this process maps, below the 2 TiB asked
+    if hard != resource.RLIM_INFINITY and hard < mine:
+        pytest.skip("the hard RLIMIT_AS of the test process is below 1 TiB")
+    monkeypatch.setattr(limits, "MEMORY", 2 * mine)
+    resource.setrlimit(resource.RLIMIT_AS, (mine, hard))
+    try:
+        assert limits.memory_in_force() == mine
+        text = limits.memory_failure("compiling x.cpp", "g++", 1)
+        no_context = glsl._no_device("no OpenGL 4.3 context through EGL (eglInitialize failed)")
+    finally:
+        resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
+    assert text == (
+        f"compiling x.cpp: the memory limit in force (ulimit -v {mine // 1024} KiB) is too low for g++ "
+        "(status 1); raise it (user code may use up to 2048 GiB), e.g. ulimit -v unlimited"
+    )
+    assert no_context.startswith("no OpenGL 4.3 context through EGL (eglInitialize failed); or the memory limit")
+    assert f"ulimit -v {mine // 1024} KiB" in no_context and "\n" not in no_context
+    assert limits.raise_hint(400 * 2**20, 2**32).startswith(f"raise it to at least {limits.MEMORY_FLOOR_KIB} KiB")
+
+
+def test_a_worker_outlives_the_thread_that_started_it() -> None:
+    """The parent-death signal of a worker's supervisor comes when the thread that started it
+    ends: the worker goes on while its process lives."""
+    import threading
+
+    code = (
+        "import struct, sys; i, o = sys.stdin.buffer, sys.stdout.buffer\n"
+        "while True:\n"
+        "    h = i.read(8)\n"
+        "    if len(h) < 8: break\n"
+        "    d = i.read(struct.unpack('<Q', h)[0])\n"
+        "    o.write(struct.pack('<iQ', 0, len(d)) + d); o.flush()\n"
+    )
+    w = limits.Worker([sys.executable, "-c", code])
+    try:
+        answers: list[bytes] = []
+        thread = threading.Thread(target=lambda: answers.append(w.request(b"one", label="echo").stdout))
+        thread.start()
+        thread.join(30)
+        assert answers == [b"one"]
+        pid = w.proc.pid
+        time.sleep(0.6)  # past the supervisor's periodic check of its parent
+        assert w.request(b"two", label="echo").stdout == b"two"
+        assert w.proc.pid == pid
+    finally:
+        w.stop()

@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._outfile import check_output_file, output_file
 from .._version import __version__
 from ..models.registry import INFO, MIX_LINEAR, MIX_RHO2, MIX_RHO_MS, model_info
 from ..models.tables import load_table, mix_weight, table_path
@@ -133,19 +134,22 @@ def _spec(oiio, width, height, meta):
     return spec
 
 
-def _write_exr(path, height, width, rows, meta):
-    """Write an EXR whose scanlines come from ``rows``: an iterable of (start, stop, pixels)."""
+def _write_exr(path, height, width, rows, meta, shown=None):
+    """Write an EXR whose scanlines come from ``rows``: an iterable of (start, stop, pixels).
+
+    ``shown``: the name the messages give (the final file when ``path`` is its temporary)."""
     import OpenImageIO as oiio  # optional dependency (extra "exr"), imported when needed
 
+    shown = path if shown is None else shown
     out = oiio.ImageOutput.create(path)
     if out is None:
-        raise OSError(f"cannot create {path}: {oiio.geterror()}")
+        raise OSError(f"cannot create {shown}: {oiio.geterror()}")
     try:
         if not out.open(path, _spec(oiio, width, height, meta)):
-            raise OSError(f"cannot write {path}: {out.geterror()}")
+            raise OSError(f"cannot write {shown}: {out.geterror()}")
         for start, stop, pixels in rows:
             if not out.write_scanlines(start, stop, 0, np.ascontiguousarray(pixels)):
-                raise OSError(f"cannot write {path}: {out.geterror()}")
+                raise OSError(f"cannot write {shown}: {out.geterror()}")
     finally:
         out.close()
 
@@ -167,7 +171,12 @@ def _progress_bar(total, desc, progress):
 
 
 def export_lut(
-    model: str, directory: str | os.PathLike[str], size: int = DEFAULT_SIZE, *, progress: bool | None = False
+    model: str,
+    directory: str | os.PathLike[str],
+    size: int = DEFAULT_SIZE,
+    *,
+    progress: bool | None = False,
+    force: bool = False,
 ) -> tuple[str, str]:
     """Write ``<model>_albedo.exr`` (size x size) and ``<model>_average_albedo.exr`` (size x 1).
 
@@ -186,11 +195,35 @@ def export_lut(
     progress : bool or None
         Progress bar (tqdm) on stderr: True, False (default), or None for "when stderr is a
         terminal".
+    force : bool
+        Replace the two files if they exist (regular files only).  Both are checked before
+        any work and written by the rule of every output file
+        (:func:`openpbr_diffuse._outfile.output_file`): never through a symbolic link, each
+        through a temporary sibling that takes the file's name only once complete.
 
     Returns
     -------
     (str, str)
         Paths of the directional and average textures.
+
+    Raises
+    ------
+    OutputFileError
+        (a ``ValueError``, naming ``--export``) a file exists without ``force``, or is a
+        symbolic link or not a regular file.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> d = tempfile.mkdtemp()
+    >>> [os.path.basename(p) for p in export_lut("eon", d, 4)]
+    ['eon_albedo.exr', 'eon_average_albedo.exr']
+    >>> export_lut("eon", d, 4)
+    Traceback (most recent call last):
+    ...
+    openpbr_diffuse._outfile.OutputExistsError: --export .../eon_albedo.exr exists: not overwritten (use --force to replace it)
+    >>> len(export_lut("eon", d, 4, force=True))
+    2
     """
     name = model_info(model).name
     size = _check_size(size)
@@ -198,10 +231,12 @@ def export_lut(
     if os.path.exists(directory) and not os.path.isdir(directory):
         raise NotADirectoryError(errno.ENOTDIR, "export directory exists and is not a directory", directory)
     os.makedirs(directory, exist_ok=True)
-    table = load_table(name)
-    rough, _ = _roughness_axis(name, size)
     p2 = os.path.join(directory, f"{name}_albedo.exr")
     p1 = os.path.join(directory, f"{name}_average_albedo.exr")
+    for p in (p2, p1):  # before any work
+        check_output_file(p, option="--export", force=force)
+    table = load_table(name)
+    rough, _ = _roughness_axis(name, size)
     bar = _progress_bar(size, f"{name}_albedo.exr", progress)
 
     def rows():
@@ -210,12 +245,17 @@ def export_lut(
             if bar is not None:
                 bar.update(e - s)
 
-    try:
-        _write_exr(p2, size, size, rows(), _metadata(name, size, "directional"))
-    finally:
-        if bar is not None:
-            bar.close()
-    _write_exr(p1, 1, size, [(0, 1, _average_row(name, table, rough))], _metadata(name, size, "average"))
+    with (
+        output_file(p2, option="--export", force=force) as t2,
+        output_file(p1, option="--export", force=force) as t1,
+    ):  # both complete before either takes its name
+        try:
+            _write_exr(str(t2), size, size, rows(), _metadata(name, size, "directional"), p2)
+        finally:
+            if bar is not None:
+                bar.close()
+        row = [(0, 1, _average_row(name, table, rough))]
+        _write_exr(str(t1), 1, size, row, _metadata(name, size, "average"), p1)
     return p2, p1
 
 

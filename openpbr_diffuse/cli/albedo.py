@@ -83,6 +83,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     )
     p.add_argument("--size", type=int, default=None, metavar="N", help="texture size for --export (default 32)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr during --export")
+    p.add_argument("--force", action="store_true", help="replace the --export files if they exist (regular files)")
     p.set_defaults(run=run)
     return p
 
@@ -104,6 +105,7 @@ def _export(args, info):
         args.export,
         DEFAULT_SIZE if args.size is None else args.size,
         progress=False if args.no_progress else None,
+        force=args.force,
     )
     if args.json:
         print(json.dumps({"model": info.name, "files": list(paths)}))
@@ -140,6 +142,8 @@ def run(args: argparse.Namespace) -> int:
         raise _usage("--size only applies with --export")
     if args.no_progress:
         raise _usage("--no-progress only applies with --export")
+    if args.force:
+        raise _usage("--force only applies with --export")
     if info.name == "lambert":
         if args.roughness is not None:
             raise _usage("lambert has no roughness (f = rho/pi); omit --roughness")

@@ -3,7 +3,7 @@
     openpbr-diffuse colorshift                               # the 24 measured ColorChecker spectra
     openpbr-diffuse colorshift --colors 0.8,0.2,0.1 checker --roughness 1 --mu 0.5 1
     openpbr-diffuse colorshift --colors scene.usda --working-space acescg --json
-    openpbr-diffuse colorshift --illuminant A --method "Otsu 2018" --image swatches.png
+    openpbr-diffuse colorshift --illuminant A --method "Otsu 2018" --image swatches.png [--force]
 
 COLORS: ``checker`` (the measured 'BabelColor Average' spectra), ``R,G,B`` (working-space
 linear RGB in [0, 1], upsampled to a spectrum by --method), or FILE: a ``.csv`` of measured
@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
@@ -86,6 +87,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     )
     p.add_argument("--json", action="store_true", help="one JSON document: settings and rows")
     p.add_argument("--image", metavar="PATH", help="write a labelled swatch image (PNG, EXR, ... by suffix)")
+    p.add_argument("--force", action="store_true", help="replace the --image PATH if it exists (a regular file)")
     p.set_defaults(run=run)
     return p
 
@@ -229,6 +231,13 @@ def run(args: argparse.Namespace) -> int:
     from ..spectral.validation import colour_shift
 
     method = _method(args.method)
+    image_inputs = [c for c in args.colors if os.path.isfile(c)]
+    if args.image:
+        from .._outfile import check_output_file
+
+        check_output_file(args.image, option="--image", force=args.force, inputs=image_inputs)  # before any work
+    elif args.force:
+        raise _usage("--force applies to --image PATH only")
     try:
         cm = colorimetry(args.illuminant, args.working_space)
     except ImportError as exc:  # colour-science missing: one line, exit 2
@@ -247,7 +256,7 @@ def run(args: argparse.Namespace) -> int:
     if args.image:
         from ..spectral.swatches import write_swatches
 
-        image = str(write_swatches(result, args.image))
+        image = str(write_swatches(result, args.image, force=args.force, inputs=image_inputs))
     if args.json:
         doc = {"settings": settings, "rows": result.rows(), "warnings": warnings, "image": image}
         print(json.dumps(doc))

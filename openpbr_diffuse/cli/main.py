@@ -6,7 +6,10 @@ Each sub-command lives in its own module of this package, exposing
 Conventions (tested in ``tests/test_cli_conventions.py``):
 
 - unusable input (``ValueError``, ``TypeError``, ``OSError``, ``UsageError``, argparse
-  errors) prints one line ``openpbr-diffuse COMMAND: error: ...`` on stderr, exit 2;
+  errors) prints one line ``openpbr-diffuse COMMAND: error: ...`` on stderr, exit 2; an
+  OSError names its file (a failed write to standard output names that);
+- NumPy's floating-point RuntimeWarnings are not printed (the commands account for
+  overflow and NaN in what they print); the library itself still issues them;
 - arguments that read as numbers (``-1e-300``, ``-inf``, ``-.5``) are values, never options;
 - a closed output pipe (``... | head -2``) ends the command quietly with exit status 141
   (128 + SIGPIPE: what a C tool killed by SIGPIPE reports, so ``set -o pipefail`` still
@@ -17,10 +20,12 @@ Conventions (tested in ``tests/test_cli_conventions.py``):
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
 import os
 import re
 import sys
+import warnings
 from collections.abc import Iterable
 
 from .._version import __version__
@@ -77,12 +82,63 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _message(exc):
-    """One line for an exception; OSErrors as 'reason: path', not '[Errno 17] ...'."""
+#: Errors of a write whose file the OS does not name (a full disk, a quota, a size limit).
+_WRITE_ERRNOS = {errno.ENOSPC, errno.EFBIG, errno.EROFS, getattr(errno, "EDQUOT", errno.ENOSPC)}
+#: The name a failed write to standard output is given.
+STDOUT_NAME = "standard output"
+
+
+def _message(exc, args=None):
+    """One line for an exception; OSErrors as 'reason: path', not '[Errno 17] ...'.
+
+    An OSError the OS raised without a file name (a write or close on a full disk) names the
+    command's ``--out`` when it has one; a message that starts with the command's own name
+    ("report: ...") does not repeat it after ``openpbr-diffuse report: error:``.
+    """
     if isinstance(exc, OSError) and exc.strerror:
-        where = f": {exc.filename}" if exc.filename is not None else ""
-        return f"{exc.strerror}{where}"
-    return " ".join(str(exc).split()) or type(exc).__name__
+        if exc.filename is not None:
+            return f"{exc.strerror}: {exc.filename}"
+        out = getattr(args, "out", None)
+        if out is not None and exc.errno in _WRITE_ERRNOS:
+            return f"{exc.strerror} (while writing {out})"
+        return exc.strerror
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    command = getattr(args, "command", None)
+    if command and text.startswith(f"{command}: "):
+        text = text[len(command) + 2 :]
+    return text
+
+
+class _NamedStdout:
+    """``sys.stdout`` whose failed writes name it: the OSError of a write to a full disk
+    carries no file name.  A closed pipe (BrokenPipeError) passes unchanged."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+    def _named(self, exc):
+        if isinstance(exc, BrokenPipeError) or exc.filename is not None or exc.errno is None:
+            return exc
+        return OSError(exc.errno, exc.strerror, STDOUT_NAME)
+
+    def write(self, text):
+        try:
+            return self._stream.write(text)
+        except OSError as exc:
+            raise self._named(exc) from None
+
+    def writelines(self, lines):
+        for line in lines:
+            self.write(line)
+
+    def flush(self):
+        try:
+            return self._stream.flush()
+        except OSError as exc:
+            raise self._named(exc) from None
 
 
 def _silence_stdout():
@@ -125,7 +181,21 @@ def main(argv: list[str] | None = None) -> int:
     from .. import _signals
 
     _signals.install()  # SIGTERM/SIGHUP like Ctrl-C: clean up, exit 128 + signum
-    prog = PROG
+    stdout = sys.stdout
+    if stdout is not None:
+        sys.stdout = _NamedStdout(stdout)
+    try:
+        with warnings.catch_warnings():
+            # NumPy's "overflow encountered in ..." lines are not for the user of a command
+            warnings.simplefilter("ignore", RuntimeWarning)
+            return _run_command(argv, _signals)
+    finally:
+        if sys.stdout is not None and isinstance(sys.stdout, _NamedStdout):
+            sys.stdout = stdout
+
+
+def _run_command(argv, _signals):
+    prog, args = PROG, None
     try:
         parser = build_parser()
         args = _parse(parser, argv)
@@ -141,10 +211,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{PROG}: interrupted" + ("" if signum == 2 else f" ({exc})"), file=sys.stderr)
         return 128 + signum
     except UsageError as exc:
-        print(f"{exc.prog or prog}: error: {_message(exc)}", file=sys.stderr)
+        print(f"{exc.prog or prog}: error: {_message(exc, args)}", file=sys.stderr)
         return EXIT_USAGE
     except (ValueError, TypeError, OSError) as exc:
-        print(f"{prog}: error: {_message(exc)}", file=sys.stderr)
+        if isinstance(exc, OSError) and exc.filename == STDOUT_NAME:
+            _silence_stdout()  # what could not be written stays unwritten, not retried at exit
+        print(f"{prog}: error: {_message(exc, args)}", file=sys.stderr)
         return EXIT_USAGE
 
 

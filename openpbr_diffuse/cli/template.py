@@ -32,10 +32,7 @@ def run(args: argparse.Namespace) -> int:
     from ..conformance.templates import write_template
 
     path = args.out or _DEFAULT[args.kind]
-    try:
-        path = write_template(args.kind, path, force=args.force)
-    except FileExistsError as exc:
-        raise ValueError(str(exc)) from None
+    path = write_template(args.kind, path, force=args.force)  # refusals: one line, exit 2
     if args.kind == "csv":
         print(f"wrote {path}: fill out_r, out_g, out_b of the rows you grade, then: openpbr-diffuse check {path}")
     else:

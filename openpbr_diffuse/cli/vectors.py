@@ -10,8 +10,8 @@ or the directional albedo; rows left blank are skipped) and grade the file with
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
+from .._outfile import check_output_file, output_file
 from ..conformance.vectors import COLUMNS, OUT_COLUMNS, default_vectors, write_vectors
 
 
@@ -28,10 +28,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
 
 
 def run(args: argparse.Namespace) -> int:
-    if Path(args.out).exists() and not args.force:
-        raise ValueError(f"{args.out} exists: not overwritten (use --force to replace it)")
+    check_output_file(args.out, option="--out", force=args.force)  # before any work
+    path = args.out
     v = default_vectors()
-    path = write_vectors(v, args.out, blank_out=True)
+    with output_file(args.out, option="--out", force=args.force) as tmp:
+        write_vectors(v, tmp, blank_out=True)
     print(
         f"wrote {len(v)} vectors (version {v.version}) to {path}; columns {', '.join(COLUMNS)}; "
         f"fill {', '.join(OUT_COLUMNS)} (blank rows are skipped) and run: openpbr-diffuse check {path}"

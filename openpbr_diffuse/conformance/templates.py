@@ -23,6 +23,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .._outfile import check_output_file, output_file
+
 KINDS = ("glsl", "cpp", "csv")
 
 _GLSL = """\
@@ -122,24 +124,41 @@ def template_text(kind: str) -> str:
 def write_template(kind: str, path: str | Path, *, force: bool = False) -> Path:
     """Write the ``kind`` template ("glsl", "cpp" or "csv") to ``path``.
 
-    An existing file is never replaced unless ``force``.  The CSV (or JSON, when the name
-    ends in ``.json``) template is the default vector set with empty result columns.
+    An existing file is never replaced unless ``force``, and then only a regular file (not
+    a symbolic link): the rule of every output file,
+    :func:`openpbr_diffuse._outfile.output_file` (a temporary sibling takes the name once
+    complete).  The CSV (or JSON, when the name ends in ``.json``) template is the default
+    vector set with empty result columns.
 
     Raises
     ------
     FileExistsError
-        ``path`` exists and ``force`` is false.
+        ``path`` exists and ``force`` is false (``OutputExistsError``, also a ``ValueError``).
+    ValueError
+        ``path`` may not be written (a symbolic link, a folder, a missing folder, ...).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> write_template("glsl", d / "f.glsl").read_text() == template_text("glsl")
+    True
+    >>> write_template("glsl", d / "f.glsl")
+    Traceback (most recent call last):
+    ...
+    openpbr_diffuse._outfile.OutputExistsError: --out .../f.glsl exists: not overwritten (use --force to replace it)
     """
     if kind not in KINDS:
         raise ValueError(f"kind: expected one of {', '.join(KINDS)}, got {kind!r}")
     path = Path(path)
-    if path.exists() and not force:
-        raise FileExistsError(f"{path} exists: not overwritten (use --force to replace it)")
-    if kind == "csv":
-        from .vectors import default_vectors, write_vectors
+    check_output_file(path, option="--out", force=force)  # before any work
+    with output_file(path, option="--out", force=force) as tmp:
+        if kind == "csv":
+            from .vectors import default_vectors, write_vectors
 
-        return write_vectors(default_vectors(), path, blank_out=True)
-    path.write_text(template_text(kind))
+            write_vectors(default_vectors(), tmp, blank_out=True)
+        else:
+            tmp.write_text(template_text(kind))
     return path
 
 

@@ -2,7 +2,7 @@
 compute shaders through wgpu (``wgsl``), one job after the other, until its stdin closes.
 
 The parent (:class:`.limits.Worker`) starts it once per API and process, under the limits of
-user code, and sends each job as a frame: an 8-byte little-endian length, then a pickled dict.
+user code and a supervisor (it dies with the parent), and sends each job as a frame: an 8-byte little-endian length, then a pickled dict.
 The child answers each with a 12-byte header (int32 status, uint64 length) and the payload:
 
 - status 0: the float32 outputs;
@@ -10,7 +10,7 @@ The child answers each with a 12-byte header (int32 status, uint64 length) and t
 - status 3: the shader does not compile (payload: one line of the compiler's log);
 - status 4: no GL context / WebGPU adapter on this machine (payload: the reason).
 
-A job that never ends is killed by the parent with the child's whole process group (the time
+A job that never ends is killed by the parent with every process of the child's run (the time
 limit is per job); a child that dies (a crash, the memory limit) is started again for the next
 job.  Keeping the context across jobs saves its set-up on every job but the first (GLSL:
 0.22 CPU s a job as a child of its own, about 0.05 in the worker; WGSL: 0.86 and 0.3,

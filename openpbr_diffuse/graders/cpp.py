@@ -126,9 +126,7 @@ class Harness:
                 err = run.stderr.decode(errors="replace")
                 if limits.memory_message(err) or run.returncode < 0:
                     raise GraderUnavailable(
-                        f"compiling {self.label} exceeded the memory limit of user code "
-                        f"({limits.MEMORY / 2**30:g} GiB) or was killed (status "
-                        f"{run.returncode})"
+                        limits.memory_failure(f"compiling {self.label}", Path(compiler()).name, run.returncode)
                     )
                 if "glm/glm.hpp" in err and "No such file" in err:
                     raise GraderUnavailable(
@@ -151,6 +149,10 @@ class Harness:
             [str(self.binary()), name], input=inputs.tobytes(), label=f"{self.label} (harness entry {name})"
         )
         if run.returncode != 0:
+            if (limits.memory_message(run.stderr) or run.returncode < 0) and limits.memory_in_force() < limits.MEMORY:
+                raise GraderUnavailable(
+                    limits.memory_failure(f"{self.label} (harness entry {name})", "the compiled code", run.returncode)
+                )
             raise GraderUnavailable(
                 f"{self.label}: harness entry {name} exited with status "
                 f"{run.returncode}: {run.stderr.decode(errors='replace').strip()[:200]}"

@@ -59,6 +59,18 @@ def _gl_worker() -> limits.Worker:
     return limits.worker(limits.script_command(CHILD, "gl"))
 
 
+def _no_device(reason: str) -> str:
+    """The GL child's reason for having no context, plus the caller's memory limit when it is
+    the lower one (EGL then fails to initialise as if no driver were installed)."""
+    limit = limits.memory_in_force()
+    if limit < limits.MEMORY:
+        return (
+            f"{reason}; or the memory limit in force (ulimit -v {limit // 1024} KiB) is too low for "
+            f"Mesa's llvmpipe: {limits.raise_hint(limit, limits.MEMORY)}"
+        )
+    return reason
+
+
 def gl_version() -> str:
     """``GL_RENDERER / GL_VERSION`` of the context the GLSL runs on, as the GL child reports it
     (the process makes no GL context of its own for it); GraderUnavailable without one."""
@@ -67,8 +79,10 @@ def gl_version() -> str:
         run = _gl_worker().request(pickle.dumps({"info": True}), label="reading the GL version")
         err = run.stderr.decode(errors="replace").strip()
         if run.returncode != 0:
+            if run.returncode != NO_DEVICE and (limits.memory_message(err) or run.returncode < 0):
+                raise GraderUnavailable(limits.memory_failure("the GL child", "Mesa's llvmpipe", run.returncode))
             last = err.splitlines()[-1] if err else f"status {run.returncode}"
-            raise GraderUnavailable(last if run.returncode == NO_DEVICE else f"the GL child failed: {last}")
+            raise GraderUnavailable(_no_device(last) if run.returncode == NO_DEVICE else f"the GL child failed: {last}")
         _VERSION = run.stdout.decode()
     return _VERSION
 
@@ -160,7 +174,7 @@ class Kernel:
 
         The shader is compiled and run in a child process (``_gpu_child``, the process's GL
         worker: one child for every run, its GL context made once) under the limits of user
-        code (:mod:`.limits`): a shader that never ends is killed with its process group.
+        code (:mod:`.limits`): a shader that never ends is killed with every process of the run.
         """
         inputs = np.ascontiguousarray(inputs, dtype=np.float32).reshape(-1, self.n_in)
         rows = inputs.shape[0]
@@ -177,19 +191,18 @@ class Kernel:
         run = _gl_worker().request(pickle.dumps(job), label=f"{label} (GLSL on llvmpipe)")
         err = run.stderr.decode(errors="replace").strip()
         if run.returncode == NO_DEVICE:
-            raise GraderUnavailable(err.splitlines()[-1] if err else "no OpenGL 4.3 context through EGL")
+            raise GraderUnavailable(_no_device(err.splitlines()[-1] if err else "no OpenGL 4.3 context through EGL"))
         if run.returncode == NO_COMPILE:
             raise GraderUnavailable(
                 f"{label} does not compile on {gl_version()}: {err.splitlines()[-1] if err else ''} "
                 "(file 1 = the subject's code, 2 = the grader's wrapper)"
             )
         if run.returncode != 0:
-            last = err.splitlines()[-1] if err else f"status {run.returncode}"
             if limits.memory_message(err) or run.returncode < 0:
-                last = (
-                    f"exceeded the memory limit of user code ({limits.MEMORY / 2**30:g} GiB) or was killed "
-                    f"(status {run.returncode})"
+                raise GraderUnavailable(
+                    limits.memory_failure(f"{label}: the GL child", "Mesa's llvmpipe", run.returncode)
                 )
+            last = err.splitlines()[-1] if err else f"status {run.returncode}"
             raise GraderUnavailable(f"{label}: the GL child failed: {last}")
         out = np.frombuffer(run.stdout, dtype=np.float32)
         if out.size != rows * self.n_out:

@@ -111,7 +111,11 @@ def load_materials(
     >>> mats[0].parameters["base_diffuse_roughness"].value
     1.0
     """
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"path must be a str or os.PathLike (a .usd* or .mtlx file), got {type(path).__name__}")
     path = os.fspath(path)
+    if not isinstance(path, str):
+        raise TypeError(f"path must name the file as text, got {type(path).__name__}")
     uv = _check_uv(uv)
     variants = _check_variants(variants)
     if time is not None:

@@ -12,11 +12,14 @@ readers' working space), float. PNG: converted to sRGB with OpenImageIO's colorc
 from __future__ import annotations
 
 import os
+from collections.abc import Iterable
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._outfile import output_file
 from .evaluate import brdf_and_lobes
 
 if TYPE_CHECKING:
@@ -83,25 +86,52 @@ def render_image(material: Material, size: int = 256, supersample: int = 2) -> N
     return img.astype(np.float32)
 
 
-def write_image(img: ArrayLike, path: str) -> None:
-    """EXR: linear ACEScg float; PNG/other: sRGB-encoded 8 bit via OpenImageIO colorconvert."""
+def write_image(
+    img: ArrayLike,
+    path: str | os.PathLike[str],
+    *,
+    force: bool = False,
+    inputs: Iterable[str | os.PathLike[str]] = (),
+    option: str = "--out",
+) -> Path:
+    """Write ``img`` to ``path``: EXR linear ACEScg float; PNG/other sRGB-encoded 8 bit
+    (OpenImageIO colorconvert).
+
+    By the rule of every output file (:func:`openpbr_diffuse._outfile.output_file`): an
+    existing file is replaced only with ``force`` (a regular file, never a symbolic link or
+    one of ``inputs``), through a temporary sibling that keeps the suffix.  Returns the
+    absolute path written.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> write_image(np.ones((8, 16, 4), np.float32), d / "x.exr").name
+    'x.exr'
+    >>> [p.name for p in d.iterdir()]
+    ['x.exr']
+    """
     import OpenImageIO as oiio
 
-    ext = os.path.splitext(path)[1].lower()
+    text = os.fspath(path)
+    ext = os.path.splitext(text)[1].lower()
+    if ext not in (".exr", ".png", ".jpg", ".jpeg", ".tif", ".tiff"):
+        raise ValueError(f"--out must end in .exr or .png (also .jpg, .tif), got {text!r}")
     buf = oiio.ImageBuf(np.ascontiguousarray(img))
-    if ext == ".exr":
-        buf.specmod().attribute("oiio:ColorSpace", "ACEScg")
-        ok = buf.write(path, "float")
-    elif ext in (".png", ".jpg", ".jpeg", ".tif", ".tiff"):
-        conv = oiio.ImageBufAlgo.colorconvert(buf, "ACEScg", "srgb_rec709_scene")
-        if conv.has_error:
-            raise OSError(f"render: colour conversion failed: {conv.geterror()}")
-        ok = conv.write(path, "uint8")
-        buf = conv
-    else:
-        raise ValueError(f"--out must end in .exr or .png (also .jpg, .tif), got {path!r}")
-    if not ok:
-        raise OSError(f"render: cannot write {path}: {buf.geterror() or oiio.geterror()}")
+    with output_file(path, option=option, force=force, inputs=inputs) as tmp:
+        if ext == ".exr":
+            buf.specmod().attribute("oiio:ColorSpace", "ACEScg")
+            ok = buf.write(str(tmp), "float")
+        else:
+            conv = oiio.ImageBufAlgo.colorconvert(buf, "ACEScg", "srgb_rec709_scene")
+            if conv.has_error:
+                raise OSError(f"render: colour conversion failed: {conv.geterror()}")
+            ok = conv.write(str(tmp), "uint8")
+            buf = conv
+        if not ok:
+            why = (buf.geterror() or oiio.geterror()).replace(str(tmp), text)  # name the file asked for
+            raise OSError(f"render: cannot write {text}: {' '.join(why.split())}")
+    return Path(os.path.abspath(text))
 
 
 __all__ = ["render_image", "write_image", "local_directions", "LIGHT", "VIEW"]

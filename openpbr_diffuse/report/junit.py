@@ -4,14 +4,18 @@ One ``<testsuite>`` per section (and one, ``implementation``, for the implementa
 test), one ``<testcase>`` per check, named by its stable id: a failing check carries
 ``<failure message=...>`` with what was measured against what; a check that did not run
 (and a section that ran nothing) is ``<skipped message=...>`` with the reason.  An
-implementation that could not run is an ``<error>``.
+implementation that could not run is an ``<error>``.  The materials the report read have
+a suite of their own, ``materials.library``: one ``<testcase>`` per material.
 """
 
 from __future__ import annotations
 
 import os
+from collections.abc import Iterable
 from pathlib import Path
 from xml.etree import ElementTree as ET
+
+from .._outfile import output_file
 
 
 def _case(suite: ET.Element, classname: str, name: str, elapsed: float = 0.0) -> ET.Element:
@@ -72,6 +76,7 @@ def junit_xml(doc: dict) -> str:
                 ).text = c.get("detail", "")
             elif status == "not run":
                 ET.SubElement(case, "skipped", message=f"not run: {c.get('not_run')}")
+    _material_cases(root, doc.get("materials") or ())
     for suite in root:
         cases = suite.findall("testcase")
         suite.set("tests", str(len(cases)))
@@ -81,13 +86,54 @@ def junit_xml(doc: dict) -> str:
     return ET.tostring(root, encoding="unicode", xml_declaration=True) + "\n"
 
 
-def write_junit(doc: dict, path: str | os.PathLike[str]) -> Path:
-    """Write :func:`junit_xml` of ``doc`` to ``path`` (through a temporary file beside it)."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(junit_xml(doc), encoding="utf-8")
-    tmp.replace(path)
-    return path
+def _material_cases(root: ET.Element, materials: Iterable[dict]) -> None:
+    """One ``<testcase>`` per material of the report (suite ``materials.library``), named
+    ``relpath:material``: a failing material carries ``<failure>`` with its reasons, an
+    unsupported one is ``<skipped>``, a flagged one passes with its reasons as output."""
+    suite = None
+    for r in materials:
+        if suite is None:
+            suite = ET.SubElement(root, "testsuite", name="materials.library")
+        reasons = ", ".join(r.get("reasons") or ()) or r.get("verdict", "")
+        case = _case(suite, "materials.library", f"{r.get('relpath')}:{r.get('material') or '(file)'}")
+        if r.get("verdict") == "fail":
+            ET.SubElement(case, "failure", message=f"{reasons}: {r.get('detail') or ''}"[:1000]).text = r.get("file")
+        elif r.get("verdict") == "unsupported":
+            ET.SubElement(case, "skipped", message=f"{reasons}: {r.get('detail') or ''}"[:1000])
+        elif r.get("verdict") == "flagged":
+            ET.SubElement(case, "system-out").text = f"{reasons}: {r.get('detail') or ''}"
+
+
+def write_junit(
+    doc: dict,
+    path: str | os.PathLike[str],
+    *,
+    force: bool = False,
+    inputs: Iterable[str | os.PathLike[str]] = (),
+    input_suffixes: Iterable[str] = (),
+) -> Path:
+    """Write :func:`junit_xml` of ``doc`` to ``path`` by the rule of every output file.
+
+    An existing file is replaced only with ``force`` (a regular file, never a link or one
+    of ``inputs``); the XML goes to a temporary sibling first, see
+    :func:`openpbr_diffuse._outfile.output_file`.  Raises ``OutputFileError`` (a
+    ``ValueError``) naming ``--junit`` and the path.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> doc = {"sections": [], "implementation": None}
+    >>> write_junit(doc, d / "junit.xml").read_text().startswith("<?xml")
+    True
+    >>> write_junit(doc, d / "junit.xml")
+    Traceback (most recent call last):
+    ...
+    openpbr_diffuse._outfile.OutputExistsError: --junit .../junit.xml exists: not overwritten (use --force to replace it)
+    """
+    with output_file(path, option="--junit", force=force, inputs=inputs, input_suffixes=input_suffixes) as tmp:
+        tmp.write_text(junit_xml(doc), encoding="utf-8")
+    return Path(os.path.abspath(os.fspath(path)))
 
 
 __all__ = ["junit_xml", "write_junit"]

@@ -12,11 +12,14 @@ clip); ``.exr`` keeps the linear working-space values (colour space in the metad
 from __future__ import annotations
 
 import os
+from collections.abc import Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
+
+from .._outfile import output_file
 
 if TYPE_CHECKING:
     from .validation import ColourShift
@@ -57,10 +60,20 @@ def swatch_array(result: ColourShift) -> tuple[NDArray[np.float32], list[tuple[i
     return img, labels
 
 
-def write_swatches(result: ColourShift, path: str | os.PathLike[str]) -> Path:
+def write_swatches(
+    result: ColourShift,
+    path: str | os.PathLike[str],
+    *,
+    force: bool = False,
+    inputs: Iterable[str | os.PathLike[str]] = (),
+) -> Path:
     """Write the swatch image of ``result`` (a ``ColourShift``) to ``path`` (format by suffix).
 
-    Returns the path.  Raises OSError if OpenImageIO cannot write it.
+    By the rule of every output file (:func:`openpbr_diffuse._outfile.output_file`): an
+    existing file is replaced only with ``force`` (a regular file, never a symbolic link or
+    one of ``inputs``), through a temporary sibling that keeps the suffix.  Returns the
+    path.  Raises ``OutputFileError`` (a ``ValueError``) naming ``--image`` when the path may
+    not be written, OSError if OpenImageIO cannot write it.
     """
     import OpenImageIO as oiio
 
@@ -83,6 +96,8 @@ def write_swatches(result: ColourShift, path: str | os.PathLike[str]) -> Path:
         "ImageDescription",
         "openpbr-diffuse colorshift: L Lambert, R RGB-evaluated EON, S spectral EON, W white then tint",
     )
-    if not buf.write(str(path), "half" if linear else "uint8"):
-        raise OSError(f"--image: cannot write {path}: {buf.geterror()}")
+    with output_file(path, option="--image", force=force, inputs=inputs) as tmp:
+        if not buf.write(str(tmp), "half" if linear else "uint8"):
+            why = (buf.geterror() or oiio.geterror()).replace(str(tmp), str(path))  # name the file asked for
+            raise OSError(f"--image: cannot write {path}: {' '.join(why.split())}")
     return path
