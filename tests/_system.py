@@ -73,6 +73,20 @@ def _babylon_ok() -> bool:
 
 
 @functools.cache
+def _npm_ok(module: str) -> bool:
+    """The npm package the grader module ``module`` reads is in the project's npm cache."""
+    import importlib
+
+    from openpbr_diffuse.graders.errors import GraderUnavailable
+
+    try:
+        importlib.import_module(f"openpbr_diffuse.graders.{module}").package_folder()
+    except GraderUnavailable:
+        return False
+    return True
+
+
+@functools.cache
 def _bpy_ok() -> bool:
     from openpbr_diffuse.graders import cycles
     from openpbr_diffuse.graders.errors import GraderUnavailable
@@ -100,6 +114,16 @@ PROGRAMS = {
         "Babylon.js (npm @babylonjs/core)",
         "npm install --prefix ~/.cache/openpbr-diffuse/npm @babylonjs/core",
         _babylon_ok,
+    ),
+    "threejs": (
+        "three.js (npm three)",
+        "npm install --prefix ~/.cache/openpbr-diffuse/npm --ignore-scripts three",
+        lambda: _npm_ok("threejs"),
+    ),
+    "three-gpu-pathtracer": (
+        "three-gpu-pathtracer (npm)",
+        "npm install --prefix ~/.cache/openpbr-diffuse/npm --ignore-scripts three three-gpu-pathtracer",
+        lambda: _npm_ok("threejs_pathtracer"),
     ),
     "bpy": (
         "Blender's bpy in a Python of its own",

@@ -14,6 +14,8 @@ materialx-glsl         MaterialX wheel: pbrlib/genglsl/mx_oren_nayar_diffuse_bsd
 materialx-glsl-qon     the same node with energy_compensation = false (QON)         optional
 cycles                 bpy (Blender) Cycles Diffuse BSDF, rendered                  unused
 babylonjs              npm @babylonjs/core: EON as each light type computes it      optional
+threejs                npm three: BRDF_EON / EON_DirectionalAlbedo (GLSL chunks)    optional
+three-gpu-pathtracer   npm three-gpu-pathtracer: eonBrdf, fonBrdf, EON sampler (WGSL) optional
 =====================  ==========================================================  =========
 
 Code that is not installed by a package -- a checkout of another project, your own
@@ -62,6 +64,8 @@ IMPLEMENTATIONS = {
         ),
         Implementation("cycles", "cycles", False, "pip install bpy"),
         Implementation("babylonjs", "babylon", False, "npm install @babylonjs/core"),
+        Implementation("threejs", "threejs", False, "npm install three"),
+        Implementation("three-gpu-pathtracer", "threejs_pathtracer", False, "npm install three-gpu-pathtracer"),
     )
 }
 
