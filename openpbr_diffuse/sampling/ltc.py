@@ -34,16 +34,28 @@ import math
 from .._jit import PI, kernel
 from .simple import cos_sin_2pi
 
+#: The coefficients of Listing 2's fit, as ``_ltc_parts`` uses them (also read by ``export``):
+#: a = 1 + r (A0 + (A1 + A2 mu) mu + (A3 + A4 mu) r); b = r (B0 + B1 mu + (B2 + B3 mu) r) / (mu^3 + B4);
+#: c = 1 + (C0 + (C1 + C2 mu) mu) r; d = (D0 + (D1 + D2 mu) mu) r / (D3 + mu (D4 + mu)).
+LTC_FIT_A = (0.303392, -0.518982, 0.111709, -0.276266, 0.335918)
+LTC_FIT_B = (-1.16407, 1.15859, 0.150815, -0.150105, -1.43545)
+LTC_FIT_C = (0.20013, -0.506373, 0.261777)
+LTC_FIT_D = (0.540852, -1.01625, 0.475392, -1.0743, 0.0725628)
+
 
 @kernel
 def _ltc_parts(mu, r):
     """(a, b_num, b_den, c, d_num, d_den) of the Listing 2 fit: b = b_num / b_den, d = d_num / d_den."""
-    a = 1.0 + r * (0.303392 + (-0.518982 + 0.111709 * mu) * mu + (-0.276266 + 0.335918 * mu) * r)
-    bn = r * (-1.16407 + 1.15859 * mu + (0.150815 - 0.150105 * mu) * r)
-    bd = mu * mu * mu - 1.43545
-    c = 1.0 + (0.20013 + (-0.506373 + 0.261777 * mu) * mu) * r
-    dn = (0.540852 + (-1.01625 + 0.475392 * mu) * mu) * r
-    dd = -1.0743 + mu * (0.0725628 + mu)
+    A0, A1, A2, A3, A4 = LTC_FIT_A
+    B0, B1, B2, B3, B4 = LTC_FIT_B
+    C0, C1, C2 = LTC_FIT_C
+    D0, D1, D2, D3, D4 = LTC_FIT_D
+    a = 1.0 + r * (A0 + (A1 + A2 * mu) * mu + (A3 + A4 * mu) * r)
+    bn = r * (B0 + B1 * mu + (B2 + B3 * mu) * r)
+    bd = mu * mu * mu + B4
+    c = 1.0 + (C0 + (C1 + C2 * mu) * mu) * r
+    dn = (D0 + (D1 + D2 * mu) * mu) * r
+    dd = D3 + mu * (D4 + mu)
     return a, bn, bd, c, dn, dd
 
 

@@ -83,11 +83,16 @@ def pow_tenth(r: float) -> float:
     return f * p if r > 0.0 else 0.0
 
 
+#: The coefficients of Listing 4's P_u = r^0.1 (P0 + mu (P1 + (P2 + P3 mu) mu)) (also read by ``export``).
+UNIFORM_FIT = (0.162925, -0.372058, 0.538233, -0.290822)
+
+
 @kernel
 def uniform_probability(mu: float, r_tenth: float) -> float:
     """P_u = r^0.1 (0.162925 + mu (-0.372058 + (0.538233 - 0.290822 mu) mu)) (Listing 4),
     given r_tenth = r^0.1 (``pow_tenth(r)``: once per material when r is fixed)."""
-    return r_tenth * (0.162925 + mu * (-0.372058 + (0.538233 - 0.290822 * mu) * mu))
+    P0, P1, P2, P3 = UNIFORM_FIT
+    return r_tenth * (P0 + mu * (P1 + (P2 + P3 * mu) * mu))
 
 
 @kernel
