@@ -1,6 +1,7 @@
 """Wrong implementations that differ from the named common bugs: a factor 1/2 or 1/(2 pi) is
-reported with its value, f_ms with rho in place of rho_ms and a clamped L.V are named, and a
-compound (f mu_i pi) or an altered FON coefficient is honestly left unexplained, never "closest".
+reported with its value, f_ms with rho in place of rho_ms and a clamped L.V are named, a
+compound (f mu_i pi) is named as the pair of its two deviations, and an altered FON
+coefficient is honestly left unexplained, never "closest".
 (The subjects are ``tests/_hand_impl.py``: formulas typed from the EON paper in plain NumPy.)
 """
 
@@ -42,7 +43,14 @@ def test_unseen_bug_named(switches, name):
     assert g.diagnosis == name, (g.diagnosis, g.diagnosis_detail)
 
 
-@pytest.mark.parametrize("switches", [dict(times_cos=True, scale=math.pi), dict(c1=0.6)])
+def test_compound_is_named_as_the_pair():
+    g = grade(V, hand.answer(V, times_cos=True, scale=math.pi))
+    assert not g.passed
+    assert g.diagnosis == "constant_factor & times_cos_theta_i", (g.diagnosis, g.diagnosis_detail)
+    assert "two deviations at once" in g.diagnosis_detail and "1/pi forgotten" in g.diagnosis_detail
+
+
+@pytest.mark.parametrize("switches", [dict(c1=0.6)])
 def test_unseen_unexplained_is_said_so(switches):
     g = grade(V, hand.answer(V, **switches))
     assert not g.passed

@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 
 from .._outfile import check_output_file, output_file
-from ..conformance.vectors import COLUMNS, OUT_COLUMNS, default_vectors, write_vectors
+from ..conformance.vectors import ALL_VECTOR_MODELS, COLUMNS, OUT_COLUMNS, default_vectors, write_vectors
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -23,6 +23,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     )
     p.add_argument("--out", required=True, metavar="FILE", help="output file (.csv, or .json)")
     p.add_argument("--force", action="store_true", help="replace FILE if it exists")
+    p.add_argument(
+        "--model", choices=ALL_VECTOR_MODELS, help="only the rows of this model (qon_fujii: not in the default set)"
+    )
     p.set_defaults(run=run)
     return p
 
@@ -30,7 +33,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
 def run(args: argparse.Namespace) -> int:
     check_output_file(args.out, option="--out", force=args.force)  # before any work
     path = args.out
-    v = default_vectors()
+    v = default_vectors(None if args.model is None else (args.model,))
     with output_file(args.out, option="--out", force=args.force) as tmp:
         write_vectors(v, tmp, blank_out=True)
     print(

@@ -370,6 +370,216 @@ def _mu_floor_predict(vectors, floor, base=None):
     return _mu_floor_predictions(vectors, [floor], base)[0]
 
 
+def _over_sqrt2(info, x):
+    return x / math.sqrt(2.0)
+
+
+def _times_sqrt2(info, x):
+    return x * math.sqrt(2.0)
+
+
+def _predict_swap_qon_fujii(vectors):
+    return _predict(vectors, model_map={"qon": "qon_fujii", "qon_fujii": "qon"})
+
+
+#: Rec. 709 / sRGB luminance weights.
+LUMINANCE_709 = (0.2126, 0.7152, 0.0722)
+#: Listing 1's guard of f_ms.
+_EPS = 1e-7
+
+
+def _eon_parts(vectors):
+    """For the EON rows (mask): the FON part ``ss`` (n, 3), E_F(mu_i), E_F(mu_o) (albedo rows:
+    E_F(mu)) (n,) -- exact for "eon", the Eq. 14 fit for "eon_approx" -- <E_F> (n,), and
+    the reference (n, 3).  Built from the library's FON (its albedo at rho = 1 is E_F)."""
+    from ..models.fon import E_F_approx, E_F_avg
+
+    ref = reference(vectors)
+    eon = np.isin(vectors.model, _EON_MODELS)
+    ss = _single_scattering(vectors)
+    r = _roughness_of(vectors)
+    brdf = vectors.kind == "brdf"
+    mu_o = np.where(brdf, vectors.wo[:, 2], vectors.mu)
+    mu_i = np.where(brdf, vectors.wi[:, 2], 1.0)
+    e = {}
+    for key, mu in (("i", mu_i), ("o", mu_o)):
+        val = np.ones(len(vectors))
+        up = eon & (mu > 0)
+        exact = up & (vectors.model == "eon")
+        if exact.any():
+            from ..models import directional_albedo
+
+            val[exact] = directional_albedo("fon", mu[exact], r[exact], np.ones((int(exact.sum()), 3)))[:, 0]
+        approx = up & (vectors.model == "eon_approx")
+        if approx.any():
+            val[approx] = np.vectorize(E_F_approx, otypes=[float])(mu[approx], r[approx])
+        e[key] = val
+    avg = np.asarray(E_F_avg(r), dtype=np.float64)
+    return eon, ss, e["i"], e["o"], avg, ref
+
+
+def _with_ms(vectors, parts, rho_ms_of, drop_mu_i=False, lobe_albedo=False, avg_used=None):
+    """EON rows rebuilt as f_ss + f_ms with the given rho_ms (``rho_ms_of(rho, avg)``), <E_F>
+    (``avg_used``), and optionally f_ms without its (1 - E_F(mu_i)) factor."""
+    eon, ss, e_i, e_o, avg, ref = parts
+    avg = avg if avg_used is None else avg_used
+    out = ref.copy()
+    if not eon.any():
+        return out
+    brdf = vectors.kind == "brdf"
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rms = rho_ms_of(vectors.rho, avg[:, None])
+        fo = np.maximum(_EPS, 1.0 - e_o)
+        fi = np.ones_like(fo) if drop_mu_i else np.maximum(_EPS, 1.0 - e_i)
+        den = np.maximum(_EPS, 1.0 - avg)
+        up = brdf & (vectors.wi[:, 2] > 0) & (vectors.wo[:, 2] > 0)
+        f_ms = np.where(up[:, None], rms / math.pi * (fo * fi / den)[:, None], 0.0)
+        a_ms = rms * (1.0 - e_o)[:, None]
+        if lobe_albedo:  # the albedo of the lobe without the mu_i factor: int mu dw / pi = 1
+            a_ms = rms * (fo / den)[:, None]
+    sel_b, sel_a = eon & brdf, eon & ~brdf
+    out[sel_b] = ss[sel_b] + f_ms[sel_b]
+    out[sel_a] = ss[sel_a] + a_ms[sel_a]
+    return out
+
+
+def _rho_ms_formula(rho, avg):
+    from ..models.eon import rho_ms
+
+    return rho_ms(rho, avg)
+
+
+def _rho_ms_scalar(weights):
+    w = np.asarray(weights, dtype=np.float64)
+
+    def predict(vectors):
+        def scalar_rho_ms(rho, avg):
+            grey = np.repeat((rho @ w)[:, None], 3, axis=1)
+            return _rho_ms_formula(grey, avg)
+
+        return _with_ms(vectors, _eon_parts(vectors), scalar_rho_ms)
+
+    return predict
+
+
+def _ms_no_mu_i(lobe_albedo):
+    def predict(vectors):
+        return _with_ms(vectors, _eon_parts(vectors), _rho_ms_formula, drop_mu_i=True, lobe_albedo=lobe_albedo)
+
+    return predict
+
+
+def _avg_of(vectors, c):
+    from ..models.fon import C1
+
+    r = _roughness_of(vectors)
+    return (1.0 + c * r) / (1.0 + C1 * r)
+
+
+def _avg_constant_predict(vectors, c, parts=None):
+    parts = _eon_parts(vectors) if parts is None else parts
+    return _with_ms(vectors, parts, _rho_ms_formula, avg_used=_avg_of(vectors, c))
+
+
+def _avg_label(c):
+    from ..models.fon import C2
+
+    return f"<E_F> = A_F (1 + c r) with c = {c:.5g} (the reference c2 = {C2:.7g})"
+
+
+def _robust_score(out, pred, weight):
+    """A residual continuous in the fitted parameter (capped per value at 1e3 tolerances)."""
+    e = np.abs(out - pred) * weight
+    return float(np.sum(np.minimum(np.where(np.isfinite(e), e, 1e3), 1e3) ** 2))
+
+
+def _grid_fit(score, lo, hi, n=65, refinements=3):
+    """argmin of ``score`` on a grid over [lo, hi], the best cell refined ``refinements`` times."""
+    grid = np.linspace(lo, hi, n)
+    for _ in range(refinements + 1):
+        s = [score(x) for x in grid]
+        k = int(np.argmin(s))
+        a, b = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
+        grid = np.linspace(a, b, 17)
+    return float(grid[int(np.argmin([score(x) for x in grid]))])
+
+
+def _avg_constant_fit(vectors, out, ref, weight):
+    parts = _eon_parts(vectors)
+    if not parts[0].any():
+        return 0.0, ref.copy()
+    c = _grid_fit(lambda c: _robust_score(out, _avg_constant_predict(vectors, c, parts), weight), -0.3, 1.0)
+    return c, _avg_constant_predict(vectors, c, parts)
+
+
+def _rough_floor_predict(vectors, floor):
+    return _predict(vectors, roughness_map=lambda info, x: np.maximum(x, floor))
+
+
+def _rough_floor_label(b):
+    return f"x' = max(x, {b:.4g})"
+
+
+def _rough_floor_predictions(vectors, floors, base):
+    """``_rough_floor_predict`` at each of ``floors`` (k, n, 3) from one evaluation of the
+    library over the rows whose roughness is below some floor."""
+    from .vectors import VectorSet
+
+    out = np.repeat(np.asarray(base, dtype=np.float64)[None], len(floors), axis=0)
+    r = vectors.roughness
+    with np.errstate(invalid="ignore"):
+        low = np.flatnonzero((vectors.model != "lambert") & (r < float(np.max(floors))))
+    if low.size == 0:
+        return out
+    fl = np.asarray(floors, dtype=np.float64)
+    k, j = np.nonzero(r[low][None, :] < fl[:, None])
+    if k.size == 0:
+        return out
+    sub = vectors.subset(low[j])
+    sub = VectorSet(sub.id, sub.kind, sub.model, sub.wi, sub.wo, sub.mu, fl[k], sub.rho, sub.version)
+    out[k, low[j]] = _predict(sub)
+    return out
+
+
+def _rough_floor_fit(vectors, out, ref, weight):
+    r = vectors.roughness[(vectors.model != "lambert") & np.isfinite(vectors.roughness)]
+    pos = r[r > 0]
+    if r.size == 0 or not (r == 0).any():
+        return 0.0, ref.copy()
+    top = float(pos.min()) if pos.size else 0.5
+    base = reference(vectors)
+    grid = np.linspace(0.0, top, 65)[1:]
+    for _ in range(4):
+        preds = _rough_floor_predictions(vectors, grid, base)
+        s = [_robust_score(out, p, weight) for p in preds]
+        k = int(np.argmin(s))
+        a, b = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
+        grid = np.linspace(a, b, 17)
+    b = float(grid[8])
+    return b, _rough_floor_predictions(vectors, [b], base)[0]
+
+
+def _below(vectors):
+    return (vectors.kind == "brdf") & ((vectors.wi[:, 2] <= 0) | (vectors.wo[:, 2] <= 0))
+
+
+def _below_predict(vectors, _=0.0):
+    """A two-sided lobe: the rows below the horizon evaluated with z -> |z|."""
+    wi, wo = vectors.wi.copy(), vectors.wo.copy()
+    wi[:, 2], wo[:, 2] = np.abs(wi[:, 2]), np.abs(wo[:, 2])
+    return _predict(vectors, wi=wi, wo=wo)
+
+
+def _below_fit(vectors, out, ref, weight):
+    """The submitted values themselves at the rows below the horizon where they are not 0."""
+    bad = _below(vectors)[:, None] & np.isfinite(out) & (np.abs(out - ref) * weight > 1.0)
+    return float(bad.any(axis=1).sum()), np.where(bad, out, ref)
+
+
+def _below_label(n):
+    return f"f != 0 at {int(n)} rows below the horizon"
+
+
 class Fitted:
     """A deviation variant with one fitted parameter: ``fit(vectors, out, ref, weight)``
     returns (parameter, prediction); ``label(parameter)`` describes it; calling it with
@@ -475,7 +685,7 @@ class Deviation:
         return self.variants[0][1](vectors)
 
 
-_TABLE = (
+_TABLE: tuple[tuple[str, str, str, tuple[tuple[str, Callable], ...]], ...] = (
     (
         "no_energy_compensation_qon",
         "QON (sigma = the given r) instead of EON: no energy compensation",
@@ -596,6 +806,63 @@ _TABLE = (
         "mu_i, mu_o clamped at a floor",
         "max(mu, floor) against grazing division",
         (("mu' = max(mu, {:.4g})", Fitted(_floor_fit, _mu_floor_predict, lambda m: f"mu' = max(mu, {m:.4g})", 0.01)),),
+    ),
+)
+
+_TABLE += (
+    (
+        "roughness_sigma_over_sqrt2",
+        "roughness mapped as sigma = r/sqrt(2) (or r sqrt(2)): pass the roughness through unchanged",
+        "Mitsuba/Arnold-style alpha -> sigma = alpha/sqrt(2) (OpenPBR discussion #159)",
+        (("x' = x/sqrt(2)", _rough(_over_sqrt2)), ("x' = x sqrt(2)", _rough(_times_sqrt2))),
+    ),
+    (
+        "qon_fujii_constants",
+        "Fujii's QON (A + 0.17 rho sigma^2/(sigma^2 + 0.13), negative s kept) where QON is asked for, "
+        "or QON where qon_fujii is: use the model's own A and s/t",
+        "Fujii 2013 and Oren-Nayar 1994 QON confused (grade Fujii's code with --model qon_fujii)",
+        (("qon <-> qon_fujii", _predict_swap_qon_fujii),),
+    ),
+    (
+        "rho_ms_from_scalar_rho",
+        "rho_ms (Eq. 18) computed from one scalar of rho instead of per channel: compute it per channel",
+        "a grey rho_ms from the luminance or the mean of a colour",
+        (
+            ("rho_ms(luminance(rho)), Rec. 709 weights", _rho_ms_scalar(LUMINANCE_709)),
+            ("rho_ms(mean(rho))", _rho_ms_scalar((1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0))),
+        ),
+    ),
+    (
+        "ms_missing_mu_i_factor",
+        "f_ms without its (1 - E_F(mu_i)) factor (not reciprocal): multiply f_ms by max(eps, 1 - E_F(mu_i))",
+        "Eq. 16 with one of its two albedo factors dropped",
+        (
+            ("f_ms without (1 - E_F(mu_i)), albedo Eq. 20", _ms_no_mu_i(False)),
+            ("f_ms without (1 - E_F(mu_i)), the lobe's albedo", _ms_no_mu_i(True)),
+        ),
+    ),
+    (
+        "avg_albedo_constant",
+        "<E_F> (Eq. 15) computed with another constant c2 in A_F (1 + c2 r): use c2 = 2/3 - 28/(15 pi)",
+        "a mistyped c2 (reference 0.0724882125)",
+        (
+            (
+                "<E_F> = A_F (1 + c r), c = {:.6g}",
+                Fitted(_avg_constant_fit, _avg_constant_predict, _avg_label, 0.724882125),
+            ),
+        ),
+    ),
+    (
+        "roughness_floor",
+        "roughness raised to a floor before use: pass roughness 0 (and small values) through",
+        "max(roughness, floor) against a singular smooth limit",
+        (("x' = max(x, {:.4g})", Fitted(_rough_floor_fit, _rough_floor_predict, _rough_floor_label, 0.05)),),
+    ),
+    (
+        "nonzero_below_horizon",
+        "f non-zero for a direction below the horizon: return 0 when wi.z <= 0 or wo.z <= 0 (single-sided)",
+        "a missing or inverted horizon test (a two-sided lobe)",
+        (("f != 0 below the horizon", Fitted(_below_fit, _below_predict, _below_label, 0.0)),),
     ),
 )
 

@@ -6,7 +6,13 @@ reference (:func:`.deviations.reference`) at the tolerance
     |out - ref| <= ABS_TOL + REL_TOL |ref|      (every row, every channel)
 
 and, when that fails, fits every known deviation of :data:`.deviations.DEVIATIONS` (each
-variant) to the submitted values and names the one that explains them.
+variant) to the submitted values and names the one that explains them.  NaN/Inf results
+(``non_finite_output``, with the inputs of the rows and the finite value expected there) and
+non-zero values below the horizon (``nonzero_below_horizon``) are named on their own and the
+other rows diagnosed apart ("non_finite_output & roughness_squared"); when no single
+deviation explains the rest, pairs are tried ("constant_factor & roughness_squared"), then
+small random-signed relative errors are called ``precision``.  The albedo at exactly mu = 0
+is accepted as 0 or as its grazing limit (:func:`accepted_reference`).
 
 Why this tolerance (:data:`TOLERANCE_REASON`): an implementation that is right but works in
 float32 differs from the float64 reference by the rounding of its inputs and output and
@@ -35,6 +41,7 @@ from __future__ import annotations
 
 import collections
 import math
+import sys
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -59,6 +66,10 @@ EXPLAIN_FRACTION = 0.9
 NOT_EXPLAINED = "no known deviation explains this"
 #: How many of the worst rows are listed.
 N_WORST = 10
+#: An error ratio that a finite result makes too large for a float (|out - ref| / tolerance
+#: above 1.8e308, e.g. out = 1e308) is recorded as this, the largest float; infinity is
+#: kept for NaN and Inf results, so that the two are told apart.
+OUT_OF_RANGE = sys.float_info.max
 
 
 def json_safe(x: Any) -> Any:
@@ -129,6 +140,28 @@ class Grade:
         )
 
 
+def accepted_reference(vectors: VectorSet, out: np.ndarray, absolute: float = ABS_TOL) -> np.ndarray:
+    """The reference of every row (:func:`.deviations.reference`), with the single-sided
+    convention accepted where the albedo is asked for at exactly mu = 0: a row whose submitted
+    values are all 0 (within ``absolute``) is compared with 0, any other with the grazing
+    limit the library returns (E -> rho for EON/FON, since E_F -> 1).
+
+    >>> from openpbr_diffuse.conformance.vectors import default_vectors
+    >>> v = default_vectors()
+    >>> v = v.subset((v.kind == "albedo") & (v.mu == 0) & (v.model == "eon"))
+    >>> accepted_reference(v, np.zeros((len(v), 3))).max(), round(float(accepted_reference(v, np.ones((len(v), 3))).max()), 6)
+    (np.float64(0.0), 1.0)
+    """
+    from .deviations import reference
+
+    ref = reference(vectors)
+    out = np.asarray(out, dtype=np.float64)
+    with np.errstate(invalid="ignore"):
+        zero = (vectors.kind == "albedo") & (vectors.mu == 0) & (np.abs(out) <= absolute).all(axis=1)
+    ref[zero] = 0.0
+    return ref
+
+
 def _tolerance(tolerance):
     if tolerance is None:
         return REL_TOL, ABS_TOL
@@ -144,9 +177,12 @@ def _tolerance(tolerance):
 
 
 def _normalised(out, pred, rel, ab):
-    with np.errstate(invalid="ignore", over="ignore"):
+    """|out - pred| / tolerance: inf where out or pred is NaN/Inf, :data:`OUT_OF_RANGE`
+    where both are finite but the ratio overflows."""
+    with np.errstate(all="ignore"):
         e = np.abs(out - pred) / (ab + rel * np.abs(pred))
-    return np.where(np.isfinite(e), e, np.inf)
+        both = np.isfinite(out) & np.isfinite(pred)
+    return np.where(np.isfinite(e), e, np.where(both, OUT_OF_RANGE, np.inf))
 
 
 def _row(vectors, i, ref, out, e):
@@ -201,7 +237,7 @@ def region_masks(vectors: VectorSet) -> dict[str, np.ndarray]:
         ldotv = np.einsum("ij,ij->i", vectors.wi, vectors.wo)
         masks = {
             "all": np.ones(len(vectors), bool),
-            "grazing (mu < 0.1)": (mu_min > 0) & (mu_min < 0.1),
+            "grazing (mu < 0.1)": ((mu_min > 0) | ~brdf) & (mu_min < 0.1),
             "L.V < 0": brdf & (ldotv < 0) & (vectors.wi[:, 2] > 0) & (vectors.wo[:, 2] > 0),
             "below the horizon": brdf & ((vectors.wi[:, 2] <= 0) | (vectors.wo[:, 2] <= 0)),
         }
@@ -326,6 +362,93 @@ def _variants(vectors, out, ref, rel, ab):
                 yield f"{name}+wi_wo_swapped", f"{label}, with wi and wo swapped", pred_s
 
 
+#: How many rows with a NaN/Inf result are named in the diagnosis.
+N_NONFINITE = 3
+
+
+def _below_horizon(vectors):
+    return (vectors.kind == "brdf") & ((vectors.wi[:, 2] <= 0) | (vectors.wo[:, 2] <= 0))
+
+
+def _fmt(x):
+    return "-" if x is None else f"{x:.6g}"
+
+
+def _inputs(w):
+    rho = "(" + ", ".join(f"{x:.6g}" for x in w["rho"]) + ")" if w["rho"] else "-"
+    where = (
+        f"mu_i {_fmt(w['mu_i'])}, mu_o {_fmt(w['mu_o'])}" if w["kind"] == "brdf" else f"albedo at mu {_fmt(w['mu'])}"
+    )
+    return f"{w['id']} [{w['model']}] ({where}, roughness {_fmt(w['roughness'])}, rho {rho})"
+
+
+def _limit_note(w):
+    """What the value is at a row where a NaN/Inf was returned, and why it is finite."""
+    expected = "(" + ", ".join(f"{x:.6g}" for x in w["expected"]) + ")"
+    if w["kind"] == "brdf" and min(w["mu_i"], w["mu_o"]) <= 0.0:
+        return (
+            f"expected {expected}: a direction with z <= 0 is below the horizon, f = 0 (test z <= 0, not z < 0; "
+            "and f stays finite as mu -> 0)"
+        )
+    if w["kind"] == "albedo" and w["mu"] == 0.0:
+        lim = " (E_F -> 1 as mu -> 0, so E -> rho)" if w["model"] in ("eon", "eon_approx", "fon") else ""
+        return (
+            f"expected the limit {expected}{lim} or 0 (single-sided); guard (S/mu)(1 - S^3) of Eq. 13, "
+            "e.g. as S mu (1 + S + S^2)/(1 + S)"
+        )
+    if w["kind"] == "brdf" and min(w["mu_i"], w["mu_o"]) >= 1.0:
+        return f"expected {expected} (along the normal: s = 0, sin(theta) = 0)"
+    return f"expected {expected}"
+
+
+def _nonfinite_text(rows, n_rows, n_nan, n_inf):
+    what = " and ".join(f"{n} {w}" for n, w in ((n_nan, "NaN"), (n_inf, "Inf")) if n)
+    shown = "; ".join(f"{_inputs(w)}: {_limit_note(w)}" for w in rows)
+    return f"NaN/Inf output ({what} values in {n_rows} rows), e.g. {shown}"
+
+
+def _below_text(vectors, out):
+    from .deviations import DEVIATIONS
+
+    dev = DEVIATIONS["nonzero_below_horizon"]
+    k = np.flatnonzero(np.any(out != 0, axis=1))
+    i = int(k[0]) if k.size else 0
+    first = f"{vectors.id[i]} (wi.z {vectors.wi[i, 2]:.6g}, wo.z {vectors.wo[i, 2]:.6g}) got {out[i].max():.6g}"
+    return (
+        f"{dev.description} [{dev.source}]: {len(vectors)} rows below the horizon, e.g. {first}; "
+        "the rows above the horizon are graded on their own"
+    )
+
+
+#: Precision noise: the median relative error at most ``PRECISION_MEDIAN``, 95 % of them within
+#: ``PRECISION_Q95`` (cancellation amplifies the rounding at a few rows), of both signs.
+PRECISION_MEDIAN = 5e-3
+PRECISION_Q95 = 2e-2
+
+
+def _precision(vectors, out, ref, rel, ab):
+    """ "precision ~ x, not a formula bug" when the failing values are off by small relative
+    errors of random sign (e.g. every intermediate rounded to a few digits); else None."""
+    with np.errstate(all="ignore"):
+        big = np.abs(ref) > 1e3 * ab
+        d = (out - ref) / np.where(big, ref, 1.0)
+        fail = big & (_normalised(out, ref, rel, ab) > 1.0)
+    if fail.sum() < 20 or not np.isfinite(d[big]).all():
+        return None
+    r = np.abs(d[big])
+    med, q95 = float(np.median(r)), float(np.quantile(r, 0.95))
+    if med > PRECISION_MEDIAN or q95 > PRECISION_Q95 or r.max() > 10 * PRECISION_Q95:
+        return None
+    pos = float((d[fail] > 0).mean())
+    if not 0.2 <= pos <= 0.8:
+        return None  # one-signed: a bias, not noise
+    return (
+        f"precision ~ {med:.1g} (median relative error; 95 % within {q95:.1g}, {pos:.0%} of the failing "
+        "values too large, the rest too small), not a formula bug: no known deviation explains it; keep "
+        "more digits in the intermediates (float32 throughout is within the tolerance)"
+    )
+
+
 def _diagnose(vectors, out, ref, e_ref, rel, ab):
     """Fit every deviation variant: (name or None, detail, {name: residual}, {name: details},
     {name: fraction of the failing values it matches})."""
@@ -335,6 +458,7 @@ def _diagnose(vectors, out, ref, e_ref, rel, ab):
     n_fail = int(failing.sum())
     candidates, details, fractions = {}, {}, {}
     best = None
+    singles = []  # (name, label, prediction) of every distinguishable variant: the pairs' factors
     for name, label, pred in _variants(vectors, out, ref, rel, ab):
         known = np.isfinite(pred)  # NaN: the deviation makes no prediction there
         if known.mean() < 0.5 or not (_normalised(pred, ref, rel, ab)[known] > 1.0).any():
@@ -360,6 +484,7 @@ def _diagnose(vectors, out, ref, e_ref, rel, ab):
             fractions[name] = explained
         if best is None or key > best[0]:
             best = (key, name, label, explained, overall)
+        singles.append((name, label, pred))
     for d in details.values():
         d.pop("_key", None)
     if best is not None:
@@ -371,7 +496,69 @@ def _diagnose(vectors, out, ref, e_ref, rel, ab):
                 f"failing values and {overall:.0%} of all values within the tolerance"
             )
             return name, text, candidates, details, fractions
+    pair = _best_pair(singles, out, ref, failing, rel, ab)
+    if pair is not None:
+        (n1, l1), (n2, l2), explained, overall = pair
+        d1, d2 = DEVIATIONS[n1.split("+")[0]], DEVIATIONS[n2.split("+")[0]]
+        text = (
+            f"two deviations at once (no single one explains this): (1) {d1.description} [{d1.source}]: {l1}; "
+            f"(2) {d2.description} [{d2.source}]: {l2}; together they match {explained:.0%} of the {n_fail} "
+            f"failing values and {overall:.0%} of all values within the tolerance"
+        )
+        return f"{n1} & {n2}", text, candidates, details, fractions
     return None, NOT_EXPLAINED, candidates, details, fractions
+
+
+def _pair_key(out, pred, known, failing, rel, ab):
+    e = _normalised(out, pred, rel, ab)
+    fk = failing & known
+    explained = float((e[fk] <= 1.0).mean()) if fk.any() else 0.0
+    overall = float((e[known] <= 1.0).mean()) if known.any() else 0.0
+    return explained, overall
+
+
+def _best_pair(singles, out, ref, failing, rel, ab):
+    """The pair of deviations (of different names) whose composition explains the values:
+    a constant factor k times another deviation's prediction (k fitted), or two predictions
+    composed multiplicatively (p1 p2 / ref: one scales what the other computes) or additively
+    (p1 + p2 - ref: they change different terms).  (label pair, explained, overall) or None."""
+    weight2 = (1.0 / (ab + rel * np.abs(ref))) ** 2
+    with np.errstate(all="ignore"):
+        nz = np.abs(ref) > 0
+        usable = [
+            (n, lab, p)
+            for n, lab, p in singles
+            if np.isfinite(p).mean() >= 0.5 and not n.startswith(("constant_factor", "nonzero_below_horizon"))
+        ]
+        best = None
+
+        def consider(a, b, pred):
+            nonlocal best
+            known = np.isfinite(pred)
+            if known.mean() < 0.5:
+                return
+            explained, overall = _pair_key(out, pred, known, failing, rel, ab)
+            if explained >= EXPLAIN_FRACTION and overall >= EXPLAIN_FRACTION:
+                if best is None or (explained, overall) > best[2:]:
+                    best = (a, b, explained, overall)
+
+        from .deviations import factor_name
+
+        for n, lab, p in usable:  # k x p
+            sel = np.isfinite(p) & np.isfinite(out)
+            den = float(np.sum(np.where(sel, weight2 * p * p, 0.0)))
+            if den <= 0:
+                continue
+            k = float(np.sum(np.where(sel, weight2 * out * p, 0.0)) / den)
+            if math.isfinite(k) and abs(k - 1.0) > 1e-3 and k != 0:
+                consider(("constant_factor", factor_name(k)), (n, lab), k * p)
+        for i, (n1, l1, p1) in enumerate(usable):
+            for n2, l2, p2 in usable[i + 1 :]:
+                if n1.split("+")[0] == n2.split("+")[0]:
+                    continue
+                consider((n1, l1), (n2, l2), np.where(nz, p1 * p2 / np.where(nz, ref, 1.0), p1 + p2 - ref))
+                consider((n1, l1), (n2, l2), p1 + p2 - ref)
+    return best
 
 
 def grade(
@@ -460,24 +647,31 @@ class _Accumulator:
         self.rel, self.ab = rel, ab
         self.n = self.n_failed = self.n_nan = self.n_inf = self.n_values = 0
         self.max_abs = self.max_rel = self.max_norm = 0.0
-        self.sum_sq = 0.0
+        self.sum_sq, self.scale = 0.0, 0.0  # sum of (diff / scale)^2: no overflow at 1e308
         self.finite = True
         self.models, self.version = set(), ""
         self.regions = {}
         self.worst = []  # (-row_e, position, row dict)
         self.sample = None  # (keys, positions, vectors, out)
+        self.nonfinite = []  # rows with a NaN/Inf result, one per kind of place (row dicts)
+        self.nonfinite_kinds = set()
+        self.n_nonfinite_rows = 0
 
     def add(self, vectors, out):
-        from .deviations import reference
+        # the submitted values may be anything (1e308, inf, nan): every overflow and invalid
+        # operation below is expected, and accounted for (OUT_OF_RANGE, n_nan, n_inf)
+        with np.errstate(all="ignore"):
+            self._add(vectors, out)
 
+    def _add(self, vectors, out):
         if len(vectors) == 0:
             return
         rel, ab = self.rel, self.ab
-        ref = reference(vectors)
+        ref = accepted_reference(vectors, out, ab)
         e = _normalised(out, ref, rel, ab)
-        with np.errstate(invalid="ignore", over="ignore"):
-            diff = np.abs(out - ref)
-            rel_err = diff / np.maximum(np.abs(ref), 1e-300)
+        diff = np.abs(out - ref)
+        rel_err = diff / np.maximum(np.abs(ref), 1e-300)
+        rel_err = np.where(np.isfinite(rel_err) | ~np.isfinite(diff), rel_err, OUT_OF_RANGE)
         finite = bool(np.isfinite(out).all())
         row_e = e.max(axis=1)
         start = self.n
@@ -490,8 +684,13 @@ class _Accumulator:
         self.finite &= finite
         self.max_norm = max(self.max_norm, float(row_e.max()))
         if self.finite:
-            self.max_abs = max(self.max_abs, float(np.max(diff)))
-            self.sum_sq += float(np.sum(diff**2))
+            top = float(np.max(diff))
+            self.max_abs = max(self.max_abs, top)
+            if top > self.scale:
+                self.sum_sq *= (self.scale / top) ** 2
+                self.scale = top
+            if self.scale > 0:
+                self.sum_sq += float(np.sum((diff / self.scale) ** 2))
             self.n_values += diff.size
             self.max_rel = max(
                 self.max_rel, float(np.max(np.where(np.abs(ref) > 0, rel_err, np.where(diff > 0, math.inf, 0.0))))
@@ -508,6 +707,24 @@ class _Accumulator:
             (-float(row_e[i]), start + int(i), _row(vectors, int(i), ref, out, e)) for i in order if row_e[i] > 0
         ]
         self.worst = sorted(self.worst, key=lambda t: (t[0], t[1]))[:N_WORST]
+        bad = np.flatnonzero(~np.isfinite(out).all(axis=1))
+        self.n_nonfinite_rows += int(bad.size)
+        if bad.size and len(self.nonfinite) < N_NONFINITE:
+            # one row of each kind of place (BRDF at mu_i = 0, at mu_o = 0, albedo at mu = 0, ...)
+            sig = np.stack(
+                [
+                    vectors.kind[bad] == "brdf",
+                    vectors.wi[bad, 2] <= 0,
+                    vectors.wo[bad, 2] <= 0,
+                    vectors.mu[bad] == 0,
+                ],
+                axis=1,
+            )
+            for j in np.unique(sig, axis=0, return_index=True)[1]:
+                key = tuple(sig[j])
+                if key not in self.nonfinite_kinds and len(self.nonfinite) < N_NONFINITE:
+                    self.nonfinite_kinds.add(key)
+                    self.nonfinite.append(_row(vectors, int(bad[j]), ref, out, e))
         keys = _row_keys(start, len(vectors))
         pos = np.arange(start, start + len(vectors))
         if self.sample is not None:
@@ -520,8 +737,10 @@ class _Accumulator:
         self.sample = (keys, pos, vectors, out)
 
     def result(self, tolerance, n_skipped):
-        from .deviations import reference
+        with np.errstate(all="ignore"):  # the diagnosis fits the submitted values, as add()
+            return self._result(tolerance, n_skipped)
 
+    def _result(self, tolerance, n_skipped):
         if self.n == 0:
             raise ValueError("vectors: nothing to grade (0 rows)")
         rel, ab = self.rel, self.ab
@@ -529,7 +748,7 @@ class _Accumulator:
         g = Grade(
             passed=passed,
             max_abs_error=self.max_abs if self.finite else math.inf,
-            rms_error=math.sqrt(self.sum_sq / self.n_values) if self.finite else math.inf,
+            rms_error=self.scale * math.sqrt(self.sum_sq / self.n_values) if self.finite else math.inf,
             tolerance={"relative": rel, "absolute": ab, "rule": "|out - ref| <= absolute + relative |ref|"},
             tolerance_reason=TOLERANCE_REASON if tolerance is None else "tolerance given by the caller",
             worst=[t[2] for t in self.worst],
@@ -548,17 +767,43 @@ class _Accumulator:
             g.diagnosis_detail = "conforms: every value within the tolerance"
             return g
         _, _, vectors, out = self.sample
-        ref = reference(vectors)
+        ref = accepted_reference(vectors, out, ab)
         e = _normalised(out, ref, rel, ab)
-        (g.diagnosis, g.diagnosis_detail, g.candidates, g.candidate_details, g.candidate_match_fractions) = _diagnose(
-            vectors, out, ref, e, rel, ab
-        )
+        # NaN/Inf rows and values below the horizon are named on their own; the rest is fitted
+        # on the finite rows above the horizon, so that neither masks another bug
+        finite = np.isfinite(out).all(axis=1)
+        failing = e.max(axis=1) > 1.0
+        below = _below_horizon(vectors) & finite & failing
+        rest = finite & ~below
+        names, texts = [], []
+        if self.n_nonfinite_rows:
+            names.append("non_finite_output")
+            texts.append(_nonfinite_text(self.nonfinite, self.n_nonfinite_rows, g.n_nan, g.n_inf))
+        if below.any():
+            names.append("nonzero_below_horizon")
+            texts.append(_below_text(vectors.subset(below), out[below]))
+        explained = True
+        if (rest & failing).any():
+            sub = vectors.subset(rest)
+            (name, detail, g.candidates, g.candidate_details, g.candidate_match_fractions) = _diagnose(
+                sub, out[rest], ref[rest], e[rest], rel, ab
+            )
+            if name is None:
+                prec = _precision(sub, out[rest], ref[rest], rel, ab)
+                if prec is not None:
+                    name, detail = "precision", prec
+            explained = name is not None
+            if explained:
+                names.append(name)
+                texts.append(detail)
+        g.diagnosis = " & ".join(names) if explained and names else None
+        g.diagnosis_detail = "; ".join(texts)
         if len(vectors) < self.n:
             g.diagnosis_detail += f" (fitted on a sample of {len(vectors)} of the {self.n} rows)"
         if g.diagnosis is None:
             where = where_it_fails(g.regions)
             nonfinite = ", ".join(f"{n} {w} values" for n, w in ((g.n_nan, "NaN"), (g.n_inf, "Inf")) if n)
-            g.diagnosis_detail = ". ".join(x for x in (NOT_EXPLAINED, where, nonfinite) if x)
+            g.diagnosis_detail = ". ".join(x for x in (NOT_EXPLAINED, where, nonfinite, *texts) if x)
         return g
 
 
@@ -610,6 +855,8 @@ __all__ = [
     "ABS_TOL",
     "TOLERANCE_REASON",
     "NOT_EXPLAINED",
+    "OUT_OF_RANGE",
     "region_masks",
     "where_it_fails",
+    "accepted_reference",
 ]

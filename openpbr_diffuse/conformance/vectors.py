@@ -3,14 +3,20 @@
 A vector is one query: ``kind == "brdf"`` asks for f(wi, wo) without the cosine factor,
 ``kind == "albedo"`` for the directional albedo E(mu).  The default set
 (:func:`default_vectors`) covers the models "lambert", "qon", "fon", "eon" and
-"eon_approx" at the edges where implementations disagree: grazing directions (mu = 0.01,
-0.001), backscatter (wi = wo), s = 0 (perpendicular azimuths, and one direction along the
-normal), L.V < 0 (opposite azimuths: FON/EON's s <= 0 branch), directions below the horizon
+"eon_approx" (and, on request, "qon_fujii": Fujii's QON with the interreflection tint) at
+the edges where implementations disagree: grazing directions (mu = 0.01, 0.001),
+backscatter (wi = wo), s = 0 (perpendicular azimuths, and one direction along the normal),
+L.V < 0 (opposite azimuths: FON/EON's s <= 0 branch), directions below the horizon
 (f = 0), roughness r = 0 and r = 1 (sigma = 0 and pi/2 for QON), white, chromatic and dark
-colours, and the albedo down to mu = 0.001.  Exactly mu = 0 is not asked for: there the
-single-sided rule (f = 0 for z <= 0, which the paper's Listing 1 applies, returning 0) and the
-grazing limit (E -> rho E_F(0) + rho_ms (1 - E_F(0)) = rho, which this library returns) are
-both defensible conventions, and a conformance test should not fail either of them.
+colours, and the albedo down to mu = 0.001.  The edge rows (:data:`EDGE_PAIRS`, appended
+after those, with ids that continue each model's numbering) ask for the exact edges: mu_i
+and mu_o = 0 and 1, L.V = +-1, azimuth differences of exactly 0 and pi, roughness 0 and its
+maximum, rho = 0 and 1, and the albedo at mu = 0 and 1.  A BRDF direction with z = 0 is below
+the horizon (f = 0).  The albedo at exactly mu = 0 has two defensible answers: the single-sided
+rule (0, which the paper's Listing 1 returns) and the grazing limit (E -> rho E_F(0) + rho_ms
+(1 - E_F(0)) = rho, which this library returns); the grader accepts either
+(:func:`.grade.accepted_reference`).  NaN or Inf is never accepted: it is the unguarded
+(S/mu)(1 - S^3) of Eq. 13, or a horizon test ``z < 0`` where ``z <= 0`` is meant.
 
 File format (CSV; JSON when the name ends in ``.json``): the columns :data:`COLUMNS` in that
 order, blank where a column does not apply (mu for BRDF rows, directions for albedo rows,
@@ -22,13 +28,14 @@ Examples
 --------
 >>> v = default_vectors()
 >>> v.version, len(v) > 1000, sorted(map(str, set(v.kind)))
-('2', True, ['albedo', 'brdf'])
+('3', True, ['albedo', 'brdf'])
 >>> bool(((v.wi[:, 2] < 0.002) & (v.kind == "brdf")).any())   # grazing rows
 True
 """
 
 from __future__ import annotations
 
+import collections
 import csv
 import io
 import json
@@ -42,8 +49,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._textfiles import named, not_utf8, write_text
+
 #: Version of the default vector set; bump when its rows change.
-VERSION = "2"  # 2: no albedo rows at exactly mu = 0 (a convention, not conformance)
+VERSION = "3"  # 3: the edge rows (mu = 0 exactly, L.V = +-1, rho = 0) and the qon_fujii rows
 #: Input columns, in file order.
 COLUMNS = (
     "id",
@@ -66,11 +75,15 @@ OUT_COLUMNS = ("out_r", "out_g", "out_b")
 FORMAT_NAME = "openpbr-diffuse conformance vectors"
 #: Models covered by the default set.
 VECTOR_MODELS = ("lambert", "qon", "fon", "eon", "eon_approx")
+#: Models with vectors on request (``default_vectors(models)``, ``vectors --model``), not in
+#: the default set: Fujii's QON (a target of its own: ``check --model qon_fujii``).
+EXTRA_MODELS = ("qon_fujii",)
+ALL_VECTOR_MODELS = VECTOR_MODELS + EXTRA_MODELS
 #: Models with albedo rows.  Not "eon_approx": the paper's Listing 1 (E_EON with
 #: exact = false) returns rho E_F~ + rho_ms (1 - E_F~) with the Eq. 14 fit E_F~, which
 #: differs from the true albedo of the approximate lobe (``directional_albedo``) by up to
 #: 5e-4 -- both are legitimate answers, so neither is graded.
-ALBEDO_MODELS = ("lambert", "qon", "fon", "eon")
+ALBEDO_MODELS = ("lambert", "qon", "fon", "eon", "qon_fujii")
 #: How far a submitted file's inputs may differ from the vectors' (float32 rounding of the
 #: printed inputs passes, a different row does not).
 INPUT_MATCH_TOL = 1e-5
@@ -160,6 +173,21 @@ _PAIRS = (
     (-1.0, 40.0, 0.0, "wi below the horizon: f = 0"),
     (35.0, -1.0, 0.0, "wo below the horizon: f = 0"),
 )
+#: The exact edges, (wi, wo, what the pair is there for): exactly representable directions
+#: (y = 0 where the azimuth difference is 0 or pi), so that float32 inputs are these exactly.
+EDGE_PAIRS = (
+    ((1.0, 0.0, 0.0), (0.6, 0.0, 0.8), "mu_i = 0 exactly: f = 0"),
+    ((0.6, 0.0, 0.8), (0.0, 1.0, 0.0), "mu_o = 0 exactly: f = 0"),
+    ((1.0, 0.0, 0.0), (-1.0, 0.0, 0.0), "mu_i = mu_o = 0, L.V = -1: f = 0"),
+    ((1.0, 0.0, 0.0), (1.0, 0.0, 0.0), "mu_i = mu_o = 0, L.V = +1: f = 0"),
+    ((0.0, 0.0, 1.0), (0.0, 0.0, 1.0), "mu_i = mu_o = 1"),
+    ((0.6, 0.0, 0.8), (0.6, 0.0, 0.8), "L.V = +1, azimuth difference 0"),
+    ((0.6, 0.0, 0.8), (0.8, 0.0, 0.6), "azimuth difference exactly 0: s > 0"),
+    ((0.6, 0.0, 0.8), (-0.8, 0.0, 0.6), "azimuth difference exactly pi: L.V = 0, s < 0"),
+)
+#: Colours and albedo mu of the edge rows (roughness: 0 and the model's maximum).
+EDGE_RHOS = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
+EDGE_ALBEDO_MU = (0.0, 1.0)
 _N_RANDOM_PAIRS = 12
 _RHOS = ((1.0, 1.0, 1.0), (0.8, 0.5, 0.2), (0.05, 0.3, 0.9))
 _ROUGHNESS = {"r": (0.0, 0.25, 0.5, 1.0), "sigma": (0.0, 0.3, 0.8, 0.5 * math.pi)}
@@ -188,20 +216,38 @@ def _pairs():
     return pairs
 
 
-def default_vectors() -> VectorSet:
+def default_vectors(models: tuple[str, ...] | list[str] | None = None) -> VectorSet:
     """The versioned default vector set (version :data:`VERSION`), built deterministically.
+
+    ``models``: the models whose rows to build (default :data:`VECTOR_MODELS`; any of
+    :data:`ALL_VECTOR_MODELS`); a model's ids are the same whichever models are asked for.
 
     BRDF rows: every direction pair × roughness × colour for each model of
     :data:`VECTOR_MODELS` (Lambert: no roughness); albedo rows (models of
     :data:`ALBEDO_MODELS`): mu in {0.001, 0.01, 0.1, 0.3, 0.5, 0.8, 1} × roughness ×
-    colour.
+    colour; then the edge rows: :data:`EDGE_PAIRS` (and the albedo at mu = 0, 1) × roughness
+    {0, maximum} × rho {0, 1}.
+
+    >>> v = default_vectors()
+    >>> edge = v.subset(v.id == "eon-brdf-0396")
+    >>> edge.wi.tolist(), edge.roughness.tolist(), edge.rho.tolist()
+    ([[1.0, 0.0, 0.0]], [0.0], [[0.0, 0.0, 0.0]])
     """
     from ..models.registry import model_info
 
+    if models is None:
+        models = VECTOR_MODELS
+    if isinstance(models, str) or not all(isinstance(m, str) for m in models):
+        raise TypeError(f"models must be a sequence of model names, one of {', '.join(ALL_VECTOR_MODELS)}")
+    bad = [m for m in models if m not in ALL_VECTOR_MODELS]
+    if bad or not models:
+        raise ValueError(f"models: expected names among {', '.join(ALL_VECTOR_MODELS)}, got {list(models)!r}")
+    models = tuple(m for m in ALL_VECTOR_MODELS if m in models)
     rows = []
     pairs = _pairs()
     nan = math.nan
-    for model in VECTOR_MODELS:
+    count = {}  # (model, kind) -> rows so far: the edge rows' ids continue the numbering
+    for model in models:
         info = model_info(model)
         roughs = (nan,) if model == "lambert" else _ROUGHNESS[info.roughness_name]
         k = 0
@@ -210,12 +256,31 @@ def default_vectors() -> VectorSet:
                 for rho in _RHOS:
                     rows.append((f"{model}-brdf-{k:04d}", "brdf", model, wi, wo, nan, r, rho))
                     k += 1
+        count[model, "brdf"] = k
         if model not in ALBEDO_MODELS:
             continue
         k = 0
         for mu in _ALBEDO_MU:
             for r in roughs:
                 for rho in _RHOS:
+                    rows.append((f"{model}-albedo-{k:03d}", "albedo", model, (nan,) * 3, (nan,) * 3, mu, r, rho))
+                    k += 1
+        count[model, "albedo"] = k
+    for model in models:  # the edge rows, after every model's rows (ids and order kept)
+        info = model_info(model)
+        edge_roughs: tuple[float, ...] = (nan,) if model == "lambert" else (0.0, _ROUGHNESS[info.roughness_name][-1])
+        k = count[model, "brdf"]
+        for wi, wo, _ in EDGE_PAIRS:
+            for r in edge_roughs:
+                for rho in EDGE_RHOS:
+                    rows.append((f"{model}-brdf-{k:04d}", "brdf", model, wi, wo, nan, r, rho))
+                    k += 1
+        if model not in ALBEDO_MODELS:
+            continue
+        k = count[model, "albedo"]
+        for mu in EDGE_ALBEDO_MU:
+            for r in edge_roughs:
+                for rho in EDGE_RHOS:
                     rows.append((f"{model}-albedo-{k:03d}", "albedo", model, (nan,) * 3, (nan,) * 3, mu, r, rho))
                     k += 1
     return VectorSet(
@@ -288,7 +353,7 @@ def write_vectors(
             "columns": names,
             "rows": [{name: value(name, i) for name in names} for i in range(n)],
         }
-        path.write_text(json.dumps(doc, indent=1) + "\n")
+        write_text(path, json.dumps(doc, indent=1) + "\n")
         return path
     buf = io.StringIO()
     for line in _header_lines(vectors):
@@ -302,11 +367,32 @@ def write_vectors(
             [_cell(c[i]) for c in text_cols[:n_in]]
             + [("" if blank_out else repr(float(c[i]))) for c in text_cols[n_in:]]
         )
-    path.write_text(buf.getvalue())
+    write_text(path, buf.getvalue())
     return path
 
 
 # ----------------------------------------------------------------------------- reading
+
+
+class _HugeInt:
+    """A JSON integer too long to be any float (read as its digit count, never converted:
+    Python refuses to convert integers of more than 4300 digits at all)."""
+
+    def __init__(self, text: str) -> None:
+        self.digits = len(text.lstrip("-"))
+
+    def __str__(self) -> str:
+        return f"<a {self.digits}-digit integer>"
+
+    __repr__ = __str__
+
+
+#: JSON integers with more digits than this are beyond any float (10^309 > 1.8e308).
+_MAX_INT_DIGITS = 400
+
+
+def _json_int(text: str) -> int | _HugeInt:
+    return int(text) if len(text) <= _MAX_INT_DIGITS else _HugeInt(text)
 
 
 def _parse_number(text, column, row_label, allow_nonfinite=False):
@@ -314,11 +400,18 @@ def _parse_number(text, column, row_label, allow_nonfinite=False):
         return math.nan
     if isinstance(text, bool):
         raise ValueError(f"{row_label}: column {column} must be a number, got {text!r}")
+    if isinstance(text, _HugeInt):
+        raise ValueError(f"{row_label}: column {column} is too large for a float (an integer of {text.digits} digits)")
     if isinstance(text, (int, float)):
         try:
-            return float(text)
+            v = float(text)
         except OverflowError:
-            raise ValueError(f"{row_label}: column {column} is too large for a float") from None
+            raise ValueError(
+                f"{row_label}: column {column} is too large for a float ({len(str(text))} digits)"
+            ) from None
+        if not (allow_nonfinite or math.isfinite(v)):  # JSON 1e400 reads as inf
+            raise ValueError(f"{row_label}: column {column} is not a finite number: {v!r}")
+        return v
     if not isinstance(text, str):
         raise ValueError(f"{row_label}: column {column} must be a number, got a {type(text).__name__}")
     text = text.strip()
@@ -338,10 +431,15 @@ def _parse_number(text, column, row_label, allow_nonfinite=False):
 def _read_records(path):
     """(column names, list of {column: raw value}) of a CSV or JSON file."""
     path = Path(path)
-    text = path.read_text(encoding="utf-8-sig")
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError:
+        raise not_utf8(path) from None
+    except OSError as exc:
+        raise named(exc, path) from None
     if path.suffix.lower() == ".json":
         try:
-            doc = json.loads(text)
+            doc = json.loads(text, parse_int=_json_int)
         except json.JSONDecodeError as exc:
             raise ValueError(f"{path}: not valid JSON ({exc.msg} at line {exc.lineno})") from None
         except RecursionError:
@@ -410,27 +508,52 @@ CHUNK_ROWS = 50_000
 MAX_JSON_BYTES = 256 * 1024 * 1024
 #: Ids of this form name rows of the vector set; any other id is the submitter's own query,
 #: graded from the inputs written in its row.
-_SET_ID = re.compile(r"^(" + "|".join(VECTOR_MODELS) + r")-(brdf|albedo)-\d+$")
+_SET_ID = re.compile(r"^(" + "|".join(ALL_VECTOR_MODELS) + r")-(brdf|albedo)-\d+$")
+
+
+#: Key of a CSV record holding the line of the file where its row starts (not a column name:
+#: a header cell is stripped text and cannot hold a NUL).
+_LINE = "\0line"
 
 
 def _csv_rows(path):
-    """(header, iterator of (data row number, cells)) of a CSV file, read line by line."""
+    """(header, iterator of {column: cell}) of a CSV file, read line by line; each record
+    also holds, under the key ``_LINE``, the line of the file where its row starts."""
     fh = open(path, encoding="utf-8-sig", newline="")
+    pending = collections.deque()  # lines handed to the reader, by number
 
     def lines():
         with fh:
-            for ln in fh:
-                st = ln.strip()
-                if st and not st.startswith("#"):
-                    yield ln
+            try:
+                for lineno, ln in enumerate(fh, 1):
+                    st = ln.strip()
+                    if st and not st.startswith("#"):
+                        pending.append(lineno)
+                        yield ln
+            except UnicodeDecodeError:
+                raise not_utf8(path) from None
+            except OSError as exc:
+                raise named(exc, path) from None
 
     reader = csv.reader(lines())
+    used = 0
+
+    def start_line():
+        """The file line where the record the reader returned last began (its lines dropped)."""
+        nonlocal used
+        first = pending[0] if pending else None
+        for _ in range(min(reader.line_num - used, len(pending))):
+            pending.popleft()
+        used = reader.line_num
+        return first
+
     try:
         header = [h.strip() for h in next(reader)]
     except StopIteration:
         raise ValueError(f"{path}: empty file (no header row)") from None
     except csv.Error as exc:
         raise ValueError(f"{path}: header row is not valid CSV ({exc})") from None
+    start_line()
     dup = sorted({h for h in header if header.count(h) > 1})
     if dup:
         raise ValueError(f"{path}: duplicated column(s) {', '.join(dup)} in the header row")
@@ -443,11 +566,17 @@ def _csv_rows(path):
             except StopIteration:
                 return
             except csv.Error as exc:
-                raise ValueError(f"{path}: data row {n + 1} is not valid CSV ({exc})") from None
+                at = f" (line {pending[0]})" if pending else ""
+                raise ValueError(f"{path}: data row {n + 1}{at} is not valid CSV ({exc})") from None
             n += 1
+            line = start_line()
             if len(cells) != len(header):
-                raise ValueError(f"{path}: data row {n} has {len(cells)} cells, the header has {len(header)}")
-            yield dict(zip(header, cells))
+                raise ValueError(
+                    f"{path}: data row {n} (line {line}) has {len(cells)} cells, the header has {len(header)}"
+                )
+            rec = dict(zip(header, cells))
+            rec[_LINE] = line
+            yield rec
 
     return header, rows()
 
@@ -463,8 +592,9 @@ def _json_rows(path):
     return names, iter(records)
 
 
-def _label(path, n, rid):
-    return f"{path}: row {n} (id {rid[:40]!r})"
+def _label(path, n, rid, line=None):
+    at = "" if line is None else f"line {line}, "
+    return f"{path}: row {n} ({at}id {rid[:40]!r})"
 
 
 def _own_row(rec, label):
@@ -474,8 +604,8 @@ def _own_row(rec, label):
     kind, model = str(rec.get("kind", "")).strip(), str(rec.get("model", "")).strip()
     if kind not in ("brdf", "albedo"):
         raise ValueError(f"{label}: column kind must be brdf or albedo, got {kind[:40]!r}")
-    if model not in VECTOR_MODELS or (kind == "albedo" and model not in ALBEDO_MODELS):
-        allowed = VECTOR_MODELS if kind == "brdf" else ALBEDO_MODELS
+    if model not in ALL_VECTOR_MODELS or (kind == "albedo" and model not in ALBEDO_MODELS):
+        allowed = ALL_VECTOR_MODELS if kind == "brdf" else ALBEDO_MODELS
         raise ValueError(
             f"{label}: column model must be one of {', '.join(allowed)} for kind {kind}, got {model[:40]!r}"
         )
@@ -490,12 +620,15 @@ def _own_row(rec, label):
             norm = math.sqrt(sum(vals[f"w{d}_{a}"] ** 2 for a in "xyz"))
             if abs(norm - 1.0) > 1e-4:
                 raise ValueError(f"{label}: columns w{d}_x, w{d}_y, w{d}_z are not a unit vector (length {norm:.6g})")
-    elif not 0.0 < vals["mu"] <= 1.0:
-        raise ValueError(f"{label}: column mu must be in (0, 1], got {vals['mu']!r}")
+    elif not 0.0 <= vals["mu"] <= 1.0:
+        raise ValueError(f"{label}: column mu must be in [0, 1], got {vals['mu']!r}")
     if model != "lambert":
         hi = model_info(model).roughness_max
         if not 0.0 <= vals["roughness"] <= hi:
             raise ValueError(f"{label}: column roughness must be in [0, {hi:g}] for {model}, got {vals['roughness']!r}")
+    for c in ("rho_r", "rho_g", "rho_b"):
+        if not 0.0 <= vals[c] <= 1.0:
+            raise ValueError(f"{label}: column {c} must be in [0, 1] (an albedo), got {vals[c]!r}")
     return kind, model, vals
 
 
@@ -507,7 +640,7 @@ def iter_results(
     The rules are those of :func:`read_results`; a CSV file is read line by line, so memory
     does not grow with the file's length.  A row whose id has the form of the set's ids
     (``eon-brdf-0042``) must be that vector; a row with any other id is the submitter's own
-    query, graded from its own inputs (checked: unit directions, mu in (0, 1], roughness in
+    query, graded from its own inputs (checked: unit directions, mu in [0, 1], roughness in
     the model's range).
 
     Examples
@@ -524,16 +657,14 @@ def iter_results(
     """
     if isinstance(chunk_rows, bool) or not isinstance(chunk_rows, int) or chunk_rows < 1:
         raise ValueError(f"chunk_rows must be a positive integer, got {chunk_rows!r}")
-    vectors = default_vectors() if vectors is None else vectors
+    vectors = default_vectors(ALL_VECTOR_MODELS) if vectors is None else vectors
     path = Path(path)
     if not path.is_file():
         if path.exists():
             raise ValueError(f"{path}: not a regular file")
         raise FileNotFoundError(2, "No such file or directory", str(path))
-    if path.suffix.lower() == ".json":
-        names, records = _json_rows(path)
-    else:
-        names, records = _csv_rows(path)
+    is_csv = path.suffix.lower() != ".json"
+    names, records = _csv_rows(path) if is_csv else _json_rows(path)
     names = list(names)
     index = {str(v): i for i, v in enumerate(vectors.id)}
     ref_cols = vectors.columns()
@@ -556,7 +687,7 @@ def iter_results(
                 first = False
             n += 1
             rid = str(rec.get("id", "")).strip()
-            label = _label(path, n, rid)
+            label = _label(path, n, rid, rec.get(_LINE) if is_csv else None)
             i = index.get(rid)
             row: int | tuple[Any, ...]
             if i is None:
@@ -571,7 +702,8 @@ def iter_results(
                 for col in ("kind", "model"):
                     if str(rec.get(col, "")).strip() != str(ref_cols[col][i]):
                         raise ValueError(
-                            f"{label}: column {col} is {str(rec.get(col))[:40]!r}, the vector has {ref_cols[col][i]!r}"
+                            f"{label}: column {col} is {str(rec.get(col))[:40]!r}, the vector has "
+                            f"{str(ref_cols[col][i])!r}"
                         )
                 for col in _NUMERIC:
                     got = _parse_number(rec.get(col), col, label)
@@ -630,7 +762,7 @@ def _chunk(vectors, take, own, out):
 def read_results(path: str | Path, vectors: VectorSet | None = None, *, with_skipped: bool = False) -> tuple:
     """Read a submitted results file; return ``(vectors_subset, out)`` matched by id.
 
-    ``vectors`` defaults to :func:`default_vectors`.  Every row must carry the columns
+    ``vectors`` defaults to :func:`default_vectors` of every model (``ALL_VECTOR_MODELS``).  Every row must carry the columns
     :data:`COLUMNS`; its id must name a vector and its inputs must equal that vector's (to
     :data:`INPUT_MATCH_TOL`, so float32-printed inputs pass), or be an id of the
     submitter's own (see :func:`iter_results`).  The results are the columns
@@ -669,6 +801,8 @@ __all__ = [
     "COLUMNS",
     "OUT_COLUMNS",
     "VECTOR_MODELS",
+    "EXTRA_MODELS",
+    "ALL_VECTOR_MODELS",
     "ALBEDO_MODELS",
     "VectorSet",
     "default_vectors",

@@ -160,9 +160,9 @@ def _tolerance_pair(tolerance):
 
 def _failing_rows(rows, out, g):
     """Where the failing rows are: their count and, for albedo rows, their mu values."""
-    from ..conformance.deviations import reference
+    from ..conformance.grade import accepted_reference
 
-    ref = reference(rows)
+    ref = accepted_reference(rows, out, g.tolerance["absolute"])  # the albedo at mu = 0: 0 or the limit
     with np.errstate(invalid="ignore"):
         e = np.abs(out - ref) / (g.tolerance["absolute"] + g.tolerance["relative"] * np.abs(ref))
     bad = ~(np.nan_to_num(e, nan=np.inf).max(axis=1) <= 1.0)
