@@ -18,6 +18,7 @@ Usage::
     python tools/bench.py --quick         # n = 10^5, fewer repetitions
     python tools/bench.py --json bench.json
     python tools/bench.py --cold          # compile budget per command, empty numba cache
+    python tools/bench.py --float32       # evaluate("eon"): float32 vs float64 (vs Dr.Jit), medians
 
 From Python: ``run_bench(n=..., reps=...)`` returns ``{"rows": [...], "env": {...},
 "startup": {...}, "c": {...}}``; ``format_table(result)`` renders it.
@@ -452,6 +453,158 @@ def startup(cold=True):
     return res
 
 
+# --------------------------------------------------------------------------- float32 vs float64
+
+
+def _drjit_eon(n, seed=1):
+    """A Dr.Jit (LLVM backend) float32 transcription of EON (Listing 1, exact E_F) on the
+    inputs of ``inputs``, or the reason it cannot run.  Returns ``(run, check)``: ``run()``
+    evaluates f for every row and waits for it (``dr.eval`` + ``dr.sync_thread``: inputs are
+    converted once, outside the timing, and the result stays in Dr.Jit's memory);
+    ``check()`` is the largest |f_drjit - f| against the package's float64 ``evaluate``.
+
+    Dr.Jit is not a dependency of the package: ``pip install drjit`` for this comparison.
+    """
+    try:
+        import drjit as dr
+        from drjit.llvm import Array3f, Float
+    except Exception as exc:  # not installed, or no LLVM library for its JIT
+        return None, f"drjit not importable ({type(exc).__name__}: {exc})"
+    import openpbr_diffuse as od
+
+    x = inputs(n, np.float32, seed)
+    pi = np.pi
+    c1, c2 = 0.5 - 2.0 / (3.0 * pi), 2.0 / 3.0 - 28.0 / (15.0 * pi)
+    eps = 1e-7
+    wi, wo = Array3f(x["wi"].T), Array3f(x["wo"].T)
+    rho, r = Array3f(x["rho"].T), Float(x["r"])
+
+    def mx(a, b):  # max by a select: Dr.Jit's dr.maximum is llvm.maximum, which LLVM < 17
+        return dr.select(a > b, a, b)  # cannot select for x86 (the process aborts)
+
+    def e_fon(mu, A):
+        # E_F = A + r A G_F / pi (Eq. 12-13), G_F in the division-free form of ``qon.G_qon``
+        S = dr.sqrt(mx(0.0, 1.0 - mu * mu))
+        g = S * (dr.acos(mu) - S * mu) + (2.0 / 3.0) * S * mu * (1.0 + S + S * S) / (1.0 + S) - (2.0 / 3.0) * S
+        return A + r * A * g / pi
+
+    def f():
+        mi, mo = wi.z, wo.z
+        s = wi.x * wo.x + wi.y * wo.y
+        s = dr.select(s < -1.0, -1.0, dr.select(s > 1.0, 1.0, s))
+        st = dr.select(s > 0.0, s / mx(mx(mi, mo), 1e-7), s)
+        A = 1.0 / (1.0 + c1 * r)
+        avg = A * (1.0 + c2 * r)
+        h = mx(eps, 1.0 - e_fon(mo, A)) * mx(eps, 1.0 - e_fon(mi, A)) / mx(eps, 1.0 - avg)
+        rho_ms = rho * rho * avg / (1.0 - rho * (1.0 - avg))
+        out = rho * (A * (1.0 + r * st) / pi) + rho_ms * (h / pi)
+        return dr.select((mi > 0.0) & (mo > 0.0), out, 0.0)
+
+    def run():
+        out = f()
+        dr.eval(out)
+        dr.sync_thread()
+        return out
+
+    def check():
+        ref = od.evaluate("eon", *(x[k].astype(np.float64) for k in ("wi", "wo", "r", "rho")))
+        return float(np.abs(np.asarray(run()).T - ref).max())
+
+    return run, check
+
+
+def _drjit_probe():
+    """None when the Dr.Jit transcription runs in a child process, else why not (a JIT that
+    cannot compile it aborts its process, which must not be this one)."""
+    code = f"import sys; sys.path.insert(0, {str(ROOT / 'tools')!r}); import bench; run, c = bench._drjit_eon(64); "
+    code += "sys.exit(3) if run is None else print(c())"
+    try:
+        p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    except subprocess.TimeoutExpired:
+        return "drjit probe timed out"
+    if p.returncode == 3:
+        return "drjit not importable"
+    if p.returncode != 0:
+        last = (p.stderr.strip().splitlines() or ["no message"])[0]
+        return f"drjit probe failed (exit {p.returncode}: {last[:120]})"
+    return None
+
+
+def dtype_comparison(n=1_000_000, reps=15, with_drjit=True):
+    """``evaluate("eon")`` at n rows in float32 and float64 (and Dr.Jit float32 when
+    importable), timed in turn within every repetition; medians and the machine load.
+
+    Returns a JSON-serialisable dict: ``ns`` (median ns per row per variant), ``min_ns``,
+    ``f64_over_f32``, ``max_ulp_f32`` (largest float32 error against the float64 path on
+    the same, widened, inputs, in float32 ulps of max(|f|, rho/pi)), ``drjit`` (its
+    version, or why it was skipped), ``load`` (1-minute load average before and after) and
+    ``env``.
+    """
+    import openpbr_diffuse as od
+
+    x32, x64 = inputs(n, np.float32), inputs(n, np.float64)
+    fns = {
+        "float64": lambda: od.evaluate("eon", x64["wi"], x64["wo"], x64["r"], x64["rho"]),
+        "float32": lambda: od.evaluate("eon", x32["wi"], x32["wo"], x32["r"], x32["rho"]),
+    }
+    drjit = {"skipped": "disabled"}
+    if with_drjit:
+        why = _drjit_probe()
+        run, check = (None, why) if why else _drjit_eon(n)
+        if run is None:
+            drjit = {"skipped": check}
+        else:
+            import drjit as dr
+
+            fns["drjit float32"] = run
+            drjit = {"version": dr.__version__, "max_abs_vs_float64": check()}
+    load_before = os.getloadavg()[0]
+    for fn in fns.values():  # warm-up (compiles)
+        fn()
+    times = {k: [] for k in fns}
+    for _ in range(reps):
+        for k, fn in fns.items():
+            t = time.perf_counter()
+            fn()
+            times[k].append(time.perf_counter() - t)
+    load_after = os.getloadavg()[0]
+    f32 = fns["float32"]().astype(np.float64)
+    f64 = od.evaluate("eon", *(x32[k].astype(np.float64) for k in ("wi", "wo", "r", "rho")))
+    scale = np.maximum(np.abs(f64), x32["rho"] / np.pi).astype(np.float32)
+    ulp = float((np.abs(f32 - f64) / np.spacing(scale).astype(np.float64)).max())
+    ns = {k: float(np.median(v)) / n * 1e9 for k, v in times.items()}
+    return {
+        "n": n,
+        "reps": reps,
+        "ns": ns,
+        "min_ns": {k: float(np.min(v)) / n * 1e9 for k, v in times.items()},
+        "f64_over_f32": ns["float64"] / ns["float32"],
+        "max_ulp_f32": ulp,
+        "drjit": drjit,
+        "load": [load_before, load_after],
+        "env": environment(),
+    }
+
+
+def format_dtype_comparison(res):
+    lines = [
+        f"evaluate('eon'), n = {res['n']}, median of {res['reps']} interleaved runs "
+        f"(load {res['load'][0]:.2f} -> {res['load'][1]:.2f}; {res['env']['cpu']}, numba {res['env']['numba']})",
+        "| variant | median ns/row | best ns/row |",
+        "|---|---|---|",
+    ]
+    for k, v in res["ns"].items():
+        lines.append(f"| {k} | {v:.2f} | {res['min_ns'][k]:.2f} |")
+    lines.append(f"float64 / float32: {res['f64_over_f32']:.2f}x; float32 max error {res['max_ulp_f32']:.1f} ulp")
+    dj = res["drjit"]
+    lines.append(
+        f"Dr.Jit skipped: {dj['skipped']}"
+        if "skipped" in dj
+        else f"Dr.Jit {dj['version']}: max |f - f64| = {dj['max_abs_vs_float64']:.2e}"
+    )
+    return "\n".join(lines)
+
+
 # --------------------------------------------------------------------------- driver
 
 
@@ -775,6 +928,12 @@ def main(argv=None):
     p.add_argument("--dtype", choices=("float32", "float64", "both"), default="both")
     p.add_argument("--surface-only", action="store_true", help="only the OpenPBRSurface rows")
     p.add_argument(
+        "--float32",
+        action="store_true",
+        help="only evaluate('eon') in float32 against float64 (and Dr.Jit float32 when importable), medians",
+    )
+    p.add_argument("--no-drjit", action="store_true", help="with --float32: skip the Dr.Jit comparison")
+    p.add_argument(
         "--cold",
         nargs="*",
         metavar="COMMAND",
@@ -790,6 +949,12 @@ def main(argv=None):
         return 0 if all(r["ok"] for r in rows) else 1
     n = a.n or (100_000 if a.quick else 1_000_000)
     reps = a.reps or (7 if a.quick else 15)
+    if a.float32:
+        res = dtype_comparison(n, reps, with_drjit=not a.no_drjit)
+        print(format_dtype_comparison(res))
+        if a.json:
+            Path(a.json).write_text(json.dumps(res, indent=1, default=float) + "\n")
+        return 0
     if a.surface_only:
         result = {
             "n": n,

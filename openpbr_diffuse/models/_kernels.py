@@ -8,13 +8,20 @@ vectorises (4-8 rows per instruction).  With a run-time model id, run-time C or
 run-time strides it does not, and the loop runs 4-10x slower.
 
 Rows are independent: ``_launch.launch`` runs a large call's loop over runs of rows on the
-package's thread pool (no ``prange``: one compiled body per driver); arithmetic is float64 for both input
-dtypes (loads are widened, stores rounded: float32 results are the float64 ones rounded).
+package's thread pool (no ``prange``: one compiled body per driver).
+
+Arithmetic is in the inputs' dtype: float64 input runs the formulas of the model modules,
+float32 input their float32 twins (``_float32.float32_twin``: the same source with float32
+constants), so that a float32 call computes in float32 throughout and LLVM packs twice as
+many rows per vector instruction.  The unit-length checks stay in float64 for both (the
+same directions are accepted whatever the dtype).  The float32 results are within the
+bound stated in ``api.evaluate`` of the float64 ones (``tests/test_float32.py``).
 
 The value checks of ``_arrays`` (unit directions, parameter ranges, finiteness) run inside
 the same loop, through the same predicates (``is_unit``, ``is_within``): the inputs are
-read once instead of once more per argument.  A driver returns the number of failing
-rows; the public verbs then run the full checks, which raise with their usual message.
+read once instead of once more per argument.  A driver returns 1 when some row
+failed (0 otherwise); the public verbs then run the full checks, which raise with their
+usual message.
 
 Inputs whose rows are all the same (a scalar roughness, one rho for every row, a fixed
 direction) are tiled into a buffer of at most ``CHUNK`` rows and the driver is called
@@ -30,8 +37,9 @@ from numba import errors, types
 from numba.extending import overload
 
 from .._arrays import is_unit, is_within
+from .._float32 import float32_twin
 from .._jit import driver, kernel, pointer_of
-from .._launch import _F, _U, launch, rows
+from .._launch import _U, launch, rows
 from .eon import eon_albedo_terms, eon_average_terms, eon_terms, rho_ms
 from .fon import fon_albedo, fon_terms
 from .fujii import fujii_albedo_terms, fujii_terms
@@ -57,6 +65,21 @@ LAMBERT, QON, QON_FOOTNOTE, QON_VO, QON_FUJII, FON, FULL_ON, GOTANDA, EON, EON_A
         "eon_approx",
     )
 )
+
+
+def _is_float32(t):
+    """True for numba's float32 type: the driver's rows are float32 (use the twins)."""
+    return isinstance(t, types.Float) and t.bitwidth == 32
+
+
+def _of(t, formula):
+    """``formula``, or its float32 twin when ``t`` (a numba type) is float32."""
+    return float32_twin(formula) if _is_float32(t) else formula
+
+
+def _consts(t, *values):
+    """``values`` as constants of the driver's float type ``t`` (float64: the Python floats)."""
+    return tuple(np.float32(v) for v in values) if _is_float32(t) else values
 
 
 def _model_id(model):
@@ -89,43 +112,47 @@ def _lobe_terms(model, ix, iy, iz, ox, oy, oz, r):
     Full Oren-Nayar keeps its published negative values (``full_on``).
     """
     m = _model_id(model)
+    lo, hi, zero = _consts(r, -1.0, 1.0, 0.0)
+    eon_terms_, fon_terms_, qon_AB_, qon_terms_ = (_of(r, f) for f in (eon_terms, fon_terms, qon_AB, qon_terms))
+    vo_terms_, fujii_terms_, full_on_terms_ = (_of(r, f) for f in (van_ouwerkerk_terms, fujii_terms, full_on_terms))
+    gotanda_terms_, lambert_terms_ = _of(r, gotanda_terms), _of(r, lambert_terms)
     if m == EON or m == EON_APPROX:
         approx = m == EON_APPROX
 
         def impl(model, ix, iy, iz, ox, oy, oz, r):
-            return eon_terms(iz, oz, min(max(ix * ox + iy * oy, -1.0), 1.0), r, approx)
+            return eon_terms_(iz, oz, min(max(ix * ox + iy * oy, lo), hi), r, approx)
     elif m == FON:
 
         def impl(model, ix, iy, iz, ox, oy, oz, r):
-            return fon_terms(iz, oz, min(max(ix * ox + iy * oy, -1.0), 1.0), r), 0.0, 0.0
+            return fon_terms_(iz, oz, min(max(ix * ox + iy * oy, lo), hi), r), zero, zero
     elif m == QON or m == QON_FOOTNOTE:
-        a_const = 0.33 if m == QON else 0.57
+        (a_const,) = _consts(r, 0.33 if m == QON else 0.57)
 
         def impl(model, ix, iy, iz, ox, oy, oz, r):
-            A, B = qon_AB(r, a_const)
-            return qon_terms(iz, oz, min(max(ix * ox + iy * oy, -1.0), 1.0), A, B), 0.0, 0.0
+            A, B = qon_AB_(r, a_const)
+            return qon_terms_(iz, oz, min(max(ix * ox + iy * oy, lo), hi), A, B), zero, zero
     elif m == QON_VO:
 
         def impl(model, ix, iy, iz, ox, oy, oz, r):
-            return van_ouwerkerk_terms(ix, iy, iz, ox, oy, oz, r), 0.0, 0.0
+            return vo_terms_(ix, iy, iz, ox, oy, oz, r), zero, zero
     elif m == QON_FUJII:
 
         def impl(model, ix, iy, iz, ox, oy, oz, r):
-            g, h = fujii_terms(iz, oz, min(max(ix * ox + iy * oy, -1.0), 1.0), r)
-            return g, h, 0.0
+            g, h = fujii_terms_(iz, oz, min(max(ix * ox + iy * oy, lo), hi), r)
+            return g, h, zero
     elif m == FULL_ON:
 
         def impl(model, ix, iy, iz, ox, oy, oz, r):
-            g, h = full_on_terms(iz, oz, min(max(ix * ox + iy * oy, -1.0), 1.0), r)
-            return g, h, 0.0
+            g, h = full_on_terms_(iz, oz, min(max(ix * ox + iy * oy, lo), hi), r)
+            return g, h, zero
     elif m == GOTANDA:
 
         def impl(model, ix, iy, iz, ox, oy, oz, r):
-            return gotanda_terms(iz, oz, min(max(ix * ox + iy * oy, -1.0), 1.0), r), 0.0, 0.0
+            return gotanda_terms_(iz, oz, min(max(ix * ox + iy * oy, lo), hi), r), zero, zero
     else:
 
         def impl(model, ix, iy, iz, ox, oy, oz, r):
-            return lambert_terms(), 0.0, 0.0
+            return lambert_terms_(), zero, zero
 
     return impl
 
@@ -145,45 +172,50 @@ def _albedo_terms(model, mu, r, average):
     """
     m = _model_id(model)
     avg_on = bool(_model_id(average))  # 0/1, a compile-time constant as the model id
+    (zero,) = _consts(r, 0.0)
+    eon_average_terms_, eon_albedo_terms_ = _of(r, eon_average_terms), _of(r, eon_albedo_terms)
+    qon_AB_, qon_average_albedo_, qon_albedo_ = (_of(r, f) for f in (qon_AB, qon_average_albedo, qon_albedo))
+    fon_albedo_, gotanda_albedo_ = _of(r, fon_albedo), _of(r, gotanda_albedo)
+    fujii_albedo_terms_, lambert_albedo_ = _of(r, fujii_albedo_terms), _of(r, lambert_albedo)
     if m == EON or m == EON_APPROX:
         approx = m == EON_APPROX
         if avg_on:
 
             def impl(model, mu, r, average):
-                return eon_average_terms(r, approx)
+                return eon_average_terms_(r, approx)
         else:
 
             def impl(model, mu, r, average):
-                return eon_albedo_terms(mu, r, approx)
+                return eon_albedo_terms_(mu, r, approx)
     elif m == QON or m == QON_FOOTNOTE or m == QON_VO:
-        a_const = 0.57 if m == QON_FOOTNOTE else 0.33
+        (a_const,) = _consts(r, 0.57 if m == QON_FOOTNOTE else 0.33)
         if avg_on:
 
             def impl(model, mu, r, average):
-                A, B = qon_AB(r, a_const)
-                return qon_average_albedo(A, B), 0.0, 0.0
+                A, B = qon_AB_(r, a_const)
+                return qon_average_albedo_(A, B), zero, zero
         else:
 
             def impl(model, mu, r, average):
-                A, B = qon_AB(r, a_const)
-                return qon_albedo(mu, A, B), 0.0, 0.0
+                A, B = qon_AB_(r, a_const)
+                return qon_albedo_(mu, A, B), zero, zero
     elif m == FON:
 
         def impl(model, mu, r, average):
-            return fon_albedo(mu, r, avg_on), 0.0, 0.0
+            return fon_albedo_(mu, r, avg_on), zero, zero
     elif m == GOTANDA:
 
         def impl(model, mu, r, average):
-            return gotanda_albedo(mu, r, avg_on), 0.0, 0.0
+            return gotanda_albedo_(mu, r, avg_on), zero, zero
     elif m == QON_FUJII:
 
         def impl(model, mu, r, average):
-            g, h = fujii_albedo_terms(mu, r, avg_on)
-            return g, h, 0.0
+            g, h = fujii_albedo_terms_(mu, r, avg_on)
+            return g, h, zero
     else:
 
         def impl(model, mu, r, average):
-            return lambert_albedo(), 0.0, 0.0
+            return lambert_albedo_(), zero, zero
 
     return impl
 
@@ -220,8 +252,8 @@ def _channels(C):
 
 @kernel
 def checked_rho(rho, c, ok):
-    """rho[c] widened to float64, and ``ok`` and-ed with its range check ([0, 1], finite)."""
-    p = _F(rho[c])
+    """rho[c] (in the input dtype), and ``ok`` and-ed with its range check ([0, 1], finite)."""
+    p = rho[c]
     return p, ok & is_within(p, 0.0, 1.0, False, False)
 
 
@@ -252,6 +284,21 @@ def write_row(nc, kind, tint, up, rho, out, i, m, g, h, avg, ok):
     return ok
 
 
+def write_row_of(nc, kind, tint, up, rho, out, i, m, g, h, avg, ok):
+    """``write_row``, or its float32 twin when the row's terms are float32 (compiled only)."""
+    raise NotImplementedError("compiled only: called from the batch drivers")
+
+
+@overload(write_row_of, inline="always")
+def _write_row_of(nc, kind, tint, up, rho, out, i, m, g, h, avg, ok):
+    write = _of(g, write_row)
+
+    def impl(nc, kind, tint, up, rho, out, i, m, g, h, avg, ok):
+        return write(nc, kind, tint, up, rho, out, i, m, g, h, avg, ok)
+
+    return impl
+
+
 def eval_driver(model, C):
     """The ``evaluate`` loop for one model id and channel count C (one driver for every C
     other than 1 and 3: see ``_channels``)."""
@@ -270,9 +317,14 @@ def _eval_driver(model, nc):
     """The ``evaluate`` loop for one model id and channel variant ``nc`` (``_channels``).
 
     ``drive(tint, rlo, rhi, wi, wo, r, rho, out) -> bad``: wi, wo flat (N*3,), r (N,),
-    rho (N*C,), out (N*C,); ``bad`` counts the rows whose inputs fail the ``_arrays``
+    rho (N*C,), out (N*C,); ``bad`` is 1 when some row's inputs fail the ``_arrays``
     checks (unit directions, roughness in [rlo, rhi], rho in [0, 1], all finite), which
-    are fused into the loop rather than run as separate passes over the inputs.
+    are fused into the loop rather than run as separate passes over the inputs, else 0.
+
+    The failures are or-ed into a flag, not counted: LLVM sizes the vectors of a loop by
+    the widest type its loads, stores and reductions carry, and a 64-bit count limited the
+    float32 loop to 4 rows per 256-bit instruction (8 with the flag: float32 ``evaluate``
+    ~2x faster; the float64 loop has 4 either way).
     """
     kind = _MIX[model]
 
@@ -283,20 +335,20 @@ def _eval_driver(model, nc):
         # indexed through their data pointers (``_jit.pointer_of``: cheaper to compile)
         wi, wo, r = pointer_of(wi_rows), pointer_of(wo_rows), pointer_of(r_rows)
         rho, out = pointer_of(rho_rows), pointer_of(out_rows)
-        bad = 0
+        failed = False
         for i in range(n):
             j = _U(i) * _U(3)
-            # float64 from here on; the range checks compare exactly as in the input dtype
-            # (rlo, rhi arrive rounded to it, and widening is exact)
-            ix, iy, iz = _F(wi[j]), _F(wi[j + _U(1)]), _F(wi[j + _U(2)])
-            ox, oy, oz = _F(wo[j]), _F(wo[j + _U(1)]), _F(wo[j + _U(2)])
-            ri = _F(r[i])
-            ok = is_unit(ix, iy, iz) & is_unit(ox, oy, oz) & is_within(ri, _F(rlo), _F(rhi), False, False)
+            # in the input dtype from here on (float32 rows: the float32 twins); the range
+            # checks compare in it (rlo, rhi arrive rounded to it), is_unit in float64
+            ix, iy, iz = wi[j], wi[j + _U(1)], wi[j + _U(2)]
+            ox, oy, oz = wo[j], wo[j + _U(1)], wo[j + _U(2)]
+            ri = r[i]
+            ok = is_unit(ix, iy, iz) & is_unit(ox, oy, oz) & is_within(ri, rlo, rhi, False, False)
             g, h, avg = lobe_terms(model, ix, iy, iz, ox, oy, oz, ri)
             up = (iz > 0.0) & (oz > 0.0)  # f = 0 when either direction is below the horizon
-            ok = write_row(nc, kind, tint, up, rho, out, i, m, g, h, avg, ok)
-            bad += 0 if ok else 1
-        return bad
+            ok = write_row_of(nc, kind, tint, up, rho, out, i, m, g, h, avg, ok)
+            failed |= not ok
+        return 1 if failed else 0
 
     return drive
 
@@ -306,9 +358,9 @@ def _albedo_driver(model, nc):
     """The ``directional_albedo`` and ``average_albedo`` loops of one model and channel variant.
 
     ``drive(tint, average, rlo, rhi, mu, r, rho, out) -> bad`` with the input checks fused
-    as in ``eval_driver`` (mu in [0, 1]).  E(mu) at mu = 0 is the limit mu -> 0; with
-    ``average`` (a run-time flag: one compiled function holds both loops, each typed with
-    its own closed form) mu is neither read nor checked.
+    as in ``eval_driver`` (mu in [0, 1]; ``bad`` a flag, as there).  E(mu) at mu = 0 is the
+    limit mu -> 0; with ``average`` (a run-time flag: one compiled function holds both
+    loops, each typed with its own closed form) mu is neither read nor checked.
     """
     kind = _MIX[model]
 
@@ -318,23 +370,23 @@ def _albedo_driver(model, nc):
         m = rho_rows.shape[0] // max(n, 1)
         mu, r = pointer_of(mu_rows), pointer_of(r_rows)  # as in ``eval_driver``
         rho, out = pointer_of(rho_rows), pointer_of(out_rows)
-        bad = 0
+        failed = False
         if average:
             for i in range(n):
-                ri = _F(r[i])
-                ok = is_within(ri, _F(rlo), _F(rhi), False, False)
-                eg, eh, avg = albedo_terms(model, 0.0, ri, 1)
-                ok = write_row(nc, kind, tint, True, rho, out, i, m, eg, eh, avg, ok)
-                bad += 0 if ok else 1
-            return bad
+                ri = r[i]
+                ok = is_within(ri, rlo, rhi, False, False)
+                eg, eh, avg = albedo_terms(model, ri, ri, 1)  # mu is not read
+                ok = write_row_of(nc, kind, tint, True, rho, out, i, m, eg, eh, avg, ok)
+                failed |= not ok
+            return 1 if failed else 0
         for i in range(n):
-            ri = _F(r[i])
-            m_i = _F(mu[i])
-            ok = is_within(ri, _F(rlo), _F(rhi), False, False) & is_within(m_i, 0.0, 1.0, False, False)
+            ri = r[i]
+            m_i = mu[i]
+            ok = is_within(ri, rlo, rhi, False, False) & is_within(m_i, 0.0, 1.0, False, False)
             eg, eh, avg = albedo_terms(model, m_i, ri, 0)
-            ok = write_row(nc, kind, tint, True, rho, out, i, m, eg, eh, avg, ok)
-            bad += 0 if ok else 1
-        return bad
+            ok = write_row_of(nc, kind, tint, True, rho, out, i, m, eg, eh, avg, ok)
+            failed |= not ok
+        return 1 if failed else 0
 
     return drive
 
@@ -342,9 +394,10 @@ def _albedo_driver(model, nc):
 def evaluate_rows(model, tint, rlo, rhi, wi, wo, r, rho, lead, C, dtype):
     """f for arrays broadcasting to ``lead`` (types and shapes checked, values not yet).
 
-    Returns the flat (prod(lead)*C,) output and the number of rows whose values fail the
-    ``_arrays`` checks (roughness in [rlo, rhi]); when that is not 0 the output is garbage
-    and the caller must raise (by running the full checks).
+    Returns the flat (prod(lead)*C,) output and the number of runs of rows (driver calls)
+    in which some row's values fail the ``_arrays`` checks (roughness in [rlo, rhi]); when
+    that is not 0 the output is garbage and the caller must raise (by running the full
+    checks).
     """
     n = math.prod(lead)
     out = np.empty(n * C, dtype=dtype)

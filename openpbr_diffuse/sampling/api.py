@@ -81,6 +81,11 @@ def sample(strategy: str, wo: ArrayLike, roughness: ArrayLike, u: ArrayLike) -> 
 def pdf(strategy: str, wo: ArrayLike, wi: ArrayLike, roughness: ArrayLike) -> NDArray[Any]:
     """Solid-angle pdf of sampling wi given wo with ``strategy``.
 
+    Positionally wo comes first, (strategy, wo, wi, roughness), the reverse of
+    ``evaluate(model, wi, wo, ...)``; ``wi=`` and ``wo=`` as keywords bind by name in any
+    order and are the safe form: the pdf is not symmetric, and swapped positional
+    arguments give another value without an error.
+
     Parameters
     ----------
     strategy : str
@@ -109,6 +114,11 @@ def pdf(strategy: str, wo: ArrayLike, wi: ArrayLike, roughness: ArrayLike) -> ND
     >>> z = np.array([0.0, 0.0, 1.0])
     >>> round(float(pdf("uniform", z, z, 1.0) * 2 * np.pi), 12)
     1.0
+    >>> wi = np.array([0.6, 0.0, 0.8])
+    >>> round(float(pdf("cosine", wi=wi, wo=z, roughness=0.0) * np.pi), 12)   # wi.z / pi
+    0.8
+    >>> round(float(pdf("cosine", z, wi, 0.0) * np.pi), 12)   # the same call, positional
+    0.8
     """
     info = strategy_info(strategy)
     dtype = ar.result_dtype(wo, wi, roughness)
