@@ -12,11 +12,13 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
-from ..conformance.vectors import VECTOR_MODELS
+from ..conformance.vectors import ALL_VECTOR_MODELS
 from ..graders import cli as graders_cli
+from . import _check_image
 
 if TYPE_CHECKING:
     from ..conformance.grade import Grade
@@ -31,11 +33,17 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument(
         "file", metavar="FILE", nargs="?", help="the vectors file with out_r, out_g, out_b filled in (CSV or JSON)"
     )
-    p.add_argument("--model", choices=VECTOR_MODELS, help="grade only the rows of this model")
+    p.add_argument("--model", choices=ALL_VECTOR_MODELS, help="grade only the rows of this model")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     graders_cli.add_arguments(p)  # --implementation / --glsl / --cpp
+    _check_image.add_arguments(p)  # --image / --chart: a rendered conformance chart
     p.set_defaults(run=run)
     return p
+
+
+#: The largest float: an error that a finite result makes larger than this is out of range
+#: (``grade.OUT_OF_RANGE``), not an Inf.
+_HUGE = sys.float_info.max
 
 
 def _num(x: float) -> str:
@@ -45,6 +53,8 @@ def _num(x: float) -> str:
         return "NaN"
     if isinstance(x, float) and math.isinf(x):
         return "Inf" if x > 0 else "-Inf"
+    if isinstance(x, float) and x >= _HUGE:
+        return "out of range (> 1.8e+308)"
     return f"{x:.6g}"
 
 
@@ -57,6 +67,8 @@ def _error(w: dict) -> str:
         return "NaN output"
     if w["status"] == "inf":
         return "Inf output"
+    if w["normalised_error"] >= _HUGE:  # a finite result too far off for the ratio to be a float
+        return f"error {w['abs_error']:.3g}, out of range in tolerances (> 1.8e+308x)"
     return f"error {w['normalised_error']:.3g}x tolerance"
 
 
@@ -82,6 +94,8 @@ def _print_text(g: Grade, path: str) -> None:
         print(f"  diagnosis: {g.diagnosis} -- {g.diagnosis_detail}")
     else:
         print(f"  diagnosis: {g.diagnosis_detail}")
+    if g.terms:
+        print(f"  which term: {g.terms}")
     print("  by region (rows failed / rows, max error in tolerances):")
     for r in g.regions:
         m = r["max_normalised_error"]
@@ -102,6 +116,8 @@ def _print_text(g: Grade, path: str) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.image is not None or args.chart is not None:
+        return _check_image.run(args, _print_text)
     status = graders_cli.run(args)
     if status is not None:
         return status
@@ -109,7 +125,7 @@ def run(args: argparse.Namespace) -> int:
     from ..conformance.vectors import iter_results
 
     if args.file is None:  # ValueError, not main.UsageError: the same exit 2 under `python -m`
-        raise ValueError("check: FILE is required (the vectors file with out_r, out_g, out_b filled in)")
+        raise ValueError("FILE is required (the vectors file with out_r, out_g, out_b filled in)")
     g = grade_chunks(iter_results(args.file), model=args.model)  # streamed: memory bounded by a chunk
     if args.json:
         d = g.to_dict()

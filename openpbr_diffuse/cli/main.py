@@ -41,6 +41,9 @@ COMMANDS = {
     "render": "render",
     "simulate": "simulate",
     "template": "template",
+    "chart": "chart",
+    "export": "export",
+    "explore": "explore",
 }
 
 PROG = "openpbr-diffuse"
