@@ -9,18 +9,24 @@ the edge inputs the vectors do not hold.
 import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 from _system import available, requires
 
 import openpbr_diffuse as od
-from openpbr_diffuse.export import LANGS, export_text, grade_command, write_export
+from openpbr_diffuse.export import LANGS, export_files, export_text, grade_command, write_export
 from openpbr_diffuse.export.render import neutral_source
 
 ALL = [(lang, "float") for lang in LANGS] + [("cpp", "double")]
 #: the stated precision of each export (relative, absolute) against the float64 library
 BOUND = {"float": (2e-5, 1e-6), "double": (1e-12, 1e-14)}
+
+
+def _full(lang, precision):
+    """Every file of the export, joined (mtlx: the document and its GLSL implementation)."""
+    return "\n".join(text for _, text in export_files(lang, "eon.x", precision))
 
 
 def _cli(*args, cwd=None):
@@ -39,7 +45,7 @@ def _grade_argv(path, lang):
 
 @pytest.mark.parametrize("lang,precision", ALL)
 def test_header_states_conventions_citation_licence_version_and_one_grade_line(lang, precision):
-    text = export_text(lang, precision)
+    text = export_text(lang, precision) if lang != "mtlx" else export_files(lang, "eon.mtlx")[1][1]
     head = text.split("\n\n", 1)[0] if lang != "cpp" else text[: text.index("#ifndef")]
     for needed in (
         "normal +z",
@@ -71,9 +77,9 @@ def test_the_neutral_source_holds_no_hand_copied_constant():
 def test_changing_a_constant_of_the_package_changes_every_export(monkeypatch, tmp_path):
     from openpbr_diffuse.models import fon
 
-    before = {k: export_text(*k) for k in ALL}
+    before = {k: _full(*k) for k in ALL}
     monkeypatch.setattr(fon, "C1", fon.C1 * 1.05)
-    after = {k: export_text(*k) for k in ALL}
+    after = {k: _full(*k) for k in ALL}
     for k in ALL:
         assert before[k] != after[k], k
         assert repr(fon.C1) in after[k]
@@ -242,7 +248,7 @@ def test_wgsl_export_runs_through_wgpu_and_matches_the_library(tmp_path):
 
 
 def test_osl_export_uses_only_what_osl_has():
-    # no OSL compiler here (see docs/guide/export.md): the rendering rules OSL needs are checked on the text
+    # the rendering rules OSL needs, on the text (compiled and run by Cycles: the slow test below)
     text = export_text("osl")
     code = "\n".join(ln.split("//")[0] for ln in text.splitlines())
     assert not re.search(r"\b(bool|vec3|eon_real|std::|true|false)\b", code)
@@ -271,3 +277,203 @@ def test_cli_writes_refuses_existing_and_symlinks_and_double_outside_cpp(tmp_pat
     assert run.returncode == 2 and len(run.stderr.strip().splitlines()) == 1 and "cpp only" in run.stderr
     assert not (tmp_path / "d.glsl").exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["eon.wgsl", "link.cpp"]  # no temporary left
+
+
+# ---- MaterialX: the nodedef loads, MaterialX's own GLSL generator emits EON, the result compiles ----
+
+_MX_MATERIAL = """
+import sys
+import MaterialX as mx
+from MaterialX import PyMaterialXGenGlsl as gg, PyMaterialXGenShader as gs
+
+doc = mx.createDocument()
+mx.readFromXmlFile(doc, sys.argv[1])
+lib = mx.createDocument()
+search = mx.getDefaultDataSearchPath()
+mx.loadLibraries(mx.getDefaultDataLibraryFolders(), search, lib)
+doc.importLibrary(lib)
+bsdf = doc.addNode("openpbr_diffuse_eon_bsdf", "eon1", "BSDF")
+bsdf.setInputValue("roughness", 0.5)
+surface = doc.addNode("surface", "surface1", "surfaceshader")
+surface.setConnectedNode("bsdf", bsdf)
+doc.addMaterialNode("material1", surface)
+generator = gg.GlslShaderGenerator.create()
+context = gs.GenContext(generator)
+context.registerSourceCodeSearchPath(search)
+shader = generator.generate("material1", surface, context)
+open(sys.argv[2], "w").write(shader.getSourceCode(gs.VERTEX_STAGE))
+open(sys.argv[3], "w").write(shader.getSourceCode(gs.PIXEL_STAGE))
+print(doc.validate()[0])
+"""
+_GL_COMPILE = """
+import sys
+from openpbr_diffuse.graders.glsl import gl_context
+program = gl_context().program(vertex_shader=open(sys.argv[1]).read(), fragment_shader=open(sys.argv[2]).read())
+print(sorted(name for name in program._members if name.startswith("eon1_")))
+"""
+
+
+@pytest.fixture(scope="module")
+def mtlx_shader(tmp_path_factory):
+    """The .mtlx export, and the GLSL MaterialX generates for a material using its node (run
+    from another folder: the implementation file is found beside the document)."""
+    pytest.importorskip("MaterialX")
+    tmp = tmp_path_factory.mktemp("mtlx")
+    out = tmp / "out"
+    out.mkdir()
+    path = write_export("mtlx", out / "eon.mtlx")
+    vs, ps = tmp / "vs.glsl", tmp / "ps.glsl"
+    run = subprocess.run(
+        [sys.executable, "-c", _MX_MATERIAL, str(path), str(vs), str(ps)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=tmp,
+    )
+    assert run.returncode == 0, run.stderr
+    return path, run.stdout.split(), vs, ps
+
+
+def test_mtlx_export_writes_the_document_and_its_implementation_beside_it(tmp_path):
+    path = write_export("mtlx", tmp_path / "lobe.mtlx")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["lobe.mtlx", "lobe_genglsl.glsl"]
+    assert 'file="lobe_genglsl.glsl"' in path.read_text()
+    glsl = (tmp_path / "lobe_genglsl.glsl").read_text()
+    assert export_text("glsl").split("\n// grade: ")[1].split("\n", 1)[1] in glsl  # the GLSL functions, verbatim
+    assert "// grade: none" in glsl and "JCGT) 14(1), 2025" in glsl
+    (tmp_path / "lobe_genglsl.glsl").write_text("mine")
+    run = _cli("export", "--lang", "mtlx", "--out", str(tmp_path / "lobe.mtlx"), "--force")
+    assert run.returncode == 0 and (tmp_path / "lobe_genglsl.glsl").read_text() == glsl
+    other = tmp_path / "other.mtlx"
+    (tmp_path / "other_genglsl.glsl").write_text("mine")  # an existing sibling: nothing written
+    run = _cli("export", "--lang", "mtlx", "--out", str(other))
+    assert run.returncode == 2 and len(run.stderr.strip().splitlines()) == 1 and not other.exists()
+    assert (tmp_path / "other_genglsl.glsl").read_text() == "mine"
+
+
+def test_mtlx_nodedef_validates_and_materialx_emits_the_eon_functions(mtlx_shader):
+    _, valid, _, ps = mtlx_shader
+    assert valid == ["True"]  # with MaterialX's libraries (the BSDF type is theirs)
+    text = ps.read_text()
+    for sig in (
+        "vec3 eon_f(vec3 wi, vec3 wo, float roughness, vec3 rho)",
+        "vec3 eon_albedo(float mu",
+        "void mx_openpbr_diffuse_eon_bsdf(",
+    ):
+        assert text.count(sig) == 1, sig
+    assert re.search(r"mx_openpbr_diffuse_eon_bsdf\(closureData, eon1_weight", text)  # the node's call
+
+
+@requires("gl")
+def test_mtlx_generated_glsl_compiles_on_llvmpipe(mtlx_shader):
+    _, _, vs, ps = mtlx_shader
+    run = subprocess.run(
+        [sys.executable, "-c", _GL_COMPILE, str(vs), str(ps)], capture_output=True, text=True, timeout=120
+    )
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "eon1_roughness" in run.stdout and "eon1_color" in run.stdout
+
+
+@requires("gl")
+def test_mtlx_generated_eon_functions_pass_check_glsl(mtlx_shader, tmp_path):
+    # the EON functions as MaterialX's generator emitted them, graded like the GLSL export
+    _, _, _, ps = mtlx_shader
+    text = ps.read_text()
+    start = text.index("float eon_sel(bool c")
+    end = text.index("\n", text.index("vec3 eon_sample_wi(vec3 wo, vec2 u, float roughness)"))
+    path = tmp_path / "generated.glsl"
+    path.write_text(text[start:end] + "\n")
+    argv = grade_command("glsl", str(path)).split()
+    run = subprocess.run(
+        [sys.executable, "-m", "openpbr_diffuse", *argv[1:], "--quick"], capture_output=True, text=True, timeout=300
+    )
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert "CONFORMS" in run.stdout
+
+
+# ---- OSL: compiled by Cycles' oslc and run in a Script node (Blender's bpy in its own Python) ----
+
+#: (columns of _expected) x (rows): the harness image holds 11 groups of 11 x 11 pixels
+_OSL_SIDE = 11
+_OSL_OUTPUTS = (
+    "eon_f(wi, wo, r, rho)",
+    "eon_f_fit(wi, wo, r, rho)",
+    "eon_f_white_tint(wi, wo, r, rho)",
+    "eon_albedo(wo[2], r, rho)",
+    "eon_albedo_fit(wo[2], r, rho)",
+    "eon_albedo_white_tint(wo[2], r, rho)",
+    "eon_average_albedo(r, rho)",
+    "eon_fon_f(wi, wo, r, rho)",
+    "eon_qon_f(wi, wo, r, rho)",
+    "eon_lambert_f(wi, wo, rho)",
+    "vector(eon_pdf(wo, wi, r), 0, 0)",
+)
+
+
+def _osl_harness(rows):
+    """The OSL export's functions (its shader left out: one shader per file) and a shader whose
+    pixel (i, j) outputs group i // 11 of row (i % 11) + 11 j."""
+    text = export_text("osl")
+    funcs = text[: text.index("\n// The lobe at this shading point")]
+    n, side, groups = len(rows), _OSL_SIDE, len(_OSL_OUTPUTS)
+    values = ", ".join(repr(float(x)) for x in rows.ravel())
+    picks = "\n".join(f"    if (g == {k}) res = {call};" for k, call in enumerate(_OSL_OUTPUTS))
+    return (
+        funcs
+        + f"""
+shader eon_harness(output color value = 0)
+{{
+    float IN[{rows.size}] = {{ {values} }};
+    int i = (int) floor((P[0] + {0.5 * groups}) * {side});
+    int j = (int) floor((P[1] + 0.5) * {side});
+    i = min(max(i, 0), {side * groups - 1});
+    int g = i / {side};
+    int k = 10 * min((i - g * {side}) + {side} * min(max(j, 0), {side - 1}), {n - 1});
+    vector wi = vector(IN[k], IN[k + 1], IN[k + 2]);
+    vector wo = vector(IN[k + 3], IN[k + 4], IN[k + 5]);
+    float r = IN[k + 6];
+    vector rho = vector(IN[k + 7], IN[k + 8], IN[k + 9]);
+    vector res = vector(0);
+{picks}
+    value = color(res[0], res[1], res[2]);
+}}
+"""
+    )
+
+
+@pytest.mark.slow
+@requires("bpy")
+def test_osl_export_compiles_in_cycles_and_matches_the_library(tmp_path):
+    from openpbr_diffuse.graders import cycles, limits
+
+    wi, wo, r, rho = (x.astype(np.float32).astype(np.float64) for x in _cases())
+    rows = np.hstack([wi, wo, r[:, None], rho])
+    assert len(rows) <= _OSL_SIDE**2
+    harness, shader = tmp_path / "harness.osl", tmp_path / "eon.osl"
+    harness.write_text(_osl_harness(rows))
+    write_export("osl", shader)
+    mu_o = 0.6
+    scene = Path(__file__).with_name("_cycles_osl_scene.py")
+    argv = [cycles.bpy_python(), str(scene), str(harness), str(shader), str(tmp_path / "out")]
+    argv += [str(_OSL_SIDE * len(_OSL_OUTPUTS)), str(_OSL_SIDE), str(mu_o)]
+    run = limits.run_limited(argv, label="Cycles OSL render", timeout=300)
+    assert run.returncode == 0, run.stderr.decode()[-3000:]
+    data = np.load(tmp_path / "out.npz")
+    img = data["harness"].astype(np.float64)  # (side, side * groups, 3)
+    got = np.zeros((len(rows), 33))
+    for k in range(len(rows)):
+        i, j = k % _OSL_SIDE, k // _OSL_SIDE
+        got[k] = np.concatenate([img[j, g * _OSL_SIDE + i] for g in range(len(_OSL_OUTPUTS))])
+    got = got[:, :31]  # the pdf group's last two channels are 0
+    want = _expected(wi, wo, r, rho)
+    rel, ab = BOUND["float"]  # Cycles' OSL float32 on the CPU, its transcendental functions: 5x looser
+    assert np.all(np.isfinite(got))
+    err = np.abs(got - want) - 5 * (ab + rel * np.abs(want))
+    assert err.max() <= 0, np.unravel_index(np.argmax(err), err.shape)
+    # the export's shader eon_diffuse itself, seen along wo = (0, -0.8, 0.6), light along the normal
+    # (wi_local's default): f_value = f(n, wo), the same at every azimuth of the tangent frame
+    assert list(data["shader_outputs"]) == ["f_value", "albedo_value"]
+    wo_view = np.array([[0.0, -np.sqrt(1 - mu_o**2), mu_o]])
+    f_n = od.evaluate("eon", np.array([[0.0, 0.0, 1.0]]), wo_view, 0.5, [0.8, 0.8, 0.8])[0]
+    shade = data["shader"].reshape(-1, 3).astype(np.float64)
+    assert np.all(np.abs(shade - f_n) <= 5 * (ab + rel * f_n)), (shade[0], f_n)

@@ -1,10 +1,12 @@
 """``openpbr-diffuse export``: write EON as one self-contained source file for a renderer.
 
-    openpbr-diffuse export --lang glsl|wgsl|cpp|osl [--precision float|double] --out FILE [--force]
+    openpbr-diffuse export --lang glsl|wgsl|cpp|osl|mtlx [--precision float|double] --out FILE [--force]
 
 Every language is rendered from the package's one source of the functions (its constants
 read from the package's own modules); the file's ``// grade:`` line is the ``check``
-command that grades it.  An existing file is never overwritten without ``--force``.
+command that grades it.  ``--lang mtlx`` writes FILE (a MaterialX nodedef) and its GLSL
+implementation ``NAME_genglsl.glsl`` beside it.  An existing file is never overwritten
+without ``--force``.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
 
     p = subparsers.add_parser(
         "export",
-        help="write EON (f, albedo, sampler, pdf) as GLSL, WGSL, C++ or OSL source",
+        help="write EON (f, albedo, sampler, pdf) as GLSL, WGSL, C++, OSL or a MaterialX node",
         description=__doc__.splitlines()[0].strip("`").replace("``", ""),
     )
     p.add_argument("--lang", required=True, choices=LANGS, help="the language of the file")
@@ -38,7 +40,12 @@ def run(args: argparse.Namespace) -> int:
         path = write_export(args.lang, args.out, precision=args.precision, force=args.force)
     except ValueError as exc:  # unknown precision for the language, a refused --out: one line, exit 2
         raise UsageError(str(exc)) from None
-    print(f"wrote {path}; grade: {grade_command(args.lang, str(path))}")
+    if args.lang == "mtlx":
+        from ..export.mtlx import glsl_name
+
+        print(f"wrote {path} and {path.with_name(glsl_name(path))} (its genglsl implementation)")
+    else:
+        print(f"wrote {path}; grade: {grade_command(args.lang, str(path))}")
     return 0
 
 

@@ -10,14 +10,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .languages import LANGS, export_text, grade_command
+from .languages import LANGS, export_files, export_text, grade_command
 
 
 def write_export(lang: str, path: str | Path, *, precision: str = "float", force: bool = False) -> Path:
     """Write the ``lang`` export to ``path`` by the project's one rule for output files.
 
     An existing file is replaced only with ``force``, never through a symbolic link; the
-    text goes to a temporary sibling that takes the name once complete.
+    text goes to a temporary sibling that takes the name once complete.  "mtlx" writes two
+    files: ``path`` and ``NAME_genglsl.glsl`` beside it (both checked before either is written).
 
     Raises
     ------
@@ -36,8 +37,12 @@ def write_export(lang: str, path: str | Path, *, precision: str = "float", force
     from .._outfile import check_output_file, write_output_file
 
     check_output_file(Path(path), option="--out", force=force)  # before any work
-    text = export_text(lang, precision)
-    return write_output_file(path, text, option="--out", force=force)
+    files = export_files(lang, path, precision)
+    for target, _ in files[1:]:
+        check_output_file(target, option="--out (its sibling)", force=force)
+    for target, text in files[1:]:
+        write_output_file(target, text, option="--out (its sibling)", force=force)
+    return write_output_file(path, files[0][1], option="--out", force=force)
 
 
-__all__ = ["LANGS", "export_text", "grade_command", "write_export"]
+__all__ = ["LANGS", "export_files", "export_text", "grade_command", "write_export"]

@@ -8,12 +8,15 @@ check`` calls with (GLSL's ``vec2 u``, C++'s GLM types).
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from .._version import __version__
+from . import mtlx
 from .constants import PRECISIONS, constants, literal
 from .render import fill, neutral_source, render
 
-#: the export languages
-LANGS = ("glsl", "wgsl", "cpp", "osl")
+#: the export languages (mtlx: a MaterialX nodedef and its genglsl implementation, two files)
+LANGS = ("glsl", "wgsl", "cpp", "osl", "mtlx")
 #: the languages with a double-precision export
 DOUBLE = ("cpp",)
 
@@ -41,8 +44,14 @@ GRADES = {
         "mu = 0, r = 0, rho = 0 and 1"
     ),
     "osl": (
-        "not graded by running: no OSL compiler is installed where the package is tested; the functions "
-        "are the same rendering of the one source as the graded GLSL and C++ exports"
+        "compiled by the oslc of Blender's Cycles (bpy 5.0, OSL 1.14) and rendered through a Script node "
+        "by the package's tests: f, the fit and white_tint variants, albedo and pdf against the library "
+        "in float32; the shader eon_diffuse's f and albedo outputs at a known view"
+    ),
+    "mtlx": (
+        "loaded and validated by MaterialX 1.39; the GLSL MaterialX's GlslShaderGenerator emits for a "
+        "material using the node compiles on Mesa llvmpipe, and its EON functions, taken from that "
+        "generated shader, pass `openpbr-diffuse check --glsl`"
     ),
 }
 #: the precision each export is tested to (relative to the library's float64 results, plus an absolute floor)
@@ -51,7 +60,11 @@ PRECISION_BOUNDS = {
     ("wgsl", "float"): "2e-5 relative + 1e-6 absolute (float32 arithmetic of lavapipe)",
     ("cpp", "float"): "2e-5 relative + 1e-6 absolute (float32, about 170 ulp)",
     ("cpp", "double"): "1e-12 relative + 1e-14 absolute (float64)",
-    ("osl", "float"): "not measured (no OSL compiler)",
+    (
+        "osl",
+        "float",
+    ): "2e-5 relative + 1e-6 absolute (float32 of Cycles' OSL on the CPU), 5x looser for its transcendental functions",
+    ("mtlx", "float"): "that of the GLSL export (the same functions)",
 }
 
 
@@ -71,6 +84,8 @@ def grade_command(lang: str, path: str = "FILE") -> str:
         return "none: openpbr-diffuse check has no --wgsl (the package's tests run this file through wgpu)"
     if lang == "osl":
         return "none: openpbr-diffuse check has no --osl"
+    if lang == "mtlx":
+        return "none: openpbr-diffuse check has no --mtlx (the GLSL functions are those of --lang glsl)"
     raise ValueError(f"lang: expected one of {', '.join(LANGS)}, got {lang!r}")
 
 
@@ -182,7 +197,12 @@ shader eon_diffuse(
     vector T = dPdu - dot(dPdu, Z) * Z;
     vector X = length(T) > 0 ? normalize(T) : normalize(cross(Z, abs(Z[0]) < 0.9 ? vector(1, 0, 0) : vector(0, 1, 0)));
     vector Y = cross(Z, X);
+    // I points from the viewer to the point (the OSL specification); Blender's Cycles passes the
+    // reverse: on a front face the viewer is on the side of Ng, which settles it
     vector V = -normalize(I);
+    if (!backfacing() && dot(V, Ng) < 0) {
+        V = -V;
+    }
     vector wo = vector(dot(V, X), dot(V, Y), dot(V, Z));
     vector r3 = vector(rho[0], rho[1], rho[2]);
     vector fv = eon_f(normalize(wi_local), wo, roughness, r3);
@@ -193,8 +213,11 @@ shader eon_diffuse(
 """
 
 
-def export_text(lang: str, precision: str = "float") -> str:
-    """The ``lang`` export ("glsl", "wgsl", "cpp" or "osl") in ``precision`` ("float"; "double" for cpp).
+def export_text(lang: str, precision: str = "float", *, glsl_file: str = "eon_genglsl.glsl") -> str:
+    """The ``lang`` export ("glsl", "wgsl", "cpp", "osl" or "mtlx") in ``precision`` ("float"; "double" for cpp).
+
+    For "mtlx" this is the ``.mtlx`` document, whose implementation names ``glsl_file``
+    (:func:`export_files` gives both files).
 
     Examples
     --------
@@ -209,7 +232,7 @@ def export_text(lang: str, precision: str = "float") -> str:
     if precision == "double" and lang not in DOUBLE:
         raise ValueError(f"precision: double is available for {', '.join(DOUBLE)} only ({lang} has float only)")
     values = {k: literal(v) for k, v in constants(precision).items()}
-    body = render(fill(neutral_source(), values), lang, precision)
+    body = render(fill(neutral_source(), values), "glsl" if lang == "mtlx" else lang, precision)
     head = _header(lang, precision)
     if lang == "glsl":
         return head + _GLSL_PRELUDE + "\n" + body + _GLSL_ADAPTERS
@@ -217,7 +240,30 @@ def export_text(lang: str, precision: str = "float") -> str:
         return head + _WGSL_PRELUDE + "\n" + body
     if lang == "cpp":
         return head + _CPP_PRELUDE.replace("REAL", precision) + "\n" + body + _CPP_ADAPTERS
+    if lang == "mtlx":
+        return mtlx.document(head, glsl_file)
     return head + _OSL_PRELUDE + "\n" + body + _OSL_SHADER
 
 
-__all__ = ["DOUBLE", "GRADES", "LANGS", "PRECISION_BOUNDS", "export_text", "grade_command"]
+def export_files(lang: str, path: str | Path, precision: str = "float") -> list[tuple[Path, str]]:
+    """The files of the ``lang`` export written at ``path``: [(path, text)], two for "mtlx"
+    (the document and ``NAME_genglsl.glsl`` beside it).
+
+    Examples
+    --------
+    >>> [p.name for p, _ in export_files("mtlx", "out/eon.mtlx")]
+    ['eon.mtlx', 'eon_genglsl.glsl']
+    """
+    path = Path(path)
+    if lang != "mtlx":
+        return [(path, export_text(lang, precision))]
+    glsl_path = path.with_name(mtlx.glsl_name(path))
+    if precision != "float":
+        raise ValueError(f"precision: double is available for {', '.join(DOUBLE)} only ({lang} has float only)")
+    values = {k: literal(v) for k, v in constants(precision).items()}
+    body = render(fill(neutral_source(), values), "glsl", precision)
+    glsl = mtlx.implementation_glsl(_header(lang, precision) + _GLSL_PRELUDE + "\n" + body + _GLSL_ADAPTERS)
+    return [(path, export_text(lang, precision, glsl_file=glsl_path.name)), (glsl_path, glsl)]
+
+
+__all__ = ["DOUBLE", "GRADES", "LANGS", "PRECISION_BOUNDS", "export_files", "export_text", "grade_command"]
