@@ -81,7 +81,12 @@ MTLX = {
         1,
         ["base_color"],
     ),
-    "malformed_float": (_sb('<input name="base_weight" type="float" value="1.0.0" />'), 1, ["base_weight", "1.0.0"]),
+    # MaterialX reads "1.0.0" as its leading number: read so, with a warning
+    "malformed_float": (
+        _sb('<input name="base_weight" type="float" value="1.0.0" />'),
+        0,
+        ["base_weight", "1.0.0", "read as 1"],
+    ),
     "not_a_number": (_sb('<input name="base_weight" type="float" value="nan" />'), 1, ["base_weight", "nan"]),
     "infinite_component": (_sb('<input name="base_color" type="color3" value="inf, 0, 0" />'), 1, ["base_color"]),
     "unconnected_nodegraph_output": (

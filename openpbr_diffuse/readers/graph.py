@@ -145,15 +145,23 @@ class Resolver:
     def _authored(self, port: Any, library: bool) -> Parameter:
         t = port.getType()
         text = port.getValueString()
+        notes: list[str] = []
         try:
-            raw = mx_value(port, t)
+            raw = mx_value(port, t, notes)
         except ValueError as exc:
             raise ValueError(f"{self.file}: {port.getNamePath()}: {exc}") from None
+        for note in notes:  # read as MaterialX reads it, said once per material
+            who = f"material {self.sink.name}: " if self.sink.name else ""
+            self._note(f"{self.file}: {who}{port.getNamePath()}: {note}")
         if raw is None and text.strip():
             raise ValueError(f"{self.file}: {port.getNamePath()}: bad {t} value {text!r} (MaterialX cannot parse it)")
         if t == "filename":
             resolved = port.getResolvedValueString() or raw
-            if resolved and not os.path.isabs(resolved):
+            if resolved and not os.path.isabs(resolved) and textures.is_packaged(self.file):
+                # a document inside a package: its relative names are members of the package
+                outer, inner = self.file[: self.file.index("[")], self.file[self.file.index("[") + 1 : -1]
+                resolved = f"{outer}[{os.path.normpath(os.path.join(os.path.dirname(inner), resolved))}]"
+            elif resolved and not os.path.isabs(resolved):
                 folder = self._source_folder(port)
                 resolved = os.path.normpath(os.path.join(folder, resolved))
             space = "raw" if library else self._space(port)
@@ -201,8 +209,7 @@ class Resolver:
         if node is not None:
             out = port.getConnectedOutput() if hasattr(port, "getConnectedOutput") else None
             outname = port.getOutputString()
-            if not library:
-                self._check_connection_type(port, node, out)
+            src = self._check_connection_type(port, node, out) if not library else ""
             via = ""
             if out is not None and out.getParent() is not None and out.getParent().getCategory() == "nodegraph":
                 via = f"{out.getNamePath()} <- "
@@ -210,6 +217,8 @@ class Resolver:
             p = self.node_value(node, outname, trail, iface, library)
             if p is None:
                 return None
+            if src:
+                p = self.convert(p, src, port.getType(), port.getNamePath())
             return Parameter(p.value, via + p.provenance, _kind(p), p.authored)
         if port.getNodeName() or port.getNodeGraphString():
             self._note(self._dangling(port) + "; default used")
@@ -256,23 +265,54 @@ class Resolver:
             return f"{out.getNamePath()} is connected to nothing"
         return f"{where}: connected to {port.getNodeName()!r}, which does not exist"
 
-    def _check_connection_type(self, port: Any, node: Any, out: Any) -> None:
-        """A warning when an input is connected to an output of another type (MaterialX's
-        validation reports it; the value is converted as ``convert`` would)."""
+    def _check_connection_type(self, port: Any, node: Any, out: Any) -> str:
+        """The type of the output an input is connected to when it is not the input's own
+        type ("" when they match), with a warning (MaterialX's validation reports it; the
+        value is converted by :meth:`convert`)."""
         src = out.getType() if out is not None else node.getType()
         if src == "multioutput" or not src:
             nd = node.getNodeDef()
             name = port.getOutputString()
             if nd is None or not name:
-                return
+                return ""
             o = nd.getActiveOutput(name)
             src = o.getType() if o is not None else ""
         want = port.getType()
         if src and want and src != want and src in VALUE_TYPES and want in VALUE_TYPES:
             self._note(
                 f"{port.getNamePath()} ({want}) is connected to {node.getNamePath()}, a {src} output: "
-                f"the value is converted"
+                f"the value is converted by MaterialX's ND_convert_{src}_{want}"
             )
+            return src
+        return ""
+
+    def convert(self, p: Parameter, src: str, want: str, where: str) -> Parameter:
+        """A ``src`` value connected to a ``want`` input, converted as MaterialX's
+        ``ND_convert_<src>_<want>`` node converts it (its library graph, e.g. vector2 -> color3
+        is (x, y, 0)); ValueError naming the input when MaterialX has no such conversion.
+
+        Examples
+        --------
+        >>> from openpbr_diffuse.readers.material import Material
+        >>> r = Resolver("x.mtlx", (0.25, 0.75), "acescg", Material("", "", "", "", False))
+        >>> r.convert(Parameter(np.array([0.25, 0.75]), "uv", "uv"), "vector2", "color3", "S/base_color").value
+        array([0.25, 0.75, 0.  ])
+        """
+        name = f"ND_convert_{src}_{want}"
+        if mxlib.nodedef(name) is None:
+            raise ValueError(
+                f"{self.file}: {where} ({want}) is connected to a {src} output, and MaterialX has no "
+                f"conversion from {src} to {want}"
+            )
+        value = np.asarray(p.value, dtype=np.float64) if isinstance(p.value, (tuple, list)) else p.value
+        graph = mxlib.implementation_graph(name)
+        out = graph.getOutput("out") or (graph.getOutputs() or [None])[0] if graph is not None else None
+        q = self.port(out, (), {"in": Parameter(value, p.provenance, p.kind)}, True) if out is not None else None
+        if q is not None:
+            value = q.value
+        else:  # natively implemented (no library graph)
+            value = ops.apply("convert", {"in": value}, want)
+        return Parameter(value, f"{p.provenance} (converted {src} -> {want} by {name})", p.kind, p.authored)
 
     # ----------------------------------------------------------------- nodes
     def node_value(

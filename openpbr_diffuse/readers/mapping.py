@@ -409,6 +409,40 @@ def clamp_inputs(m: Material) -> None:
         m.node_inputs[name] = Parameter(value, p.provenance + " (clamped)", p.kind, p.value)
 
 
+@functools.cache
+def _types(node_class):
+    """{input: MaterialX type} of the node's inputs."""
+    from ..nodes.materialx_defs import nodedef_inputs
+
+    return {n: d.type for n, d in nodedef_inputs(OPENPBR if node_class == "OpenPBRSurface" else OREN_NAYAR).items()}
+
+
+def check_shapes(m: Material) -> None:
+    """ValueError naming the file, material and input when a node input has another number
+    of components than its type (the node would refuse it): the material fails, not the file.
+
+    Examples
+    --------
+    >>> m = Material("M", "/M", "x.usda", "", False, node_class="OpenPBRSurface")
+    >>> m.node_inputs = {"base_color": Parameter((0.25, 0.75), "uv", "connection")}
+    >>> check_shapes(m)
+    Traceback (most recent call last):
+    ...
+    ValueError: x.usda: material /M: base_color has 2 components, but it is a color3 input (uv)
+    """
+    types = _types(m.node_class)
+    for name, p in m.node_inputs.items():
+        t = types.get(name, "")
+        want = int(t[-1]) if t[:5] in ("color", "vecto") else 1 if t == "float" else None
+        if want is None or p.value is None or isinstance(p.value, (str, bool)):
+            continue
+        got = np.asarray(p.value).size
+        if got != want:
+            raise ValueError(
+                f"{m.file}: material {m.path}: {name} has {got} components, but it is a {t} input ({p.provenance})"
+            )
+
+
 # ----------------------------------------------------------------------- building
 def _unmapped(sid: str, inner: Any) -> str:
     """Why a shader maps onto no node (for a ``surface`` node: the BSDF it wraps)."""
@@ -475,9 +509,10 @@ def build_material(
         )
         m.unsupported.append(f"diffuse_model {m.diffuse_model!r} (needs OpenPBRSurface(diffuse_model=...))")
         return m
+    check_shapes(m)
     clamp_inputs(m)
     m.supported = True
     return m
 
 
-__all__ = ["FAMILIES", "Family", "family", "build_material", "clamp_inputs", "ALIASES"]
+__all__ = ["FAMILIES", "Family", "family", "build_material", "clamp_inputs", "check_shapes", "ALIASES"]

@@ -10,6 +10,7 @@ The file is only read.
 from __future__ import annotations
 
 import os
+import re
 from typing import Any
 
 from . import mxlib
@@ -141,10 +142,69 @@ def load(
     -------
     list of Material
     """
+    doc = read_document(path)
+    return materials_of(doc, os.fspath(path), uv=uv, material=material, path_prefix=path_prefix, variants=variants)
+
+
+#: An ``xi:include`` of a document's text and the file it names.
+_INCLUDE = re.compile(r"""<xi:include\b[^>]*?\bhref\s*=\s*["']([^"']*)["']""")
+
+
+def load_packaged(
+    package: str | os.PathLike, member: Any, *, uv: tuple = (0.5, 0.5), material: str | None = None
+) -> list:
+    """Materials of a MaterialX document that is the root (first) member of a ``.usdz``
+    package (usd-core opens only USD layers as a package's root).
+
+    The member is read within its size (``package.read_member``); its relative file names
+    are members of the same package (``pkg.usdz[textures/a.png]``, read through usd-core's
+    asset resolver); its ``xi:include``s are not read (outside the package, MaterialX would
+    look them up relative to the working directory), with a warning.  ``Material.file`` is
+    the package; messages name the member as ``pkg.usdz[doc.mtlx]``.
+    """
     import MaterialX as mx
 
-    doc = read_document(path)
-    file = os.fspath(path)
+    from . import package as pkg
+
+    outer = os.fspath(package)
+    name = f"{outer}[{member.name}]"
+    text = pkg.read_member(outer, member).decode("utf-8", "replace")
+    doc = mx.createDocument()
+    options = mx.XmlReadOptions()
+    options.readXIncludeFunction = None
+    try:
+        mx.readFromXmlString(doc, text, mx.FileSearchPath(), options)
+    except Exception as exc:  # MaterialX raises its own exception types
+        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise ValueError(f"{name}: not a readable MaterialX document ({msg})") from None
+    doc.setDataLibrary(mxlib.library())
+    mats = materials_of(doc, outer, uv=uv, material=material, source=name)
+    notes = [f"read with MaterialX from {name}, the package's root document (usd-core opens only USD layers as a root)"]
+    notes += [
+        f"{name}: xi:include of {href!r} is not read (a document inside a package includes nothing from outside it)"
+        for href in _INCLUDE.findall(text)
+    ]
+    for m in mats:
+        m.warnings[:0] = notes
+    return mats
+
+
+def materials_of(
+    doc: Any,
+    file: str,
+    *,
+    uv: tuple = (0.5, 0.5),
+    material: str | None = None,
+    path_prefix: str | None = None,
+    variants: dict | None = None,
+    source: str | None = None,
+) -> list:
+    """Materials of a MaterialX document already read (see :func:`load`); ``source``: how
+    messages name the document (default ``file``; a package member ``pkg.usdz[doc.mtlx]``,
+    whose relative file names are then members of the same package)."""
+    import MaterialX as mx
+
+    source = source or file
     doc_space = doc.getColorSpace()
     material_nodes = doc.getMaterialNodes()
     pairs = [(m.getName(), m.getNamePath(), shader_of(m)) for m in material_nodes]
@@ -175,7 +235,7 @@ def load(
         try:
             with deep_stack():
                 m = build_material(
-                    _MxShader(shader, file, doc_space), name=name, path=full, file=file, uv=uv, variants=variants
+                    _MxShader(shader, source, doc_space), name=name, path=full, file=file, uv=uv, variants=variants
                 )
         except Exception as exc:  # one bad value fails its own material, never the document
             m = failed_material(exc, name=name, path=full, file=file, uv=uv, variants=variants)
@@ -245,4 +305,4 @@ class _MxShader:
         return params
 
 
-__all__ = ["read_document", "load", "SHADER_CATEGORIES"]
+__all__ = ["read_document", "load", "load_packaged", "materials_of", "SHADER_CATEGORIES"]

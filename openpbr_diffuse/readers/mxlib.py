@@ -10,6 +10,7 @@ from __future__ import annotations
 import functools
 import os
 import re
+import struct
 from typing import Any
 
 from ..nodes.materialx_defs import parse_value
@@ -279,10 +280,18 @@ def _include_folders(file: str, doc: Any) -> list:
     return folders
 
 
-def mx_value(elem: Any, type_name: str) -> Any:
+#: A number at the start of a text, as C++ stream extraction (MaterialX's value reader) reads it.
+_LEADING_NUMBER = re.compile(r"\s*[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+
+
+def mx_value(elem: Any, type_name: str, notes: list[str] | None = None) -> Any:
     """The value of a MaterialX input / output element as parsed by MaterialX itself
     (``getValue``: "1 0 0" and "1, 0, 0" alike), as a Python value: float, int, bool, str
     or a tuple of floats; None when nothing (or nothing MaterialX can parse) is authored.
+
+    A float whose text is more than one number ("0.482,0.169,0.109", "1.0.0") is read as
+    MaterialX reads it, its leading number, when ``notes`` is given (a line saying so is
+    appended to it); without ``notes`` it raises ValueError.
 
     Examples
     --------
@@ -292,6 +301,10 @@ def mx_value(elem: Any, type_name: str) -> Any:
     >>> i = n.addInput("value", "color3"); i.setValueString("1 0 0.5")
     >>> mx_value(i, "color3")
     (1.0, 0.0, 0.5)
+    >>> f = n.addInput("f", "float"); f.setValueString("0.482,0.169,0.109")
+    >>> notes = []
+    >>> mx_value(f, "float", notes), notes
+    (0.482, ["float value '0.482,0.169,0.109' is not one number: read as 0.482, its leading number, as MaterialX reads it"])
     """
     if type_name in ("string", "filename"):
         text = elem.getValueString()
@@ -305,8 +318,17 @@ def mx_value(elem: Any, type_name: str) -> Any:
             return v
         try:  # the decimal text in double precision (MaterialX holds floats in single precision)
             return float(text)
-        except ValueError:  # MaterialX reads a leading number ("1.0.0" as 1): malformed all the same
-            raise ValueError(f"float value {text!r} is not a number") from None
+        except ValueError:  # MaterialX reads a leading number ("1.0.0" as 1)
+            if notes is None:
+                raise ValueError(f"float value {text!r} is not a number") from None
+        lead = _LEADING_NUMBER.match(text)
+        x = float(lead.group()) if lead else float(v)
+        if struct.unpack("f", struct.pack("f", x))[0] != struct.unpack("f", struct.pack("f", float(v)))[0]:
+            x = float(v)  # not the number MaterialX read: MaterialX's own value
+        notes.append(
+            f"float value {text!r} is not one number: read as {x:g}, its leading number, as MaterialX reads it"
+        )
+        return x
     vals = tuple(float(x) for x in v)
     try:  # MaterialX separates components by commas and/or spaces; read them in double precision
         exact = tuple(float(x) for x in re.split(r"[,\s]+", text.strip()))

@@ -14,7 +14,15 @@ Textures inside a USD package (``scene.usdz[textures/a.png]``, as usd-core's ass
 resolves them) are read through that resolver (``Ar.GetResolver().OpenAsset``), never through
 the file system.  OpenImageIO's Python bindings have no IOProxy (no reading from memory), so
 the member's bytes are written once to a private temporary folder this module creates (never
-next to the package) and removed when the interpreter exits.
+next to the package) and removed when the interpreter exits.  The folder holds a stamp file
+naming its owner process; a folder left behind by a process that was killed (SIGKILL: no exit
+handler runs) is recognised by its name and stamp, its owner no longer running, and removed
+the next time a folder is made (:func:`remove_leftovers`).
+
+A texture that cannot be decoded (a corrupt PNG) gives the same TextureError at every lookup
+in the process -- the first one's message, kept per file -- so every material that uses it
+falls back the same way; what the image libraries print on stderr (``libpng error: ...``) is
+captured, their message being in the error.
 """
 
 from __future__ import annotations
@@ -28,6 +36,8 @@ from collections.abc import Iterable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+from ._capture import captured_stderr
 
 _WRAPS = {
     "repeat": "Periodic",
@@ -77,9 +87,10 @@ def file_info(path, mtime):
     """(channels, bits per channel, OpenImageIO colour space) of an image file."""
     import OpenImageIO as oiio
 
-    inp = oiio.ImageInput.open(path)
+    with captured_stderr([]):
+        inp = oiio.ImageInput.open(path)
     if inp is None:
-        raise TextureError(f"texture {path!r} cannot be read: {oiio.geterror() or 'unknown format'}")
+        raise TextureError(f"texture {path!r} cannot be read: {_first_line(oiio.geterror()) or 'unknown format'}")
     try:
         spec = inp.spec()
         if spec.tile_width == 0 and spec.width * spec.height > MAX_UNTILED_PIXELS:
@@ -118,12 +129,97 @@ def display_name(path: str) -> str:
 
 
 _PRIVATE: list = []  # [folder, pid of the process that made it]
+#: Name prefix of the private folders, and the stamp file in each ("PID START": the owner's
+#: process id and, on Linux, its start time in clock ticks, which tells a reused pid apart).
+PREFIX = "openpbr_diffuse_packaged_"
+STAMP = "owner"
+
+
+def _start_time(pid: int) -> str:
+    """The start time of process ``pid`` (Linux /proc, clock ticks since boot; "" if unknown)."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as f:
+            stat = f.read()
+        return stat[stat.rindex(b")") + 2 :].split()[19].decode()
+    except (OSError, ValueError, IndexError):
+        return ""
+
+
+def _alive(pid: int, start: str) -> bool:
+    """Whether the process that wrote a stamp ``PID START`` still runs."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's process: running
+        pass
+    now = _start_time(pid)
+    return not (start and now and now != start)
+
+
+def remove_leftovers(folder: str | None = None) -> list[str]:
+    """Remove private folders that processes of this tool left in ``folder`` (default: the
+    temporary folder) when they were killed: a folder is removed only if it is a real folder
+    (not a symbolic link) of this user named ``PREFIX*`` whose stamp file names a process that
+    no longer runs.  Nothing is followed through a symbolic link.  Returns the folders removed.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> base = tempfile.mkdtemp()
+    >>> left = os.path.join(base, PREFIX + "x")
+    >>> os.mkdir(left)
+    >>> with open(os.path.join(left, STAMP), "w") as f:
+    ...     _ = f.write("999999999 1")          # no such process
+    >>> mine = tempfile.mkdtemp(prefix=PREFIX, dir=base)
+    >>> _write_stamp(mine)                      # this process: kept
+    >>> [os.path.basename(p) for p in remove_leftovers(base)], sorted(os.listdir(base)) == [os.path.basename(mine)]
+    (['openpbr_diffuse_packaged_x'], True)
+    """
+    import stat as st
+
+    base = folder or tempfile.gettempdir()
+    if not getattr(shutil.rmtree, "avoids_symlink_attacks", False):
+        return []  # removal here could be raced into following a link: leave them
+    removed = []
+    try:
+        entries = list(os.scandir(base))
+    except OSError:
+        return []
+    for entry in entries:
+        if not entry.name.startswith(PREFIX):
+            continue
+        try:
+            info = entry.stat(follow_symlinks=False)
+            if not st.S_ISDIR(info.st_mode) or info.st_uid != os.getuid():
+                continue
+            fd = os.open(os.path.join(entry.path, STAMP), os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
+            with os.fdopen(fd, "rb") as f:
+                words = f.read(64).split()
+            pid, start = int(words[0]), (words[1].decode() if len(words) > 1 else "")
+        except (OSError, ValueError, IndexError):
+            continue  # not a folder with a stamp of ours: left alone
+        if pid == os.getpid() or _alive(pid, start):
+            continue
+        shutil.rmtree(entry.path, ignore_errors=True)
+        if not os.path.lexists(entry.path):
+            removed.append(entry.path)
+    return removed
+
+
+def _write_stamp(folder: str) -> None:
+    fd = os.open(os.path.join(folder, STAMP), os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    with os.fdopen(fd, "w") as f:
+        f.write(f"{os.getpid()} {_start_time(os.getpid())}\n")
 
 
 def _private_dir() -> str:
-    """A temporary folder of this process (made on first use, removed at exit)."""
+    """A temporary folder of this process (made on first use, removed at exit; leftovers of
+    killed processes removed when it is made)."""
     if not _PRIVATE or _PRIVATE[1] != os.getpid():  # a forked child makes (and removes) its own
-        d = tempfile.mkdtemp(prefix="openpbr_diffuse_packaged_")
+        remove_leftovers()
+        d = tempfile.mkdtemp(prefix=PREFIX)
+        _write_stamp(d)
         atexit.register(_remove, d, os.getpid())
         _PRIVATE[:] = [d, os.getpid()]
         _member_file.cache_clear()
@@ -222,11 +318,28 @@ def sample(path: str, uv: Iterable[float], wrap_s: str = "periodic", wrap_t: str
     opt.twrap = getattr(oiio.Wrap, _WRAPS[wrap_name(wrap_t)])
     opt.interpmode = oiio.InterpMode.Bilinear
     ts = _system()
-    out = ts.texture(path, opt, u, 1.0 - v, 0.0, 0.0, 0.0, 0.0, nch)
-    err = ts.geterror()
+    st = os.stat(path)
+    key = (path, st.st_mtime_ns, st.st_size)
+    if key in _BROKEN:
+        raise TextureError(f"texture {name!r}: {_BROKEN[key]}")
+    with captured_stderr([]):  # libpng prints its errors on fd 2 too; OpenImageIO's error has them
+        out = ts.texture(path, opt, u, 1.0 - v, 0.0, 0.0, 0.0, 0.0, nch)
+        err = ts.geterror()
     if err:
-        raise TextureError(f"texture {name!r}: {err.strip().splitlines()[0].replace(path, name)}")
+        # the cache now holds a broken file and would answer the next lookups with no error
+        # and undefined texels: every later lookup gets this error instead
+        _BROKEN[key] = _first_line(err).replace(path, name)
+        raise TextureError(f"texture {name!r}: {_BROKEN[key]}")
     return np.asarray(out, dtype=np.float64)
+
+
+#: Texture files that failed to decode in this process: (path, mtime, size) -> the error.
+_BROKEN: dict[tuple, str] = {}
+
+
+def _first_line(text: str) -> str:
+    text = (text or "").strip()
+    return text.splitlines()[0] if text else ""
 
 
 def outside_unit(uv: ArrayLike) -> bool:
@@ -234,4 +347,14 @@ def outside_unit(uv: ArrayLike) -> bool:
     return bool(np.any((np.asarray(uv, dtype=np.float64) < 0.0) | (np.asarray(uv, dtype=np.float64) > 1.0)))
 
 
-__all__ = ["TextureError", "sample", "info", "wrap_name", "outside_unit", "local_file", "is_packaged", "display_name"]
+__all__ = [
+    "TextureError",
+    "sample",
+    "info",
+    "wrap_name",
+    "outside_unit",
+    "local_file",
+    "is_packaged",
+    "display_name",
+    "remove_leftovers",
+]

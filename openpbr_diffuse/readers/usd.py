@@ -30,16 +30,14 @@ Resolution as USD defines it:
 
 from __future__ import annotations
 
-import contextlib
 import os
 import struct
-import tempfile
-from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
 
-from . import colorspace, mxlib, ops, textures
+from . import colorspace, mxlib, ops, package, textures
+from ._capture import captured_stderr
 from .graph import MAX_CHAIN, Resolver, _short, check_finite, convert_color, deep_stack, to_python
 from .mapping import build_material
 from .material import Material, Parameter, failed_material
@@ -69,23 +67,19 @@ _MX_TYPES = {
 }
 
 
-@contextlib.contextmanager
-def captured_stderr(lines: list[str]) -> Iterator[None]:
-    """Capture what USD's diagnostics write to fd 2 (appended to ``lines``)."""
-    try:
-        fd = os.dup(2)
-    except OSError:
-        yield
-        return
-    with tempfile.TemporaryFile(mode="w+b") as tmp:
-        os.dup2(tmp.fileno(), 2)
-        try:
-            yield
-        finally:
-            os.dup2(fd, 2)
-            os.close(fd)
-            tmp.seek(0)
-            lines += [ln for ln in tmp.read().decode("utf-8", "replace").splitlines() if ln.strip()]
+#: Components of the value types (None: not a number).
+_SIZES = {"float": 1, "integer": 1, "boolean": 1, "color3": 3, "color4": 4, "vector2": 2, "vector3": 3, "vector4": 4}
+#: (components, a colour wanted) -> the type a value of that many components is taken for.
+_TYPE_OF_SIZE = {
+    (1, False): "float",
+    (1, True): "float",
+    (2, False): "vector2",
+    (2, True): "vector2",
+    (3, False): "vector3",
+    (3, True): "color3",
+    (4, False): "vector4",
+    (4, True): "color4",
+}
 
 
 #: Deepest nesting of braces (prims, dictionaries) a text layer may have: usd-core recurses per
@@ -107,13 +101,23 @@ def _nesting(path):
     return int(np.max(np.cumsum(step), initial=0))
 
 
-def open_stage(path: str | os.PathLike[str], diagnostics: list[str]) -> Any:
+def open_stage(
+    path: str | os.PathLike[str],
+    diagnostics: list[str],
+    *,
+    variants: dict[str, str] | None = None,
+    time: float | None = None,
+) -> Any:
     """Open a stage (ValueError with one line if it cannot be read).
 
     A text layer nested deeper than :data:`MAX_NESTING` levels is refused before usd-core
-    sees it (usd-core would crash the process on it).
+    sees it (usd-core would crash the process on it); a stage that could need more memory
+    than ``guard.STAGE_BUDGET_MB`` is opened first in a child process under that limit
+    (``guard.check_stage``, with the ``variants`` and ``time`` the reader will use).
     """
     from pxr import Tf, Usd
+
+    from . import guard
 
     depth = _nesting(path)
     if depth > MAX_NESTING:
@@ -121,16 +125,61 @@ def open_stage(path: str | os.PathLike[str], diagnostics: list[str]) -> Any:
             f"{path}: nested {depth} levels deep, more than the {MAX_NESTING} this reader "
             f"accepts (usd-core cannot open such a layer safely)"
         )
+    guard.check_stage(os.fspath(path), variants, time)
 
     try:
         with captured_stderr(diagnostics):
             stage = Usd.Stage.Open(os.fspath(path), Usd.Stage.LoadAll)
     except Tf.ErrorException as exc:
-        msg = " ".join(str(exc).split())
+        msg = " ".join(_error_text(exc, path).split())
         raise ValueError(f"{path}: not a readable USD stage ({msg[:300]})") from None
     if stage is None:
         raise ValueError(f"{path}: not a readable USD stage")
     return stage
+
+
+def _error_text(exc: BaseException, path: str | os.PathLike[str]) -> str:
+    """usd-core's message, or when it quotes bytes that are not UTF-8 (Python then cannot
+    even make it a string) where the layer stops being UTF-8 text."""
+    try:
+        return str(exc)
+    except UnicodeDecodeError:
+        pass
+    where = _not_utf8(path)
+    return f"not UTF-8 text: {where}" if where else "a layer it composes is not UTF-8 text"
+
+
+def _not_utf8(path: str | os.PathLike[str]) -> str:
+    """ "byte 0xe9 at line 2, column 11 (byte 20)" for the first byte of a text layer that is
+    not UTF-8 ("" for a binary layer or valid text); reads the file in pieces."""
+    line, col, offset, pending = 1, 1, 0, b""
+
+    def advance(text: str) -> None:
+        nonlocal line, col
+        if "\n" in text:
+            line += text.count("\n")
+            col = len(text) - text.rfind("\n")
+        else:
+            col += len(text)
+
+    with open(path, "rb") as f:
+        if f.read(6) != b"#usda ":
+            return ""
+        f.seek(0)
+        while True:
+            chunk = f.read(1 << 16)
+            data = pending + chunk
+            try:
+                text, pending = data.decode("utf-8"), b""
+            except UnicodeDecodeError as exc:
+                if exc.reason != "unexpected end of data" or not chunk:
+                    advance(data[: exc.start].decode("utf-8"))
+                    return f"byte 0x{data[exc.start]:02x} at line {line}, column {col} (byte {offset + exc.start})"
+                text, pending = data[: exc.start].decode("utf-8"), data[exc.start :]  # a character cut in two
+            advance(text)
+            offset += len(data) - len(pending)
+            if not chunk:
+                return ""
 
 
 def apply_variants(stage: Any, variants: dict[str, str] | None, diagnostics: list[str]) -> None:
@@ -315,6 +364,8 @@ class _UsdResolver:
             src_prim = s.source.GetPrim()
             if s.sourceType == UsdShade.AttributeType.Output and src_prim.IsA(UsdShade.Shader):
                 p = self.shader_value(UsdShade.Shader(src_prim), s.sourceName, mx_type, trail)
+                if p is not None:
+                    p = self._as_type(p, mx_type, s.source.GetOutput(s.sourceName), attr)
                 return p and Parameter(p.value, f"{attr.GetPath()} <- {p.provenance}", _kind(p), p.authored)
             nxt = (
                 s.source.GetOutput(s.sourceName)
@@ -348,6 +399,27 @@ class _UsdResolver:
         if isinstance(v, tuple):
             v = np.asarray(v, dtype=np.float64)
         return Parameter(v, prov, "time" if note else "authored")
+
+    def _as_type(self, p: Parameter, mx_type: str, output: Any, attr: Any) -> Parameter:
+        """A shader output's value connected to an input of ``mx_type``: converted as
+        MaterialX's ``ND_convert_<src>_<type>`` converts it when it has another number of
+        components (a 2-component uv on a colour input), with a warning; ValueError naming
+        the input when MaterialX has no such conversion."""
+        want = _SIZES.get(mx_type)
+        if want is None or isinstance(p.value, (str, bool)):
+            return p
+        got = np.asarray(p.value).size
+        if got == want:
+            return p
+        declared = _MX_TYPES.get(str(output.GetTypeName()), "") if output else ""
+        src = declared if _SIZES.get(declared) == got else _TYPE_OF_SIZE.get((got, mx_type.startswith("color")), "")
+        if not src:
+            raise ValueError(f"{self.file}: {attr.GetPath()} ({mx_type}) is connected to a value of {got} components")
+        self._note(
+            f"{attr.GetPath()} ({mx_type}) is connected to {output.GetAttr().GetPath() if output else 'a value'}, "
+            f"a {src} output: the value is converted by MaterialX's ND_convert_{src}_{mx_type}"
+        )
+        return self.mx.convert(p, src, mx_type, str(attr.GetPath()))
 
     def inputs(self, shader: Any, sid: str, trail: tuple, authored: dict | None = None) -> dict:
         """Resolved {name: Parameter} of every nodedef input of a shader (defaults filled).
@@ -862,8 +934,16 @@ def _load(
     from pxr import Sdf, UsdShade
 
     file = os.fspath(path)
+    if os.path.splitext(file)[1].lower() == ".usdz":
+        root = package.members(file)[0]  # checked as usd-core will read it
+        if os.path.splitext(root.name)[1].lower() == ".mtlx":
+            if variants:
+                raise ValueError(f"{file}: variants apply to USD stages; its root document {root.name} is MaterialX")
+            from . import materialx
+
+            return materialx.load_packaged(file, root, uv=uv, material=material)
     diagnostics: list[str] = []
-    stage = open_stage(file, diagnostics)
+    stage = open_stage(file, diagnostics, variants=variants, time=time)
     apply_variants(stage, variants, diagnostics)
     entries = _entries(stage, file, time, uv, variants, diagnostics)
     chosen = entries
@@ -894,4 +974,4 @@ def _load(
     return mats
 
 
-__all__ = ["load", "open_stage", "apply_variants"]
+__all__ = ["load", "open_stage", "apply_variants", "captured_stderr"]
