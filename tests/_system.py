@@ -73,6 +73,18 @@ def _babylon_ok() -> bool:
 
 
 @functools.cache
+def _babylon_loaders_ok() -> bool:
+    from openpbr_diffuse.graders.errors import GraderUnavailable
+    from openpbr_diffuse.renderers import babylonjs
+
+    try:
+        babylonjs.version()
+    except GraderUnavailable:
+        return False
+    return True
+
+
+@functools.cache
 def _npm_ok(module: str) -> bool:
     """The npm package the grader module ``module`` reads is in the project's npm cache."""
     import importlib
@@ -114,6 +126,11 @@ PROGRAMS = {
         "Babylon.js (npm @babylonjs/core)",
         "npm install --prefix ~/.cache/openpbr-diffuse/npm @babylonjs/core",
         _babylon_ok,
+    ),
+    "babylonjs-loaders": (
+        "Babylon.js's glTF loader (npm @babylonjs/loaders)",
+        "npm install --prefix ~/.cache/openpbr-diffuse/npm --ignore-scripts @babylonjs/core @babylonjs/loaders",
+        _babylon_loaders_ok,
     ),
     "threejs": (
         "three.js (npm three)",

@@ -68,6 +68,12 @@ SLOW = [
     ("docs/guide/report.md", "report --select", "runs two sections of the report"),
     ("docs/guide/report.md", "report --list-checks", "runs the selected sections of the report"),
     ("docs/guide/simulation.md", "simulate", "Monte Carlo simulations of the microsurface"),
+    (
+        "docs/guide/renderer-conformance.md",
+        "python tools/renderer_conformance.py",
+        "renders the chart in Blender (bpy), three.js and Babylon.js (Chromium): ~40 s, rewrites the page",
+    ),
+    ("docs/guide/chart.md", "check --implementation eevee", "renders the chart with Blender EEVEE (bpy, EGL)"),
     ("docs/guide/layered.md", "simulate_layered_albedo", "a Monte Carlo simulation of 10^6 paths"),
 ]
 

@@ -1,9 +1,12 @@
-'''The chart scene as a Blender script: builds it in bpy and renders a linear EXR with Cycles.
+'''The chart scene as a Blender script: builds it in bpy and renders a linear EXR (Cycles, EEVEE or Hydra Storm).
 
 The script reads the chart.json beside it; run it with Blender or a Python with ``bpy``::
 
-    blender -b -P render_blender.py -- OUT.exr [SAMPLES]
-    python render_blender.py OUT.exr [SAMPLES]          # bpy as a module
+    blender -b -P render_blender.py -- OUT.exr [SAMPLES] [ENGINE]
+    python render_blender.py OUT.exr [SAMPLES] [ENGINE]          # bpy as a module
+
+ENGINE is ``CYCLES`` (the default), ``EEVEE`` (samples = its render samples; needs an
+OpenGL context: EGL without a display) or ``HYDRA_STORM`` (the hydra_storm add-on).
 
 Principled BSDF per tile: Base Color = rho, Diffuse Roughness = the tile's roughness,
 Specular IOR Level 0, Metallic 0, Coat 0, Sheen 0.  A Sun of strength E (W/m^2, angle 0),
@@ -24,10 +27,12 @@ from __future__ import annotations
 #: sky, so the direct light needs one sample; a few more average the pixel filter.
 DEFAULT_SAMPLES = 16
 
-SCRIPT = r'''"""Build and render an openpbr-diffuse conformance chart scene with Blender Cycles.
+SCRIPT = r'''"""Build and render an openpbr-diffuse conformance chart scene with Blender (Cycles by default).
 
-    blender -b -P render_blender.py -- OUT.exr [SAMPLES]
-    python render_blender.py OUT.exr [SAMPLES]
+    blender -b -P render_blender.py -- OUT.exr [SAMPLES] [ENGINE]
+    python render_blender.py OUT.exr [SAMPLES] [ENGINE]
+
+ENGINE: CYCLES (default), EEVEE (SAMPLES = its render samples) or HYDRA_STORM.
 
 Reads chart.json from this script's folder (schema openpbr-diffuse-chart/1).
 """
@@ -44,9 +49,12 @@ import bpy  # noqa: E402
 
 argv = sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else sys.argv[1:]
 if not argv:
-    sys.exit("usage: render_blender.py OUT.exr [SAMPLES]")
+    sys.exit("usage: render_blender.py OUT.exr [SAMPLES] [CYCLES|EEVEE|HYDRA_STORM]")
 OUT = os.path.abspath(argv[0])
 SAMPLES = int(argv[1]) if len(argv) > 1 else __SAMPLES__
+ENGINE = argv[2].upper() if len(argv) > 2 else "CYCLES"
+if ENGINE not in ("CYCLES", "EEVEE", "HYDRA_STORM"):
+    sys.exit(f"ENGINE: expected CYCLES, EEVEE or HYDRA_STORM, got {argv[2]!r}")
 if os.path.exists(OUT):
     sys.exit(f"{OUT} exists: not overwritten")
 chart = json.load(open(os.path.join(HERE, "chart.json")))
@@ -54,6 +62,13 @@ chart = json.load(open(os.path.join(HERE, "chart.json")))
 bpy.ops.wm.read_factory_settings(use_empty=True)
 scene = bpy.context.scene
 scene.render.engine = "CYCLES"
+if ENGINE == "EEVEE":  # "BLENDER_EEVEE_NEXT" in Blender 4.2 to 4.4
+    names = bpy.types.RenderSettings.bl_rna.properties["engine"].enum_items.keys()
+    scene.render.engine = "BLENDER_EEVEE_NEXT" if "BLENDER_EEVEE_NEXT" in names else "BLENDER_EEVEE"
+    scene.eevee.taa_render_samples = SAMPLES
+elif ENGINE == "HYDRA_STORM":
+    bpy.ops.preferences.addon_enable(module="hydra_storm")
+    scene.render.engine = "HYDRA_STORM"
 cy = scene.cycles
 cy.device = "CPU"
 cy.samples = SAMPLES
@@ -129,7 +144,7 @@ for tile in chart["tiles"]:
 
 scene.render.filepath = OUT
 bpy.ops.render.render(write_still=True)
-print("openpbr-diffuse chart: rendered", OUT, "with Blender", bpy.app.version_string)
+print("openpbr-diffuse chart: rendered", OUT, "with Blender", bpy.app.version_string, scene.render.engine)
 '''.replace("__SAMPLES__", str(DEFAULT_SAMPLES))
 
 

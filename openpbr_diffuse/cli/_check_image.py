@@ -47,6 +47,49 @@ def _junit(path: str, result: ImageGrade, image: str, force: bool) -> None:
     write_output_file(path, text, option="--junit", force=force, inputs=[image])
 
 
+def is_renderer(name: str | None) -> bool:
+    """Whether ``--implementation NAME`` names a renderer (its chart image is graded).
+
+    >>> is_renderer("eevee"), is_renderer("threejs"), is_renderer(None)
+    (True, False, False)
+    """
+    from ..renderers import RENDERERS
+
+    return name in RENDERERS
+
+
+def run_renderer(args: argparse.Namespace, print_grade: Callable) -> int:
+    """``check --implementation RENDERER``: render the chart's scene_01 (256^2, distant light)
+    with the renderer, from the chart file its users take, and grade the image."""
+    from ..graders import limits
+    from ..renderers import render_and_grade
+
+    if args.file is not None:
+        raise ValueError("give FILE (vectors) or --implementation, not both")
+    for opt in ("source", "glsl", "cpp", "junit"):
+        if getattr(args, opt, None):
+            raise ValueError(f"--{opt} is not used with --implementation {args.implementation} (a renderer)")
+    if getattr(args, "timeout", None) is not None:
+        limits.set_limits(timeout=args.timeout)
+    r = render_and_grade(args.implementation)
+    g = r.grade
+    if args.json:
+        print(json.dumps(r.to_dict()))
+        return 0 if g.passed else 1
+    verdict = "CONFORMS" if g.passed else "DOES NOT CONFORM"
+    print(
+        f"{r.label} {r.version}: {verdict} (chart {r.scene}, {r.resolution}x{r.resolution}, {r.light} light, "
+        f"rendered in {r.seconds:.1f} s)"
+    )
+    for note in r.notes:
+        print(f"  {note}")
+    print(f"  exposure factor {g.exposure:.6g} (calibrated on the ramp); ramp residual {g.ramp_residual:.3g}")
+    if g.non_linear:
+        print(f"  non-linear output: {g.non_linear}")
+    print_grade(g.grade, f"  {r.renderer}")
+    return 0 if g.passed else 1
+
+
 def run(args: argparse.Namespace, print_grade: Callable) -> int:
     from ..chart.grading import grade_image
     from ..chart.image import read_image
