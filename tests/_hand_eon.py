@@ -48,6 +48,10 @@ def eon(
     guarded=True,
     digits=None,
     with_ms=True,
+    mu_floor=None,
+    s_y_sign=1.0,
+    extra_rho_ms=False,
+    ldotv_clamp=False,
 ):
     """(n, 3) EON answers for the EON rows of VectorSet ``v`` (brdf and albedo rows).
 
@@ -55,7 +59,11 @@ def eon(
     Eq. 18 (e.g. from a grey rho); drop_mu_i: f_ms without (1 - E_F(mu_i)); c2: the constant
     of <E_F>; horizon "<=" (reference), "<" (a z = 0 direction is evaluated) or "none" (a
     two-sided lobe: z -> |z|); guarded: E_F as a guarded expression; digits: every
-    intermediate rounded to that many significant digits.
+    intermediate rounded to that many significant digits; mu_floor: mu_i, mu_o (and the
+    albedo's mu) raised to max(mu, mu_floor) inside the formulas; s_y_sign: -1 writes s with
+    the y products subtracted (wi.x wo.x - wi.y wo.y), not symmetric in the azimuth;
+    extra_rho_ms: f_ms and the albedo's ms part times rho once more; ldotv_clamp: s from
+    clamp(L.V, 1e-8, 1) (MaterialX GLSL).
     """
     n = len(v)
     r = rough(np.where(np.isnan(v.roughness), 0.0, v.roughness))
@@ -72,7 +80,13 @@ def eon(
         if horizon == "none":
             wi[:, 2], wo[:, 2] = np.abs(wi[:, 2]), np.abs(wo[:, 2])
         mi, mo = wi[:, 2], wo[:, 2]
-        s = _sig(np.einsum("ij,ij->i", wi, wo) - mi * mo, digits)
+        s = _sig(wi[:, 0] * wo[:, 0] + s_y_sign * wi[:, 1] * wo[:, 1], digits)
+        if ldotv_clamp:
+            s = np.clip(s + mi * mo, 1e-8, 1.0) - mi * mo
+        if mu_floor is not None:
+            mi, mo = np.where(mi > 0, np.maximum(mi, mu_floor), mi), np.where(mo > 0, np.maximum(mo, mu_floor), mo)
+        if extra_rho_ms:
+            rms = rms * rho
         st = np.where(s > 0, s / np.maximum(mi, mo), s)
         f_ss = _sig(rho / PI * (af * (1.0 + r * st))[:, None], digits)
         ei, eo = e_f(mi, r, guarded, digits), e_f(mo, r, guarded, digits)
@@ -81,7 +95,7 @@ def eon(
         f = f_ss + (f_ms if with_ms else 0.0)
         below = (mi < 0) | (mo < 0) if horizon == "<" else (mi <= 0) | (mo <= 0)
         f = np.where(below[:, None], 0.0, f)
-        ea = e_f(v.mu, r, guarded, digits)
+        ea = e_f(v.mu if mu_floor is None else np.maximum(v.mu, mu_floor), r, guarded, digits)
         alb = rho * ea[:, None] + (rms * (1.0 - ea)[:, None] if with_ms else 0.0)
     return _sig(np.where(brdf[:, None], f, alb), digits)
 

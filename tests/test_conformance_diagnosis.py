@@ -155,8 +155,11 @@ def test_common_bug_named_from_the_filled_csv_template(case, csv_template, tmp_p
     path = tmp_path / "filled.csv"
     path.write_text(_fill_template(csv_template, hand.answer(V, np.float32, **switches), eon))
     capsys.readouterr()
-    assert main(["check", str(path), "--json"]) == 1
+    # the Eq. 14 fit where exact EON is claimed is a bounded deviation: "conforms with warnings", exit 0
+    bounded = name == "eq14_fit_for_exact"
+    assert main(["check", str(path), "--json"]) == (0 if bounded else 1)
     d = json.loads(capsys.readouterr().out)
+    assert d["tier"] == ("conforms with warnings" if bounded else "does not conform")
     assert d["diagnosis"] == name and fragment in d["diagnosis_detail"], d["diagnosis_detail"]
     assert d["n_rows"] == int(eon.sum()) and d["n_skipped"] == len(V) - int(eon.sum())
     assert "closest" not in d["diagnosis_detail"]

@@ -11,6 +11,9 @@ MODULES = [
     "openpbr_diffuse.sampling.quality",
     "openpbr_diffuse.report.render",
     "openpbr_diffuse.conformance.grade",
+    "openpbr_diffuse.conformance.properties",
+    "openpbr_diffuse.conformance.terms",
+    "openpbr_diffuse.conformance.tiers",
     "openpbr_diffuse.conformance.templates",
 ]
 

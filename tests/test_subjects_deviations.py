@@ -102,8 +102,8 @@ def test_conforming_subject_conforms(language, capsys):
     status, result = check(capsys, f"--{language}", str(path), "--function", "f", "--albedo-function", "albedo")
     q = by_quantity(result)
     assert status == 0 and result["passed"], result
-    # 396 + 32 edge rows (mu = 0 exactly, L.V = +-1, rho = 0), 84 + 8 (the albedo at mu = 0, 1)
-    assert q["brdf"]["n"] == 428 and q["albedo"]["n"] == 92
+    # 396 + 32 edge rows (mu = 0 exactly, L.V = +-1, rho = 0) + 52 swapped pairs, 84 + 8 (the albedo at mu = 0, 1)
+    assert q["brdf"]["n"] == 480 and q["albedo"]["n"] == 92
     assert q["brdf"]["max_abs_error"] < 5e-5 and q["albedo"]["max_abs_error"] < 5e-5
 
 
@@ -125,7 +125,9 @@ def test_mutant_is_named_by_check(language, name, tmp_path, capsys):
     mutant = sm.MUTANTS[name]
     path = sm.write_mutant(name, language, tmp_path)
     status, result = check(capsys, f"--{language}", str(path), "--function", "f", "--albedo-function", "albedo")
-    assert status == 1 and not result["passed"]
+    # the Eq. 14 fit where exact EON is claimed: "conforms with warnings" (exit 0), still named
+    assert status == (0 if name == "eq14" else 1) and not result["passed"]
+    assert result["tier"] == ("conforms with warnings" if name == "eq14" else "does not conform")
     assert_named(by_quantity(result), mutant, language)
 
 

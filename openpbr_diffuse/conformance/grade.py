@@ -66,6 +66,29 @@ EXPLAIN_FRACTION = 0.9
 NOT_EXPLAINED = "no known deviation explains this"
 #: How many of the worst rows are listed.
 N_WORST = 10
+#: The three tiers of a grade.
+CONFORMS, CONFORMS_WITH_WARNINGS, DOES_NOT_CONFORM = "conforms", "conforms with warnings", "does not conform"
+#: Named deviations that are bounded and legitimate in practice: a grade whose only diagnosis
+#: is one of them is "conforms with warnings" (with what it is and its size).
+WARNING_DEVIATIONS = {
+    "eq14_fit_for_exact": "the Eq. 14 fit of E_F where the exact one is claimed (EON paper Listing 1, "
+    "exact = false): a bounded approximation; claim eon_approx to conform outright",
+}
+#: ``precision="half"``: the declared storage precision whose rounding noise is a warning.
+PRECISIONS = ("single", "half")
+
+
+def ulp_half(x: np.ndarray) -> np.ndarray:
+    """One unit in the last place of IEEE float16 at ``|x|`` (2^-24 below the normal range).
+
+    >>> ulp_half(np.array([1.0, 0.3, 1e-6])).tolist()
+    [0.0009765625, 0.000244140625, 5.960464477539063e-08]
+    """
+    a = np.abs(np.asarray(x, np.float64))
+    e = np.floor(np.log2(np.maximum(a, 2.0**-14)))
+    return np.where(np.isfinite(a), 2.0 ** (e - 10), np.inf)
+
+
 #: An error ratio that a finite result makes too large for a float (|out - ref| / tolerance
 #: above 1.8e308, e.g. out = 1e308) is recorded as this, the largest float; infinity is
 #: kept for NaN and Inf results, so that the two are told apart.
@@ -111,6 +134,15 @@ class Grade:
     n_inf: int = 0
     n_skipped: int = 0
     candidate_match_fractions: dict = field(default_factory=dict)
+    #: which EON term the failing values get wrong (:func:`.terms.which_term`), or None
+    terms: str | None = None
+    #: "conforms", "conforms with warnings" (a named, bounded deviation, :data:`WARNING_DEVIATIONS`,
+    #: or float16 noise under ``precision="half"``) or "does not conform"
+    tier: str = ""
+    #: why the tier is "conforms with warnings"
+    warnings: list = field(default_factory=list)
+    #: the properties the rows show (:func:`.properties.vector_properties`): checks with ids
+    properties: list = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
         return json_safe(
@@ -136,6 +168,10 @@ class Grade:
                 "n_inf": self.n_inf,
                 "n_skipped": self.n_skipped,
                 "candidate_match_fractions": self.candidate_match_fractions,
+                "terms": self.terms,
+                "tier": self.tier,
+                "warnings": self.warnings,
+                "properties": self.properties,
             }
         )
 
@@ -568,6 +604,7 @@ def grade(
     model: str | None = None,
     tolerance: float | tuple | None = None,
     n_skipped: int = 0,
+    precision: str | None = None,
 ) -> Grade:
     """Grade submitted values ``out`` (n, 3) for the rows of ``vectors``.
 
@@ -584,6 +621,9 @@ def grade(
         (absolute stays ``ABS_TOL``); a pair: (relative, absolute).
     n_skipped : int
         Rows of the file left blank (not graded; reported as ``n_skipped``).
+    precision : {None, "single", "half"}
+        The precision the implementation declares: with ``"half"`` values off by at most one
+        float16 ulp beyond the tolerance give the tier "conforms with warnings".
 
     Returns
     -------
@@ -608,7 +648,7 @@ def grade(
         vectors, out = vectors.subset(keep), out[keep]
     if len(vectors) == 0:
         raise ValueError("vectors: nothing to grade (0 rows)")
-    acc = _Accumulator(rel, ab)
+    acc = _Accumulator(rel, ab, precision)
     acc.add(vectors, out)
     return acc.result(tolerance, n_skipped)
 
@@ -643,8 +683,12 @@ def _concat(parts):
 class _Accumulator:
     """Grade chunk by chunk: totals, regions, worst rows and a bounded sample for the diagnosis."""
 
-    def __init__(self, rel, ab):
+    def __init__(self, rel, ab, precision=None):
         self.rel, self.ab = rel, ab
+        if precision not in (None, *PRECISIONS):
+            raise ValueError(f"precision: expected one of {', '.join(PRECISIONS)}, got {precision!r}")
+        self.half = precision == "half"
+        self.max_norm_half = 0.0  # max |out - ref| / (abs + rel |ref| + ulp_half(ref))
         self.n = self.n_failed = self.n_nan = self.n_inf = self.n_values = 0
         self.max_abs = self.max_rel = self.max_norm = 0.0
         self.sum_sq, self.scale = 0.0, 0.0  # sum of (diff / scale)^2: no overflow at 1e308
@@ -683,6 +727,9 @@ class _Accumulator:
         self.n_inf += int(np.isinf(out).sum())
         self.finite &= finite
         self.max_norm = max(self.max_norm, float(row_e.max()))
+        if self.half:
+            e_half = np.nan_to_num(diff / (ab + rel * np.abs(ref) + ulp_half(ref)), nan=np.inf)
+            self.max_norm_half = max(self.max_norm_half, float(e_half.max()))
         if self.finite:
             top = float(np.max(diff))
             self.max_abs = max(self.max_abs, top)
@@ -763,9 +810,14 @@ class _Accumulator:
             n_inf=self.n_inf,
             n_skipped=int(n_skipped),
         )
+        from .properties import vector_properties
+
+        g.properties = vector_properties(self.sample[2], self.sample[3], rel, ab, self.half)
         if passed:
             g.diagnosis_detail = "conforms: every value within the tolerance"
+            g.tier = CONFORMS
             return g
+        g.tier = DOES_NOT_CONFORM
         _, _, vectors, out = self.sample
         ref = accepted_reference(vectors, out, ab)
         e = _normalised(out, ref, rel, ab)
@@ -796,10 +848,24 @@ class _Accumulator:
             if explained:
                 names.append(name)
                 texts.append(detail)
+        from .terms import which_term
+
+        g.terms = which_term(vectors.subset(rest), out[rest], rel, ab)
         g.diagnosis = " & ".join(names) if explained and names else None
         g.diagnosis_detail = "; ".join(texts)
         if len(vectors) < self.n:
             g.diagnosis_detail += f" (fitted on a sample of {len(vectors)} of the {self.n} rows)"
+        if self.finite and self.half and self.max_norm_half <= 1.0:
+            g.tier = CONFORMS_WITH_WARNINGS
+            g.warnings.append(
+                "half precision declared: every value within the tolerance plus 1 ulp of float16 at the "
+                f"reference (the values are off by up to {self.max_norm:.3g} tolerances: float16 rounding)"
+            )
+        elif self.finite and g.diagnosis in WARNING_DEVIATIONS:
+            g.tier = CONFORMS_WITH_WARNINGS
+            g.warnings.append(
+                f"{g.diagnosis}: {WARNING_DEVIATIONS[g.diagnosis]}; max relative error {g.max_rel_error:.2g}"
+            )
         if g.diagnosis is None:
             where = where_it_fails(g.regions)
             nonfinite = ", ".join(f"{n} {w} values" for n, w in ((g.n_nan, "NaN"), (g.n_inf, "Inf")) if n)
@@ -812,6 +878,7 @@ def grade_chunks(
     *,
     model: str | None = None,
     tolerance: float | tuple | None = None,
+    precision: str | None = None,
 ) -> Grade:
     """Grade ``(vectors, out[, n_skipped])`` chunks (e.g. :func:`.vectors.iter_results`) as one
     file: the same :class:`Grade` as :func:`grade` on the rows put together (the diagnosis is
@@ -828,7 +895,7 @@ def grade_chunks(
     True
     """
     rel, ab = _tolerance(tolerance)
-    acc = _Accumulator(rel, ab)
+    acc = _Accumulator(rel, ab, precision)
     skipped = 0
     seen_model = False
     for chunk in chunks:
@@ -859,4 +926,9 @@ __all__ = [
     "region_masks",
     "where_it_fails",
     "accepted_reference",
+    "CONFORMS",
+    "CONFORMS_WITH_WARNINGS",
+    "DOES_NOT_CONFORM",
+    "WARNING_DEVIATIONS",
+    "ulp_half",
 ]

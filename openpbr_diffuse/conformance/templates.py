@@ -34,9 +34,8 @@ _GLSL = """\
 // both point away from the surface.  f is the BRDF value WITHOUT the cosine factor.
 // roughness: r in [0, 1] for FON/EON (sigma in radians for QON); rho: linear RGB albedo.
 //
-// Grade it:
-//   openpbr-diffuse check --glsl THIS_FILE --function f --albedo-function albedo \
-//       --sample-function sample_wi --pdf-function pdf
+// Grade it (THIS_FILE: this file's path; one line, run from a shell):
+//   openpbr-diffuse check --glsl THIS_FILE --function f --albedo-function albedo --sample-function sample_wi --pdf-function pdf
 //
 // >>> PLACEHOLDER: a Lambertian lobe, so that this file compiles and runs as it is. <<<
 // >>> Replace the four bodies with your implementation.                             <<<
@@ -75,9 +74,8 @@ _CPP = """\
 // both point away from the surface.  f is the BRDF value WITHOUT the cosine factor.
 // roughness: r in [0, 1] for FON/EON (sigma in radians for QON); rho: linear RGB albedo.
 //
-// Grade it:
-//   openpbr-diffuse check --cpp THIS_FILE --function f --albedo-function albedo \
-//       --sample-function sample_wi --pdf-function pdf
+// Grade it (THIS_FILE: this file's path; one line, run from a shell):
+//   openpbr-diffuse check --cpp THIS_FILE --function f --albedo-function albedo --sample-function sample_wi --pdf-function pdf
 //
 // >>> PLACEHOLDER: a Lambertian lobe, so that this file compiles and runs as it is. <<<
 // >>> Replace the four bodies with your implementation.                             <<<

@@ -28,7 +28,7 @@ Examples
 --------
 >>> v = default_vectors()
 >>> v.version, len(v) > 1000, sorted(map(str, set(v.kind)))
-('3', True, ['albedo', 'brdf'])
+('4', True, ['albedo', 'brdf'])
 >>> bool(((v.wi[:, 2] < 0.002) & (v.kind == "brdf")).any())   # grazing rows
 True
 """
@@ -52,7 +52,7 @@ from numpy.typing import NDArray
 from .._textfiles import named, not_utf8, write_text
 
 #: Version of the default vector set; bump when its rows change.
-VERSION = "3"  # 3: the edge rows (mu = 0 exactly, L.V = +-1, rho = 0) and the qon_fujii rows
+VERSION = "4"  # 3: the edge rows (mu = 0 exactly, L.V = +-1, rho = 0) and the qon_fujii rows; 4: swapped pairs
 #: Input columns, in file order.
 COLUMNS = (
     "id",
@@ -189,6 +189,12 @@ EDGE_PAIRS = (
 EDGE_RHOS = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
 EDGE_ALBEDO_MU = (0.0, 1.0)
 _N_RANDOM_PAIRS = 12
+#: Pairs of :data:`_PAIRS` (by index) and of the random pairs (index from ``len(_PAIRS)``) whose
+#: swapped version (wo, wi) is added after the edge rows: reciprocity f(wi, wo) = f(wo, wi) from
+#: the rows themselves (the asymmetric pairs above the horizon, grazing ones included).
+SWAPPED_PAIRS = (1, 2, 8, 9, 11, 15, 16, 17, 18, 21, 22, 23, 24)
+#: The colour of the swapped rows (every roughness).
+SWAPPED_RHO = (0.8, 0.5, 0.2)
 _RHOS = ((1.0, 1.0, 1.0), (0.8, 0.5, 0.2), (0.05, 0.3, 0.9))
 _ROUGHNESS = {"r": (0.0, 0.25, 0.5, 1.0), "sigma": (0.0, 0.3, 0.8, 0.5 * math.pi)}
 _ALBEDO_MU = (0.001, 0.01, 0.1, 0.3, 0.5, 0.8, 1.0)
@@ -275,6 +281,7 @@ def default_vectors(models: tuple[str, ...] | list[str] | None = None) -> Vector
                 for rho in EDGE_RHOS:
                     rows.append((f"{model}-brdf-{k:04d}", "brdf", model, wi, wo, nan, r, rho))
                     k += 1
+        count[model, "brdf"] = k
         if model not in ALBEDO_MODELS:
             continue
         k = count[model, "albedo"]
@@ -283,6 +290,14 @@ def default_vectors(models: tuple[str, ...] | list[str] | None = None) -> Vector
                 for rho in EDGE_RHOS:
                     rows.append((f"{model}-albedo-{k:03d}", "albedo", model, (nan,) * 3, (nan,) * 3, mu, r, rho))
                     k += 1
+    for model in models:  # version 4: the swapped pairs, after the edge rows
+        info = model_info(model)
+        k = count[model, "brdf"]
+        for j in SWAPPED_PAIRS:
+            wi, wo = pairs[j]
+            for r in (nan,) if model == "lambert" else _ROUGHNESS[info.roughness_name]:
+                rows.append((f"{model}-brdf-{k:04d}", "brdf", model, wo, wi, nan, r, SWAPPED_RHO))
+                k += 1
     return VectorSet(
         id=np.array([r[0] for r in rows]),
         kind=np.array([r[1] for r in rows]),

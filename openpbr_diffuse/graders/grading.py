@@ -39,7 +39,9 @@ SAMPLER_MASS_TOL = 5e-3
 #: phi_o off the x axis (an anisotropic pdf's frame is exercised)
 SAMPLER_CASES = tuple((mu, r) for mu in (0.05, 0.3, 0.8) for r in (0.5, 1.0))
 SAMPLER_PHI = 0.7
-SAMPLER_N = {True: 40_000, False: 200_000}
+#: samples per case: ONE count for ``check`` and ``report`` (the report reads it from here), so a
+#: sampler gets the same chi-square in both
+SAMPLER_SAMPLES = 100_000
 SAMPLER_ALPHA = 0.01
 #: agreement of a pdf with a reference strategy's: relative to max(reference, SAMPLER_PDF_FLOOR)
 #: (float32 + llvmpipe arithmetic; the strategies differ by > 10 % somewhere)
@@ -102,13 +104,15 @@ class QuantityGrade:
     regions: dict | None = None
     #: data for the report's pictures (not serialised)
     plot: Any = field(default=None, repr=False, compare=False)
+    #: the values' :class:`~openpbr_diffuse.conformance.grade.Grade` (printed as ``check FILE`` prints it; not serialised)
+    values: Any = field(default=None, repr=False, compare=False)
 
     @classmethod
     def from_grade(
         cls, quantity: str, g: Grade, excluded: int = 0, tolerance_reason: str | None = None
     ) -> QuantityGrade:
         tol = f"|out - ref| <= {g.tolerance['absolute']:g} + {g.tolerance['relative']:g} |ref|"
-        return cls(
+        q = cls(
             quantity,
             bool(g.passed),
             float(g.max_abs_error),
@@ -121,6 +125,8 @@ class QuantityGrade:
             excluded,
             g.to_dict(),
         )
+        q.values = g
+        return q
 
 
 @dataclass
@@ -147,7 +153,9 @@ class ImplementationGrade:
                 "passed": self.passed,
                 "version": self.version,
                 "notes": self.notes,
-                "quantities": [{k: v for k, v in asdict(q).items() if k != "plot"} for q in self.quantities],
+                "quantities": [
+                    {k: v for k, v in asdict(q).items() if k not in ("plot", "values")} for q in self.quantities
+                ],
             }
         )
 
@@ -173,9 +181,13 @@ def _failing_rows(rows, out, g):
 
 
 def grade_values(
-    subject: Subject, vectors: VectorSet | None = None, kinds: Sequence[str] = ("brdf", "albedo")
+    subject: Subject,
+    vectors: VectorSet | None = None,
+    kinds: Sequence[str] = ("brdf", "albedo"),
+    precision: str | None = None,
 ) -> list[QuantityGrade]:
-    """BRDF / albedo of ``subject`` on the vectors of its model, graded by conformance.grade."""
+    """BRDF / albedo of ``subject`` on the vectors of its model, graded by conformance.grade
+    (``precision``: the precision the implementation declares, as ``grade``'s)."""
     from ..conformance.grade import grade
     from ..conformance.vectors import default_vectors
 
@@ -207,7 +219,7 @@ def grade_values(
                 f"tolerance 4 standard errors = {4 * se:.2g} absolute"
             )
         out = np.asarray(out, dtype=np.float64)
-        g = grade(rows, out, model=subject.model, tolerance=tolerance)
+        g = grade(rows, out, model=subject.model, tolerance=tolerance, precision=precision)
         q = QuantityGrade.from_grade(kind, g, excluded, None if tolerance is None else reason)
         if not g.passed:
             q.detail += "; " + _failing_rows(rows, out, g)
@@ -231,6 +243,50 @@ def _sampler_nodes():
     d = np.stack([S * np.cos(P), S * np.sin(P), Z], axis=-1).reshape(-1, 3)
     w = (zw[:, None, :, None] * pw[None, :, None, :]).reshape(-1)
     return d, w, z_edges, phi_edges
+
+
+#: a node's pdf is "off" its closest reference strategy's by more than this relative amount
+_BLAME_REL = 2e-2
+
+
+def _pdf_blame(p_nodes: Any, WO: Any, WI: Any, R: Any, n_cases: int, m: int) -> str:
+    """Where a pdf that does not integrate to 1 is off, against the reference strategy it
+    matches best on most nodes (the lower quartile of the relative difference): "where the sampled mu_i < X (at every mu_o)" when the off nodes
+    are the sampled directions below X at every view, "where mu_o < Y" when they are every
+    direction at the views below Y; "" when neither (or no strategy is close)."""
+    import openpbr_diffuse as od
+
+    p = p_nodes.reshape(-1)
+    ok = np.isfinite(p) & (p >= 0)
+    best, best_med, ratio = None, np.inf, None
+    for strategy in od.STRATEGIES:
+        ref = od.pdf(strategy, WO, WI, R)
+        with np.errstate(all="ignore"):
+            rr = np.where(ok & (ref > SAMPLER_PDF_FLOOR), p / np.where(ref > 0, ref, 1.0), np.nan)
+        # the lower quartile: a pdf off on up to 3/4 of the nodes still names its strategy
+        med = float(np.nanpercentile(np.abs(rr - 1.0), 25)) if np.isfinite(rr).any() else np.inf
+        if med < best_med:
+            best, best_med, ratio = strategy, med, rr
+    if ratio is None or best_med > SAMPLER_PDF_TOL:
+        return ""
+    off = np.abs(ratio - 1.0) > _BLAME_REL  # NaN (no comparison): not off
+    if not off.any():
+        return ""
+    mu_i, mu_o = WI[:, 2], WO[:, 2]
+    factor = float(np.nanmedian(ratio[off]))
+    cases_off = off.reshape(n_cases, m).any(axis=1)
+    x_i = float(mu_i[off].max())
+    # mu_i: every view has off nodes, and no node above the largest off mu_i is off anywhere
+    if cases_off.all() and not (off & (mu_i <= x_i)).all() and np.all(~off[mu_i > x_i]):
+        lim = min((z for z in np.unique(mu_i) if z > x_i), default=1.0)
+        return (
+            f"the pdf is {factor:.3g}x the '{best}' strategy's where the sampled mu_i < {0.5 * (x_i + lim):.2g} "
+            "(at every mu_o): the error follows the sampled direction, not the view"
+        )
+    x_o = float(mu_o[off].max())
+    if not cases_off.all():
+        return f"the pdf is {factor:.3g}x the '{best}' strategy's where mu_o <= {x_o:.2g} (for every sampled mu_i)"
+    return ""
 
 
 def _case_label(mu, r):
@@ -295,7 +351,8 @@ def grade_sampler(
         With ``sample(wo, roughness, u) -> (wi, pdf)`` and ``pdf(wo, wi, roughness)``; without
         them nothing is graded ([] is returned).
     quick : bool
-        40 000 samples per case instead of 200 000.
+        Accepted for callers' convenience; the sample count is ``SAMPLER_SAMPLES`` either way
+        (the same in ``check`` and ``report``).
     seed : int
         Seed of the uniform numbers.
     claim : str, optional
@@ -339,7 +396,7 @@ def grade_sampler(
     if claim is not None and claim not in od.STRATEGIES:
         raise ValueError(f"claim: expected one of {', '.join(od.STRATEGIES)}, got {claim!r}")
     rng = np.random.default_rng(seed)
-    n = SAMPLER_N[bool(quick)]
+    n = SAMPLER_SAMPLES
     cases = [(mu, r) for mu in SAMPLER_NORM_MU for r in SAMPLER_NORM_R]
     nodes, weights, z_edges, phi_edges = _sampler_nodes()
     m = nodes.shape[0]
@@ -386,12 +443,17 @@ def grade_sampler(
         )
     else:
         off_mu = sorted({mu for (mu, _), e in zip(cases, mass_err) if e > SAMPLER_MASS_TOL})
+        blame = _pdf_blame(p_nodes, WO, WI, R, len(cases), m)
+        if "where the sampled mu_i" in blame:
+            grazing = ""  # the error follows the sampled direction, not the view
         norm_sentence = f"pdf integrates to {mass[k_worst]:.4g} at {grazing}{_case_label(mu_w, r_w)}" + (
             f" ({n_off} of {len(cases)} (mu_o, roughness) cases off by more than "
             f"{SAMPLER_MASS_TOL:g}, at mu_o {off_mu[0]:g} to {off_mu[-1]:g})"
             if n_off > 1
             else ""
         )
+        if blame:
+            norm_sentence += f"; {blame}"
     # (c) against every reference strategy at the same nodes
     ok = ~bad_nodes.reshape(-1)
     ref_err = {}
@@ -779,14 +841,67 @@ def grade_surface(subject: Subject, selection: str) -> list[QuantityGrade]:
     ]
 
 
+def grade_properties(subject: Subject) -> list[QuantityGrade]:
+    """The properties of the subject's own BRDF and albedo functions
+    (:func:`openpbr_diffuse.conformance.properties.check_properties`) as one quantity,
+    ``"properties"``, whose ``checks`` are the properties (ids ``property.*``).
+
+    Not run (``[]``) without a BRDF or albedo function, or for a subject whose values are
+    Monte Carlo estimates or that documents a restricted input domain (a property's
+    directions may lie outside it).
+
+    Examples
+    --------
+    >>> import openpbr_diffuse as od
+    >>> from openpbr_diffuse.graders.subject import Subject
+    >>> s = Subject("ref", "eon", None, "", brdf=lambda wi, wo, r, rho: od.evaluate("eon", wi, wo, r, rho))
+    >>> [q] = grade_properties(s)
+    >>> q.quantity, q.passed, q.checks[0]["id"]
+    ('properties', True, 'property.reciprocity')
+    """
+    from ..conformance.properties import check_properties
+
+    if (
+        (subject.brdf is None and subject.albedo is None)
+        or subject.noise
+        or subject.brdf_domain
+        or subject.albedo_domain
+    ):
+        return []
+    checks = check_properties(subject.brdf, subject.albedo, model=subject.model, tolerance=subject.tolerance)
+    failed = [c for c in checks if c["status"] == "fail"]
+    n_run = sum(c["status"] != "skip" for c in checks)
+    sentence = (
+        "; ".join(c["detail"] for c in failed)
+        if failed
+        else f"all {n_run} properties hold (reciprocity, energy, channels, rho, horizon, r = 0, clamps, azimuth)"
+    )
+    return [
+        QuantityGrade(
+            "properties",
+            not failed,
+            float("nan"),
+            float("nan"),
+            "each property's own (see its check)",
+            "properties of the implementation's own functions: a failure names the kind of mistake",
+            failed[0]["id"] if failed else None,
+            sentence,
+            n=len(checks),
+            sentence=sentence,
+            checks=checks,
+        )
+    ]
+
+
 def grade_subject(
     subject: Subject,
     *,
     vectors: VectorSet | None = None,
     quick: bool = False,
-    quantities: Sequence[str] = ("brdf", "albedo", "sampler", "surface"),
+    quantities: Sequence[str] = ("brdf", "albedo", "properties", "sampler", "surface"),
     selection: str | None = None,
     sampler_model: str | None = None,
+    precision: str | None = None,
 ) -> ImplementationGrade:
     """Grade every quantity ``subject`` offers; returns an :class:`ImplementationGrade`.
 
@@ -803,7 +918,9 @@ def grade_subject(
                 result.quantities.append(q)
         return result
     kinds = tuple(k for k in ("brdf", "albedo") if k in quantities)
-    result.quantities += grade_values(subject, vectors, kinds)
+    result.quantities += grade_values(subject, vectors, kinds, precision)
+    if "properties" in quantities:
+        result.quantities += grade_properties(subject)
     if "sampler" in quantities:
         result.quantities += grade_sampler(subject, quick=quick, claim=sampler_model)
     if "surface" in quantities and subject.surface is not None:
