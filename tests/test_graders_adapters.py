@@ -172,7 +172,7 @@ def test_glsl_adapter_passes_the_right_function(glsl_file, capsys):
     status, result = check(capsys, "--glsl", str(glsl_file), "--function", "f_test", "--albedo-function", "E_test")
     q = by_quantity(result)
     assert status == 0 and result["passed"], result
-    assert q["brdf"]["n"] == 396 and q["albedo"]["n"] == 84
+    assert q["brdf"]["n"] == 480 and q["albedo"]["n"] == 92  # the EON rows of the default vectors (v4)
 
 
 @needs_gl
@@ -186,7 +186,11 @@ def test_glsl_adapter_names_the_deviation(glsl_file, capsys, switch):
     assert status == 1
     assert not q["brdf"]["passed"] and q["brdf"]["diagnosis"] == name, q["brdf"]["detail"]
     if changes_albedo:
-        assert not q["albedo"]["passed"] and q["albedo"]["diagnosis"] == name, q["albedo"]["detail"]
+        assert not q["albedo"]["passed"], q["albedo"]["detail"]
+        # albedo rows alone may not tell two deviations apart (white tint and Lambert both give rho):
+        # then the diagnosis names the other and says it cannot tell them apart
+        detail = q["albedo"]["detail"]
+        assert q["albedo"]["diagnosis"] == name or f"cannot tell it from: {name}" in detail, detail
     else:
         assert q["albedo"]["passed"]
 
@@ -217,6 +221,7 @@ def test_cpp_adapter_names_every_deviation(cpp_file, capsys, switch):
     q = by_quantity(result)
     assert status == 1 and q["brdf"]["diagnosis"] == name, q["brdf"]["detail"]
     if changes_albedo:
-        assert q["albedo"]["diagnosis"] == name, q["albedo"]["detail"]
+        detail = q["albedo"]["detail"]
+        assert q["albedo"]["diagnosis"] == name or f"cannot tell it from: {name}" in detail, detail
     else:
         assert q["albedo"]["passed"]

@@ -485,6 +485,21 @@ def _precision(vectors, out, ref, rel, ab):
     )
 
 
+def _indistinguishable(name, label, singles, ref, rel, ab):
+    """Other named deviations whose predictions equal the chosen one's on every row both
+    predict (e.g. on albedo rows alone white_tint and Lambert-for-EON both give rho)."""
+    chosen = next(pred for n, lab, pred in singles if n == name and lab == label)
+    twins = []
+    for other, _, pred in singles:
+        if other == name or other in twins:
+            continue
+        both = np.isfinite(pred) & np.isfinite(chosen)
+        r, a = np.broadcast_to(rel, pred.shape)[both], np.broadcast_to(ab, pred.shape)[both]
+        if both.mean() >= 0.5 and (_normalised(pred[both], chosen[both], r, a) <= 0.01).all():
+            twins.append(other)
+    return twins
+
+
 def _diagnose(vectors, out, ref, e_ref, rel, ab):
     """Fit every deviation variant: (name or None, detail, {name: residual}, {name: details},
     {name: fraction of the failing values it matches})."""
@@ -531,6 +546,10 @@ def _diagnose(vectors, out, ref, e_ref, rel, ab):
                 f"{dev.description} [{dev.source}]: {label}; matches {explained:.0%} of the {n_fail} "
                 f"failing values and {overall:.0%} of all values within the tolerance"
             )
+            twins = _indistinguishable(name, label, singles, ref, rel, ab)
+            if twins:
+                details[name]["indistinguishable_from"] = twins
+                text += f"; these rows cannot tell it from: {', '.join(twins)} (other rows, e.g. the BRDF's, can)"
             return name, text, candidates, details, fractions
     pair = _best_pair(singles, out, ref, failing, rel, ab)
     if pair is not None:
