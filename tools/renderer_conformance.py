@@ -35,6 +35,12 @@ python tools/renderer_conformance.py
 
 def _row(s: dict, date: str) -> str:
     diag = s["diagnosis"] or ("none" if s["verdict"] == "conforms" else "no known deviation")
+    near = s.get("closest")
+    if s["diagnosis"] is None and near:
+        diag = (
+            f"closest: {near['deviation']} (residual {100 * near['residual_max_rel']:.2g} % max, "
+            f"{100 * near['residual_rms_rel']:.2g} % rms, beyond the tolerance)"
+        )
     if s["non_linear"]:
         diag += f"; non-linear output flagged: {s['non_linear']}"
     err = f"{s['max_rel_error']:.2g} relative ({s['max_abs_error']:.2g} absolute)"

@@ -5,7 +5,9 @@
    least-squares factor c between the measured and the stated values (``absolute``: c = 1,
    graded against the stated irradiance).
 3. Linearity: a ramp value off the line c e by more than its tolerance is non-linear
-   output.  The sRGB curve and a power law a e^gamma are fitted; the better one is named
+   output -- unless a power law fitted to the ramp has a gamma within its uncertainty of 1
+   (it moves the ramp end to end by at most :data:`LINEAR_SPAN` or :data:`LINEAR_SCATTER`
+   times the ramp's scatter about it: a rasteriser's error, not a curve).  The sRGB curve and a power law a e^gamma are fitted; the better one is named
    ("sRGB-encoded", "gamma ~ 2.2"), the image is linearised with it and the BRDF graded
    after that -- the verdict stays "does not conform" (the render settings are wrong).
 4. The test tiles become rows (wi, wo, roughness, rho, out = value / (mu_i E c); in the
@@ -16,13 +18,16 @@
 The tolerance (one for every row, as ``grade`` takes it):
 
     relative  IMAGE_REL_TOL + the chart's interreflection bound + K sigma_c / c
-              + max over the tiles of (K stderr + q) / value
+              + the renderer's floor + max over the tiles of (K stderr + q) / value
     absolute  max over the dark tiles (value < DARK) of (K stderr + q) / (mu_i E c)
 
 The tiles much noisier than the median tile (:data:`NOISY_FACTOR`) are graded apart with
 a tolerance of their own (a grazing tile where a few samples miss), so that they do not
 widen the tolerance of the others.
-with K = :data:`K_SIGMA` standard errors of a tile's mean (a path tracer's noise), q half a
+The renderer's floor is its own error at roughness 0, where every model is rho/pi: the
+largest scatter of a ramp / white tile about the exposure line beyond that tile's noise
+band (0 for a path tracer whose ramp is within its noise; EEVEE: 3.6e-3).
+With K = :data:`K_SIGMA` standard errors of a tile's mean (a path tracer's noise), q half a
 code value of an integer file (rasteriser output), sigma_c the standard error of the
 exposure factor.  IMAGE_REL_TOL covers half-float storage (4.9e-4 relative) and the
 renderer's float32 geometry; the smallest deviation in the catalogue (an extra rho on
@@ -56,6 +61,14 @@ IMAGE_REL_TOL = 2e-3
 DARK = 1e-2
 #: A tile whose relative noise is above this many times the median tile's is graded apart.
 NOISY_FACTOR = 4.0
+#: A power law fitted to the ramp is linear output when it moves the ramp, end to end, by at
+#: most this (|gamma - 1| ln(e_max / e_min)) or by no more than the ramp's scatter about it:
+#: a rasteriser's own error at roughness 0 is of this size (EEVEE: 0.36 % on the darkest ramp
+#: tile, a fitted gamma of 1.001), a transfer curve by far more (sRGB or gamma 2.2: > 100 %).
+LINEAR_SPAN = 0.01
+#: ... or by at most this many times the ramp's largest relative scatter about the fitted power
+#: law (tile-to-tile errors of a rasteriser tilt a fitted gamma by about that much).
+LINEAR_SCATTER = 4.0
 
 
 @dataclass
@@ -126,6 +139,13 @@ def _linearity(m, e, tol):
     if np.all(np.abs(m - c * e) <= tol + 1e-12):
         return None, None
     ok = (m > 0) & (e > 0)
+    if ok.sum() >= 3 and np.ptp(np.log(e[ok])) > 0:
+        # a gamma within its uncertainty of 1 is linear output with scatter (not a curve)
+        span = float(np.ptp(np.log(e[ok])))
+        g1, la = np.polyfit(np.log(e[ok]), np.log(m[ok]), 1)
+        scatter = float(np.max(np.abs(math.exp(la) * e[ok] ** g1 / m[ok] - 1.0)))
+        if abs(float(g1) - 1.0) * span <= max(LINEAR_SPAN, LINEAR_SCATTER * scatter):
+            return None, None
     cands = []
     dec = srgb_decode(m)
     cd = _fit(dec, e, 1.0)
@@ -226,6 +246,12 @@ def grade_image(
     se_c = float(math.sqrt(np.sum((e * stats.stderr[cal]) ** 2)) / np.sum(e * e))
     c = 1.0 if absolute else c_fit
     ramp_res = float(np.max(np.abs(m / (c * e) - 1.0)))
+    # the renderer's own error at roughness 0 (where every model is rho/pi): the ramp's scatter
+    # about the exposure line beyond each tile's noise band, added to every tile's tolerance
+    with np.errstate(divide="ignore", invalid="ignore"):
+        beyond = np.abs(m / (c_fit * e) - 1.0) - band / np.abs(c_fit * e)
+    floor = float(np.max(np.where(np.isfinite(beyond) & (e > 0), beyond, 0.0), initial=0.0))
+    floor = max(floor, 0.0)
     rows = [t for t, s in zip(tiles, test, strict=True) if s]
     n = len(rows)
     wo = np.array([t["wo"] for t in rows], float)
@@ -256,7 +282,7 @@ def grade_image(
     out = means[test] / (c * scale[:, None])
     noise = (k_sigma * stats.stderr[test] + q[test]) / (c * scale[:, None])
     variation = max((float(t.get("variation", 0.0)) for t in rows), default=0.0)
-    rel0 = IMAGE_REL_TOL + float(chart.get("interreflection_bound", 0.0)) + variation
+    rel0 = IMAGE_REL_TOL + float(chart.get("interreflection_bound", 0.0)) + variation + floor
     if not absolute:
         rel0 += k_sigma * se_c / c
     # a tile's noise is relative to its value (a path tracer's, a quantisation step): the
@@ -278,9 +304,12 @@ def grade_image(
         "relative": rel,
         "absolute": ab,
         "k_sigma": k_sigma,
+        "renderer_floor": floor,
         "rule": (
             f"|out - ref| <= {ab:.3g} + {rel:.3g} |ref| per tile: {IMAGE_REL_TOL:g} (half float, float32 geometry) "
-            f"+ the interreflection bound + {k_sigma:g} standard errors of the exposure + {k_sigma:g} standard "
+            f"+ the interreflection bound + the renderer's own error on the ramp ({floor:.2g}: its scatter "
+            f"about the exposure line beyond the tiles' noise) + {k_sigma:g} standard errors of the exposure + "
+            f"{k_sigma:g} standard "
             "errors of the noisiest tile's mean and half a code value, relative to its value (absolute for "
             f"BRDF values < {DARK:g})"
         ),

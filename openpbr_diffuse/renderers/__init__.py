@@ -171,6 +171,7 @@ def summary(result: RenderResult) -> dict[str, Any]:
         "light": result.light,
         "verdict": "conforms" if g.passed else "does not conform",
         "diagnosis": g.grade.diagnosis,
+        "closest": g.grade.closest,
         "non_linear": g.non_linear,
         "exposure": g.exposure,
         "max_rel_error": d.get("max_rel_error"),
