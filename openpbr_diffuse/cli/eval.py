@@ -3,22 +3,33 @@
     openpbr-diffuse eval materials/clay_rough.mtlx
     openpbr-diffuse eval scene.usda --material /World/Ball --theta-i 0 30 60 --theta-o 45 --phi 180
     openpbr-diffuse eval paint.usda --variant finish=gloss --time 12 --uv 0.25 0.75 --json
+    openpbr-diffuse eval LIBRARY_DIR more.usda --jsonl materials.jsonl   # many files: one line per material
 
 For each material (or the one asked for, or the material bound to a geometry prim): the
 resolved parameters with their provenance (colours in ACEScg), the diffuse lobe's effective
 weight and selection probability, the directional albedo at theta_o and the BRDF values
 (no cosine) at the given directions.  Angles in degrees; phi is the azimuth of wi relative
 to wo (180: forward, in the plane of incidence).
+
+``--jsonl OUT`` (batch mode): any number of files and folders (searched recursively), one JSON
+line per material written as the files are done, in the order of the files (each line as an
+entry of ``--json``'s "materials", plus "relpath" and "index"; a file that cannot be read is one
+line with "error" and "path": null).  The files are read by worker processes (``--jobs``),
+results are kept in the cache (``--cache-dir`` / ``--no-cache``) or the work goes to a Dask
+cluster (``--scheduler``), as for ``report``.  OUT follows the rule of every output file: an
+existing file is replaced only with ``--force``; ``-`` writes to stdout.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 
 import numpy as np
 
+from ._library import add_library_options
 from ._materials import add_material_options, load
 
 
@@ -29,6 +40,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         description=__doc__.splitlines()[0].strip("`").replace("``", ""),
     )
     add_material_options(p)
+    for action in p._actions:  # with --jsonl the FILE may be a folder, and more may follow
+        if action.dest == "file":
+            action.help = "USD stage (.usda/.usdc/.usdz) or MaterialX document (.mtlx); with --jsonl also folders"
+    p.add_argument("more", nargs="*", metavar="FILE", help="more files or folders (with --jsonl)")
     p.add_argument(
         "--theta-i",
         type=float,
@@ -55,6 +70,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     )
     p.add_argument("--all", action="store_true", help="list every parameter, not only the set and modelled ones")
     p.add_argument("--json", action="store_true", help="one JSON document (schema in the README)")
+    p.add_argument(
+        "--jsonl",
+        metavar="OUT",
+        default=None,
+        help="batch mode: one JSON line per material of every FILE and folder, written as they are done (- for stdout)",
+    )
+    p.add_argument("--force", action="store_true", help="replace the --jsonl OUT file if it exists")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar or lines (--jsonl)")
+    add_library_options(p)
     p.set_defaults(run=run)
     return p
 
@@ -97,6 +121,14 @@ def run(args: argparse.Namespace) -> int:
         ti, to, ph = np.broadcast_arrays(np.asarray(args.theta_i), np.asarray(args.theta_o), np.asarray(args.phi))
     except ValueError:
         raise ValueError("eval: --theta-i, --theta-o and --phi must have the same number of values (or one)") from None
+    if args.jsonl is not None:
+        from .eval_batch import run_jsonl
+
+        return run_jsonl(args, ti, to, ph)
+    if args.force:
+        raise ValueError("eval: --force applies to --jsonl OUT only")
+    if args.more or os.path.isdir(args.file):
+        raise ValueError("eval: several files or a folder need --jsonl OUT (one JSON line per material)")
     materials = load(args)
     results = [(m, evaluate(m, ti, to, ph)) for m in materials]
     # 0: every material read (unsupported shaders listed as such); 1: some could not be

@@ -7,6 +7,7 @@
     openpbr-diffuse report                      # the reference's own evidence only
     openpbr-diffuse report --list-checks        # the stable check ids
     openpbr-diffuse report --select 'albedo.*' --junit junit.xml
+    openpbr-diffuse report LIBRARY_DIR --quick --select materials   # a material library: parallel, cached
 
 The implementation under test is graded first and its verdict is the first line of the page
 and of the output; the library's own evidence follows, counted separately.  Writes
@@ -31,6 +32,8 @@ FAST_EVIDENCE = ("implementations", "approximations")
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Add the ``report`` sub-command."""
+    from ._library import add_library_options
+
     p = subparsers.add_parser(
         "report",
         help="does your implementation conform? HTML + JSON + images",
@@ -47,7 +50,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         "conformance vectors' five and the samplers other than cosine and EON are listed as not run "
         "(the full report runs them)",
     )
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar (nor progress lines)")
+    add_library_options(p, previews=True)
     g = p.add_argument_group("the implementation under test")
     g.add_argument("--vectors", metavar="FILE", help="a filled vectors file (CSV / JSON with out_r, out_g, out_b)")
     _grader_arguments(g)
@@ -73,6 +77,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         help="print the check ids (from a run of the selected sections into a scratch folder) and exit",
     )
     c.add_argument("--junit", metavar="FILE", help="also write the checks as JUnit XML")
+    c.add_argument("--force", action="store_true", help="replace the --junit FILE if it exists (a regular file)")
     p.set_defaults(run=run)
     return p
 
@@ -157,13 +162,39 @@ def _sections(args, under):
     return FAST_EVIDENCE if evidence == "fast" else SECTIONS
 
 
+def _check_junit(args: argparse.Namespace) -> dict:
+    """Check ``--junit FILE`` before any work (the output-file rule; never inside ``--out``);
+    the keyword arguments of ``write_junit``: the run's inputs."""
+    from pathlib import Path
+
+    from .._outfile import OutputFileError, check_output_file
+    from ..report.runner import MATERIAL_SUFFIXES, default_paths
+
+    if not args.junit:
+        if args.force:
+            raise ValueError("--force applies to --junit FILE only (--out DIR has rules of its own)")
+        return {}
+    inputs = [*(args.paths or default_paths()), *(f for f in (args.vectors, args.glsl, args.cpp) if f)]
+    kwargs = {"inputs": inputs, "input_suffixes": MATERIAL_SUFFIXES}
+    target = check_output_file(args.junit, option="--junit", force=args.force, **kwargs)
+    out = Path(args.out).resolve()
+    if target.parent.resolve() == out or out in target.parent.resolve().parents:
+        raise OutputFileError(
+            f"--junit {args.junit} is inside the report folder --out {args.out}, which is replaced "
+            "as a whole; choose a path outside it"
+        )
+    return kwargs
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the report per ``args``; the exit status."""
+    from ..library.progress import mode_for
     from ..report.model import QUICK_NOT_RUN
     from ..report.render import quick_skipped
     from ..report.runner import run_report
+    from ._library import library_options
 
-    progress = not args.no_progress and sys.stderr.isatty()
+    progress = mode_for(sys.stderr, not args.no_progress)  # a bar on a terminal, else lines
     if args.list_checks:
         import tempfile
 
@@ -192,22 +223,28 @@ def run(args: argparse.Namespace) -> int:
         ):
             print(f"implementation.{q}\t(with --sample-function / --pdf-function)")
         return 0
-    under, subject = _under_test(args)
-    result = run_report(
-        args.paths,
-        args.out,
-        quick=args.quick,
-        progress=progress,
-        sections=_sections(args, under),
-        select=args.select,
-        under_test=under,
-        subject=subject,
-    )
+    junit = _check_junit(args)  # before any work
+    library = library_options(args, progress)  # before any work: --scheduler connects here
+    try:
+        under, subject = _under_test(args)
+        result = run_report(
+            args.paths,
+            args.out,
+            quick=args.quick,
+            progress=progress,
+            sections=_sections(args, under),
+            select=args.select,
+            under_test=under,
+            subject=subject,
+            library=library,
+        )
+    finally:
+        library.close()
     doc = result.document
     if args.junit:
         from ..report.junit import write_junit
 
-        write_junit(doc, args.junit)
+        write_junit(doc, args.junit, force=args.force, **junit)
     ut = doc.get("implementation")
     if ut:
         print(ut["headline"])

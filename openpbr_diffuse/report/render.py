@@ -2,8 +2,10 @@
 
 Rendered with Jinja2 with autoescaping on for every value: material names, file paths,
 documentation strings and any other text that can come from a user's file reach the page
-only escaped.  The page loads nothing from the network (inline CSS, no scripts; the images
-are files in ``images/`` beside it) and forbids scripts by its Content-Security-Policy.
+only escaped.  The page loads nothing from the network (inline CSS; the images are files in
+``images/`` beside it).  Its one script, the filter and sort of the materials table
+(:mod:`.library_html`, present when the report lists materials), is allowed by its SHA-256
+in the page's Content-Security-Policy: no other script can run.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ _TEMPLATE = """<!DOCTYPE html>
 <html lang="en">
 <head>
 <meta charset="utf-8">
-<meta http-equiv="Content-Security-Policy" content="default-src 'none'; img-src 'self' data: file:; style-src 'unsafe-inline'">
+<meta http-equiv="Content-Security-Policy" content="default-src 'none'; img-src 'self' data: file:; style-src 'unsafe-inline'; script-src {{ script_hash }}">
 <meta name="viewport" content="width=device-width, initial-scale=1">
 <title>openpbr-diffuse conformance report</title>
 <style>
@@ -33,7 +35,7 @@ figcaption { font-size: .85em; color: #444; }
 .warn { background: #fff6d6; border-left: 4px solid #e0a800; padding: .3em .6em; margin: .3em 0; }
 .meta { color: #555; font-size: .9em; }
 caption { text-align: left; font-weight: 600; padding: .2em 0; }
-</style>
+{{ library_style | safe }}</style>
 </head>
 <body>
 <h1>openpbr-diffuse conformance report</h1>
@@ -96,14 +98,17 @@ materials: {% for p in doc.paths %}<code>{{ p }}</code>{% if not loop.last %}, {
 <td class="{{ status_class(c.status) }}">{{ {'pass': 'pass', 'fail': 'FAIL'}.get(c.status, c.not_run | not_run) }}</td>
 <td>{{ c.reference }}</td><td>{{ c.detail }}</td></tr>
 {% endfor %}</table>{% endif %}
-{% for t in s.tables %}<table class="data"><caption>{{ t.caption }}</caption>
+{% set lib = library_parts(s) if s.key == 'materials' and doc.materials else none %}
+{% for t in (lib.tables if lib else s.tables) %}<table class="data"><caption>{{ t.caption }}</caption>
 <tr>{% for c in t.columns %}<th>{{ c }}</th>{% endfor %}</tr>
 {% for row in t.rows %}<tr>{% for v in row %}<td{% if v is number %} class="num"{% endif %}>{{ v | num }}</td>{% endfor %}</tr>
 {% endfor %}</table>{% endfor %}
-{% for f in s.figures %}<figure><img src="{{ f.file }}" alt="{{ f.caption }}" loading="eager">
+{% for f in (lib.figures if lib else s.figures) %}<figure><img src="{{ f.file }}" alt="{{ f.caption }}" loading="eager">
 <figcaption>{{ f.caption }}</figcaption></figure>{% endfor %}
+{% if lib %}{% include "materials" %}{% endif %}
 </section>
 {% endfor %}
+{% if doc.materials %}<script>{{ library_script | safe }}</script>{% endif %}
 </body>
 </html>
 """
@@ -175,7 +180,9 @@ def render_html(doc: dict, image_dir: Path | None = None) -> str:
     >>> "&lt;b&gt;T&lt;/b&gt;" in render_html(doc), "<b>T</b>" in render_html(doc)
     (True, False)
     """
-    from jinja2 import Environment
+    from jinja2 import DictLoader, Environment
+
+    from . import library_html
 
     doc = dict(doc)
     if image_dir is not None:
@@ -190,14 +197,26 @@ def render_html(doc: dict, image_dir: Path | None = None) -> str:
             s["warnings"] = list(s.get("warnings", [])) + [f"image not written: {f['file']}" for f in missing]
             sections.append(s)
         doc["sections"] = sections
-    env = Environment(autoescape=True, trim_blocks=False, lstrip_blocks=False)
+    env = Environment(
+        autoescape=True, trim_blocks=False, lstrip_blocks=False, loader=DictLoader({"materials": library_html.TEMPLATE})
+    )
     env.filters["num"] = _num
     env.filters["vec"] = _vec
     env.filters["not_run"] = _not_run
     doc.setdefault("implementation", None)
     doc.setdefault("evidence", {"n_checks": doc.get("n_checks", 0), "n_failed": doc.get("n_failed", 0), "n_not_run": 0})
     template = env.from_string(_TEMPLATE)
-    return template.render(doc=doc, status_class=_status_class, quick_skipped=quick_skipped)
+    lib = library_html.context(doc)
+    return template.render(
+        doc=doc,
+        status_class=_status_class,
+        quick_skipped=quick_skipped,
+        script_hash=library_html.script_hash(),
+        library_style=library_html.STYLE,
+        library_script=library_html.SCRIPT,
+        library_parts=lib.pop("parts"),
+        **lib,
+    )
 
 
 __all__ = ["render_html", "quick_skipped"]

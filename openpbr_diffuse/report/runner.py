@@ -18,7 +18,8 @@ only when everything was written: an existing report is replaced only by a compl
                    "notes" [str], "warnings" [str], "checks": [CHECK],
                    "tables": [{"caption", "columns", "rows"}],
                    "figures": [{"file" ("images/<key>_*.png"), "caption"}]}],
-     "checks": [CHECK]}       # every check of every section, flattened
+     "checks": [CHECK],       # every check of every section, flattened
+     "materials": [MATERIAL]} # every material of the materials section, in file order ([] without it)
     CHECK = {"id" ("section.check_slug", stable), "section", "name", "measured", "threshold",
              "comparison" ("<=", ">=", "=="), "expected" (null unless "=="), "unit",
              "reference" (provenance), "detail", "passed" (bool), "status": "pass"|"fail"|"not run",
@@ -30,6 +31,16 @@ only when everything was written: an existing report is replaced only by a compl
                                 "diagnosis" (deviation name|null), "sentence", "max_abs_error",
                                 "where" (the inputs of the largest error), "n", "n_failed",
                                 "detail", "worst" [row]}]}
+
+    MATERIAL = {"file" (absolute), "relpath" (relative to the given path it was found under),
+                "index" (position in its file), "material" (prim / node path; null: the file
+                could not be read), "name", "shader", "kind" (shader family), "node",
+                "diffuse_model", "verdict": "fail"|"flagged"|"unsupported"|"pass",
+                "reasons" [str], "detail", "base_color" [3], "roughness",
+                "diffuse_weight" [3], "diffuse_probability", "albedo" [3] (at theta_o = 30 deg),
+                "albedo_mu" {"1", "0.5", "0.2": [3]}, "albedo_max", "albedo_limit",
+                "probability_error", "not_modelled" [str] (first 5), "n_not_modelled",
+                "warnings" [str] (first 5), "n_warnings"}       # numbers null when not evaluated
 
 Schema 1 had no "id"/"status"/"not_run" on checks, no "implementation", "evidence", "select"
 and section statuses "pass"|"fail"|"error"|"not available" only (a section with 0 checks was
@@ -57,6 +68,7 @@ from .model import Check, Context, SectionResult, slug
 
 if TYPE_CHECKING:
     from ..graders.subject import Subject
+    from ..library import LibraryOptions
     from .subject import UnderTest
 
 SCHEMA = "openpbr-diffuse-report/2"
@@ -256,6 +268,7 @@ def build_document(
     elapsed_s: float,
     select: Sequence[str] | None = (),
     figures: Sequence[tuple[str, str]] = (),
+    materials: Sequence[dict] = (),
 ) -> dict:
     """``report.json``'s document (see the module docstring for the schema)."""
     from .._version import __version__
@@ -306,18 +319,42 @@ def build_document(
             "elapsed_s": round(elapsed_s, 3),
             "sections": sections,
             "checks": checks,
+            "materials": list(materials),
         }
     )
 
 
+class _SectionLines:
+    """Progress of the sections as lines on stderr (stderr is not a terminal)."""
+
+    def __init__(self, total):
+        self.total, self.n = total, 0
+
+    def set_description(self, key):
+        import sys
+
+        print(f"report: section {self.n + 1}/{self.total} {key}", file=sys.stderr, flush=True)
+
+    def set_postfix_str(self, text, refresh=True):
+        pass
+
+    def update(self, n):
+        self.n += n
+
+    def close(self):
+        pass
+
+
 def _progress_bar(total, enabled):
-    """A tqdm bar on stderr (disabled when not wanted)."""
+    """A tqdm bar on stderr (disabled when not wanted); lines when ``enabled == "lines"``."""
+    if enabled == "lines":
+        return _SectionLines(total)
     from tqdm.auto import tqdm
 
     return tqdm(
         total=total,
         unit="section",
-        disable=not enabled,
+        disable=not enabled or enabled == "none",
         dynamic_ncols=True,
         bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} [{elapsed}] {postfix}",
     )
@@ -328,11 +365,12 @@ def run_report(
     out: str | Path = "report",
     *,
     quick: bool = False,
-    progress: bool = True,
+    progress: bool | str = True,
     sections: Sequence[str] | None = None,
     select: Sequence[str] | None = None,
     under_test: UnderTest | None = None,
     subject: Subject | None = None,
+    library: LibraryOptions | None = None,
 ) -> ReportRun:
     """Run the report and write ``out/index.html``, ``out/report.json`` and ``out/images/``.
 
@@ -344,8 +382,9 @@ def run_report(
         Output directory; replaced only when the new report is complete.
     quick : bool
         Smaller grids and sample counts (seconds instead of tens of seconds).
-    progress : bool
-        Show a progress bar on stderr.
+    progress : bool or {"bar", "lines", "none"}
+        Show a progress bar on stderr (True: "bar"); "lines": a line per section and, while
+        the materials are read, every few seconds (for a stderr that is not a terminal).
     sections : sequence of str, optional
         Section keys to run (default all of :data:`.sections.SECTIONS`, in that order).
     select : sequence of str, optional
@@ -355,6 +394,10 @@ def run_report(
         The implementation under test, already graded (:mod:`.subject`): shown first,
         counted apart from the library's evidence; ``subject`` (its callables), when given,
         is drawn in the pictures.
+    library : LibraryOptions, optional
+        How the materials section reads the files (:mod:`openpbr_diffuse.library`): worker
+        processes, cache, Dask cluster, number of previews (default: in this process, no
+        cache; its progress follows ``progress``).
 
     Raises
     ------
@@ -397,6 +440,7 @@ def run_report(
                 paths=list(paths),
                 quick=quick,
                 progress=lambda message: bar.set_postfix_str(str(message)[:60], refresh=True),
+                extra={"library": _library_options(library, progress)},
             )
             with _plot.style():
                 for key in keys:
@@ -406,7 +450,13 @@ def run_report(
         finally:
             bar.close()
         doc = build_document(
-            run, paths=paths, quick=quick, elapsed_s=time.perf_counter() - t0, select=select, figures=figures
+            run,
+            paths=paths,
+            quick=quick,
+            elapsed_s=time.perf_counter() - t0,
+            select=select,
+            figures=figures,
+            materials=ctx.extra.get("materials", ()),
         )
         run.document = doc
         (tmp / "report.json").write_text(json.dumps(doc, indent=1, allow_nan=False) + "\n")
@@ -418,6 +468,16 @@ def run_report(
         raise
     run.out_dir = out
     return run
+
+
+def _library_options(library, progress):
+    """The materials section's options; its progress follows the report's unless set."""
+    from ..library import LibraryOptions
+
+    mode = {True: "bar", False: "none"}.get(progress, progress) if isinstance(progress, bool) else progress
+    if library is None:
+        return LibraryOptions(progress=str(mode))
+    return library
 
 
 def _subject_figures(under_test, subject, image_dir, quick):

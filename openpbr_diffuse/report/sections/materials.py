@@ -1,148 +1,115 @@
 """Report section "materials": every material of the given files (or the bundled library).
 
-Per material: the resolved parameters with their provenance, the library node it maps onto,
-the diffuse lobe's effective weight and selection probability and the material's directional
-albedo at theta_o = 30 deg, the albedo curve E(theta_o) (total and the diffuse lobe's share,
-``materials_<n>_albedo.png``), a preview render (directional light | furnace,
-``materials_<n>_render.png``), what is not modelled and the warnings.
+The files are read one at a time (:mod:`openpbr_diffuse.library`: in worker processes, from
+the cache, or on a Dask cluster, as ``ctx.extra["library"]`` says; serially and uncached
+without it), each reduced to one compact record per material and dropped, so the cost grows
+with the number of files, never with the square of it, and the heavy objects (stages, nodes,
+figures) never pile up.  The records (``ctx.extra["materials"]``, ``report.json``'s
+``"materials"``: every material, in file order) carry the node each maps onto, the diffuse
+lobe's weight and selection probability and the directional albedo at theta_o = 30 deg, the
+albedo at mu = 1, 0.5, 0.2, a verdict and its reasons.
 
-Checks per supported material (against properties the lobe stack must have, computed with
-the material's node): the lobe selection probabilities sum to 1; the directional albedo does
-not exceed 1 beyond the diffuse model's known overshoot (QON: up to 1.0152, EON-paper Fig. 5;
-EON / Lambert: 2e-3, the GGX albedo-table accuracy).  Strings from the files are returned as
-plain text (the runner escapes them).
+The section summarises the library: counts by verdict, shader kind and reason, the worst
+materials, fixed-size histograms of the diffuse roughness, the base colour and the albedo
+(``materials_distributions.png``); a preview render (directional light | furnace) and an
+albedo plot (total and the diffuse lobe's share) of at most ``previews`` materials, failing
+and flagged first (``materials_<n>_<name>_render.png``, ``..._albedo.png``), each its own
+small figure, with its resolved parameters and their provenance.  The page's table of every
+material (filter, sort) is drawn from the records.
+
+Checks, against properties the lobe stack must have, computed with each material's node:
+every file is read; every material is evaluated; the directional albedo does not exceed 1
+beyond the diffuse model's known overshoot (QON: up to 1.0152, EON-paper Fig. 5; EON /
+Lambert: 2e-3, the GGX albedo-table accuracy); the lobe selection probabilities sum to 1.
+Strings from the files are returned as plain text (the runner escapes them).
 """
 
+from __future__ import annotations
+
+import base64
 import re
+from typing import Any
 
 import numpy as np
 
+from ...library.worker import OVERSHOOT, PROBABILITY_TOLERANCE, THETA_O  # noqa: F401 -- part of this module's API
 from ..model import Check, Context, Figure, SectionResult, Table
 
 TITLE = "Materials"
 KEY = "materials"
-
-#: Allowed albedo above 1 per diffuse model (QON's documented overshoot, else table accuracy).
-OVERSHOOT = {"qon": 0.0152 + 2e-3, "eon": 2e-3, "lambert": 2e-3, "": 2e-3}
-THETA_O = 30.0
-
-
-def _slug(k, m):
-    return f"{k:02d}_" + re.sub(r"[^A-Za-z0-9]+", "_", m.name).strip("_")[:40]
+#: Rows of the worst-materials table; entries of a check's detail; warnings listed.
+WORST_ROWS = 20
+DETAIL_ITEMS = 20
+WARNINGS_LISTED = 30
 
 
-def _fmt(v):
+def _slug(k: int, name: str) -> str:
+    return f"{k:02d}_" + re.sub(r"[^A-Za-z0-9]+", "_", name or "material").strip("_")[:40]
+
+
+def _listing(items: list[str], limit: int = DETAIL_ITEMS) -> str:
+    more = len(items) - limit
+    return "; ".join(items[:limit]) + (f"; ... and {more} more" if more > 0 else "")
+
+
+def _fmt(v: Any) -> str:
+    if v is None:
+        return "-"
     if isinstance(v, (tuple, list)):
-        return "(" + ", ".join(f"{x:.4g}" for x in v) + ")"
+        return "(" + ", ".join(f"{x:.4g}" if x is not None else "-" for x in v) + ")"
     if isinstance(v, float):
         return f"{v:.4g}"
     return str(v)
 
 
-def _albedo_curves(node, n_mu):
-    """theta_o (deg), the material's albedo E (n, 3) and the diffuse lobe's weight x albedo."""
-    from ...readers.evaluate import brdf_and_lobes
+def _file_record(f: Any, error: str) -> dict[str, Any]:
+    """The record standing for a file that could not be read."""
+    from ...library.summary import FILE_NOT_READ
+    from ...library.worker import empty_record
 
-    theta = np.linspace(0.0, 89.0, n_mu)
-    wo = np.stack([np.sin(np.radians(theta)), np.zeros_like(theta), np.cos(np.radians(theta))], axis=-1)
-    _, E, d, _ = brdf_and_lobes(node, wo, wo)
-    return theta, E, np.asarray(d["contribution"])
-
-
-def _albedo_grid(curves, path):
-    """One panel per material: albedo (solid) and diffuse lobe share (dashed), R, G, B."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    n = len(curves)
-    cols = min(4, n)
-    rows = (n + cols - 1) // cols
-    fig, axes = plt.subplots(
-        rows, cols, figsize=(3.0 * cols, 2.3 * rows), dpi=80, squeeze=False, sharex=True, sharey=True
-    )
-    for ax, (label, theta, E, contrib) in zip(axes.flat, curves):
-        for c, colour in enumerate(("tab:red", "tab:green", "tab:blue")):
-            ax.plot(theta, E[:, c], color=colour, lw=1.2)
-            ax.plot(theta, contrib[:, c], color=colour, lw=1.0, ls="--")
-        ax.set_title(label[:34], fontsize=8)
-        ax.set_ylim(0.0, 1.05)
-        ax.tick_params(labelsize=7)
-    for ax in axes.flat[n:]:
-        ax.set_visible(False)
-    fig.text(
-        0.5,
-        0.005,
-        "theta_o (deg); solid: directional albedo, dashed: diffuse lobe weight x albedo",
-        ha="center",
-        fontsize=8,
-    )
-    fig.subplots_adjust(left=0.05, right=0.98, top=0.95, bottom=0.08, hspace=0.45, wspace=0.12)
-    fig.savefig(path)
-    plt.close(fig)
+    rec = empty_record()
+    rec.update(kind="(file not read)", verdict="fail", reasons=[FILE_NOT_READ], detail=error)
+    return {"file": f.path, "relpath": f.relpath, "index": 0, **rec}
 
 
-def _render(m, path, size):
-    from ...readers.preview import render_image, write_image
+def read_library(ctx: Context, opts: Any, runner: Any) -> tuple[list, list, list]:
+    """(files, records, unreadable "relpath: error" texts) of ``ctx.paths`` (or the bundled library).
 
-    write_image(render_image(m, size, supersample=1), str(path))
+    >>> from pathlib import Path
+    >>> from openpbr_diffuse.library import LibraryOptions
+    >>> from openpbr_diffuse.readers import BUNDLED_MATERIALS
+    >>> ctx = Context(Path("."), paths=[BUNDLED_MATERIALS / "clay_rough.mtlx"], quick=True)
+    >>> opts = LibraryOptions()
+    >>> with opts.runner() as runner:
+    ...     files, records, unreadable = read_library(ctx, opts, runner)
+    >>> [(r["relpath"], r["material"], r["verdict"]) for r in records], unreadable
+    ([('clay_rough.mtlx', 'clay_rough', 'pass')], [])
+    """
+    from ...library import Progress, Task, list_files
+    from ...readers import BUNDLED_MATERIALS
 
-
-def _material_rows(mats: list) -> list:
-    from ...readers.evaluate import evaluate
-
-    rows = []
-    for m in mats:
-        if m.error:
-            rows.append(
-                [m.file, m.path, "-", "not evaluated", "-", "-", "-", "-", "-", f"error: {m.error}", len(m.warnings)]
-            )
-            continue
-        if not m.supported:
-            rows.append(
-                [m.file, m.path, m.shader_id, "-", "-", "-", "-", "-", "-", "; ".join(m.unsupported), len(m.warnings)]
-            )
-            continue
-        r = evaluate(m, [THETA_O], [THETA_O], [180.0])
-        ni = m.node_inputs
-        colour = ni.get("base_color", ni.get("color"))
-        rough = ni.get("base_diffuse_roughness", ni.get("roughness"))
-        d = r["diffuse"]
-        rows.append(
-            [
-                m.file,
-                m.path,
-                m.shader_id,
-                f"{m.node_class} ({m.diffuse_model})",
-                _fmt(colour.value),
-                _fmt(rough.value),
-                _fmt(tuple(d["weight"][0])),
-                f"{d['probability'][0]:.4f}",
-                _fmt(tuple(r["albedo"][0])),
-                "; ".join(m.unsupported) or "-",
-                len(m.warnings),
-            ]
-        )
-    return rows
+    files = list_files(ctx.paths or [BUNDLED_MATERIALS])
+    task = Task(kind="report", n_mu=16 if ctx.quick else 46)
+    records: list[dict[str, Any]] = []
+    unreadable: list[str] = []
+    with Progress(len(files), opts.progress, "materials", position=1) as progress:
+        for o in runner.run([(f.path, task) for f in files], progress):
+            f = files[o.index]
+            if o.payload.get("error"):
+                unreadable.append(f"{f.relpath}: {o.payload['error']}")
+                records.append(_file_record(f, o.payload["error"]))
+                continue
+            for k, rec in enumerate(o.payload["records"]):
+                records.append({"file": f.path, "relpath": f.relpath, "index": k, **rec})
+    return files, records, unreadable
 
 
-def build(ctx: Context) -> SectionResult:
-    from ...readers import BUNDLED_MATERIALS, find_material_files, load_materials
-    from ...readers.evaluate import directions
+def _checks(res: SectionResult, files: list, records: list, unreadable: list) -> None:
+    from ...library.summary import FILE_NOT_READ, excess
 
-    res = SectionResult(KEY, TITLE)
-    files = find_material_files(ctx.paths or [BUNDLED_MATERIALS])
-    mats = []
-    unreadable = []
-    for f in files:
-        ctx.progress(f"materials: reading {f.name}")
-        try:
-            mats += load_materials(f)
-        except (ValueError, TypeError, OSError) as exc:
-            unreadable.append(f"{f}: {exc}")
-            res.warnings.append(f"{f}: cannot be read: {exc}")
-    failed = [m for m in mats if m.error]
+    mats = [r for r in records if FILE_NOT_READ not in r["reasons"]]
+    failed = [r for r in mats if "not evaluated" in r["reasons"]]
+    evaluated = [r for r in mats if r.get("albedo_max") is not None or r.get("probability_error") is not None]
     # an input that cannot be read, or a material that cannot be evaluated, is a failed check
     res.checks.append(
         Check(
@@ -152,7 +119,7 @@ def build(ctx: Context) -> SectionResult:
             "<=",
             unit="unreadable files",
             reference=f"{len(files)} files",
-            detail="; ".join(unreadable),
+            detail=_listing(unreadable),
         )
     )
     res.checks.append(
@@ -163,102 +130,221 @@ def build(ctx: Context) -> SectionResult:
             "<=",
             unit="materials not evaluated",
             reference=f"{len(mats)} materials",
-            detail="; ".join(f"{m.path}: {m.error}" for m in failed),
+            detail=_listing([f"{r['material']}: {r['detail']}" for r in failed]),
         )
     )
+    why = "no material of the given files was evaluated" if not evaluated else None
+    over = sorted((r for r in evaluated if r.get("albedo_max") is None or excess(r) > 0), key=lambda r: -excess(r))
+    worst = max((excess(r) for r in evaluated), default=float("nan"))
+    res.checks.append(
+        Check(
+            "every material's directional albedo <= 1 (within its diffuse model's allowance)",
+            float("inf") if any(r.get("albedo_max") is None for r in evaluated) else worst,
+            0.0,
+            "<=",
+            unit="largest albedo above the allowance",
+            reference="energy conservation; allowance 0.0172 for QON (its known overshoot, EON paper Fig. 5, "
+            "and the GGX table accuracy), 2e-3 for EON and Lambert (the GGX albedo-table accuracy); "
+            f"theta_o in [0, 87] deg, {len(evaluated)} materials",
+            detail=_listing([f"{r['relpath']} {r['material']}: {r['detail']}" for r in over]),
+            not_run=why,
+        )
+    )
+    perr = [r["probability_error"] for r in evaluated if r.get("probability_error") is not None]
+    bad = [r for r in evaluated if r.get("probability_error") is None or r["probability_error"] > PROBABILITY_TOLERANCE]
+    res.checks.append(
+        Check(
+            "every material's lobe selection probabilities sum to 1",
+            float("inf") if len(perr) < len(evaluated) else max(perr, default=float("nan")),
+            PROBABILITY_TOLERANCE,
+            "<=",
+            unit="largest |sum - 1|",
+            reference=f"OpenPBR spec, reduction to a mixture of lobes; {len(evaluated)} materials",
+            detail=_listing([f"{r['relpath']} {r['material']}: {r['probability_error']}" for r in bad]),
+            not_run=why,
+        )
+    )
+
+
+def _tables(res: SectionResult, records: list) -> None:
+    from ...library.summary import by_kind, by_reason, by_verdict, worst_key
+
+    res.tables.append(Table("Materials by verdict", ["verdict", "materials"], by_verdict(records)))
+    res.tables.append(
+        Table(
+            "Materials by shader kind",
+            ["shader kind", "materials", "fail", "flagged", "unsupported", "pass"],
+            by_kind(records),
+        )
+    )
+    reasons = by_reason(records)
+    if reasons:
+        res.tables.append(Table("Materials by reason", ["reason", "materials"], reasons))
+    worst = sorted(records, key=worst_key)[:WORST_ROWS]
+    res.tables.append(
+        Table(
+            f"The worst {len(worst)} materials: failing first, then flagged, then by the largest albedo "
+            "against its allowance",
+            ["verdict", "file", "material", "shader kind", "largest albedo / allowance", "reasons", "detail"],
+            [
+                [
+                    r["verdict"],
+                    r["relpath"],
+                    r["material"] or "-",
+                    r["kind"],
+                    f"{_fmt(r.get('albedo_max'))} / {_fmt(r.get('albedo_limit'))}",
+                    ", ".join(r["reasons"]) or "-",
+                    r["detail"] or "-",
+                ]
+                for r in worst
+            ],
+        )
+    )
+
+
+def _distributions(records: list, path: Any) -> bool:
+    """Histograms (fixed bins) of the diffuse roughness, base colour and albedo at three mu."""
+    from ...library.summary import distributions
+    from ...library.worker import MUS
+    from .._plot import pyplot
+
+    d = distributions(records)
+    if not len(d["roughness"]) and not len(d["base_color"]):
+        return False
+    plt = pyplot()
+    fig, axes = plt.subplots(1, 3, figsize=(10.5, 2.8), dpi=80)
+    fig.subplots_adjust(left=0.06, right=0.99, bottom=0.2, top=0.95, wspace=0.25)
+    bins = np.linspace(0.0, 1.0, 21)
+    axes[0].hist(np.clip(d["roughness"], 0.0, 1.0), bins=bins, color="0.4")
+    axes[0].set_xlabel("diffuse roughness")
+    for c, colour in enumerate(("tab:red", "tab:green", "tab:blue")):
+        if len(d["base_color"]):
+            axes[1].hist(np.clip(d["base_color"][:, c], 0.0, 1.0), bins=bins, histtype="step", color=colour)
+    axes[1].set_xlabel("base colour R, G, B (ACEScg, clipped to [0, 1])")
+    for mu, ls in zip(MUS, ("-", "--", ":")):
+        a = d[f"albedo_mu={mu:g}"]
+        if len(a):
+            axes[2].hist(
+                np.clip(a, 0.0, 1.05), bins=np.linspace(0.0, 1.05, 22), histtype="step", ls=ls, label=f"mu {mu:g}"
+            )
+    axes[2].set_xlabel("directional albedo (mean of R, G, B)")
+    axes[2].legend(fontsize=7)
+    for ax in axes:
+        ax.set_ylabel("materials", fontsize=8)
+        ax.tick_params(labelsize=7)
+    fig.savefig(path)
+    plt.close(fig)
+    return True
+
+
+def _figures(ctx: Context, res: SectionResult, runner: Any, records: list, cap: int) -> int:
+    """Previews, albedo plots and parameter tables of the chosen materials; how many were drawn."""
+    from ...library import Task
+    from ...library.summary import chosen_for_figures
+
+    chosen = chosen_for_figures(records, cap)
+    by_file: dict[str, list[int]] = {}
+    for k in chosen:
+        by_file.setdefault(records[k]["file"], []).append(k)
+    n_mu, size = (16, 32) if ctx.quick else (46, 72)
+    files = list(by_file)
+    items = [
+        (f, Task(kind="detail", n_mu=n_mu, size=size, select=tuple(sorted(records[k]["index"] for k in by_file[f]))))
+        for f in files
+    ]
+    drawn: dict[int, dict[str, Any]] = {}
+    for o in runner.run(items):
+        at = {records[k]["index"]: k for k in by_file[files[o.index]]}
+        for d in o.payload.get("records", []):
+            if d.get("index") in at:
+                drawn[at[d["index"]]] = d
+    n = 0
+    for rank, k in enumerate(chosen):
+        d, r = drawn.get(k), records[k]
+        if d is None or d.get("error"):
+            res.warnings.append(f"{r['relpath']} {r['material']}: not drawn: {(d or {}).get('error', 'not found')}")
+            continue
+        slug = _slug(rank, r["name"])
+        render = f"materials_{slug}_render.png"
+        (ctx.image_dir / render).write_bytes(base64.b64decode(d["preview_png"]))
+        plot = f"materials_{slug}_albedo.png"
+        (ctx.image_dir / plot).write_bytes(base64.b64decode(d["albedo_png"]))
+        where = f"{r['relpath']} {r['material']} ({r['verdict']})"
+        res.figures.append(Figure(render, f"{where}: directional light (left), uniform white furnace (right)"))
+        res.figures.append(
+            Figure(
+                plot,
+                f"{where}: directional albedo against theta_o (solid, R G B), diffuse lobe's weight x albedo (dashed)",
+            )
+        )
+        res.tables.append(
+            Table(
+                f"{rank:02d} {r['material']} ({r['shader']}): resolved parameters",
+                ["parameter", "value", "kind", "provenance"],
+                d["parameters"],
+            )
+        )
+        n += 1
+    return n
+
+
+def build(ctx: Context) -> SectionResult:
+    from ...library import LibraryOptions
+
+    res = SectionResult(KEY, TITLE)
+    opts = ctx.extra.get("library") or LibraryOptions()
+    with opts.runner() as runner:
+        ctx.progress("materials: reading")
+        files, records, unreadable = read_library(ctx, opts, runner)
+        computed, cached = runner.computed, runner.cached
+        ctx.extra["materials"] = records
+        _checks(res, files, records, unreadable)
+        _tables(res, records)
+        ctx.progress("materials: pictures")
+        if _distributions(records, ctx.image_dir / "materials_distributions.png"):
+            res.figures.append(
+                Figure(
+                    "materials_distributions.png",
+                    "Distributions over the evaluated materials: diffuse roughness, base colour (R G B) and the "
+                    "directional albedo at mu = 1, 0.5, 0.2",
+                )
+            )
+        drawn = _figures(ctx, res, runner, records, opts.previews)
+    n_mats = sum(r["material"] is not None for r in records)
     res.notes.append(
-        f"{len(mats)} materials from {len(files)} files"
+        f"{n_mats} materials from {len(files)} files"
         + (" (the bundled library)" if not ctx.paths else "")
         + ". Colours in ACEScg (the readers' working space); evaluated at uv (0.5, 0.5), default time and "
         f"variants. Diffuse weight, probability and albedo at theta_o = {THETA_O:g} deg; the weight includes "
         "base_weight, (1 - metalness) and the albedo scaling 1 - E_specular(mu_o)."
     )
-    res.tables.append(
-        Table(
-            "Materials: the node each maps onto and its diffuse lobe at theta_o = 30 deg",
-            [
-                "file",
-                "material",
-                "shader",
-                "node (diffuse)",
-                "base colour",
-                "diffuse roughness",
-                "diffuse weight",
-                "selection probability",
-                "albedo",
-                "not modelled",
-                "warnings",
-            ],
-            _material_rows(mats),
-        )
+    res.notes.append(
+        f"Previews and albedo plots: {drawn} of {n_mats} materials (at most {opts.previews}: failing first, then "
+        "flagged, then in file order). Every material is in the table below and in report.json (\"materials\")."
     )
-    n_mu = 16 if ctx.quick else 46
-    size = 32 if ctx.quick else 72
-    curves = []
-    for k, m in enumerate(mats):
-        ctx.progress(f"materials: {m.name}")
-        for w in m.warnings:
-            res.warnings.append(f"{m.path}: {w}")
-        if m.error:
-            res.warnings.append(f"{m.path}: not evaluated: {m.error}")
-        if not m.supported:
-            continue
-        slug = _slug(k, m)
-        res.tables.append(
-            Table(
-                f"{m.path} ({m.shader_id}): resolved parameters",
-                ["parameter", "value", "kind", "provenance"],
-                [
-                    [n, _fmt(p.value), p.kind, p.provenance]
-                    for n, p in m.parameters.items()
-                    if p.kind != "default"
-                    or n in m.node_inputs
-                    and n in ("base_color", "base_diffuse_roughness", "base_weight", "color", "roughness")
-                ],
-            )
-        )
-        node = m.node()
-        theta, E, contrib = _albedo_curves(node, n_mu)
-        curves.append((f"{k:02d} {m.name}", theta, E, contrib))
-        _render(m, ctx.image_dir / f"materials_{slug}_render.png", size)
-        res.figures.append(
-            Figure(f"materials_{slug}_render.png", f"{m.path}: directional light (left), uniform white furnace (right)")
-        )
-        tol = OVERSHOOT.get(m.diffuse_model, 2e-3)
-        res.checks.append(
-            Check(
-                f"{m.path}: directional albedo <= 1",
-                float(np.max(E[theta <= 87.0])),
-                1.0 + tol,
-                "<=",
-                reference=f"energy conservation; allowance {tol:g} for the {m.diffuse_model or 'oren_nayar'} "
-                "diffuse model's known overshoot and the GGX table accuracy",
-            )
-        )
-        wi, wo = directions(THETA_O, np.linspace(0.0, 85.0, 12), 180.0)
-        if hasattr(node, "lobes"):
-            total = sum(np.asarray(lb.probability) for lb in node.lobes_and_eval(wi, wo)[0])
-            res.checks.append(
-                Check(
-                    f"{m.path}: lobe selection probabilities sum to 1",
-                    float(np.max(np.abs(total - 1.0))),
-                    1e-12,
-                    "<=",
-                    reference="OpenPBR spec, reduction to a mixture of lobes",
-                )
-            )
-    if curves:
-        ctx.progress("materials: albedo curves")
-        _albedo_grid(curves, ctx.image_dir / "materials_albedo.png")
-        res.figures.insert(
-            0,
-            Figure(
-                "materials_albedo.png",
-                "Directional albedo against theta_o of each material (solid, R G B) and its "
-                "diffuse lobe's weight x albedo (dashed); panels numbered as the renders",
-            ),
-        )
+    how = (
+        f"on the Dask cluster {opts.scheduler or ''}".rstrip()
+        if runner.remote
+        else f"{opts.jobs} worker processes"
+        if opts.jobs > 1
+        else "in one process"
+    )
+    cache = f", {cached} from the cache ({opts.cache.folder})" if opts.cache is not None else " (no cache)"
+    res.notes.append(f"Files: {computed} read {how}{cache}.")
+    for text in unreadable[:WARNINGS_LISTED]:
+        res.warnings.append(f"cannot be read: {text}")
+    bad = [r for r in records if "not evaluated" in r["reasons"]]
+    for r in bad[: max(0, WARNINGS_LISTED - len(unreadable))]:
+        res.warnings.append(f"{r['relpath']} {r['material']}: not evaluated: {r['detail']}")
+    more = len(unreadable) + len(bad) - WARNINGS_LISTED
+    if more > 0:
+        res.warnings.append(f"... and {more} more files or materials that could not be read (see the table)")
+    if opts.cache is not None and opts.cache.write_error:
+        res.warnings.append(f"the cache could not be written (the results were not kept): {opts.cache.write_error}")
+    n_warned = sum(bool(r.get("n_warnings")) for r in records)
+    if n_warned:
+        res.warnings.append(f"{n_warned} materials carry reader warnings (listed per material in the table)")
     return res
 
 
-__all__ = ["TITLE", "build"]
+__all__ = ["TITLE", "build", "read_library"]
