@@ -48,11 +48,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .tolerance import ABS_TOL, REL_TOL  # re-exported: grade.ABS_TOL, grade.REL_TOL
+
 if TYPE_CHECKING:
     from .vectors import VectorSet
 
-REL_TOL = 1e-4
-ABS_TOL = 1e-6
 TOLERANCE_REASON = (
     "|out - ref| <= 1e-6 + 1e-4 |ref| per value. Float32 rounding of the vectors' inputs and of "
     "the result moves the reference by at most 6.4e-6 relative / 2.4e-5 absolute on f = 247 "

@@ -194,7 +194,7 @@ def check_properties(
     >>> [c["id"] for c in check_properties(swap, e) if c["status"] == "fail"][0]
     'property.reciprocity'
     """
-    from .grade import ABS_TOL, REL_TOL
+    from .tolerance import ABS_TOL, REL_TOL
 
     rel, ab = (REL_TOL, ABS_TOL) if tolerance is None else (float(tolerance[0]), float(tolerance[1]))
     if brdf is None:

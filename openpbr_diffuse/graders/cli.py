@@ -18,7 +18,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -36,8 +36,12 @@ def _seconds(text: str) -> float:
     return value
 
 
-def add_arguments(parser: argparse.ArgumentParser | argparse._ArgumentGroup) -> None:
+def add_arguments(parser: argparse.ArgumentParser | argparse._ArgumentGroup, renderers: Sequence[str] = ()) -> None:
     """Add the grader options to a parser (``check``'s) or to an argument group of one.
+
+    ``renderers``: more ``--implementation`` names, graded from their image of the chart (the
+    command line passes :data:`openpbr_diffuse.renderers.RENDERERS`; the graders do not import
+    the renderers, which use them).
 
     >>> import argparse
     >>> p = argparse.ArgumentParser()
@@ -45,7 +49,6 @@ def add_arguments(parser: argparse.ArgumentParser | argparse._ArgumentGroup) -> 
     >>> p.parse_args(["--cpp", "f.cpp", "--function", "f", "--timeout", "5"]).timeout
     5.0
     """
-    from ..renderers import RENDERERS
     from . import IMPLEMENTATIONS, limits
 
     if isinstance(parser, argparse._ArgumentGroup):
@@ -59,12 +62,11 @@ def add_arguments(parser: argparse.ArgumentParser | argparse._ArgumentGroup) -> 
         )
     g.add_argument(
         "--implementation",
-        choices=sorted(IMPLEMENTATIONS) + sorted(RENDERERS),
+        choices=sorted(IMPLEMENTATIONS) + sorted(renderers),
         metavar="NAME",
         help="one of: "
         + ", ".join(IMPLEMENTATIONS)
-        + "; or a renderer, whose image of the chart is graded: "
-        + ", ".join(RENDERERS),
+        + ("; or a renderer, whose image of the chart is graded: " + ", ".join(renderers) if renderers else ""),
     )
     g.add_argument("--source", metavar="PATH", help="the implementation's checkout (its code is not in a package)")
     g.add_argument(
