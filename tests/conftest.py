@@ -46,3 +46,12 @@ def pytest_runtest_makereport(item, call):
     if _system.PREFIX in text:
         rep.outcome = "failed"
         rep.longrepr = f"{text} -- {_system.REQUIRE_ENV} is set, so a missing system program fails the run"
+
+
+def pytest_configure(config):
+    """The library cache of report/eval (``$OPENPBR_DIFFUSE_CACHE_DIR``) in a folder of this test
+    run, so that the tests neither read nor fill the user's cache."""
+    import os
+    import tempfile
+
+    os.environ.setdefault("OPENPBR_DIFFUSE_CACHE_DIR", tempfile.mkdtemp(prefix="openpbr-diffuse-test-cache-"))
