@@ -4,7 +4,10 @@
   ``openpbr_diffuse.cli.main.build_parser`` (80 columns, no colour);
 - the import table of ``docs/design/layering.md`` (between its ``<!-- layering:begin -->`` and
   ``<!-- layering:end -->`` markers): which sub-package imports which, read from every module's
-  ``import`` statements (lazy ones inside functions included) with ``ast``.
+  ``import`` statements (lazy ones inside functions included) with ``ast``;
+- the module-size table of ``docs/design/surface-engine.md`` (between its
+  ``<!-- module-sizes:begin -->`` and ``<!-- module-sizes:end -->`` markers): the lines of
+  each module of the surface engine and the first line of its docstring.
 
 Usage::
 
@@ -27,6 +30,19 @@ PACKAGE = ROOT / "openpbr_diffuse"
 CLI_PAGE = ROOT / "docs" / "reference" / "cli.md"
 LAYERING_PAGE = ROOT / "docs" / "design" / "layering.md"
 BEGIN, END = "<!-- layering:begin -->", "<!-- layering:end -->"
+ENGINE_PAGE = ROOT / "docs" / "design" / "surface-engine.md"
+SIZES_BEGIN, SIZES_END = "<!-- module-sizes:begin -->", "<!-- module-sizes:end -->"
+#: the surface engine's modules, in the order of the table (the lobe modules after them)
+ENGINE_MODULES = (
+    "nodes/surface_inputs.py",
+    "nodes/_surface_params.py",
+    "nodes/_surface_kernels.py",
+    "nodes/_surface_passes.py",
+    "nodes/_surface_drivers.py",
+    "nodes/lobes/__init__.py",
+    "nodes/lobes/_common.py",
+    "nodes/lobes/_samplers.py",
+)
 
 
 def cli_page() -> str:
@@ -128,8 +144,30 @@ def layering_page(current: str) -> str:
     return f"{head}{BEGIN}\n{layering_table()}\n{END}{tail}"
 
 
+def module_sizes_table() -> str:
+    """| module | lines | holds | of the surface engine's modules and its lobe modules."""
+    lobes = sorted(p.relative_to(PACKAGE).as_posix() for p in (PACKAGE / "nodes" / "lobes").glob("[!_]*.py"))
+    rows = ["| module | lines | holds |", "|---|---|---|"]
+    for rel in (*ENGINE_MODULES, *lobes):
+        text = (PACKAGE / rel).read_text(encoding="utf-8")
+        doc = ast.get_docstring(ast.parse(text)) or ""
+        first = " ".join(doc.split("\n\n")[0].split()).split(". ")[0].rstrip(".") + "."
+        rows.append(f"| `{rel}` | {len(text.splitlines())} | {first} |")
+    return "\n".join(rows)
+
+
+def module_sizes_page(current: str) -> str:
+    head, rest = current.split(SIZES_BEGIN, 1)
+    _, tail = rest.split(SIZES_END, 1)
+    return f"{head}{SIZES_BEGIN}\n{module_sizes_table()}\n{SIZES_END}{tail}"
+
+
 def targets() -> dict[Path, str]:
-    return {CLI_PAGE: cli_page() + "\n", LAYERING_PAGE: layering_page(LAYERING_PAGE.read_text(encoding="utf-8"))}
+    return {
+        CLI_PAGE: cli_page() + "\n",
+        LAYERING_PAGE: layering_page(LAYERING_PAGE.read_text(encoding="utf-8")),
+        ENGINE_PAGE: module_sizes_page(ENGINE_PAGE.read_text(encoding="utf-8")),
+    }
 
 
 def main(argv: list[str] | None = None) -> int:

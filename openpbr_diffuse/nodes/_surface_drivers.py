@@ -27,29 +27,26 @@ each call's directions.
 
 import functools
 import math
+import os
+import zlib
 
 import numba
 import numpy as np
 
 from .._jit import block, helper, inline, opaque, runner, stack_buffer
 from .._launch import _U, SERIAL_ROWS, executor, launch, rows
+from . import lobes as _lobes
 from ._surface_kernels import (
     COAT,
-    D_EON,
     DIFFUSE,
     FUZZ,
     METAL,
-    N_CCURVE,
-    N_CURVE,
     N_LOBES,
     N_PARAMS,
-    N_SAMPLERS,
-    S_COSINE,
-    S_EON,
-    S_GGX,
-    S_SHEEN,
     SPECULAR,
 )
+from ._surface_kernels import LOBES as LOBE_MODULES
+from ._surface_params import D_EON, N_CCURVE, N_CURVE, N_SAMPLERS
 from ._surface_passes import (
     NROWS,
     ROW,
@@ -74,6 +71,29 @@ from ._surface_passes import (
     state_passes,
 )
 
+
+def _registry_key():
+    """An int of the lobe registry: its lobes' names and the source of the engine's modules
+    (the lobe modules, ``_surface_params``, ``_surface_kernels``, ``_surface_passes``).  Every
+    runner closes over it, and numba's cache indexes a closure's compilations by its values:
+    a process with another registry (a lobe added) or an edited lobe compiles its own
+    runners instead of loading ones compiled for other lobes."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    files = {m.__file__ for m in LOBE_MODULES} | {
+        os.path.join(os.path.dirname(_lobes.__file__), f) for f in ("_common.py", "_samplers.py", "__init__.py")
+    }
+    files |= {os.path.join(here, f) for f in ("_surface_params.py", "_surface_kernels.py", "_surface_passes.py")}
+    key = zlib.crc32(" ".join(m.NAME for m in LOBE_MODULES).encode())
+    for path in sorted(files):
+        with open(path, "rb") as fh:
+            key = zlib.crc32(fh.read(), key)
+    return key
+
+
+#: the registry's key (``_registry_key``), a closure value of every runner
+REGISTRY_KEY = _registry_key()
+
+
 # --------------------------------------------------------------------------- buffers
 # Each run of blocks keeps its scratch, its compaction lists and (one material) a copy of the
 # material's parameters in stack buffers: loads of the parameters then leave the passes'
@@ -87,37 +107,47 @@ _param_buffer = stack_buffer(N_PARAMS)
 @inline
 def _local_params(p):
     """One material's parameters, copied to a stack buffer."""
-    q = _param_buffer()
+    params = _param_buffer()
     for i in range(N_PARAMS):
-        q[i] = p[i]
-    return q
+        params[i] = p[i]
+    return params
 
 
-@block
-def _each_sampler(vndf, p, ps, s0, f, idx, cnt):
-    """``sample_pass`` of every sampler that some row of the block uses (vndf a constant of the
-    GGX pass: ``sample_reflection`` branches on it)."""
-    if cnt[S_EON]:
-        sample_pass(opaque(S_EON), opaque(vndf), p, ps, s0, f, idx, cnt)
-    if cnt[S_COSINE]:
-        sample_pass(opaque(S_COSINE), opaque(vndf), p, ps, s0, f, idx, cnt)
-    if cnt[S_GGX]:
-        if vndf:
-            sample_pass(opaque(S_GGX), opaque(True), p, ps, s0, f, idx, cnt)
+def _each_sampler_source():
+    """The body of ``_each_sampler``, generated from the samplers' table: ``sample_pass`` of
+    every sampler that some row of the block uses, the sampler id a constant once inlined
+    (vndf too, for the samplers that branch on it: ``sample_reflection``)."""
+    lines = ["def _each_sampler(vndf, p, stride, first, f, idx, cnt):"]
+    for s, vndf_branches in enumerate(_lobes.BRANCHES_ON_VNDF):
+        call = "sample_pass(opaque({}), opaque({}), p, stride, first, f, idx, cnt)"
+        lines.append(f"    if cnt[{s}]:")
+        if vndf_branches:
+            lines += ["        if vndf:", "            " + call.format(s, True), "        else:"]
+            lines.append("            " + call.format(s, False))
         else:
-            sample_pass(opaque(S_GGX), opaque(False), p, ps, s0, f, idx, cnt)
-    if cnt[S_SHEEN]:
-        sample_pass(opaque(S_SHEEN), opaque(vndf), p, ps, s0, f, idx, cnt)
+            lines.append("        " + call.format(s, "vndf"))
+    return "\n".join(lines) + "\n"
+
+
+def _generated(source, name, env):
+    namespace = dict(env, __name__=__name__)
+    exec(compile(source, __file__, "exec"), namespace)
+    return namespace[name]
+
+
+_each_sampler = block(
+    _generated(_each_sampler_source(), "_each_sampler", {"sample_pass": sample_pass, "opaque": opaque})
+)
 
 
 @block
-def _choose(ud, u, s0, m, mb, f):
+def _choose(ud, u, first, m, span_rows, f):
     if ud == 3:
-        load_u_pass(3, u, s0, m, f)
-        choose_pass(3, mb, f)
+        load_u_pass(3, u, first, m, f)
+        choose_pass(3, span_rows, f)
     else:
-        load_u_pass(2, u, s0, m, f)
-        choose_pass(2, mb, f)
+        load_u_pass(2, u, first, m, f)
+        choose_pass(2, span_rows, f)
 
 
 # --------------------------------------------------------------------------- block runs
@@ -135,64 +165,96 @@ def _block_range(t, nt, n):
 
 @helper
 def _block(b, n):
-    """Block b of n rows: its first row s0, its rows m and the rows its passes run over."""
-    s0 = b * B
-    m = min(B, n - s0)
-    return s0, m, span(m)
+    """Block b of n rows: its first row first, its rows m and the rows its passes run over."""
+    first = b * B
+    m = min(B, n - first)
+    return first, m, span(m)
 
 
-def _albedo_run(ps, lobes, dmodel):
+def _albedo_run(stride, lobes, dmodel):
+    registry = REGISTRY_KEY
+
     @runner
     def albedo_run(t, nt, active, ms, p, wo, out):
         """out (n*3) = sum_k w_k E_k."""
+        _ = registry  # the cache's index holds it (``REGISTRY_KEY``)
         n = wo.shape[0] // 3
         f = _scratch()
-        if ps == 0:  # one material: a local copy (ps is a constant: the other branch is pruned)
-            q = _local_params(p)
+        if stride == 0:  # one material: a local copy (stride is a constant: the other branch is pruned)
+            params = _local_params(p)
         else:  # a material per row: read where they are
-            q = p
+            params = p
         b0, b1 = _block_range(t, nt, n)
         for b in range(b0, b1):
-            s0, m, mb = _block(b, n)
-            load_pass(wo, s0, m, f, ROW.OX)
-            state_passes(opaque(lobes), active, opaque(dmodel), ms, opaque(True), opaque(True), q, ps, s0, mb, f)
-            fill_pass(f, ROW.A0, mb, 0.0)
-            fill_pass(f, ROW.A1, mb, 0.0)
-            fill_pass(f, ROW.A2, mb, 0.0)
-            each_albedo(lobes, active, dmodel, ms, q, ps, s0, mb, f)
-            rgb_out_pass(s0, m, f, out)
+            first, m, span_rows = _block(b, n)
+            load_pass(wo, first, m, f, ROW.OX)
+            state_passes(
+                opaque(lobes),
+                active,
+                opaque(dmodel),
+                ms,
+                opaque(True),
+                opaque(True),
+                params,
+                stride,
+                first,
+                span_rows,
+                f,
+            )
+            fill_pass(f, ROW.A0, span_rows, 0.0)
+            fill_pass(f, ROW.A1, span_rows, 0.0)
+            fill_pass(f, ROW.A2, span_rows, 0.0)
+            each_albedo(lobes, active, dmodel, ms, params, stride, first, span_rows, f)
+            rgb_out_pass(first, m, f, out)
 
     return albedo_run
 
 
-def _eval_run(ps, lobes, dmodel):
+def _eval_run(stride, lobes, dmodel):
+    registry = REGISTRY_KEY
+
     @runner
     def eval_run(t, nt, active, only, ms, p, wi, wo, out):
         """out (n*3) = sum_k w_k f_k, or the unweighted f_only when only >= 0."""
+        _ = registry  # the cache's index holds it (``REGISTRY_KEY``)
         n = wo.shape[0] // 3
         on = active if only < 0 else active & (1 << only)
         f = _scratch()
-        if ps == 0:  # one material: a local copy (ps is a constant: the other branch is pruned)
-            q = _local_params(p)
+        if stride == 0:  # one material: a local copy (stride is a constant: the other branch is pruned)
+            params = _local_params(p)
         else:  # a material per row: read where they are
-            q = p
+            params = p
         b0, b1 = _block_range(t, nt, n)
         for b in range(b0, b1):
-            s0, m, mb = _block(b, n)
-            load_pass(wo, s0, m, f, ROW.OX)
-            load_pass(wi, s0, m, f, ROW.IX)
-            state_passes(opaque(lobes), active, opaque(dmodel), ms, opaque(False), opaque(False), q, ps, s0, mb, f)
-            ggx_pass(on, q, ps, s0, mb, f)
-            fill_pass(f, ROW.A0, mb, 0.0)
-            fill_pass(f, ROW.A1, mb, 0.0)
-            fill_pass(f, ROW.A2, mb, 0.0)
-            each_eval(lobes, on, dmodel, only < 0, ms, q, ps, s0, mb, f)
-            rgb_out_pass(s0, m, f, out)
+            first, m, span_rows = _block(b, n)
+            load_pass(wo, first, m, f, ROW.OX)
+            load_pass(wi, first, m, f, ROW.IX)
+            state_passes(
+                opaque(lobes),
+                active,
+                opaque(dmodel),
+                ms,
+                opaque(False),
+                opaque(False),
+                params,
+                stride,
+                first,
+                span_rows,
+                f,
+            )
+            ggx_pass(on, params, stride, first, span_rows, f)
+            fill_pass(f, ROW.A0, span_rows, 0.0)
+            fill_pass(f, ROW.A1, span_rows, 0.0)
+            fill_pass(f, ROW.A2, span_rows, 0.0)
+            each_eval(lobes, on, dmodel, only < 0, ms, params, stride, first, span_rows, f)
+            rgb_out_pass(first, m, f, out)
 
     return eval_run
 
 
-def _lobes_run(ps, lobes):
+def _lobes_run(stride, lobes):
+    registry = REGISTRY_KEY
+
     @runner
     def lobes_run(t, nt, active, dmodel, sel, ms, with_f, p, wi, wo, W, E, P, out):
         """W, E (n*8*3), P (n*8): weight, albedo and probability of every lobe slot at wo;
@@ -204,93 +266,126 @@ def _lobes_run(ps, lobes):
         every model: a process that reads materials of several models compiles it once);
         the EON diffuse lobe's BSDF pass is typed with the model a constant, so that its
         loop vectorises as in ``eval_run``."""
+        _ = registry  # the cache's index holds it (``REGISTRY_KEY``)
         n = wo.shape[0] // 3
         f = _scratch()
-        if ps == 0:  # one material: a local copy (ps is a constant: the other branch is pruned)
-            q = _local_params(p)
+        if stride == 0:  # one material: a local copy (stride is a constant: the other branch is pruned)
+            params = _local_params(p)
         else:  # a material per row: read where they are
-            q = p
+            params = p
         b0, b1 = _block_range(t, nt, n)
         for b in range(b0, b1):
-            s0, m, mb = _block(b, n)
-            load_pass(wo, s0, m, f, ROW.OX)
-            state_passes(opaque(lobes), active, dmodel, ms, opaque(True), opaque(True), q, ps, s0, mb, f)
-            probability_pass(lobes, active, sel, q, ps, s0, mb, f, ms)
+            first, m, span_rows = _block(b, n)
+            load_pass(wo, first, m, f, ROW.OX)
+            state_passes(
+                opaque(lobes), active, dmodel, ms, opaque(True), opaque(True), params, stride, first, span_rows, f
+            )
+            probability_pass(lobes, active, sel, params, stride, first, span_rows, f, ms)
             for k in range(N_LOBES):  # & lobes: a constant, so LLVM drops the slots outside the set
-                lobe_outputs_pass(k, is_on(active & lobes, k), ms, q, ps, s0, m, f, W, E, P)
+                lobe_outputs_pass(k, is_on(active & lobes, k), ms, params, stride, first, m, f, W, E, P)
             if with_f:
-                load_pass(wi, s0, m, f, ROW.IX)
-                ggx_pass(active, q, ps, s0, mb, f)
-                fill_pass(f, ROW.A0, mb, 0.0)
-                fill_pass(f, ROW.A1, mb, 0.0)
-                fill_pass(f, ROW.A2, mb, 0.0)
+                load_pass(wi, first, m, f, ROW.IX)
+                ggx_pass(active, params, stride, first, span_rows, f)
+                fill_pass(f, ROW.A0, span_rows, 0.0)
+                fill_pass(f, ROW.A1, span_rows, 0.0)
+                fill_pass(f, ROW.A2, span_rows, 0.0)
                 if dmodel == D_EON:
-                    each_eval(lobes, active, D_EON, True, ms, q, ps, s0, mb, f)
+                    each_eval(lobes, active, D_EON, True, ms, params, stride, first, span_rows, f)
                 else:
-                    each_eval(lobes, active, dmodel, True, ms, q, ps, s0, mb, f)
-                rgb_out_pass(s0, m, f, out)
+                    each_eval(lobes, active, dmodel, True, ms, params, stride, first, span_rows, f)
+                rgb_out_pass(first, m, f, out)
 
     return lobes_run
 
 
-def _pdf_run(ps, lobes, dmodel):
+def _pdf_run(stride, lobes, dmodel):
+    registry = REGISTRY_KEY
+
     @runner
     def pdf_run(t, nt, active, sel, ms, vndf, p, wo, wi, out):
         """out (n) = sum_k P_k pdf_k(wi | wo); 0 where wo is below the horizon."""
+        _ = registry  # the cache's index holds it (``REGISTRY_KEY``)
         n = wo.shape[0] // 3
         f = _scratch()
-        if ps == 0:  # one material: a local copy (ps is a constant: the other branch is pruned)
-            q = _local_params(p)
+        if stride == 0:  # one material: a local copy (stride is a constant: the other branch is pruned)
+            params = _local_params(p)
         else:  # a material per row: read where they are
-            q = p
+            params = p
         b0, b1 = _block_range(t, nt, n)
         for b in range(b0, b1):
-            s0, m, mb = _block(b, n)
-            load_pass(wo, s0, m, f, ROW.OX)
-            load_pass(wi, s0, m, f, ROW.IX)
-            state_passes(opaque(lobes), active, opaque(dmodel), ms, opaque(True), opaque(True), q, ps, s0, mb, f)
-            probability_pass(lobes, active, sel, q, ps, s0, mb, f, ms)
-            ggx_pdf_pass(active, vndf, q, ps, s0, mb, f)
-            fill_pass(f, ROW.Q, mb, 0.0)
-            each_pdf(lobes, active, dmodel, False, vndf, q, ps, s0, mb, f)
+            first, m, span_rows = _block(b, n)
+            load_pass(wo, first, m, f, ROW.OX)
+            load_pass(wi, first, m, f, ROW.IX)
+            state_passes(
+                opaque(lobes),
+                active,
+                opaque(dmodel),
+                ms,
+                opaque(True),
+                opaque(True),
+                params,
+                stride,
+                first,
+                span_rows,
+                f,
+            )
+            probability_pass(lobes, active, sel, params, stride, first, span_rows, f, ms)
+            ggx_pdf_pass(active, vndf, params, stride, first, span_rows, f)
+            fill_pass(f, ROW.MIXTURE_PDF, span_rows, 0.0)
+            each_pdf(lobes, active, dmodel, False, vndf, params, stride, first, span_rows, f)
             for r in range(m):
-                out[_U(s0 + r)] = f[at(ROW.Q, r)] if f[at(ROW.OZ, r)] > 0.0 else 0.0
+                out[_U(first + r)] = f[at(ROW.MIXTURE_PDF, r)] if f[at(ROW.OZ, r)] > 0.0 else 0.0
 
     return pdf_run
 
 
-def _sample_run(ps, lobes, dmodel):
+def _sample_run(stride, lobes, dmodel):
+    registry = REGISTRY_KEY
+
     @runner
     def sample_run(t, nt, active, sel, ms, vndf, p, wo, u, wi, out):
         """Pick lobe k with P_k (u[0]), sample it (u[1:3], or u[0] rescaled and u[1] when u has
         2 columns); wi (n*3), out (n) = the mixture pdf at wi; 0 marks a failed sample."""
+        _ = registry  # the cache's index holds it (``REGISTRY_KEY``)
         n = wo.shape[0] // 3
         ud = u.shape[0] // n
         f = _scratch()
         idx = _lists()
         cnt = _counts()
-        if ps == 0:  # one material: a local copy (ps is a constant: the other branch is pruned)
-            q = _local_params(p)
+        if stride == 0:  # one material: a local copy (stride is a constant: the other branch is pruned)
+            params = _local_params(p)
         else:  # a material per row: read where they are
-            q = p
+            params = p
         b0, b1 = _block_range(t, nt, n)
         for b in range(b0, b1):
-            s0, m, mb = _block(b, n)
-            load_pass(wo, s0, m, f, ROW.OX)
-            state_passes(opaque(lobes), active, opaque(dmodel), ms, opaque(True), opaque(True), q, ps, s0, mb, f)
-            probability_pass(lobes, active, sel, q, ps, s0, mb, f, ms)
-            _choose(ud, u, s0, m, mb, f)
-            compact(opaque(dmodel), mb, f, idx, cnt)
-            _each_sampler(vndf, q, ps, s0, f, idx, cnt)
-            ggx_pdf_pass(active, vndf, q, ps, s0, mb, f)
-            fill_pass(f, ROW.Q, mb, 0.0)
-            fill_pass(f, ROW.MINE, mb, 0.0)
-            each_pdf(lobes, active, dmodel, True, vndf, q, ps, s0, mb, f)
+            first, m, span_rows = _block(b, n)
+            load_pass(wo, first, m, f, ROW.OX)
+            state_passes(
+                opaque(lobes),
+                active,
+                opaque(dmodel),
+                ms,
+                opaque(True),
+                opaque(True),
+                params,
+                stride,
+                first,
+                span_rows,
+                f,
+            )
+            probability_pass(lobes, active, sel, params, stride, first, span_rows, f, ms)
+            _choose(ud, u, first, m, span_rows, f)
+            compact(opaque(dmodel), span_rows, f, idx, cnt)
+            _each_sampler(vndf, params, stride, first, f, idx, cnt)
+            ggx_pdf_pass(active, vndf, params, stride, first, span_rows, f)
+            fill_pass(f, ROW.MIXTURE_PDF, span_rows, 0.0)
+            fill_pass(f, ROW.CHOSEN_PDF, span_rows, 0.0)
+            each_pdf(lobes, active, dmodel, True, vndf, params, stride, first, span_rows, f)
             for r in range(m):
-                j = _U(3) * _U(s0 + r)
+                j = _U(3) * _U(first + r)
                 up = f[at(ROW.OZ, r)] > 0.0
-                good = up & (f[at(ROW.OK, r)] > 0.0) & (f[at(ROW.MINE, r)] > 0.0)
-                out[_U(s0 + r)] = f[at(ROW.Q, r)] if good else 0.0
+                good = up & (f[at(ROW.OK, r)] > 0.0) & (f[at(ROW.CHOSEN_PDF, r)] > 0.0)
+                out[_U(first + r)] = f[at(ROW.MIXTURE_PDF, r)] if good else 0.0
                 wi[j] = f[at(ROW.IX, r)] if up else 0.0
                 wi[j + _U(1)] = f[at(ROW.IX + 1, r)] if up else 0.0
                 wi[j + _U(2)] = f[at(ROW.IX + 2, r)] if up else 1.0

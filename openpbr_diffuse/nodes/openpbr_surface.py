@@ -56,16 +56,17 @@ largest component ("max", adobe/openpbr-bsdf); "uniform" (1/K) is for comparison
 Lambert, subsurface: cosine; GGX: visible normals, Heitz 2018, or the plain NDF; fuzz: its
 LTC); ``pdf`` is the one-sample mixture pdf sum_k P_k pdf_k over the whole sphere.
 
-Not modelled (accepted, listed in ``ignored_inputs`` with a warning when set): anisotropy,
-thin film, emission, geometry_opacity, the transmission volume (scatter, its anisotropy,
-dispersion; transmission_depth > 0 only switches the tint off), subsurface radius, and the
-tangent / coat-normal inputs.  specular_ior or coat_ior < 1: total internal reflection is
+The inputs used are declared once (``surface_inputs.MODELLING``, with the nodedef's types):
+transmission_depth > 0 switches the transmission tint off, as the graph.  Not modelled
+(accepted, listed in ``ignored_inputs`` with a warning when set): anisotropy, thin film,
+emission, geometry_opacity, the transmission volume (scatter, its anisotropy, dispersion),
+subsurface radius, and the tangent / coat-normal inputs.  specular_ior or coat_ior < 1: total internal reflection is
 not modelled, the Fresnel factor of the reciprocal index (same F0) is used, with a warning.
 The F82-tint Fresnel is the published formula, unclamped (warned when it dips below 0).
 
 Speed: every verb is one compiled driver (``_surface_drivers``) that runs blocks of rows one
-lobe at a time, each pass a vectorised loop (``_surface_passes``; the lobes themselves are
-``_surface_kernels``); the material's inputs are packed once into a parameter vector per
+lobe at a time, each pass a vectorised loop (``_surface_passes``; the lobes themselves are the
+modules of ``nodes.lobes``, assembled by ``_surface_kernels``); the material's inputs are packed once into a parameter vector per
 material.  Building a surface from plain
 Python numbers and 3-tuples skips NumPy's input conversion (same checks, same values), and
 ``lobes`` at one direction of one material calls the serial driver directly.
@@ -86,36 +87,15 @@ from .. import _arrays as ar
 from ..microfacet import ggx
 from . import _surface_drivers as sd
 from . import _surface_kernels as sk
+from . import surface_inputs
 from ._node import NodeMeta, bind_inputs, convert_input, is_default, node_signature
+from ._surface_params import D_EON, D_LAMBERT, D_QON
 from .frame import Frame
 from .materialx_defs import nodedef_inputs
 
-#: The inputs this model uses; every other input of the nodedef is reported when set.
-MODELLED = (
-    "base_weight",
-    "base_color",
-    "base_diffuse_roughness",
-    "base_metalness",
-    "specular_weight",
-    "specular_color",
-    "specular_roughness",
-    "specular_ior",
-    "transmission_weight",
-    "transmission_color",
-    "subsurface_weight",
-    "subsurface_color",
-    "subsurface_scatter_anisotropy",
-    "coat_weight",
-    "coat_color",
-    "coat_roughness",
-    "coat_ior",
-    "coat_darkening",
-    "fuzz_weight",
-    "fuzz_color",
-    "fuzz_roughness",
-    "geometry_thin_walled",
-    "geometry_normal",
-)
+#: The inputs this model uses (``surface_inputs.MODELLING``); every other input of the
+#: nodedef is reported when set.
+MODELLED = surface_inputs.MODELLED + sk.LOBE_INPUTS
 
 #: Inputs whose nodedef ui maximum is a UI range, not a validity bound: OpenPBR's own example
 #: metals use an F82 tint above 1 (cesium 1.394, rubidium 1.096) and subsurface radius
@@ -125,7 +105,7 @@ UNBOUNDED_ABOVE = ("specular_color", "subsurface_radius_scale")
 SELECTIONS = ("length", "max", "uniform")
 LOBE_NAMES = sk.LOBE_NAMES
 #: diffuse_model -> kernel model id
-DIFFUSE_MODELS = {"eon": sk.D_EON, "qon": sk.D_QON, "lambert": sk.D_LAMBERT}
+DIFFUSE_MODELS = {"eon": D_EON, "qon": D_QON, "lambert": D_LAMBERT}
 _OPTIONS = (("selection", "length"), ("specular_sampling", "vndf"), ("multiscatter", True), ("diffuse_model", "eon"))
 _OPTION_NAMES = tuple(n for n, _ in _OPTIONS)
 _MODELLED = frozenset(MODELLED)
@@ -165,7 +145,7 @@ def pack_parameters(p: Mapping[str, Any], changed: Iterable[str] | None = None) 
     raw = _one_material(p, changed)
     lead = ()
     if raw is None:
-        vals = [p[n] if n != "geometry_thin_walled" else np.float64(bool(p[n])) for n, _ in sk.RAW]
+        vals = [np.float64(bool(p[n])) if n in _BOOLEAN else p[n] for n, _ in sk.RAW]
         lead = np.broadcast_shapes(*(np.shape(v)[:-1] if w == 3 else np.shape(v) for v, (_, w) in zip(vals, sk.RAW)))
         raw = np.concatenate(
             [
@@ -180,6 +160,8 @@ def pack_parameters(p: Mapping[str, Any], changed: Iterable[str] | None = None) 
     return out, mask, warn
 
 
+#: the boolean inputs of the packed row (packed as 0.0 / 1.0)
+_BOOLEAN = frozenset(n for n, _ in sk.RAW if nodedef_inputs(surface_inputs.NODEDEF)[n].type == "boolean")
 #: offset and width of each RAW input in the flat row
 _RAW_AT: dict[str, tuple[int, int]] = {}
 for _n, _w in sk.RAW:
@@ -201,7 +183,7 @@ def _one_material(p, changed):
         v = p[n]
         if type(v) is np.float64:  # what ``_convert`` gives a plain float input
             flat[a] = v
-        elif n == "geometry_thin_walled":
+        elif n in _BOOLEAN:
             flat[a] = float(bool(v))
         elif w == 1 and np.ndim(v) == 0:
             flat[a] = float(v)

@@ -1,0 +1,59 @@
+"""The samplers the lobes share (a lobe names its own by ``sampler``), one function per
+sampler with one signature, indexed by the sampler ids of ``_surface_params`` (S_EON,
+S_COSINE, S_GGX, S_SHEEN).  The sample pass of a block gathers the rows whose chosen lobes
+share a sampler and runs that sampler over them, so that its loop vectorises; the lobe only
+sets the sampler's width (``sample_setup``: its GGX alpha, its roughness) and the side of
+the surface.
+
+The hemisphere samplers never return z = 0: as in ``sampling`` (``sample``), |z| is floored
+at ``Z_MIN``, which only rounding reaches (a CLTC direction on the clipped boundary), so
+that the sample lies in its lobe and its pdf is the lobe's pdf there.
+"""
+
+from ..._jit import block
+from ...microfacet import kernels as mf
+from ...microfacet.sheen import sheen_sample
+from ...sampling.ltc import from_frame, ltc_frame
+from ...sampling.mis import eon_sample
+from ...sampling.simple import cosine_sample_local
+from .._surface_params import PARAM, Z_MIN
+
+
+@block
+def eon(p, offset, ox, oy, oz, u1, u2, vndf, width):
+    """The EON sampler (EON paper Listing 4) at r = width."""
+    mu = min(max(oz, 0.0), 1.0)
+    Xx, Xy = ltc_frame(ox, oy)
+    x, y, z, _ = eon_sample(Xx, Xy, mu, width, p[offset + PARAM.R_TENTH], u1, u2)
+    return x, y, max(z, Z_MIN), True
+
+
+@block
+def cosine(p, offset, ox, oy, oz, u1, u2, vndf, width):
+    Xx, Xy = ltc_frame(ox, oy)
+    lx, ly, z, _ = cosine_sample_local(u1, u2)
+    x, y = from_frame(Xx, Xy, lx, ly)
+    return x, y, max(z, Z_MIN), True
+
+
+@block
+def ggx(p, offset, ox, oy, oz, u1, u2, vndf, width):
+    """GGX at alpha = width: visible normals (Heitz 2018) or the NDF; fails (ok False) when
+    an NDF normal faces away from wo."""
+    return mf.sample_reflection(ox, oy, oz, width, u1, u2, vndf)
+
+
+@block
+def sheen(p, offset, ox, oy, oz, u1, u2, vndf, width):
+    """The LTC sheen's sampler at fuzz roughness = width."""
+    mu = min(max(oz, 0.0), 1.0)
+    Xx, Xy = ltc_frame(ox, oy)
+    lx, ly, z = sheen_sample(mu, width, u1, u2)
+    x, y = from_frame(Xx, Xy, lx, ly)
+    return x, y, max(z, Z_MIN), True
+
+
+#: the samplers, by sampler id
+SAMPLERS = (eon, cosine, ggx, sheen)
+#: the samplers that branch on ``specular_sampling`` (their pass is compiled once for each)
+BRANCHES_ON_VNDF = (False, False, True, False)

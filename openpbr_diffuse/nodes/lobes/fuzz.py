@@ -1,0 +1,69 @@
+"""The fuzz lobe [fuzz_bsdf]: the Zeltner 2022 LTC sheen (``microfacet.sheen``), tint
+fuzz_color, roughness fuzz_roughness, weight fuzz_weight, on top of every layer; sampled by
+its LTC.
+
+Example
+-------
+>>> from openpbr_diffuse.nodes import OpenPBRSurface
+>>> p = OpenPBRSurface(fuzz_weight=0.5, fuzz_color=(1.0, 0.5, 0.0)).params
+>>> round(weight_color(p, 0, 1), 6), bool(is_on(p, 0))
+(0.25, True)
+"""
+
+from ..._jit import block
+from ...microfacet.sheen import sheen_density
+from ...sampling.ltc import ltc_frame, to_frame
+from .._surface_params import ON_TOP, PARAM, S_SHEEN
+from ._common import unit_albedo
+
+NAME = "fuzz"
+LAYER = ON_TOP
+READS_DIFFUSE_MODEL = False
+constant_albedo = unit_albedo
+
+
+@block
+def weight_color(p, offset, c):
+    return p[offset + PARAM.FUZZ_W] * p[offset + PARAM.FUZZ_COLOR + c]
+
+
+@block
+def is_on(p, offset):
+    return p[offset + PARAM.FUZZ_W] > 0.0
+
+
+@block
+def eval(p, offset, d, x):
+    up = (d.wi_z > 0.0) & (d.wo_z > 0.0)
+    Xx, Xy = ltc_frame(d.wo_x, d.wo_y)
+    lx, ly = to_frame(Xx, Xy, d.wi_x, d.wi_y)
+    v = x.e_fuzz * sheen_density(lx, ly, d.wi_z, d.wo_z, p[offset + PARAM.FUZZ_R]) / d.wi_z
+    v = v if up else 0.0
+    return v, v, v
+
+
+@block
+def pdf(p, offset, d, dmodel, vndf, ggx_pdf):
+    Xx, Xy = ltc_frame(d.wo_x, d.wo_y)
+    lx, ly = to_frame(Xx, Xy, d.wi_x, d.wi_y)
+    return sheen_density(lx, ly, d.wi_z, d.wo_z, p[offset + PARAM.FUZZ_R])
+
+
+@block
+def sampler(dmodel):
+    return S_SHEEN
+
+
+@block
+def sample_setup(p, offset):
+    return p[offset + PARAM.FUZZ_R], 1.0
+
+
+@block
+def albedo(c, p, offset, ms, st):
+    return st.fuzz
+
+
+@block
+def score(mx, p, offset, weight_at, constant, ms, st):
+    return st.fuzz * constant

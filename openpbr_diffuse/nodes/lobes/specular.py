@@ -1,0 +1,75 @@
+"""The base specular lobe [dielectric_reflection]: GGX (height-correlated Smith G2, alpha =
+r^2) with the exact Fresnel factor of the modulated index (F0 = specular_weight F0(eta_s)),
+tint specular_color, under the coat; sampled by GGX (visible normals or the NDF).  Its GGX
+reflection without Fresnel and its pdf are computed once a row and shared with the metal
+lobe (``EvalInputs.ggx_f``, ``ggx_pdf``).
+
+Example
+-------
+>>> from openpbr_diffuse.nodes import OpenPBRSurface
+>>> p = OpenPBRSurface(specular_color=(0.5, 0.5, 0.5)).params
+>>> round(weight_color(p, 0, 1), 6), bool(is_on(p, 0))
+(0.5, True)
+"""
+
+from ..._jit import block
+from ...microfacet import fresnel
+from ...microfacet import kernels as mf
+from .._surface_params import PARAM, S_GGX, UNDER_COAT
+from ._common import unit_albedo
+
+NAME = "specular"
+LAYER = UNDER_COAT
+READS_DIFFUSE_MODEL = False
+constant_albedo = unit_albedo
+
+
+@block
+def weight_color(p, offset, c):
+    return p[offset + PARAM.BASE_MUL + c] * (1.0 - p[offset + PARAM.METAL]) * p[offset + PARAM.SPEC_COLOR + c]
+
+
+@block
+def is_on(p, offset):
+    tinted = (
+        (p[offset + PARAM.SPEC_COLOR] > 0.0)
+        or (p[offset + PARAM.SPEC_COLOR + 1] > 0.0)
+        or (p[offset + PARAM.SPEC_COLOR + 2] > 0.0)
+    )
+    return (1.0 - p[offset + PARAM.METAL] > 0.0) and (p[offset + PARAM.X_S] > 0.0) and tinted
+
+
+@block
+def eval(p, offset, d, x):
+    ior_x = p[offset + PARAM.X_S]
+    v = (
+        x.ggx_f
+        * fresnel.dielectric(x.ggx_cos, p[offset + PARAM.ETA_S])
+        * mf.multiscatter(ior_x * ior_x, x.e1_specular, x.multiscatter)
+    )
+    return v, v, v
+
+
+@block
+def pdf(p, offset, d, dmodel, vndf, ggx_pdf):
+    return ggx_pdf
+
+
+@block
+def sampler(dmodel):
+    return S_GGX
+
+
+@block
+def sample_setup(p, offset):
+    return p[offset + PARAM.ALPHA_S], 1.0
+
+
+@block
+def albedo(c, p, offset, ms, st):
+    return st.specular
+
+
+@block
+def score(mx, p, offset, weight_at, constant, ms, st):
+    return st.specular * constant

@@ -1,0 +1,78 @@
+"""The subsurface lobe [subsurface_bsdf], *approximated* as a Lambertian reflection of albedo
+subsurface_color; when thin-walled [subsurface_thin_walled], the reflection half of the
+reference graph's 0.5/0.5 mix: a QON reflection (sigma = base_diffuse_roughness) weighted
+subsurface_color (1 - g) / 2 (its translucent half is ``subsurface_transmission``).  Cosine
+sampled.
+
+Example
+-------
+>>> from openpbr_diffuse.nodes import OpenPBRSurface
+>>> p = OpenPBRSurface(subsurface_weight=1.0, subsurface_color=(0.5, 0.5, 0.5)).params
+>>> round(weight_color(p, 0, 0), 6), round(constant_albedo(p, 0, 0), 6)  # Lambertian, not thin
+(1.0, 0.5)
+"""
+
+from ..._jit import INV_PI, block
+from ...models.qon import qon_terms
+from ...sampling.simple import cosine_pdf
+from .._surface_params import PARAM, S_COSINE, UNDER_SPECULAR
+
+NAME = "subsurface"
+LAYER = UNDER_SPECULAR
+READS_DIFFUSE_MODEL = False
+
+
+@block
+def weight_color(p, offset, c):
+    solid = p[offset + PARAM.BASE_MUL + c] * (1.0 - p[offset + PARAM.METAL]) * (1.0 - p[offset + PARAM.TRANS_W])
+    S, g = p[offset + PARAM.SSS_W], p[offset + PARAM.SSS_ANISO]
+    thin = p[offset + PARAM.THIN] > 0.0
+    return solid * S * 0.5 * p[offset + PARAM.SSS_COLOR + c] * (1.0 - g) if thin else solid * S
+
+
+@block
+def constant_albedo(p, offset, c):
+    return p[offset + PARAM.SSS_COLOR + c]
+
+
+@block
+def is_on(p, offset):
+    return (1.0 - p[offset + PARAM.METAL]) * (1.0 - p[offset + PARAM.TRANS_W]) * p[offset + PARAM.SSS_W] > 0.0
+
+
+@block
+def eval(p, offset, d, x):
+    up = (d.wi_z > 0.0) & (d.wo_z > 0.0)
+    s = d.wi_x * d.wo_x + d.wi_y * d.wo_y + d.wi_z * d.wo_z - d.wi_z * d.wo_z
+    qon = qon_terms(d.wi_z, d.wo_z, s, p[offset + PARAM.QON_AB], p[offset + PARAM.QON_AB + 1])
+    thin = p[offset + PARAM.THIN] > 0.0
+    g = qon if thin else INV_PI
+    g = g if up else 0.0
+    color = offset + PARAM.SSS_COLOR
+    return p[color] * g, p[color + 1] * g, p[color + 2] * g
+
+
+@block
+def pdf(p, offset, d, dmodel, vndf, ggx_pdf):
+    density = cosine_pdf(d.wi_z)
+    return density if d.wi_z > 0.0 else 0.0
+
+
+@block
+def sampler(dmodel):
+    return S_COSINE
+
+
+@block
+def sample_setup(p, offset):
+    return 0.0, 1.0
+
+
+@block
+def albedo(c, p, offset, ms, st):
+    return p[offset + PARAM.SSS_COLOR + c] * st.thin_reflection
+
+
+@block
+def score(mx, p, offset, weight_at, constant, ms, st):
+    return st.thin_reflection * constant
