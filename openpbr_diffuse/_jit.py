@@ -145,9 +145,10 @@ block = _compiled_only(fastmath=FASTMATH, error_model="numpy", forceinline=True,
 #: arithmetic (their NaN and Inf comparisons are the point).
 predicate = _compiled_only(error_model="numpy", forceinline=True)
 
-#: Decorator for the tiny helpers (scratch indices, block bounds): inlined in numba's IR, so
-#: that they are never compiled on their own (a ``kernel`` is compiled once per distinct
-#: literal argument of its call sites).
+#: Decorator for a function inlined in numba's IR at its call sites, never compiled on its
+#: own: one whose ``stack_buffer`` must live in its caller's frame (``_local_params`` of
+#: ``nodes._surface_drivers``, a material's parameters copied for a block).  The tiny integer
+#: helpers (scratch indices, block bounds) use ``helper`` instead.
 inline = numba.njit(inline="always")
 
 
@@ -183,14 +184,14 @@ serial = numba.njit(cache=True, error_model="numpy", **NO_NRT, **NO_CFUNC)
 #: Decorators for the random walks of the microsurface simulators (``simulation``): the
 #: per-path loops (``walk``) and the steps they call (``walk_step``: compiled for compiled
 #: callers only, as ``kernel``, and inlined by LLVM; inlined in numba's IR instead, each of
-#: their call sites was a copy to type and lower, and the layered walk compiled in 5.6 s
-#: instead of 1.8 s, same results bit for bit).  No fastmath: the walks rely on IEEE
+#: their call sites was a copy to type and lower, and the layered walk compiled three times
+#: slower, same results bit for bit).  No fastmath: the walks rely on IEEE
 #: comparisons free of inf and NaN at grazing angles, and their speed comes from the
 #: per-path loop, not from vectorisation.  With NRT: a walk allocates its tallies.  numpy's
 #: error model, as every other compiled loop of the package: a division is one instruction,
-#: not a test for a zero divisor and a ZeroDivisionError path (the walks compile in 6 % less
-#: time, results bit for bit the same: ``simulate_albedo`` V-cavity and a GGX-over-EON
-#: layered albedo, 2026-12-05).
+#: not a test for a zero divisor and a ZeroDivisionError path (the walks compile faster, same
+#: results bit for bit; measurements in docs/benchmarks/bench.md, "Measurements moved from the
+#: code").
 walk = numba.njit(cache=True, nogil=True, error_model="numpy", **NO_CFUNC)
 walk_step = _compiled_only(forceinline=True, error_model="numpy")
 

@@ -1,7 +1,7 @@
 """Batch launch machinery shared by every compiled verb (models, sampling, the surface).
 
 One launch model: a driver is a serial ``nogil`` loop over flat, C-contiguous buffers, and a
-call of at least ``SERIAL_ROWS`` rows is cut into contiguous runs of rows that the one thread
+call of at least ``SPLIT_ROWS`` rows is cut into contiguous runs of rows that the one thread
 pool of the package (``executor``, sized to numba's configured thread count) runs at once.
 No driver is compiled with ``parallel=True``: numba's ``prange`` lowering compiles every
 loop body twice (a serial and a parallel version), which doubled the cold start, and a
@@ -156,7 +156,7 @@ def launch(
     With only FULL inputs the driver runs once over all rows.  Otherwise it runs per block
     of at most CHUNK rows: TILED inputs are repeated to one block's rows, BROADCAST ones are
     gathered block by block (``row_blocks``), so the extra memory is a few blocks of input
-    whatever the broadcast shape.  A call (or block) of at least ``SERIAL_ROWS`` rows is cut
+    whatever the broadcast shape.  A call (or block) of at least ``SPLIT_ROWS`` rows is cut
     into a run of rows per thread on the pool, unless ``split`` is false (a ``drive`` that
     runs its rows on the pool itself: the surface's block runners).  Returns the sum of what the driver calls return (the count
     of rows that failed the input checks, for drivers that check; None counts as 0).

@@ -3,7 +3,6 @@ way tests/test_report_page.py drives it) and read what the first screen shows.""
 
 from pathlib import Path
 
-import pytest
 from _system import need
 from test_report_page import CHROMIUM, FLAGS
 
@@ -13,7 +12,8 @@ def first_screen(html: Path, selector: str = "#headline", width: int = 1280, hei
     "body": the page's text, "errors": page errors and console errors, "failed": failed
     requests, "images": [(src, complete, naturalWidth)]}.  Skips when playwright or Chromium
     is absent."""
-    sync_api = pytest.importorskip("playwright.sync_api")
+    from playwright import sync_api
+
     need("chromium")
     errors, failed = [], []
     with sync_api.sync_playwright() as p:

@@ -2,10 +2,10 @@
 
 import json
 
+import colour
 import numpy as np
 import pytest
 
-colour = pytest.importorskip("colour")
 pytestmark = pytest.mark.filterwarnings("ignore::colour.utilities.ColourRuntimeWarning")
 
 from openpbr_diffuse.cli.main import main  # noqa: E402
@@ -153,7 +153,8 @@ def test_spectra_csv(tmp_path, capsys):
 
 
 def test_image(tmp_path, capsys):
-    oiio = pytest.importorskip("OpenImageIO")
+    import OpenImageIO as oiio
+
     path = tmp_path / "sw.png"
     code, out, _ = run(
         capsys, "colorshift", "--colors", "checker", "--roughness", "0", "1", "--mu", "1", "--image", str(path)
@@ -250,8 +251,10 @@ def test_unwritable_image(capsys, tmp_path):
 def test_bundled_materials_colours(capsys):
     """Every supported bundled material becomes a row; its rho_rgb is the reader's ACEScg colour
     converted to lin_rec709 (checked with OpenImageIO's OCIO conversion, Bradford)."""
-    readers = pytest.importorskip("openpbr_diffuse.readers")
-    oiio = pytest.importorskip("OpenImageIO")
+    import OpenImageIO as oiio
+
+    from openpbr_diffuse import readers
+
     path = readers.BUNDLED_MATERIALS / "clay_rough.mtlx"
     mats = [m for m in readers.load_materials(path) if m.supported]
     code, out, _ = run(capsys, "colorshift", "--colors", str(path), "--roughness", "0.5", "--mu", "1", "--json")
@@ -302,7 +305,8 @@ def test_bad_files_one_line_exit_2(tmp_path, capsys, name, text, match):
 
 
 def test_image_exr_keeps_linear_working_space_values(tmp_path, capsys):
-    oiio = pytest.importorskip("OpenImageIO")
+    import OpenImageIO as oiio
+
     from openpbr_diffuse.spectral import swatches
 
     path = tmp_path / "sw.exr"

@@ -7,12 +7,11 @@ form; OpenImageIO's OCIO colour conversion (Bradford) between working spaces; La
 (E = rho) where EON must reduce to it.
 """
 
+import colour
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
-colour = pytest.importorskip("colour")
 
 import openpbr_diffuse as od  # noqa: E402
 from openpbr_diffuse import spectral as sp  # noqa: E402
@@ -203,7 +202,8 @@ def test_albedo_matches_quadrature_tables(cm):
 
 def test_bradford_adaptation_matches_openimageio():
     """ACEScg rho_rgb equals OpenImageIO's (OCIO, Bradford) conversion of the Rec.709 one."""
-    oiio = pytest.importorskip("OpenImageIO")
+    import OpenImageIO as oiio
+
     a = sp.checker(sp.colorimetry("D65", "lin_rec709")).rho_rgb
     b = sp.checker(sp.colorimetry("D65", "acescg")).rho_rgb
     buf = oiio.ImageBuf(np.ascontiguousarray(a[None].astype(np.float32)))

@@ -52,9 +52,9 @@ def test_pages_render_in_chromium_with_search_and_no_console_error(site, page):
     import http.server
     import threading
 
+    from playwright import sync_api
     from test_report_page import CHROMIUM, FLAGS
 
-    sync_api = pytest.importorskip("playwright.sync_api")
     need("chromium")
     handler = functools.partial(http.server.SimpleHTTPRequestHandler, directory=str(site))
     handler.log_message = lambda *a, **k: None  # type: ignore[attr-defined]

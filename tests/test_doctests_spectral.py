@@ -5,8 +5,6 @@ import importlib
 
 import pytest
 
-pytest.importorskip("colour")
-
 MODULES = [
     "openpbr_diffuse.spectral.colorimetry",
     "openpbr_diffuse.spectral.recovery",

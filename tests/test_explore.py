@@ -65,7 +65,8 @@ def _frame(n):
 
 @pytest.fixture(scope="module")
 def page_values(tmp_path_factory):
-    sync_api = pytest.importorskip("playwright.sync_api")
+    from playwright import sync_api
+
     need("chromium")
     path = write_explorer(tmp_path_factory.mktemp("explore") / "eon.html")
     settings = {"r": 0.7, "rho_r": 0.9, "rho_g": 0.5, "rho_b": 0.1, "theta_o": 50, "theta_i": 60, "phi": 120}

@@ -317,7 +317,6 @@ print(sorted(name for name in program._members if name.startswith("eon1_")))
 def mtlx_shader(tmp_path_factory):
     """The .mtlx export, and the GLSL MaterialX generates for a material using its node (run
     from another folder: the implementation file is found beside the document)."""
-    pytest.importorskip("MaterialX")
     tmp = tmp_path_factory.mktemp("mtlx")
     out = tmp / "out"
     out.mkdir()

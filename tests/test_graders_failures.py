@@ -1,6 +1,5 @@
 """Clear failures: a missing piece is one line on stderr naming it and how to get it, exit 2."""
 
-import pytest
 from _system import need
 
 from openpbr_diffuse.cli.main import main
@@ -38,7 +37,6 @@ def test_cpp_compile_error_names_the_line(capsys, tmp_path):
 def test_no_egl(capsys, monkeypatch, tmp_path):
     """No EGL in the GL child (a moderngl whose context fails, first on its import path):
     one line naming what to install, exit 2."""
-    pytest.importorskip("moderngl")
     fake = tmp_path / "fake"
     fake.mkdir()
     (fake / "moderngl.py").write_text(

@@ -94,7 +94,6 @@ def test_memory_limit_applies_in_the_child() -> None:
 
 
 def _gl_or_skip():
-    pytest.importorskip("moderngl")
     from openpbr_diffuse.graders import glsl
 
     try:

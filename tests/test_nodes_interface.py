@@ -10,12 +10,11 @@ import json
 import sys
 import warnings
 
+import MaterialX as mx
 import numpy as np
 import pytest
 
 from openpbr_diffuse.nodes import IgnoredInputWarning, OpenPBRSurface, OrenNayarDiffuseBSDF, materialx_defs
-
-mx = pytest.importorskip("MaterialX")
 
 
 @pytest.fixture(scope="module")

@@ -144,7 +144,6 @@ def test_hydra_storm_renders_a_roughness_dependent_lobe_that_is_not_eon(tmp_path
 def test_threejs_renders_the_chart_and_conforms(tmp_path):
     """three.js r187 (GLTFLoader + WebGLRenderer, float render target, SwiftShader): conforms,
     largest relative error ~3e-4 (its Eq. 14 fit of E_FON is within the image tolerance)."""
-    pytest.importorskip("playwright.sync_api")
     from _system import need
 
     need("chromium", "threejs")
@@ -163,7 +162,6 @@ def test_babylonjs_renders_the_chart_within_a_percent_and_is_named_precision(tmp
     tiles, 0.7 % at grazing; the PBR shader takes the view vector from the camera's position
     (normalize(vEyePosition - vPositionW)) also for an orthographic camera, so distant tiles
     see a slightly tilted view.  Graded 'precision'; every roughness-0 row conforms."""
-    pytest.importorskip("playwright.sync_api")
     from _system import need
 
     need("chromium", "babylonjs", "babylonjs-loaders")

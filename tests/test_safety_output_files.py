@@ -350,7 +350,6 @@ def test_render_force_replaces_a_regular_file_never_a_link(tmp_path, capsys):
 
 
 def test_colorshift_image_rule(tmp_path, capsys, monkeypatch):
-    pytest.importorskip("colour")
     from openpbr_diffuse.cli import colorshift as cli_colorshift
 
     image = tmp_path / "sw.png"
@@ -379,7 +378,6 @@ def test_colorshift_image_rule(tmp_path, capsys, monkeypatch):
 
 
 def test_albedo_export_refuses_existing_files_before_any_work(tmp_path, capsys, monkeypatch):
-    pytest.importorskip("OpenImageIO")
     from openpbr_diffuse.albedo import export
 
     argv = ["albedo", "eon", "--export", tmp_path, "--size", "4", "--no-progress"]
@@ -401,7 +399,6 @@ def test_albedo_export_refuses_existing_files_before_any_work(tmp_path, capsys, 
 
 
 def test_albedo_export_never_writes_through_a_link(tmp_path, capsys):
-    pytest.importorskip("OpenImageIO")
     victim = tmp_path / "victim"
     victim.write_bytes(b"precious")
     out = tmp_path / "luts"

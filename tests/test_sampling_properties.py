@@ -418,7 +418,6 @@ def test_strategy_must_be_a_string():
 def test_variance_curves_tool_writes_table_csv_and_png(tmp_path, capsys):
     import importlib.util
 
-    pytest.importorskip("matplotlib")
     path = Path(__file__).resolve().parents[1] / "tools" / "variance_curves.py"
     spec = importlib.util.spec_from_file_location("variance_curves", path)
     tool = importlib.util.module_from_spec(spec)

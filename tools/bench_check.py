@@ -1,6 +1,12 @@
 """Benchmark: `check FILE` on a large results file -- peak memory and CPU time of a streamed grade.
 
     python tools/bench_check.py [--rows 10000000] [--dir /tmp]
+    python tools/bench_check.py --glsl [--saves 5]
+
+With ``--glsl``: the CPU and wall seconds of a warm ``check --glsl`` of a correct file (run
+twice, the second measured), and the re-grade time of ``check --glsl … --watch`` after a
+save (wall seconds from the write to the new verdict line, which includes the watch's
+0.2 s settle time, and the grade time it prints), alternating a correct and a wrong file.
 
 Writes a CSV of ROWS rows (the default vector set repeated under new ids of the submitter's
 own, with the reference values rounded to float32 as results), then runs
@@ -58,11 +64,83 @@ def cpu_name() -> str:
     return platform.processor() or "unknown"
 
 
+def _load() -> str:
+    try:
+        return " ".join(Path("/proc/loadavg").read_text().split()[:3])
+    except OSError:
+        return "unknown"
+
+
+def bench_glsl(saves: int) -> int:
+    """Warm ``check --glsl`` (CPU s) and the ``--watch`` re-grade after a save (s)."""
+    import re
+    import signal
+
+    good = (ROOT / "tests" / "subjects" / "eon_conforming.glsl").read_text()
+    wrong = good.replace("float r = roughness;", "float r = roughness * roughness;", 1)
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    with tempfile.TemporaryDirectory() as tmp:
+        src = Path(tmp) / "eon.glsl"
+        src.write_text(good)
+        cmd = [sys.executable, "-m", "openpbr_diffuse", "check", "--glsl", str(src), "--function", "f"]
+        cmd += ["--albedo-function", "albedo"]
+        cpu = []
+        for _ in range(2):
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
+            t = time.time()
+            r = subprocess.run(cmd, capture_output=True, text=True, env=env)
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            used = after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
+            cpu.append((round(used, 2), round(time.time() - t, 2), r.returncode))
+        tool = subprocess.Popen([*cmd, "--watch"], stdout=subprocess.PIPE, text=True, env=env)
+        assert tool.stdout is not None
+        waits, graded = [], []
+        try:
+            for k in range(saves + 1):
+                if k:
+                    t = time.monotonic()
+                    # a comment makes each save new text: compiled afresh by the GL child
+                    src.write_text((wrong if k % 2 else good) + f"\n// save {k}\n")
+                while True:
+                    line = tool.stdout.readline()
+                    if not line:
+                        raise RuntimeError("the watch ended")
+                    m = re.search(r"graded in ([0-9.]+) s", line)
+                    if m:
+                        break
+                if k:
+                    waits.append(round(time.monotonic() - t, 2))
+                    graded.append(float(m.group(1)))
+        finally:
+            tool.send_signal(signal.SIGINT)
+            tool.wait(timeout=30)
+    print(
+        json.dumps(
+            {
+                "date": time.strftime("%Y-%m-%d"),
+                "cpu": cpu_name(),
+                "cores": os.cpu_count(),
+                "load": _load(),
+                "check_glsl_warm_cpu_s": cpu[1][0],
+                "check_glsl_warm_wall_s": cpu[1][1],
+                "check_glsl_exit": cpu[1][2],
+                "watch_save_to_verdict_s": waits,
+                "watch_graded_in_s": graded,
+            }
+        )
+    )
+    return 0
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rows", type=int, default=10_000_000)
     ap.add_argument("--dir", default=tempfile.gettempdir())
+    ap.add_argument("--glsl", action="store_true", help="time check --glsl and its --watch re-grade instead")
+    ap.add_argument("--saves", type=int, default=6, help="with --glsl: saves timed")
     a = ap.parse_args()
+    if a.glsl:
+        return bench_glsl(a.saves)
     path = Path(a.dir) / f"bench_check_{os.getpid()}.csv"
     try:
         t = time.time()

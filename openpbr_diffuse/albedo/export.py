@@ -82,18 +82,6 @@ def _blocks(size):
     return [(s, min(size, s + step)) for s in range(0, size, step)]
 
 
-def lut_values(model: str, size: int = DEFAULT_SIZE) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
-    """The two textures as arrays: (N, N, 3) directional and (1, N, 3) average, float32."""
-    name = model_info(model).name
-    size = _check_size(size)
-    table = load_table(name)
-    rough, _ = _roughness_axis(name, size)
-    img2d = np.empty((size, size, 3), dtype=np.float32)
-    for s, e in _blocks(size):
-        img2d[s:e] = _rows(name, size, table, rough, s, e)
-    return img2d, _average_row(name, table, rough)
-
-
 def _metadata(name, size, kind):
     info = INFO[name]
     table = load_table(name)

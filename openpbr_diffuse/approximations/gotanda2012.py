@@ -72,13 +72,6 @@ def sigma_from_shininess(shininess: ArrayLike) -> NDArray[np.float64]:
     return np.sqrt(2.0 / shi)
 
 
-def shininess_from_sigma(sigma: ArrayLike) -> NDArray[np.float64]:
-    """Inverse of Eq. 21: shininess = 2 / sigma^2 (inf at sigma = 0)."""
-    sigma = ar.in_range("sigma", sigma, np.float64, 0.0, math.inf, " (radians)")
-    with np.errstate(divide="ignore"):
-        return 2.0 / (sigma * sigma)
-
-
 def simplified_qon(wi: ArrayLike, wo: ArrayLike, sigma: ArrayLike, rho: ArrayLike = 1.0) -> NDArray[np.float64]:
     """Eq. 20: QON in dot products, f = rho/pi [A + B max(0, E.L - (N.E)(N.L)) min(1, N.L/N.E) / N.L].
 

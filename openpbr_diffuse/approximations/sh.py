@@ -38,8 +38,6 @@ C2 = math.sqrt(15.0 / (4.0 * math.pi))
 C3 = math.sqrt(5.0 / (16.0 * math.pi))
 #: Band of each of the 9 coefficients.
 BAND = np.array([0, 1, 1, 1, 2, 2, 2, 2, 2])
-#: Index of the zonal (m = 0) coefficient of each band: Y_00, Y_10, Y_20.
-ZONAL = (0, 2, 6)
 #: sqrt(4 pi / (2l + 1)) per band (the ZH rotation factor).
 ZH_ROTATION = np.sqrt(4.0 * math.pi / (2.0 * np.arange(3) + 1.0))
 #: Lambert's (rho = 1) response per band, A_l / pi with A_0 = pi, A_1 = 2 pi/3, A_2 = pi/4

@@ -1,6 +1,7 @@
 """``openpbr-diffuse check``: grade another implementation's results on the test vectors.
 
     openpbr-diffuse check results.csv [--model eon] [--json]
+    openpbr-diffuse check results.csv --watch     (also with --glsl FILE / --cpp FILE)
 
 Rows whose out_r, out_g, out_b are blank are skipped (and counted). Exit status: 0 conforms,
 1 does not conform, 2 unusable file (missing columns, non-numeric values, rows that do not
@@ -31,7 +32,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     )
     p.add_argument("--model", choices=ALL_VECTOR_MODELS, help="grade only the rows of this model")
     p.add_argument("--json", action="store_true", help="machine-readable output")
-    graders_cli.add_arguments(p)  # --implementation / --glsl / --cpp
+    p.add_argument(
+        "--watch",
+        action="store_true",
+        help="grade again on every save of FILE (or the --glsl/--cpp file) and print what changed; Ctrl-C ends",
+    )
+    from ..renderers import RENDERERS
+
+    graders_cli.add_arguments(p, renderers=list(RENDERERS))  # --implementation / --glsl / --cpp
     graders_cli.add_tier_arguments(p)  # --precision / --expect-fail
     _check_image.add_arguments(p)  # --image / --chart: a rendered conformance chart
     p.set_defaults(run=run)
@@ -45,6 +53,10 @@ def _print_text(g: Grade, path: str) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if getattr(args, "watch", False):
+        from . import _watch
+
+        return _watch.run(args)
     if args.image is not None or args.chart is not None:
         return _check_image.run(args, _print_text)
     if _check_image.is_renderer(getattr(args, "implementation", None)):

@@ -12,9 +12,8 @@ The child answers each with a 12-byte header (int32 status, uint64 length) and t
 
 A job that never ends is killed by the parent with every process of the child's run (the time
 limit is per job); a child that dies (a crash, the memory limit) is started again for the next
-job.  Keeping the context across jobs saves its set-up on every job but the first (GLSL:
-0.22 CPU s a job as a child of its own, about 0.05 in the worker; WGSL: 0.86 and 0.3,
-measured 2026-12-05 on llvmpipe and lavapipe).
+job.  Keeping the context across jobs saves its set-up on every job but the first (the
+measurements: docs/benchmarks/bench.md, "Measurements moved from the code").
 
 The parent runs this file as a script (``CHILD``, through ``limits.script_command``), not as a
 module of the package: it imports numpy and the GPU library only, not the package and numba.

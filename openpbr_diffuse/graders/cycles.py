@@ -87,11 +87,6 @@ def bpy_version() -> str:
     return _probe()[0]
 
 
-def kernel_source() -> Path | None:
-    """Cycles' bsdf_oren_nayar.h shipped inside the bpy wheel (hashed into the version)."""
-    return _probe()[1]
-
-
 def render(rows: list[dict], budget: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Render job rows in a child Python with bpy; returns (mean (n,3), standard error (n,3))."""
     job = {**BUDGET, **(budget or {}), "rows": rows}

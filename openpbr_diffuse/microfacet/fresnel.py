@@ -136,12 +136,6 @@ def eta_of_parameter(x):
 
 
 @ufunc
-def fresnel_schlick(c, F0):
-    """``schlick`` as a ufunc."""
-    return schlick(c, F0)
-
-
-@ufunc
 def f82_coefficient(F0, tint):
     """``f82_a`` as a ufunc."""
     return f82_a(F0, tint)

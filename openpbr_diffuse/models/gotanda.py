@@ -12,15 +12,8 @@ the notes; this uses 1/0.45).  It is an approximation of full Oren-Nayar, graded
 reference.
 """
 
-import math
-
 from .._jit import INV_PI, kernel
 from .fon import fon_shape_albedo, fon_shape_average, s_over_t
-
-
-def sigma_from_shininess(shininess: float) -> float:
-    """Eq. 21: sigma = sqrt(2 / shininess)."""
-    return math.sqrt(2.0 / shininess)
 
 
 @kernel

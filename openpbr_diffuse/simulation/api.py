@@ -15,8 +15,6 @@ queries of the call, the number of workers, or whether a Dask cluster ran it.
 from __future__ import annotations
 
 import math
-import os
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -25,6 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import _arrays as ar
 from ._common import N_ORDERS
+from ._run import RunOptions, execute
 
 #: microgeometry name -> (roughness name, allowed range)
 GEOMETRIES = {
@@ -51,16 +50,6 @@ def _check_geometry(geometry, roughness):
     if not (lo <= r <= hi):
         raise ValueError(f"roughness ({name} of {geometry}) must be in [{lo:g}, {hi:.6g}], got {r!r}")
     return r
-
-
-def _check_count(name, value, minimum):
-    if isinstance(value, (float, np.floating)) and math.isfinite(value) and float(value).is_integer():
-        value = int(value)  # paths=1e6
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise TypeError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    if value < minimum:
-        raise ValueError(f"{name} must be an integer >= {minimum}, got {value}")
-    return int(value)
 
 
 def _rho(rho: ArrayLike) -> NDArray[np.float64]:
@@ -130,31 +119,6 @@ def _client(client, scheduler):
         raise ConnectionError(
             f"scheduler {scheduler}: no Dask scheduler answered within {SCHEDULER_TIMEOUT_S:g} s ({type(exc).__name__})"
         ) from None
-
-
-def _bar(iterable, progress, total=None):
-    """``iterable`` wrapped in a tqdm bar on stderr when ``progress`` (chunks done)."""
-    if not progress:
-        return iterable
-    from tqdm.auto import tqdm
-
-    return tqdm(iterable, total=total, desc="simulate", unit="chunk", leave=False)
-
-
-def _execute(tasks, workers, client, scheduler, progress=False):
-    """Run the chunk tasks (locally on threads, or on a Dask cluster), results in task order."""
-    cl, own = _client(client, scheduler)
-    if cl is not None:
-        try:
-            futures = cl.map(_run_task, tasks, pure=False)
-            return cl.gather(futures)
-        finally:
-            if own:
-                cl.close()
-    if workers == 1 or len(tasks) == 1:
-        return [_run_task(t) for t in _bar(tasks, progress)]
-    with ThreadPoolExecutor(max_workers=workers) as pool:  # the kernel releases the GIL
-        return list(_bar(pool.map(_run_task, tasks), progress, total=len(tasks)))
 
 
 def _plan(kind, geometry, roughness, queries, random_wi, rho, paths, seed):
@@ -342,13 +306,12 @@ def simulate_albedo(
             f"mu must be in [1e-100, 1] (cosine of the incident angle; MU_MIN = 1e-100), got {mu[bad][0]!r}"
         )
     rho = _rho(rho)
-    paths = _check_count("paths", paths, 1)
-    seed = _check_count("seed", seed, 0)
-    workers = (os.cpu_count() or 1) if workers is None else _check_count("workers", workers, 1)
+    run = RunOptions.check(paths, seed, workers, client, scheduler, progress)
+    paths, seed = run.paths, run.seed
     no_wo = np.zeros((0, 3))
     queries = [(np.array([math.sqrt(max(0.0, 1.0 - m * m)), 0.0, m]), no_wo, [m]) for m in mu]
     tasks, spans = _plan("albedo", geometry, roughness, queries, False, rho, paths, seed)
-    results = _execute(tasks, workers, client, scheduler, progress)
+    results = execute(_run_task, tasks, run)
     return _albedo_result(geometry, roughness, mu, rho, paths, seed, results, spans)
 
 
@@ -377,12 +340,11 @@ def simulate_average_albedo(
     """
     roughness = _check_geometry(geometry, roughness)
     rho = _rho(rho)
-    paths = _check_count("paths", paths, 1)
-    seed = _check_count("seed", seed, 0)
-    workers = (os.cpu_count() or 1) if workers is None else _check_count("workers", workers, 1)
+    run = RunOptions.check(paths, seed, workers, client, scheduler, progress)
+    paths, seed = run.paths, run.seed
     queries = [(np.array([0.0, 0.0, 1.0]), np.zeros((0, 3)), [-1.0])]
     tasks, spans = _plan("average", geometry, roughness, queries, True, rho, paths, seed)
-    results = _execute(tasks, workers, client, scheduler, progress)
+    results = execute(_run_task, tasks, run)
     return _albedo_result(geometry, roughness, None, rho, paths, seed, results, spans)
 
 
@@ -441,9 +403,8 @@ def simulate_brdf(
         if (w[:, 2] <= 0.0).any():
             raise ValueError(f"{name} must be above the horizon (z > 0)")
     rho = _rho(rho)
-    paths = _check_count("paths", paths, 1)
-    seed = _check_count("seed", seed, 0)
-    workers = (os.cpu_count() or 1) if workers is None else _check_count("workers", workers, 1)
+    run = RunOptions.check(paths, seed, workers, client, scheduler, progress)
+    paths, seed = run.paths, run.seed
     uniq, inverse = np.unique(wi, axis=0, return_inverse=True)
     inverse = inverse.reshape(-1)
     queries, rows = [], []
@@ -452,7 +413,7 @@ def simulate_brdf(
         rows.append(idx)
         queries.append((np.ascontiguousarray(uniq[g]), np.ascontiguousarray(wo[idx]), uniq[g]))
     tasks, spans = _plan("brdf", geometry, roughness, queries, False, rho, paths, seed)
-    results = _execute(tasks, workers, client, scheduler, progress)
+    results = execute(_run_task, tasks, run)
     C = rho.shape[0]
     f = np.empty((n, C))
     se = np.empty((n, C))

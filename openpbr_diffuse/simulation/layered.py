@@ -28,8 +28,6 @@ True
 from __future__ import annotations
 
 import math
-import os
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
@@ -37,7 +35,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _arrays as ar
-from .api import _client, _mean_err
+from ._run import RunOptions, execute
+from .api import _mean_err
 
 INTERFACES = ("smooth", "ggx")
 BASES = ("lambert", "eon", "smith-ggx")
@@ -133,16 +132,6 @@ class LayeredSurface:
         return [INTERFACES.index(self.interface), BASES.index(self.base), *map(int, bits)]
 
 
-def _check_count(name: str, value: int | float, minimum: int) -> int:
-    if isinstance(value, (float, np.floating)) and math.isfinite(value) and float(value).is_integer():
-        value = int(value)
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise TypeError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    if value < minimum:
-        raise ValueError(f"{name} must be an integer >= {minimum}, got {value}")
-    return int(value)
-
-
 def _channels(surface: LayeredSurface, rho: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     r = np.ascontiguousarray(ar.rho_array("rho", rho, np.dtype(np.float64)).reshape(-1))
     tau = surface.tau
@@ -174,21 +163,6 @@ def _run_task(task):
     alpha, eta, tau, base, r, rho, wi, random_wi, wo, n, seed = task
     b = {"lambert": LAMBERT, "eon": EON, "smith-ggx": SMITH}[base]
     return chunk_kernel(b)(alpha, eta, tau, r, rho, wi, random_wi, wo, n, seed, MAX_BOUNCES)
-
-
-def _execute(tasks, workers, client, scheduler):
-    cl, own = _client(client, scheduler)
-    if cl is not None:
-        try:
-            return cl.gather(cl.map(_run_task, tasks, pure=False))
-        finally:
-            if own:
-                cl.close()
-    workers = (os.cpu_count() or 1) if workers is None else _check_count("workers", workers, 1)
-    if workers == 1 or len(tasks) == 1:
-        return [_run_task(t) for t in tasks]
-    with ThreadPoolExecutor(max_workers=workers) as pool:  # the kernel releases the GIL
-        return list(pool.map(_run_task, tasks))
 
 
 def _plan(kind, surface, queries, random_wi, rho, tau, paths, seed):
@@ -289,8 +263,8 @@ class LayeredBRDF:
 def _albedo(kind, surface, mu, rho, paths, seed, workers, client, scheduler):
     if not isinstance(surface, LayeredSurface):
         raise TypeError(f"surface must be a LayeredSurface, got {type(surface).__name__}")
-    paths = _check_count("paths", paths, 2)
-    seed = _check_count("seed", seed, 0)
+    run = RunOptions.check(paths, seed, workers, client, scheduler, min_paths=2)
+    paths, seed = run.paths, run.seed
     r, tau = _channels(surface, rho)
     wo = np.zeros((0, 3))
     if kind == "average":
@@ -298,7 +272,7 @@ def _albedo(kind, surface, mu, rho, paths, seed, workers, client, scheduler):
     else:
         queries = [(np.array([math.sqrt(max(0.0, 1.0 - m * m)), 0.0, m]), wo, [m]) for m in mu]
     tasks, spans = _plan(kind, surface, queries, kind == "average", r, tau, paths, seed)
-    results = _execute(tasks, workers, client, scheduler)
+    results = execute(_run_task, tasks, run)
     n, C = len(spans), r.size
     out = {k: np.empty((n, C)) for k in ("s", "se", "d", "de", "t", "te")}
     ev = np.empty(n)
@@ -433,15 +407,15 @@ def simulate_layered_brdf(
         raise ValueError(
             "simulate_layered_brdf needs base 'lambert' or 'eon' (the microsurface base has no closed-form BRDF)"
         )
-    paths = _check_count("paths", paths, 2)
-    seed = _check_count("seed", seed, 0)
+    run = RunOptions.check(paths, seed, workers, client, scheduler, min_paths=2)
+    paths, seed = run.paths, run.seed
     wi, wo = _dirs("wi", wi), _dirs("wo", wo)
     if wi.shape != wo.shape:
         raise ValueError(f"wi and wo must have the same shape, got {wi.shape} and {wo.shape}")
     r, tau = _channels(surface, rho)
     queries = [(wi[i], wo[i : i + 1].copy(), [*wi[i], *wo[i]]) for i in range(wi.shape[0])]
     tasks, spans = _plan("brdf", surface, queries, False, r, tau, paths, seed)
-    results = _execute(tasks, workers, client, scheduler)
+    results = execute(_run_task, tasks, run)
     f = np.empty((len(spans), r.size))
     se = np.empty_like(f)
     for q, (a, b) in enumerate(spans):
