@@ -66,7 +66,6 @@ SLOW = [
     ("docs/guide/report.md", "report --implementation", "a report with an implementation"),
     ("docs/guide/report.md", "report --quick", "the quick report: every evidence section"),
     ("docs/guide/report.md", "report --select", "runs two sections of the report"),
-    ("docs/guide/report.md", "report --list-checks", "runs the selected sections of the report"),
     ("docs/guide/simulation.md", "simulate", "Monte Carlo simulations of the microsurface"),
     (
         "docs/guide/renderer-conformance.md",

@@ -2,8 +2,6 @@
 
 import pytest
 
-pytest.importorskip("colour")
-
 
 @pytest.mark.filterwarnings("ignore::colour.utilities.ColourRuntimeWarning")
 def test_colorshift_section_quick(tmp_path):

@@ -76,7 +76,7 @@ def test_conforming_glsl_exits_0_and_says_so(tmp_path, capsys):
     )
     ut = doc["implementation"]
     assert status == 0 and ut["status"] == "conforms", ut["verdicts"]
-    assert [v["status"] for v in ut["verdicts"]] == ["conforms", "conforms"]
+    assert [v["status"] for v in ut["verdicts"]] == ["conforms", "conforms", "conforms"]  # brdf, albedo, properties
     assert first.startswith("glsl:eon_conforming.glsl:f conforms")
     page = first_screen(tmp_path / "r" / "index.html")
     assert page["errors"] == [] and "conforms" in page["text"] and "does not conform" not in page["text"]
@@ -124,4 +124,4 @@ def test_conforming_cpp_exits_0(tmp_path, capsys):
         *ONLY_IMPLEMENTATION,
     )
     assert status == 0 and doc["implementation"]["status"] == "conforms"
-    assert first == "cpp:eon_conforming.cpp:f conforms (BRDF, albedo)"
+    assert first == "cpp:eon_conforming.cpp:f conforms (BRDF, albedo, properties)"

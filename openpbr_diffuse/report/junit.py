@@ -37,10 +37,15 @@ def junit_xml(doc: dict) -> str:
     ut = doc.get("implementation")
     if ut:
         suite = ET.SubElement(root, "testsuite", name="implementation")
+        props = ET.SubElement(suite, "properties")
+        ET.SubElement(props, "property", name="tier", value=str(ut.get("status", "")))
+        ET.SubElement(props, "property", name="verdict", value=str(ut.get("verdict_line", "")))
         for v in ut.get("verdicts", []):
             case = _case(suite, "implementation", v["id"])
             if v["status"] == "does not conform":
                 ET.SubElement(case, "failure", message=f"does not conform: {v['sentence']}").text = v.get("where", "")
+            elif v["status"] == "conforms with warnings":
+                ET.SubElement(case, "system-out").text = f"conforms with warnings: {v['sentence']}"
             elif v["status"] == "could not run":
                 ET.SubElement(case, "error", message=f"could not run: {v.get('detail', '')}")
             for c in v.get("checks") or ():  # sub-checks (the sampler's), by their stable ids

@@ -152,6 +152,10 @@ class SectionResult:
     warnings: list[str] = field(default_factory=list)
     #: why the section ran nothing (shown as "not run"), when it did not
     not_run: str | None = None
+    #: titled lists (e.g. one per graded implementation): [{"title": str, "items": [str]}]
+    lists: list[dict] = field(default_factory=list)
+    #: a findings section's count of findings (a third party's failing quantities), else None
+    findings: int | None = None
 
     def __post_init__(self):
         for c in self.checks:
@@ -181,3 +185,92 @@ def in_quick(ctx: Context, names: tuple, quick_names: tuple) -> tuple:
     ('eon',)
     """
     return tuple(n for n in names if not ctx.quick or n in quick_names)
+
+
+@dataclass(frozen=True)
+class CheckSpec:
+    """One declared check of a section: its stable ``id``, its ``title`` (the name shown) and
+    whether ``report --quick`` runs it (``quick=False``: listed as "not run" in a quick run).
+
+    ``reference`` and ``unit`` are shown on the not-run row.
+    """
+
+    id: str
+    title: str
+    quick: bool = True
+    reference: str = ""
+    unit: str = ""
+
+
+class CheckTable:
+    """A section's checks, declared once at module level (``CHECKS``) in page order.
+
+    ``build`` makes its checks with :meth:`check` (by title or id: an undeclared one raises
+    KeyError); the runner gives every declared check that ``report --quick`` leaves out a
+    "not run" row (:meth:`not_run_in_quick`) and puts the checks in declared order;
+    ``report --list-checks`` reads these tables without building any section.
+
+    Examples
+    --------
+    >>> t = CheckTable("demo", [("demo.a", "a holds"), ("demo.b", "b holds", False)])
+    >>> t.ids
+    ('demo.a', 'demo.b')
+    >>> c = t.check("a holds", 0.5, 1.0)
+    >>> c.id, c.passed
+    ('demo.a', True)
+    >>> [(c.id, c.status) for c in t.not_run_in_quick()]
+    [('demo.b', 'not run')]
+    """
+
+    def __init__(self, section: str, specs: list | tuple):
+        self.section = section
+        self.specs = tuple(s if isinstance(s, CheckSpec) else CheckSpec(*s) for s in specs)
+        self._by_id = {s.id: s for s in self.specs}
+        self._by_title = {s.title: s for s in self.specs}
+        bad = [s.id for s in self.specs if not s.id.startswith(section + ".")]
+        if bad or len(self._by_id) != len(self.specs):
+            raise ValueError(f"CheckTable {section!r}: ids must be unique and start with {section + '.'!r}: {bad}")
+
+    @property
+    def ids(self) -> tuple:
+        return tuple(s.id for s in self.specs)
+
+    def spec(self, key: str) -> CheckSpec:
+        """The declared check of id or title ``key`` (KeyError when undeclared)."""
+        s = self._by_id.get(key) or self._by_title.get(key)
+        if s is None:
+            raise KeyError(f"check {key!r} is not declared in {self.section}.CHECKS")
+        return s
+
+    def check(
+        self, key: str, measured: float, threshold: float, comparison: str = "<=", reference: str = "", **kw: Any
+    ) -> Check:
+        """A :class:`Check` of the declared check ``key`` (its title as name, its id)."""
+        s = self.spec(key)
+        return Check(s.title, measured, threshold, comparison, reference, id=s.id, section=self.section, **kw)
+
+    def not_run_in_quick(self) -> list[Check]:
+        """The checks ``report --quick`` leaves out, as "not run"."""
+        return [
+            Check(
+                s.title,
+                math.nan,
+                math.nan,
+                reference=s.reference or "the full report (`openpbr-diffuse report`)",
+                unit=s.unit,
+                not_run=QUICK_NOT_RUN,
+                id=s.id,
+                section=self.section,
+            )
+            for s in self.specs
+            if not s.quick
+        ]
+
+    def complete(self, res: SectionResult, quick: bool) -> None:
+        """Add the quick run's not-run rows ``res`` lacks and sort its checks in declared order
+        (checks outside the table, e.g. an error's, go last)."""
+        have = {c.id for c in res.checks}
+        if quick:
+            res.checks += [c for c in self.not_run_in_quick() if c.id not in have]
+        order = {i: k for k, i in enumerate(self.ids)}
+        res.checks.sort(key=lambda c: order.get(c.id, len(order)))

@@ -25,7 +25,10 @@ _TEMPLATE = """<!DOCTYPE html>
 body { font-family: system-ui, sans-serif; margin: 1.5em auto; max-width: 1200px; color: #222; line-height: 1.4; padding: 0 1em; }
 h1 { font-size: 1.6em; } h2 { border-bottom: 1px solid #ccc; padding-bottom: .2em; margin-top: 2em; }
 table { border-collapse: collapse; margin: .6em 0 1.2em; font-size: .85em; }
-th, td { border: 1px solid #ccc; padding: .2em .5em; text-align: left; vertical-align: top; }
+th, td { border: 1px solid #ccc; padding: .2em .5em; text-align: left; vertical-align: top; overflow-wrap: anywhere; }
+table { max-width: 100%; } code, .meta { overflow-wrap: anywhere; } pre { white-space: pre-wrap; overflow-wrap: anywhere; }
+.warntier { color: #8a6100; font-weight: 600; }
+#start { background: #f4f7fb; border: 1px solid #cfd8e3; padding: .5em .8em; }
 th { background: #f3f3f3; } td.num { text-align: right; font-variant-numeric: tabular-nums; }
 .pass { color: #17692b; font-weight: 600; } .fail, .error { color: #b00020; font-weight: 600; }
 .na { color: #777; font-weight: 600; }
@@ -46,18 +49,19 @@ materials: {% for p in doc.paths %}<code>{{ p }}</code>{% if not loop.last %}, {
 (<code>openpbr-diffuse report</code>): {% for key, title, n in skipped %}<a href="#section-{{ key }}">{{ title }}</a> ({{ n }} check{{ 's' if n != 1 }}){% if not loop.last %}, {% endif %}{% endfor %}.</p>{% endif %}
 {% set ut = doc.implementation %}
 {% if ut %}<section id="under-test" data-status="{{ ut.status }}">
-<p id="headline" class="{{ 'pass' if ut.status == 'conforms' else ('na' if ut.status == 'could not run' else 'fail') }}">{{ ut.headline }}</p>
+<p id="headline" class="{{ ut.status | tier_class }}">{{ ut.headline }}</p>
+<p id="verdict-line" class="{{ ut.status | tier_class }}">Verdict: <strong>{{ ut.verdict_line }}</strong></p>
 <table id="verdicts"><caption>Implementation under test: {{ ut.name }}</caption>
 <tr><th>quantity</th><th>verdict</th><th>diagnosis</th><th>largest abs error</th><th>worst row (largest error / tolerance)</th><th>rows failing</th></tr>
 {% for v in ut.verdicts %}<tr data-id="{{ v.id }}"><td>{{ v.label }}</td>
-<td class="{{ 'pass' if v.status == 'conforms' else ('na' if v.status == 'could not run' else 'fail') }}">{{ v.status }}</td>
+<td class="{{ v.status | tier_class }}">{{ v.status }}</td>
 <td>{{ v.sentence }}</td><td class="num">{{ v.max_abs_error | num }}</td><td>{{ v.where }}</td>
 <td class="num">{{ v.n_failed }} / {{ v.n }}</td></tr>
 {% endfor %}</table>
 {% for v in ut.verdicts if v.checks %}<table class="data checks"><caption>{{ v.label }}: checks</caption>
 <tr><th>id</th><th>status</th><th>measured</th><th>threshold</th><th>detail</th></tr>
 {% for c in v.checks %}<tr data-id="{{ c.id }}"><td><code>{{ c.id }}</code></td>
-<td class="{{ 'pass' if c.status == 'pass' else ('fail' if c.status == 'fail' else 'na') }}">{{ c.status }}</td>
+<td class="{{ {'pass': 'pass', 'fail': 'fail', 'warn': 'warntier'}.get(c.status, 'na') }}">{{ c.status }}</td>
 <td class="num">{{ c.measured | num }}</td><td class="num">{{ c.threshold | num }}</td><td>{{ c.detail }}</td></tr>
 {% endfor %}</table>{% endfor %}
 {% for n in ut.notes %}<p class="meta">{{ n }}</p>{% endfor %}
@@ -73,6 +77,11 @@ materials: {% for p in doc.paths %}<code>{{ p }}</code>{% if not loop.last %}, {
 </section>
 <h2 id="evidence">The library's own evidence (counted separately)</h2>
 {% else %}<p id="headline" class="na">No implementation under test: this report shows the reference's own evidence. Use --glsl/--cpp/--vectors/--implementation to grade yours.</p>
+<div id="start"><p>To grade your own BRDF (a GLSL function <code>vec3 f(vec3 wi, vec3 wo, float roughness, vec3 rho)</code>):</p>
+<pre><code>openpbr-diffuse template glsl --out mine.glsl     # a starting file
+openpbr-diffuse report --glsl mine.glsl --function f</code></pre>
+<p>The guide: &ldquo;The conformance report&rdquo; of the documentation (<code>docs/guide/report.md</code> in the
+source; <code>openpbr-diffuse report --help</code>).</p></div>
 {% endif %}
 {% if doc.evidence.n_checks == 0 %}<p id="overall" class="na">The reference's evidence: not run (no check ran{% if doc.select %}; --select {{ doc.select | join(' ') }}{% endif %}).</p>
 {% else %}<p id="overall" class="{{ 'pass' if doc.passed else 'fail' }}">The reference's evidence: {{ "ALL CHECKS PASS" if doc.passed else "SOME CHECKS FAIL" }}:
@@ -81,7 +90,7 @@ materials: {% for p in doc.paths %}<code>{{ p }}</code>{% if not loop.last %}, {
 <tr><th>section</th><th>status</th><th>checks passed</th><th>time (s)</th></tr>
 {% for s in doc.sections %}<tr><td><a href="#section-{{ s.key }}">{{ s.title }}</a></td>
 <td class="{{ status_class(s.status) }}">{{ s.status }}</td>
-<td class="num">{% if s.status == 'not run' %}{{ s.not_run | not_run }}{% else %}{{ s.checks | selectattr('passed') | list | length }} / {{ s.checks | rejectattr('status', 'equalto', 'not run') | list | length }}{% endif %}</td>
+<td class="num">{% if s.status == 'not run' %}{{ s.not_run | not_run }}{% elif s.status == 'findings' %}{{ s.findings or 0 }} finding{{ 's' if s.findings != 1 }} ({{ s.lists | length }} implementation{{ 's' if s.lists | length != 1 }} graded){% else %}{{ s.checks | selectattr('passed') | list | length }} / {{ s.checks | rejectattr('status', 'equalto', 'not run') | list | length }}{% endif %}</td>
 <td class="num">{{ s.elapsed_s | num }}</td></tr>
 {% endfor %}</table>
 {% for s in doc.sections %}
@@ -91,6 +100,8 @@ materials: {% for p in doc.paths %}<code>{{ p }}</code>{% if not loop.last %}, {
 {% if s.not_run %}<p class="warn not-run">{{ s.not_run if s.not_run.startswith('not run') else 'Not run: ' ~ s.not_run }}</p>{% endif %}
 {% for n in s.notes %}<p>{{ n }}</p>{% endfor %}
 {% for w in s.warnings %}<p class="warn">{{ w }}</p>{% endfor %}
+{% if s.findings is number %}<p class="findings"><strong>{{ s.findings }} finding{{ 's' if s.findings != 1 }}</strong> (quantities that do not conform) among {{ s.lists | length }} implementation{{ 's' if s.lists | length != 1 }} graded.</p>{% endif %}
+{% for l in s.lists %}<h3>{{ l.title }}</h3><ul class="items">{% for i in l["items"] %}<li>{{ i }}</li>{% endfor %}</ul>{% endfor %}
 {% if s.checks %}<table class="checks"><caption>Checks</caption>
 <tr><th>id</th><th>check</th><th>measured</th><th>threshold</th><th>result</th><th>reference</th><th>detail</th></tr>
 {% for c in s.checks %}<tr data-id="{{ c.id }}"><td><code>{{ c.id }}</code></td><td>{{ c.name }}</td><td class="num">{{ c.measured | num }}{% if c.unit %} {{ c.unit }}{% endif %}</td>
@@ -160,6 +171,11 @@ def quick_skipped(doc: dict) -> list:
     return out
 
 
+def _tier_class(status):
+    """The CSS class of an implementation's tier."""
+    return {"conforms": "pass", "conforms with warnings": "warntier", "could not run": "na"}.get(status, "fail")
+
+
 def _status_class(status):
     return {"pass": "pass", "fail": "fail", "error": "error"}.get(status, "na")
 
@@ -203,6 +219,7 @@ def render_html(doc: dict, image_dir: Path | None = None) -> str:
     env.filters["num"] = _num
     env.filters["vec"] = _vec
     env.filters["not_run"] = _not_run
+    env.filters["tier_class"] = _tier_class
     doc.setdefault("implementation", None)
     doc.setdefault("evidence", {"n_checks": doc.get("n_checks", 0), "n_failed": doc.get("n_failed", 0), "n_not_run": 0})
     template = env.from_string(_TEMPLATE)

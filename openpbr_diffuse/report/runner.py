@@ -17,6 +17,8 @@ only when everything was written: an existing report is replaced only by a compl
                    "not_run" (str|null: why nothing ran), "elapsed_s", "error" (str|null),
                    "notes" [str], "warnings" [str], "checks": [CHECK],
                    "tables": [{"caption", "columns", "rows"}],
+                   "lists": [{"title", "items" [str]}] (e.g. one per graded implementation),
+                   "findings" (int|null: a findings section's count of failing quantities),
                    "figures": [{"file" ("images/<key>_*.png"), "caption"}]}],
      "checks": [CHECK],       # every check of every section, flattened
      "materials": [MATERIAL]} # every material of the materials section, in file order ([] without it)
@@ -24,8 +26,9 @@ only when everything was written: an existing report is replaced only by a compl
              "comparison" ("<=", ">=", "=="), "expected" (null unless "=="), "unit",
              "reference" (provenance), "detail", "passed" (bool), "status": "pass"|"fail"|"not run",
              "not_run" (str|null: why)}
-    UNDER_TEST = {"name", "kind" ("vectors"|"code"), "status": "conforms"|"does not conform"|
-                  "could not run", "headline", "error", "version" {str: str}, "notes" [str],
+    UNDER_TEST = {"name", "kind" ("vectors"|"code"), "status" = "tier": "conforms"|
+                  "conforms with warnings"|"does not conform"|"could not run", "headline",
+                  "verdict_line" (the last line of the output), "error", "version" {str: str}, "notes" [str],
                   "figures": [{"file", "caption"}],
                   "verdicts": [{"id" ("implementation.brdf", ...), "quantity", "label", "status",
                                 "diagnosis" (deviation name|null), "sentence", "max_abs_error",
@@ -219,6 +222,11 @@ def run_section(key: str, ctx: Context, select: Sequence[str] | None = None) -> 
         res.key, res.title = key, res.title or title
         for c in res.checks:
             c.section = key
+        table = getattr(module, "CHECKS", None)
+        if table is not None:  # every check declared (KeyError otherwise), the quick run's not-run rows
+            for c in res.checks:
+                c.id = table.spec(c.id or c.name).id
+            table.complete(res, ctx.quick)
     except Exception as exc:  # a broken section must not lose the rest of the report
         return _error(SectionResult(key, title), key, f"{type(exc).__name__}: {exc}", t0)
     assign_ids(res)
@@ -227,6 +235,68 @@ def run_section(key: str, ctx: Context, select: Sequence[str] | None = None) -> 
         if not res.checks:
             res.not_run = "no check of this section matches --select " + " ".join(select)
     return SectionRun(res, _status(res), time.perf_counter() - t0)
+
+
+#: The implementation's verdicts and their sub-checks (``report --glsl/--cpp/--vectors/--implementation``).
+IMPLEMENTATION_IDS = (
+    ("implementation.brdf", "(with --glsl / --cpp / --vectors / --implementation)"),
+    ("implementation.albedo", "(with --glsl / --cpp / --vectors / --implementation)"),
+    ("implementation.properties", "(with --glsl / --cpp / --implementation: the properties of its own functions)"),
+    ("implementation.sampler_pdf", "(with --glsl / --cpp / --vectors / --implementation)"),
+    ("implementation.sampler_chi2", "(with --glsl / --cpp / --vectors / --implementation)"),
+    ("implementation.sampler_pdf.normalisation", "(with --sample-function / --pdf-function)"),
+    ("implementation.sampler_pdf.reference", "(with --sample-function / --pdf-function)"),
+    ("implementation.sampler_chi2.chi2", "(with --sample-function / --pdf-function)"),
+    ("implementation.sampler_chi2.valid", "(with --sample-function / --pdf-function)"),
+    ("implementation.sampler_chi2.variance", "(with --sample-function / --pdf-function)"),
+)
+
+
+def declared_checks(
+    keys: Sequence[str] | None = None, select: Sequence[str] | None = None, quick: bool = False
+) -> list[tuple[str, str]]:
+    """Every declared check id and its title, read from the sections' ``CHECKS`` tables (no
+    section is built): ``[(id, title)]`` in page order, then the implementation's ids.
+
+    A section with no declared check is listed as ``key.section`` ("findings"); with
+    ``quick``, the checks ``--quick`` leaves out are marked "(not run in --quick)".
+
+    Examples
+    --------
+    >>> ids = [i for i, _ in declared_checks(["albedo"])]
+    >>> ids[0], "implementation.brdf" in ids
+    ('albedo.lambert_directional_albedo_closed_form_vs_table', True)
+    >>> declared_checks(["graders"])[0]
+    ('graders.section', '(findings)')
+    """
+    from . import sections as section_pkg
+
+    keys = tuple(section_pkg.SECTIONS if keys is None else keys)
+    if select and not any(section_selected(k, select) for k in keys) and not matches(select, "implementation.x"):
+        raise ValueError(
+            f"--select: no section or check id matches {' '.join(select)} "
+            f"(sections: {', '.join(section_pkg.SECTIONS)}; see --list-checks)"
+        )
+    out = []
+    for key in keys:
+        if not section_selected(key, select):
+            continue
+        try:
+            module = importlib.import_module(f"{section_pkg.__name__}.{key}")
+        except ModuleNotFoundError:
+            out.append((f"{key}.section", "(not available)"))
+            continue
+        specs = module.CHECKS.specs
+        if not specs:
+            out.append((f"{key}.section", "(findings)"))
+        for spec in specs:
+            if select and not matches(select, key) and not matches(select, spec.id):
+                continue
+            out.append((spec.id, spec.title + (" (not run in --quick)" if quick and not spec.quick else "")))
+    from ..conformance.properties import PROPERTY_IDS
+
+    props = [(f"implementation.{p}", "(with --glsl / --cpp / --implementation)") for p in PROPERTY_IDS]
+    return out + list(IMPLEMENTATION_IDS) + props
 
 
 def _error(res, key, message, t0):
@@ -288,6 +358,8 @@ def build_document(
                 "warnings": list(r.warnings),
                 "checks": [c.to_dict() for c in r.checks],
                 "tables": [asdict(t) for t in r.tables],
+                "lists": list(r.lists),
+                "findings": r.findings,
                 "figures": [{"file": f"{IMAGE_DIR}/{f.file}", "caption": f.caption} for f in r.figures],
             }
         )
@@ -499,6 +571,7 @@ __all__ = [
     "matches",
     "section_selected",
     "assign_ids",
+    "declared_checks",
     "ReportRun",
     "SectionRun",
     "SCHEMA",

@@ -28,16 +28,25 @@ if TYPE_CHECKING:
     from ..graders.subject import Subject
 
 CONFORMS, DOES_NOT_CONFORM, COULD_NOT_RUN = "conforms", "does not conform", "could not run"
+#: The middle tier (``conformance.grade``): a named, bounded deviation or float16 noise; exit 0.
+CONFORMS_WITH_WARNINGS = "conforms with warnings"
 #: The sentence when a failure matches no known deviation.
 NO_KNOWN = "no known deviation explains this"
 #: Exit status of ``report`` when the implementation could not be run.
 EXIT_COULD_NOT_RUN = 3
-_QUANTITY_LABEL = {"brdf": "BRDF", "albedo": "albedo", "sampler pdf": "pdf", "sampler chi2": "sampler"}
+_QUANTITY_LABEL = {
+    "brdf": "BRDF",
+    "albedo": "albedo",
+    "properties": "properties",
+    "sampler pdf": "pdf",
+    "sampler chi2": "sampler",
+}
 
 
 @dataclass
 class Verdict:
-    """One quantity's verdict (``status`` is one of "conforms", "does not conform", "could not run")."""
+    """One quantity's verdict: ``status`` is its tier ("conforms", "conforms with warnings",
+    "does not conform") or "could not run"."""
 
     quantity: str
     status: str
@@ -66,6 +75,7 @@ class Verdict:
             "quantity": self.quantity,
             "label": _QUANTITY_LABEL.get(self.quantity, self.quantity),
             "status": self.status,
+            "tier": self.status,
             "diagnosis": self.diagnosis,
             "sentence": self.sentence,
             "max_abs_error": self.max_abs_error,
@@ -93,11 +103,40 @@ class UnderTest:
 
     @property
     def status(self) -> str:
-        """ "could not run" if nothing ran, "does not conform" if any graded quantity fails, else "conforms"."""
+        """The tier: "could not run" if nothing ran, "does not conform" if any graded quantity
+        fails, else "conforms with warnings" if any has warnings, else "conforms"."""
         ran = [v for v in self.verdicts if v.status != COULD_NOT_RUN]
         if self.error or not ran:
             return COULD_NOT_RUN
-        return DOES_NOT_CONFORM if any(v.status == DOES_NOT_CONFORM for v in ran) else CONFORMS
+        if any(v.status == DOES_NOT_CONFORM for v in ran):
+            return DOES_NOT_CONFORM
+        return CONFORMS_WITH_WARNINGS if any(v.status == CONFORMS_WITH_WARNINGS for v in ran) else CONFORMS
+
+    @property
+    def verdict_line(self) -> str:
+        """The implementation's verdict in one line, the last line of ``report``'s output:
+        the tier in capitals, the name and, per quantity that is not a plain pass, its diagnosis.
+
+        >>> ut = UnderTest("mine.glsl", "code", [Verdict("brdf", DOES_NOT_CONFORM, "roughness_squared"),
+        ...                                      Verdict("albedo", CONFORMS)])
+        >>> ut.verdict_line
+        'DOES NOT CONFORM: mine.glsl (brdf: roughness_squared)'
+        >>> UnderTest("ref", "code", [Verdict("brdf", CONFORMS), Verdict("properties", CONFORMS)]).verdict_line
+        'CONFORMS: ref (BRDF, properties)'
+        """
+        s = self.status
+        if s == COULD_NOT_RUN:
+            why = self.error or "; ".join(v.detail for v in self.verdicts if v.detail) or "nothing to grade"
+            return f"COULD NOT RUN: {self.name} ({why})"
+        if s == CONFORMS:
+            labels = [_QUANTITY_LABEL.get(v.quantity, v.quantity) for v in self.verdicts if v.status == CONFORMS]
+            return f"CONFORMS: {self.name} ({', '.join(labels)})"
+        parts = [
+            f"{v.quantity}: {v.diagnosis or (NO_KNOWN if v.status == DOES_NOT_CONFORM else 'warning')}"
+            for v in self.verdicts
+            if v.status in (DOES_NOT_CONFORM, CONFORMS_WITH_WARNINGS)
+        ]
+        return f"{s.upper()}: {self.name} ({'; '.join(parts)})"
 
     @property
     def headline(self) -> str:
@@ -109,6 +148,9 @@ class UnderTest:
         if s == COULD_NOT_RUN:
             why = self.error or "; ".join(v.detail for v in self.verdicts if v.detail) or "nothing to grade"
             return f"{self.name} could not run: {why}"
+        if s == CONFORMS_WITH_WARNINGS:
+            v = next(v for v in self.verdicts if v.status == CONFORMS_WITH_WARNINGS)
+            return f"{self.name} conforms with warnings: {v.sentence}"
         return (
             f"{self.name} conforms ("
             + ", ".join(_QUANTITY_LABEL.get(v.quantity, v.quantity) for v in self.verdicts if v.status == CONFORMS)
@@ -120,7 +162,9 @@ class UnderTest:
             "name": self.name,
             "kind": self.kind,
             "status": self.status,
+            "tier": self.status,
             "headline": self.headline,
+            "verdict_line": self.verdict_line,
             "error": self.error,
             "version": {k: str(v) for k, v in self.version.items()},
             "notes": list(self.notes),
@@ -218,6 +262,7 @@ def verdict_from_grade(quantity: str, g: dict) -> Verdict:
     """
     worst = list(g.get("worst") or [])
     passed = bool(g.get("passed"))
+    warned = not passed and g.get("tier") == CONFORMS_WITH_WARNINGS
     diag = None if passed else g.get("diagnosis")
     max_abs = g.get("max_abs_error")
     max_abs = math.inf if max_abs == "inf" else _finite(max_abs)
@@ -228,11 +273,15 @@ def verdict_from_grade(quantity: str, g: dict) -> Verdict:
     detail = f"{g.get('n_failed_rows', 0)} of {g.get('n_rows', 0)} rows outside the tolerance"
     if extra:
         detail += " (" + ", ".join(extra) + ")"
+    if warned:
+        sentence = "conforms with warnings: " + ("; ".join(g.get("warnings") or []) or _deviation_sentence(diag))
+    else:
+        sentence = "every value within the tolerance" if passed else _deviation_sentence(diag)
     return Verdict(
         quantity,
-        CONFORMS if passed else DOES_NOT_CONFORM,
+        CONFORMS_WITH_WARNINGS if warned else (CONFORMS if passed else DOES_NOT_CONFORM),
         diag,
-        "every value within the tolerance" if passed else _deviation_sentence(diag),
+        sentence,
         max_abs,
         _where(worst[0] if worst else None),
         int(g.get("n_rows", 0) or 0),
@@ -240,6 +289,7 @@ def verdict_from_grade(quantity: str, g: dict) -> Verdict:
         detail,
         worst[:10],
         g.get("regions"),
+        warnings=list(g.get("warnings") or []) if warned else [],
     )
 
 
@@ -254,9 +304,10 @@ def verdict_from_quantity(q: QuantityGrade) -> Verdict:
     passed = bool(q.passed)
     if getattr(q, "sentence", None) is not None:
         failed = [c for c in q.checks if c.get("status") == "fail"]
+        warned = passed and any(c.get("status") == "warn" for c in q.checks)
         return Verdict(
             q.quantity,
-            CONFORMS if passed else DOES_NOT_CONFORM,
+            CONFORMS_WITH_WARNINGS if warned else (CONFORMS if passed else DOES_NOT_CONFORM),
             None if passed else q.diagnosis,
             q.sentence or "",  # not None here
             _finite(q.max_abs_error),
@@ -323,7 +374,7 @@ def grade_subject_under_test(subject: Subject, *, quick: bool = True, sampler_mo
     ut = UnderTest(name=subject.name, kind="code", version=dict(subject.version), notes=list(subject.notes))
     try:
         result = grade_subject(
-            subject, quick=quick, quantities=("brdf", "albedo", "sampler"), sampler_model=sampler_model
+            subject, quick=quick, quantities=("brdf", "albedo", "properties", "sampler"), sampler_model=sampler_model
         )
     except GraderUnavailable as exc:
         ut.error = " ".join(str(exc).split())
@@ -452,7 +503,7 @@ def figures(subject: Subject, ut: UnderTest, image_dir: Path, *, quick: bool = T
             ax.set_title(f"in-plane, mu_o = {mu_o:g}", fontsize=8)
             ax.set_xlabel("theta_i (deg; > 0 on the viewer's side)", fontsize=8)
             ax.tick_params(labelsize=7)
-        axes[0, 0].set_ylabel("f cos theta_i", fontsize=8)
+        axes[0, 0].set_ylabel("f cos theta_i (1/sr)", fontsize=8)
         axes[0, 0].legend(fontsize=6)
         fig.tight_layout()
         out.append(
@@ -474,8 +525,8 @@ def figures(subject: Subject, ut: UnderTest, image_dir: Path, *, quick: bool = T
             ax.plot(
                 mu, np.asarray(subject.albedo(mu, rr, rh), float)[:, 0], color=c, lw=1, ls="--", label=f"theirs r={r:g}"
             )
-        ax.set_xlabel("mu")
-        ax.set_ylabel("E(mu), rho = 0.5")
+        ax.set_xlabel("mu = cos theta_o (unitless)")
+        ax.set_ylabel("E(mu) (unitless), rho = 0.5")
         ax.legend(fontsize=6)
         fig.tight_layout()
         out.append(("subject_albedo.png", fig, "Directional albedo: theirs (dashed) against the reference (pale)"))
@@ -550,6 +601,7 @@ def _sampler_figures(plt: Any, plot: dict) -> list:
 
 __all__ = [
     "CONFORMS",
+    "CONFORMS_WITH_WARNINGS",
     "COULD_NOT_RUN",
     "DOES_NOT_CONFORM",
     "EXIT_COULD_NOT_RUN",

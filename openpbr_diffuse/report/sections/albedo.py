@@ -13,9 +13,89 @@ import math
 import numpy as np
 
 from .._plot import pyplot, save
-from ..model import QUICK_MODELS, WHITE, Check, Context, Figure, SectionResult, Table, skipped_in_quick
+from ..model import QUICK_MODELS, WHITE, CheckTable, Context, Figure, SectionResult, Table
 
 TITLE = "Albedo: closed forms against the reference tables"
+
+#: The section's checks, declared once: (id, title, runs in --quick); ``--list-checks`` reads
+#: this table, ``--quick`` lists the checks marked False as not run.
+CHECKS = CheckTable(
+    'albedo',
+    [
+        (
+            'albedo.lambert_directional_albedo_closed_form_vs_table',
+            'lambert: directional albedo, closed form vs table',
+            True,
+        ),
+        ('albedo.lambert_average_albedo_closed_form_vs_table', 'lambert: average albedo, closed form vs table', True),
+        ('albedo.qon_directional_albedo_closed_form_vs_table', 'qon: directional albedo, closed form vs table', True),
+        ('albedo.qon_average_albedo_closed_form_vs_table', 'qon: average albedo, closed form vs table', True),
+        (
+            'albedo.qon_footnote_directional_albedo_closed_form_vs_table',
+            'qon_footnote: directional albedo, closed form vs table',
+            False,
+        ),
+        (
+            'albedo.qon_footnote_average_albedo_closed_form_vs_table',
+            'qon_footnote: average albedo, closed form vs table',
+            False,
+        ),
+        (
+            'albedo.qon_van_ouwerkerk_directional_albedo_closed_form_vs_table',
+            'qon_van_ouwerkerk: directional albedo, closed form vs table',
+            False,
+        ),
+        (
+            'albedo.qon_van_ouwerkerk_average_albedo_closed_form_vs_table',
+            'qon_van_ouwerkerk: average albedo, closed form vs table',
+            False,
+        ),
+        (
+            'albedo.qon_fujii_directional_albedo_closed_form_vs_table',
+            'qon_fujii: directional albedo, closed form vs table',
+            False,
+        ),
+        (
+            'albedo.qon_fujii_average_albedo_closed_form_vs_table',
+            'qon_fujii: average albedo, closed form vs table',
+            False,
+        ),
+        ('albedo.fon_directional_albedo_closed_form_vs_table', 'fon: directional albedo, closed form vs table', True),
+        ('albedo.fon_average_albedo_closed_form_vs_table', 'fon: average albedo, closed form vs table', True),
+        (
+            'albedo.gotanda_directional_albedo_closed_form_vs_table',
+            'gotanda: directional albedo, closed form vs table',
+            False,
+        ),
+        ('albedo.gotanda_average_albedo_closed_form_vs_table', 'gotanda: average albedo, closed form vs table', False),
+        ('albedo.eon_directional_albedo_closed_form_vs_table', 'eon: directional albedo, closed form vs table', True),
+        ('albedo.eon_average_albedo_closed_form_vs_table', 'eon: average albedo, closed form vs table', True),
+        (
+            'albedo.eon_approx_directional_albedo_closed_form_vs_table',
+            'eon_approx: directional albedo, closed form vs table',
+            True,
+        ),
+        (
+            'albedo.eon_approx_average_albedo_closed_form_vs_table',
+            'eon_approx: average albedo, closed form vs table',
+            True,
+        ),
+        ('albedo.stated_value_e_f_mu_1_r_1', 'stated value E_F(mu = 1, r = 1)', True),
+        ('albedo.stated_value_e_f_mu_0_7_r_1', 'stated value E_F(mu = 0.7, r = 1)', True),
+        ('albedo.stated_value_e_f_mu_0_3_r_0_5', 'stated value E_F(mu = 0.3, r = 0.5)', True),
+        ('albedo.stated_value_e_f_r_0_5', 'stated value <E_F>(r = 0.5)', False),
+        ('albedo.stated_value_e_f_r_1', 'stated value <E_F>(r = 1)', False),
+        ('albedo.stated_value_e_qon_mu_0_5_sigma_pi_4', 'stated value E_QON(mu = 0.5, sigma = pi/4)', True),
+        ('albedo.stated_value_e_qon_sigma_pi_4', 'stated value <E_QON>(sigma = pi/4)', False),
+        (
+            'albedo.stated_value_full_on_e_mu_0_05_sigma_0_5_rho_1',
+            'stated value full ON E(mu = 0.05, sigma = 0.5), rho = 1',
+            False,
+        ),
+        ('albedo.eq_14_fit_of_e_f_max_fractional_error', 'Eq. 14 fit of E_F: max fractional error', False),
+    ],
+)
+
 #: Closed form vs table: the tables' interpolation error is < 3e-6 (stated in each file).
 TABLE_TOL = 1e-5
 #: The paper: the Eq. 14 fit "has fractional error of less than 0.1% over all directions".
@@ -64,10 +144,7 @@ def _stated(ctx, res):
 
     rows = []
     for label, m, kind, mu, rough, value, dec in STATED:
-        if ctx.quick and kind == "avg":  # the nested average quadrature is the slow part
-            continue
-        if ctx.quick and m not in QUICK_MODELS:
-            res.checks.append(skipped_in_quick(f"stated value {label}", _STATED_REFERENCE))
+        if ctx.quick and not CHECKS.spec(f"stated value {label}").quick:
             continue
         ctx.progress(f"stated value {label}")
 
@@ -78,7 +155,7 @@ def _stated(ctx, res):
         tol = 0.5 * 10.0**-dec + 1e-9
         rows.append([label, value, q, q - value])
         res.checks.append(
-            Check(
+            CHECKS.check(
                 f"stated value {label}",
                 q,
                 tol,
@@ -112,10 +189,6 @@ def build(ctx: Context) -> SectionResult:
         if not info.closed_form_albedo:
             continue
         if ctx.quick and m not in QUICK_MODELS:  # listed as not run (the full report runs them)
-            for kind in ("directional", "average"):
-                res.checks.append(
-                    skipped_in_quick(f"{m}: {kind} albedo, closed form vs table", f"data/{table_path(m).name}")
-                )
             continue
         ctx.progress(f"albedo {m}")
         table = load_table(m)
@@ -132,7 +205,7 @@ def build(ctx: Context) -> SectionResult:
             worst_avg = max(worst_avg, float(np.abs(Ea - Ra).max()))
         ref = f"data/{table_path(m).name} (quadrature of evaluate; interpolation error {table.interpolation_error:.1e})"
         res.checks.append(
-            Check(
+            CHECKS.check(
                 f"{m}: directional albedo, closed form vs table",
                 worst,
                 TABLE_TOL,
@@ -142,7 +215,7 @@ def build(ctx: Context) -> SectionResult:
             )
         )
         res.checks.append(
-            Check(f"{m}: average albedo, closed form vs table", worst_avg, TABLE_TOL, "<=", reference=ref)
+            CHECKS.check(f"{m}: average albedo, closed form vs table", worst_avg, TABLE_TOL, "<=", reference=ref)
         )
         rows.append([m, worst, worst_avg, float(table.interpolation_error)])
     res.tables.append(
@@ -159,7 +232,7 @@ def build(ctx: Context) -> SectionResult:
     frac = np.abs(err) / exact
     k = np.unravel_index(np.argmax(np.abs(err)), err.shape)
     res.checks.append(
-        Check(
+        CHECKS.check(
             "Eq. 14 fit of E_F: max fractional error",
             float(frac.max()),
             FIT_TOL,
@@ -182,7 +255,7 @@ def build(ctx: Context) -> SectionResult:
     axes[0].set_title("E_F(mu): exact (table, solid) and Eq. 14 fit (dotted)")
     axes[1].set_title("Eq. 14 fit: fractional error (%) (EON paper Fig. 6 right)")
     for ax in axes:
-        ax.set_xlabel("mu")
+        ax.set_xlabel("mu = cos theta_o (unitless)")
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7)
     fig.subplots_adjust(left=0.07, right=0.98, bottom=0.15, top=0.85, wspace=0.28, hspace=0.5)

@@ -13,10 +13,51 @@ from pathlib import Path
 
 import numpy as np
 
-from ..model import Check, Context, Figure, SectionResult, Table
+from ..model import CheckTable, Context, Figure, SectionResult, Table
 
 KEY = "colorshift"
 TITLE = "Spectral versus RGB: the EON colour shift"
+
+#: The section's checks, declared once: (id, title, runs in --quick); ``--list-checks`` reads
+#: this table, ``--quick`` lists the checks marked False as not run.
+CHECKS = CheckTable(
+    'colorshift',
+    [
+        (
+            'colorshift.r_0_rgb_and_spectral_evaluation_agree_eon_is_lambert',
+            'r = 0: RGB and spectral evaluation agree (EON is Lambert)',
+            True,
+        ),
+        ('colorshift.r_0_no_colour_shift', 'r = 0: no colour shift', True),
+        ('colorshift.spectrally_flat_reflectance_rgb_spectral', 'spectrally flat reflectance: RGB = spectral', True),
+        ('colorshift.flat_reflectance_albedo_quadrature_table', 'flat reflectance: albedo = quadrature table', True),
+        (
+            'colorshift.pipeline_xyz_of_the_patches_colour_sd_to_xyz',
+            'pipeline XYZ of the patches = colour.sd_to_XYZ',
+            True,
+        ),
+        (
+            'colorshift.white_then_tint_keeps_the_chromaticity_of_rho',
+            'white then tint keeps the chromaticity of rho',
+            True,
+        ),
+        (
+            'colorshift.saturation_c_l_grows_strictly_with_r_chromatic_patches_mu_0',
+            'saturation C*/L* grows strictly with r (chromatic patches, mu > 0)',
+            True,
+        ),
+        (
+            'colorshift.white_furnace_per_wavelength_rho_1_at_81_wavelengths',
+            'white furnace per wavelength (rho = 1 at 81 wavelengths)',
+            True,
+        ),
+        (
+            'colorshift.shipped_colorchecker_colour_shift_table_reproduced',
+            'shipped ColorChecker colour-shift table reproduced',
+            True,
+        ),
+    ],
+)
 
 
 def _grid(quick):
@@ -36,7 +77,7 @@ def _checks(res, cm, colour):
     inside = ~res.rho_rgb_clipped
     k0 = int(np.argmin(res.roughness))
     checks.append(
-        Check(
+        CHECKS.check(
             "r = 0: RGB and spectral evaluation agree (EON is Lambert)",
             float(res.delta_e_rgb_vs_spectral[inside, k0].max()),
             1e-6,
@@ -48,7 +89,7 @@ def _checks(res, cm, colour):
         )
     )
     checks.append(
-        Check(
+        CHECKS.check(
             "r = 0: no colour shift", float(res.delta_e_shift[:, k0].max()), 1e-6, "<=", "Lambert limit", unit="dE2000"
         )
     )
@@ -62,7 +103,7 @@ def _checks(res, cm, colour):
     )
     fr = colour_shift(fs, res.roughness, res.mu, cm)
     checks.append(
-        Check(
+        CHECKS.check(
             "spectrally flat reflectance: RGB = spectral",
             float(fr.delta_e_rgb_vs_spectral.max()),
             1e-6,
@@ -73,7 +114,7 @@ def _checks(res, cm, colour):
     )
     E_ref = od.reference_albedo("eon", res.mu[None, None, :], res.roughness[None, :, None], flat[:, None, None, :1])
     checks.append(
-        Check(
+        CHECKS.check(
             "flat reflectance: albedo = quadrature table",
             float(abs(fr.albedo_spectral - E_ref).max()),
             1e-5,
@@ -86,7 +127,7 @@ def _checks(res, cm, colour):
         [colour.sd_to_XYZ(sds[n], cm.cmfs, cm.illuminant_sd, method="Integration") for n in res.colours.names]
     )
     checks.append(
-        Check(
+        CHECKS.check(
             "pipeline XYZ of the patches = colour.sd_to_XYZ",
             float(abs(res.XYZ["spectral"][:, k0] - XYZ_ref[:, None]).max()),
             1e-9,
@@ -100,7 +141,7 @@ def _checks(res, cm, colour):
         return X[..., :2] / X.sum(-1, keepdims=True)
 
     checks.append(
-        Check(
+        CHECKS.check(
             "white then tint keeps the chromaticity of rho",
             float(abs(xy(res.XYZ["white_tint"]) - xy(XYZ_ref)[:, None, None]).max()),
             1e-10,
@@ -116,7 +157,7 @@ def _checks(res, cm, colour):
     sat = (C / Lab[..., 0])[chrom][:, :, pos]
     bad = int((np.diff(sat, axis=1) <= 0).sum()) if len(res.roughness) > 1 else 0
     checks.append(
-        Check(
+        CHECKS.check(
             "saturation C*/L* grows strictly with r (chromatic patches, mu > 0)",
             bad,
             0,
@@ -128,7 +169,7 @@ def _checks(res, cm, colour):
     )
     E1 = od.directional_albedo("eon", res.mu[None, :], res.roughness[:, None], np.ones(cm.wavelengths.size))
     checks.append(
-        Check(
+        CHECKS.check(
             "white furnace per wavelength (rho = 1 at 81 wavelengths)",
             float(abs(E1 - 1).max()),
             1e-6,
@@ -152,7 +193,7 @@ def _table_check(quick):
         fresh.setdefault("v", []).append([float(v) for v in vals[1:]])
     new = np.array(fresh["v"])
     old = np.stack([cols[c] for c in ref.COLUMNS[1:]], axis=-1)
-    return Check(
+    return CHECKS.check(
         "shipped ColorChecker colour-shift table reproduced",
         float(abs(new - old).max()),
         1e-8,

@@ -19,9 +19,11 @@ from __future__ import annotations
 import math
 import os
 
-from ..model import Context, SectionResult, Table
+from ..model import CheckTable, Context, SectionResult, Table
 
 TITLE = "Third-party implementations, graded by running their own code (findings)"
+#: The section holds findings, not checks (a third party's verdict is not a failed check).
+CHECKS = CheckTable("graders", [])
 KEY = "graders"
 
 
@@ -84,11 +86,15 @@ def build(ctx: Context) -> SectionResult:
                     q.diagnosis or "—",
                 ]
             )
-        result.notes.append(
-            f"{name}: "
-            + "; ".join(f"{k} = {v}" for k, v in g.version.items() if v)
-            + (". " + " ".join(g.notes) if g.notes else "")
-        )
+        items = [
+            f"{q.quantity}: {'conforms' if q.passed else 'FINDING: does not conform'}"
+            + (f" ({q.diagnosis})" if q.diagnosis and not q.passed else "")
+            + f", max abs error {_fmt(q.max_abs_error)}"
+            for q in g.quantities
+        ]
+        items.append("version: " + ("; ".join(f"{k} = {v}" for k, v in g.version.items() if v) or "—"))
+        items += list(g.notes)
+        result.lists.append({"title": name, "items": items})
     result.tables.append(
         Table(
             caption="Implementations run on this machine and graded against the reference (conformance.grade on "
@@ -109,6 +115,7 @@ def build(ctx: Context) -> SectionResult:
         )
     )
     ctx.extra.setdefault("graders", run)
+    result.findings = sum(r[6] == "FAIL" for r in rows)
     if not rows:
         result.not_run = "no implementation could run here: " + ("; ".join(result.warnings) or "none planned")
     result.notes.append(

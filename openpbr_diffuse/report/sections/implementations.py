@@ -10,9 +10,94 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..model import Check, Context, SectionResult, Table
+from ..model import CheckTable, Context, SectionResult, Table
 
 TITLE = "Grader self-test: test vectors and known deviations"
+
+#: The section's checks, declared once: (id, title, runs in --quick); ``--list-checks`` reads
+#: this table, ``--quick`` lists the checks marked False as not run.
+CHECKS = CheckTable(
+    'implementations',
+    [
+        ('implementations.reference_rounded_to_float32_conforms', 'reference rounded to float32 conforms', True),
+        (
+            'implementations.no_energy_compensation_qon_fails_and_is_diagnosed',
+            'no_energy_compensation_qon: fails and is diagnosed',
+            True,
+        ),
+        (
+            'implementations.no_energy_compensation_fon_fails_and_is_diagnosed',
+            'no_energy_compensation_fon: fails and is diagnosed',
+            True,
+        ),
+        (
+            'implementations.rho_ms_extra_inv_pi_fails_and_is_diagnosed',
+            'rho_ms_extra_inv_pi: fails and is diagnosed',
+            True,
+        ),
+        ('implementations.rho_ms_extra_rho_fails_and_is_diagnosed', 'rho_ms_extra_rho: fails and is diagnosed', True),
+        ('implementations.ldotv_clamped_fails_and_is_diagnosed', 'ldotv_clamped: fails and is diagnosed', True),
+        ('implementations.white_tint_fails_and_is_diagnosed', 'white_tint: fails and is diagnosed', True),
+        ('implementations.times_cos_theta_i_fails_and_is_diagnosed', 'times_cos_theta_i: fails and is diagnosed', True),
+        (
+            'implementations.roughness_sigma_vs_r_fails_and_is_diagnosed',
+            'roughness_sigma_vs_r: fails and is diagnosed',
+            True,
+        ),
+        ('implementations.roughness_squared_fails_and_is_diagnosed', 'roughness_squared: fails and is diagnosed', True),
+        (
+            'implementations.no_energy_compensation_lambert_fails_and_is_diagnosed',
+            'no_energy_compensation_lambert: fails and is diagnosed',
+            True,
+        ),
+        (
+            'implementations.eq14_fit_for_exact_fails_and_is_diagnosed',
+            'eq14_fit_for_exact: fails and is diagnosed',
+            True,
+        ),
+        ('implementations.constant_factor_fails_and_is_diagnosed', 'constant_factor: fails and is diagnosed', True),
+        ('implementations.ms_missing_inv_pi_fails_and_is_diagnosed', 'ms_missing_inv_pi: fails and is diagnosed', True),
+        (
+            'implementations.divided_by_cos_theta_i_fails_and_is_diagnosed',
+            'divided_by_cos_theta_i: fails and is diagnosed',
+            True,
+        ),
+        ('implementations.roughness_degrees_fails_and_is_diagnosed', 'roughness_degrees: fails and is diagnosed', True),
+        ('implementations.rho_srgb_encoded_fails_and_is_diagnosed', 'rho_srgb_encoded: fails and is diagnosed', True),
+        ('implementations.mu_floor_fails_and_is_diagnosed', 'mu_floor: fails and is diagnosed', True),
+        (
+            'implementations.roughness_sigma_over_sqrt2_fails_and_is_diagnosed',
+            'roughness_sigma_over_sqrt2: fails and is diagnosed',
+            True,
+        ),
+        (
+            'implementations.qon_fujii_constants_fails_and_is_diagnosed',
+            'qon_fujii_constants: fails and is diagnosed',
+            True,
+        ),
+        (
+            'implementations.rho_ms_from_scalar_rho_fails_and_is_diagnosed',
+            'rho_ms_from_scalar_rho: fails and is diagnosed',
+            True,
+        ),
+        (
+            'implementations.ms_missing_mu_i_factor_fails_and_is_diagnosed',
+            'ms_missing_mu_i_factor: fails and is diagnosed',
+            True,
+        ),
+        (
+            'implementations.avg_albedo_constant_fails_and_is_diagnosed',
+            'avg_albedo_constant: fails and is diagnosed',
+            True,
+        ),
+        ('implementations.roughness_floor_fails_and_is_diagnosed', 'roughness_floor: fails and is diagnosed', True),
+        (
+            'implementations.nonzero_below_horizon_fails_and_is_diagnosed',
+            'nonzero_below_horizon: fails and is diagnosed',
+            True,
+        ),
+    ],
+)
 
 
 def build(ctx: Context) -> SectionResult:
@@ -34,7 +119,7 @@ def build(ctx: Context) -> SectionResult:
     res.notes.append(f"Tolerance: {TOLERANCE_REASON}")
     g32 = grade(v, ref.astype(np.float32))
     res.checks.append(
-        Check(
+        CHECKS.check(
             "reference rounded to float32 conforms",
             g32.max_normalised_error,
             1.0,
@@ -54,7 +139,7 @@ def build(ctx: Context) -> SectionResult:
         ok = (not g.passed) and g.diagnosis == name
         detail = g.candidate_details.get(name, {})
         res.checks.append(
-            Check(
+            CHECKS.check(
                 f"{name}: fails and is diagnosed",
                 1.0 if ok else 0.0,
                 0.0,

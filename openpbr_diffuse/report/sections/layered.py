@@ -16,9 +16,38 @@ from typing import Any
 
 import numpy as np
 
-from ..model import QUICK_NOT_RUN, Check, Context, Figure, SectionResult, Table, skipped_in_quick
+from ..model import QUICK_NOT_RUN, Check, CheckTable, Context, Figure, SectionResult, Table
 
 TITLE = "The diffuse lobe under a dielectric layer: layering rules against physics"
+
+#: The section's checks, declared once: (id, title, runs in --quick); ``--list-checks`` reads
+#: this table, ``--quick`` lists the checks marked False as not run.
+CHECKS = CheckTable(
+    'layered',
+    [
+        (
+            'layered.live_simulation_vs_exact_closed_form_smooth_n_1_5_coat_color',
+            'live simulation vs exact closed form (smooth n 1.5, coat_color 0.8, rho 0.8, mu 0.3)',
+            False,
+        ),
+        (
+            'layered.live_simulation_vs_exact_closed_form_smooth_n_1_5_coat_color_2',
+            'live simulation vs exact closed form (smooth n 1.5, coat_color 0.8, rho 1.0, mu 0.3)',
+            False,
+        ),
+        (
+            'layered.live_ggx_interface_simulation_reproduces_the_shipped_diffuse',
+            'live GGX-interface simulation reproduces the shipped diffuse part (alpha 0.25, n 1.5, mu 0.4, rho 0.8)',
+            False,
+        ),
+        (
+            'layered.white_furnace_of_the_ggx_interface_layer_rho_1_no_absorption',
+            'white furnace of the GGX-interface layer (rho 1, no absorption)',
+            False,
+        ),
+    ],
+)
+
 KEY = "layered"
 HEADLINE_N, HEADLINE_RHO = 1.5, 0.8
 
@@ -28,16 +57,6 @@ _SMOOTH_REF = "closed form with internal reflections (Saunderson 1942; Lekner & 
 _GGX = "live GGX-interface simulation reproduces the shipped diffuse part (alpha 0.25, n 1.5, mu 0.4, rho 0.8)"
 _FURNACE = "white furnace of the GGX-interface layer (rho 1, no absorption)"
 _FURNACE_REF = "energy-conserving microsurface walk: every path leaves"
-
-
-def _not_run_live() -> list[Check]:
-    """The live checks, listed as not run (``report --quick``: the layered simulator's
-    kernel is the largest compilation of the report)."""
-    return [
-        *(skipped_in_quick(_SMOOTH.format(rho=rho), _SMOOTH_REF, unit="standard errors") for rho in (0.8, 1.0)),
-        skipped_in_quick(_GGX, "data/layered_grading.csv", unit="standard errors"),
-        skipped_in_quick(_FURNACE, _FURNACE_REF),
-    ]
 
 
 def _live(quick: bool, rows: list[dict]) -> list[Check]:
@@ -58,8 +77,8 @@ def _live(quick: bool, rows: list[dict]) -> list[Check]:
         ref = float(smooth_lambert_albedo(1.5, rho, 0.3, -np.log(0.8)))
         z = abs(e.total[0, c] - ref) / e.total_stderr[0, c]
         checks.append(
-            Check(
-                name=_SMOOTH.format(rho=rho),
+            CHECKS.check(
+                _SMOOTH.format(rho=rho),
                 measured=float(z),
                 threshold=4.0,
                 unit="standard errors",
@@ -75,8 +94,8 @@ def _live(quick: bool, rows: list[dict]) -> list[Check]:
     e = simulate_layered_albedo(LayeredSurface("ggx", 1.5, 0.25), [0.4], rho=[0.8, 1.0], paths=paths, seed=12)
     z = abs(e.diffuse[0, 0] - row["physics"]) / np.hypot(e.diffuse_stderr[0, 0], row["physics_se"])
     checks.append(
-        Check(
-            name=_GGX,
+        CHECKS.check(
+            _GGX,
             measured=float(z),
             threshold=4.5,
             unit="standard errors",
@@ -85,8 +104,8 @@ def _live(quick: bool, rows: list[dict]) -> list[Check]:
         )
     )
     checks.append(
-        Check(
-            name=_FURNACE,
+        CHECKS.check(
+            _FURNACE,
             measured=float(abs(e.total[0, 1] - 1.0)),
             threshold=1e-12,
             reference=_FURNACE_REF,
@@ -101,7 +120,6 @@ def build(ctx: Context) -> SectionResult:
     res = SectionResult(key=KEY, title=TITLE)
     header, rows = lg.load_table()
     if ctx.quick:  # every check of this section is live: the full report runs them
-        res.checks.extend(_not_run_live())
         res.not_run = QUICK_NOT_RUN
         res.notes.append(
             "Quick run: the live simulations (the layered simulator against the smooth interface's closed form "

@@ -33,9 +33,30 @@ from typing import Any
 import numpy as np
 
 from ...library.worker import OVERSHOOT, PROBABILITY_TOLERANCE, THETA_O  # noqa: F401 -- part of this module's API
-from ..model import Check, Context, Figure, SectionResult, Table
+from ..model import CheckTable, Context, Figure, SectionResult, Table
 
 TITLE = "Materials"
+
+#: The section's checks, declared once: (id, title, runs in --quick); ``--list-checks`` reads
+#: this table, ``--quick`` lists the checks marked False as not run.
+CHECKS = CheckTable(
+    'materials',
+    [
+        ('materials.every_given_material_file_is_read', 'every given material file is read', True),
+        ('materials.every_material_found_is_evaluated', 'every material found is evaluated', True),
+        (
+            'materials.every_material_s_directional_albedo_1_within_its_diffuse_mod',
+            "every material's directional albedo <= 1 (within its diffuse model's allowance)",
+            True,
+        ),
+        (
+            'materials.every_material_s_lobe_selection_probabilities_sum_to_1',
+            "every material's lobe selection probabilities sum to 1",
+            True,
+        ),
+    ],
+)
+
 KEY = "materials"
 #: Rows of the worst-materials table; entries of a check's detail; warnings listed.
 WORST_ROWS = 20
@@ -112,7 +133,7 @@ def _checks(res: SectionResult, files: list, records: list, unreadable: list) ->
     evaluated = [r for r in mats if r.get("albedo_max") is not None or r.get("probability_error") is not None]
     # an input that cannot be read, or a material that cannot be evaluated, is a failed check
     res.checks.append(
-        Check(
+        CHECKS.check(
             "every given material file is read",
             float(len(unreadable)),
             0.0,
@@ -123,7 +144,7 @@ def _checks(res: SectionResult, files: list, records: list, unreadable: list) ->
         )
     )
     res.checks.append(
-        Check(
+        CHECKS.check(
             "every material found is evaluated",
             float(len(failed)),
             0.0,
@@ -137,7 +158,7 @@ def _checks(res: SectionResult, files: list, records: list, unreadable: list) ->
     over = sorted((r for r in evaluated if r.get("albedo_max") is None or excess(r) > 0), key=lambda r: -excess(r))
     worst = max((excess(r) for r in evaluated), default=float("nan"))
     res.checks.append(
-        Check(
+        CHECKS.check(
             "every material's directional albedo <= 1 (within its diffuse model's allowance)",
             float("inf") if any(r.get("albedo_max") is None for r in evaluated) else worst,
             0.0,
@@ -153,7 +174,7 @@ def _checks(res: SectionResult, files: list, records: list, unreadable: list) ->
     perr = [r["probability_error"] for r in evaluated if r.get("probability_error") is not None]
     bad = [r for r in evaluated if r.get("probability_error") is None or r["probability_error"] > PROBABILITY_TOLERANCE]
     res.checks.append(
-        Check(
+        CHECKS.check(
             "every material's lobe selection probabilities sum to 1",
             float("inf") if len(perr) < len(evaluated) else max(perr, default=float("nan")),
             PROBABILITY_TOLERANCE,

@@ -14,9 +14,91 @@ import math
 import numpy as np
 
 from .._plot import pyplot, save
-from ..model import QUICK_STRATEGIES, Check, Context, Figure, SectionResult, Table, in_quick, skipped_in_quick
+from ..model import (
+    QUICK_STRATEGIES,
+    CheckTable,
+    Context,
+    Figure,
+    SectionResult,
+    Table,
+    in_quick,
+)
 
 TITLE = "Sampling: chi-square, normalisation, variance (Fig. 10-12)"
+
+#: The section's checks, declared once: (id, title, runs in --quick); ``--list-checks`` reads
+#: this table, ``--quick`` lists the checks marked False as not run.
+CHECKS = CheckTable(
+    'sampling',
+    [
+        ('sampling.chi_square_cosine_mu_o_0_02_r_1_p_value', 'chi-square cosine, mu_o = 0.02, r = 1: p-value', True),
+        ('sampling.chi_square_cosine_mu_o_0_3_r_1_p_value', 'chi-square cosine, mu_o = 0.3, r = 1: p-value', False),
+        ('sampling.chi_square_cosine_mu_o_0_9_r_1_p_value', 'chi-square cosine, mu_o = 0.9, r = 1: p-value', False),
+        ('sampling.chi_square_cosine_mu_o_0_3_r_0_3_p_value', 'chi-square cosine, mu_o = 0.3, r = 0.3: p-value', False),
+        ('sampling.chi_square_uniform_mu_o_0_02_r_1_p_value', 'chi-square uniform, mu_o = 0.02, r = 1: p-value', False),
+        ('sampling.chi_square_uniform_mu_o_0_3_r_1_p_value', 'chi-square uniform, mu_o = 0.3, r = 1: p-value', False),
+        ('sampling.chi_square_uniform_mu_o_0_9_r_1_p_value', 'chi-square uniform, mu_o = 0.9, r = 1: p-value', False),
+        (
+            'sampling.chi_square_uniform_mu_o_0_3_r_0_3_p_value',
+            'chi-square uniform, mu_o = 0.3, r = 0.3: p-value',
+            False,
+        ),
+        ('sampling.chi_square_ltc_mu_o_0_02_r_1_p_value', 'chi-square ltc, mu_o = 0.02, r = 1: p-value', False),
+        ('sampling.chi_square_ltc_mu_o_0_3_r_1_p_value', 'chi-square ltc, mu_o = 0.3, r = 1: p-value', False),
+        ('sampling.chi_square_ltc_mu_o_0_9_r_1_p_value', 'chi-square ltc, mu_o = 0.9, r = 1: p-value', False),
+        ('sampling.chi_square_ltc_mu_o_0_3_r_0_3_p_value', 'chi-square ltc, mu_o = 0.3, r = 0.3: p-value', False),
+        (
+            'sampling.chi_square_ltc_nonneg_mu_o_0_02_r_1_p_value',
+            'chi-square ltc_nonneg, mu_o = 0.02, r = 1: p-value',
+            False,
+        ),
+        (
+            'sampling.chi_square_ltc_nonneg_mu_o_0_3_r_1_p_value',
+            'chi-square ltc_nonneg, mu_o = 0.3, r = 1: p-value',
+            False,
+        ),
+        (
+            'sampling.chi_square_ltc_nonneg_mu_o_0_9_r_1_p_value',
+            'chi-square ltc_nonneg, mu_o = 0.9, r = 1: p-value',
+            False,
+        ),
+        (
+            'sampling.chi_square_ltc_nonneg_mu_o_0_3_r_0_3_p_value',
+            'chi-square ltc_nonneg, mu_o = 0.3, r = 0.3: p-value',
+            False,
+        ),
+        ('sampling.chi_square_cltc_mu_o_0_02_r_1_p_value', 'chi-square cltc, mu_o = 0.02, r = 1: p-value', False),
+        ('sampling.chi_square_cltc_mu_o_0_3_r_1_p_value', 'chi-square cltc, mu_o = 0.3, r = 1: p-value', False),
+        ('sampling.chi_square_cltc_mu_o_0_9_r_1_p_value', 'chi-square cltc, mu_o = 0.9, r = 1: p-value', False),
+        ('sampling.chi_square_cltc_mu_o_0_3_r_0_3_p_value', 'chi-square cltc, mu_o = 0.3, r = 0.3: p-value', False),
+        ('sampling.chi_square_eon_mu_o_0_02_r_1_p_value', 'chi-square eon, mu_o = 0.02, r = 1: p-value', True),
+        ('sampling.chi_square_eon_mu_o_0_3_r_1_p_value', 'chi-square eon, mu_o = 0.3, r = 1: p-value', False),
+        ('sampling.chi_square_eon_mu_o_0_9_r_1_p_value', 'chi-square eon, mu_o = 0.9, r = 1: p-value', False),
+        ('sampling.chi_square_eon_mu_o_0_3_r_0_3_p_value', 'chi-square eon, mu_o = 0.3, r = 0.3: p-value', False),
+        ('sampling.pdf_normalisation_max_integral_of_pdf_1', 'pdf normalisation: max |integral of pdf - 1|', True),
+        (
+            'sampling.exact_variance_quadrature_converged_at_theta_o_0_999_pi_2',
+            'exact variance quadrature converged at theta_o = 0.999 pi/2',
+            True,
+        ),
+        (
+            'sampling.eon_sampler_unbiased_max_e_w_1_on_the_authors_grid',
+            "EON sampler unbiased: max |E[w] - 1| on the authors' grid",
+            True,
+        ),
+        (
+            'sampling.variance_ratio_cosine_eon_at_the_authors_last_point_theta_o_',
+            "variance ratio cosine / EON at the authors' last point (theta_o = 0.999 pi/2)",
+            True,
+        ),
+        (
+            'sampling.monte_carlo_variance_vs_exact_quadrature_r_1_theta_o_70_88_8',
+            'Monte Carlo variance vs exact quadrature (r = 1, theta_o = 70, 88.854 deg)',
+            True,
+        ),
+    ],
+)
+
 ALPHA = 0.01
 #: The authors' grid (scripts/variance_plots.py).
 AUTHORS_THETA = 0.5 * math.pi * np.linspace(0.0, 0.999, 64)
@@ -40,7 +122,7 @@ def _chi2(ctx, res):
         p, chi2, dof, mass = chi2_test(s, mu, r, n, seed=100 + k)
         rows.append([s, mu, r, n, chi2, dof, p])
         res.checks.append(
-            Check(
+            CHECKS.check(
                 f"chi-square {s}, mu_o = {mu:g}, r = {r:g}: p-value",
                 p,
                 sidak,
@@ -49,10 +131,6 @@ def _chi2(ctx, res):
                 detail=f"chi2 = {chi2:.1f} for {dof} dof; Sidak level for {len(cases)} tests at alpha = {ALPHA}",
             )
         )
-    for s in STRATEGIES:
-        if s not in in_quick(ctx, STRATEGIES, QUICK_STRATEGIES):  # --quick: listed as not run
-            for mu, r in points:
-                res.checks.append(skipped_in_quick(f"chi-square {s}, mu_o = {mu:g}, r = {r:g}: p-value", _CHI2_REF))
     res.tables.append(
         Table(
             "Chi-square goodness of fit of sample() against pdf()",
@@ -76,7 +154,7 @@ def _normalisation(ctx, res):
                 if abs(m - 1.0) >= worst:
                     worst, where = abs(m - 1.0), f"{s}, mu_o = {mu}, r = {r}"
     res.checks.append(
-        Check(
+        CHECKS.check(
             "pdf normalisation: max |integral of pdf - 1|",
             worst,
             1e-3,
@@ -166,7 +244,7 @@ def _claim(ctx, res, mc, n_mc):
     _, var_c_fine = exact_weight_moments("cosine", math.cos(theta[-1]), 1.0, 2 * order)
     conv = max(abs(var_e_fine - ve[last]) / var_e_fine, abs(var_c_fine - vc[last]) / var_c_fine)
     res.checks.append(
-        Check(
+        CHECKS.check(
             "exact variance quadrature converged at theta_o = 0.999 pi/2",
             conv,
             1e-2,
@@ -176,7 +254,7 @@ def _claim(ctx, res, mc, n_mc):
         )
     )
     res.checks.append(
-        Check(
+        CHECKS.check(
             "EON sampler unbiased: max |E[w] - 1| on the authors' grid",
             float(np.abs(me - 1).max()),
             1e-5,
@@ -186,7 +264,7 @@ def _claim(ctx, res, mc, n_mc):
         )
     )
     res.checks.append(
-        Check(
+        CHECKS.check(
             "variance ratio cosine / EON at the authors' last point (theta_o = 0.999 pi/2)",
             float(ratio[last]),
             10.0,
@@ -205,7 +283,7 @@ def _claim(ctx, res, mc, n_mc):
             _, var_x = exact_weight_moments(s, math.cos(math.radians(th_deg)), 1.0, order)
             worst = max(worst, abs(var_mc - var_x) / var_x)
     res.checks.append(
-        Check(
+        CHECKS.check(
             "Monte Carlo variance vs exact quadrature (r = 1, theta_o = 70, 88.854 deg)",
             worst,
             0.25 if ctx.quick else 0.1,

@@ -20,9 +20,19 @@ import time
 import numpy as np
 
 from .._plot import pyplot, save
-from ..model import QUICK_MODELS, Check, Context, Figure, SectionResult, Table, in_quick
+from ..model import QUICK_MODELS, CheckTable, Context, Figure, SectionResult, Table, in_quick
 
 TITLE = "Timings (the paper's Table 1 on this machine)"
+
+#: The section's checks, declared once: (id, title, runs in --quick); ``--list-checks`` reads
+#: this table, ``--quick`` lists the checks marked False as not run.
+CHECKS = CheckTable(
+    'timings',
+    [
+        ('timings.every_table_1_entry_measured', 'every Table 1 entry measured', True),
+    ],
+)
+
 #: EON paper Table 1 (ns): eval, cosine sample, CLTC sample (None: not given).
 PAPER = {
     "lambert": (1.4, 67.2, None),
@@ -123,7 +133,7 @@ def build(ctx: Context) -> SectionResult:
     )
     ok = sum(1 for t in measured if math.isfinite(t) and t > 0)
     res.checks.append(
-        Check(
+        CHECKS.check(
             "every Table 1 entry measured",
             float(ok),
             0.0,
