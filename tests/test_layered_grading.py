@@ -105,8 +105,9 @@ def test_report_section(tmp_path):
 
     assert "layered" in SECTIONS
     from openpbr_diffuse.report.model import QUICK_NOT_RUN
+    from openpbr_diffuse.report.runner import run_section
 
-    res = layered.build(Context(image_dir=tmp_path, quick=True))
+    res = run_section("layered", Context(image_dir=tmp_path, quick=True)).result
     # --quick: the live simulations are listed, not run (the full report runs them)
     assert res.checks and all(c.status == "not run" and c.not_run == QUICK_NOT_RUN for c in res.checks)
     assert res.not_run == QUICK_NOT_RUN

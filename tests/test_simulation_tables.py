@@ -58,9 +58,10 @@ def test_eon_rho_ms_in_the_colorshift_table_is_eq18():
 
 def test_report_section_builds(tmp_path):
     from openpbr_diffuse.report.model import Context
+    from openpbr_diffuse.report.runner import run_section
     from openpbr_diffuse.report.sections import simulation
 
-    res = simulation.build(Context(image_dir=tmp_path, quick=True))
+    res = run_section("simulation", Context(image_dir=tmp_path, quick=True)).result
     assert res.key == "simulation" and res.tables and len(res.figures) == 3
     for f in res.figures:
         assert (tmp_path / f.file).stat().st_size > 1000 and f.file.startswith("simulation_")
