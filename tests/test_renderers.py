@@ -17,14 +17,11 @@ from openpbr_diffuse.renderers import RENDERERS, render_and_grade, renderer
 
 
 def test_every_renderer_is_an_implementation_name_of_check(capsys):
-    import argparse
+    from openpbr_diffuse.cli.main import build_parser
 
-    from openpbr_diffuse.graders import cli as graders_cli
-
-    p = argparse.ArgumentParser()
-    graders_cli.add_arguments(p)
+    p = build_parser()
     for name in RENDERERS:
-        assert p.parse_args(["--implementation", name]).implementation == name
+        assert p.parse_args(["check", "--implementation", name]).implementation == name
     assert set(RENDERERS) == {"cycles-render", "eevee", "storm", "threejs-render", "babylonjs-render"}
     with pytest.raises(ValueError, match="'povray' is not one of"):
         renderer("povray")
