@@ -222,7 +222,7 @@ class CheckTable:
     [('demo.b', 'not run')]
     """
 
-    def __init__(self, section: str, specs: list | tuple):
+    def __init__(self, section: str, specs: list | tuple) -> None:
         self.section = section
         self.specs = tuple(s if isinstance(s, CheckSpec) else CheckSpec(*s) for s in specs)
         self._by_id = {s.id: s for s in self.specs}

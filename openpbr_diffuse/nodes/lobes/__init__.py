@@ -35,13 +35,19 @@ Example
 ['diffuse', 'specular', 'metal']
 """
 
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from types import ModuleType
+from typing import Any
+
 from . import coat, diffuse, fuzz, metal, specular, subsurface, subsurface_transmission, transmission
 from ._samplers import BRANCHES_ON_VNDF, SAMPLERS
 
 __all__ = ["BRANCHES_ON_VNDF", "DECLARES", "REGISTRY", "SAMPLERS", "dispatch", "register"]
 
 #: The lobe modules, in slot order (a lobe's id is its row).
-REGISTRY = [diffuse, specular, metal, transmission, subsurface, subsurface_transmission, coat, fuzz]
+REGISTRY: list[ModuleType] = [diffuse, specular, metal, transmission, subsurface, subsurface_transmission, coat, fuzz]
 
 #: What a lobe module declares (``register`` checks them).
 DECLARES = (
@@ -59,7 +65,7 @@ DECLARES = (
 )
 
 
-def register(module):
+def register(module: ModuleType) -> int:
     """Append a lobe module to ``REGISTRY`` (before the engine is imported); its lobe id.
 
     Raises
@@ -82,7 +88,9 @@ def register(module):
     return len(REGISTRY) - 1
 
 
-def dispatch(name, argnames, table, module, select=False):
+def dispatch(
+    name: str, argnames: Sequence[str], table: Sequence[Callable[..., Any]], module: str, select: bool = False
+) -> Callable[..., Any]:
     """A compiled function ``name(k, *rest)`` returning ``table[k](*rest)``, its body generated
     from the table: an if-chain on k (a run-time value, or a constant LLVM folds once the
     function is inlined), or with ``select`` every entry computed and one selected (cheap
@@ -108,7 +116,7 @@ def dispatch(name, argnames, table, module, select=False):
         for k in range(last):
             lines += [f"    if k == {k}:", f"        return f{k}({rest})"]
         lines.append(f"    return f{last}({rest})")
-    namespace = {f"f{k}": f for k, f in enumerate(table)}
+    namespace: dict[str, Any] = {f"f{k}": f for k, f in enumerate(table)}
     namespace["__name__"] = module
     exec(compile("\n".join(lines) + "\n", __file__, "exec"), namespace)
     f = namespace[name]

@@ -10,6 +10,10 @@ at ``Z_MIN``, which only rounding reaches (a CLTC direction on the clipped bound
 that the sample lies in its lobe and its pdf is the lobe's pdf there.
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from ..._jit import block
 from ...microfacet import kernels as mf
 from ...microfacet.sheen import sheen_sample
@@ -18,9 +22,15 @@ from ...sampling.mis import eon_sample
 from ...sampling.simple import cosine_sample_local
 from .._surface_params import PARAM, Z_MIN
 
+if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import NDArray
+
 
 @block
-def eon(p, offset, ox, oy, oz, u1, u2, vndf, width):
+def eon(
+    p: NDArray[np.float64], offset: int, ox: float, oy: float, oz: float, u1: float, u2: float, vndf: bool, width: float
+) -> tuple[float, float, float, bool]:
     """The EON sampler (EON paper Listing 4) at r = width."""
     mu = min(max(oz, 0.0), 1.0)
     Xx, Xy = ltc_frame(ox, oy)
@@ -29,7 +39,9 @@ def eon(p, offset, ox, oy, oz, u1, u2, vndf, width):
 
 
 @block
-def cosine(p, offset, ox, oy, oz, u1, u2, vndf, width):
+def cosine(
+    p: NDArray[np.float64], offset: int, ox: float, oy: float, oz: float, u1: float, u2: float, vndf: bool, width: float
+) -> tuple[float, float, float, bool]:
     Xx, Xy = ltc_frame(ox, oy)
     lx, ly, z, _ = cosine_sample_local(u1, u2)
     x, y = from_frame(Xx, Xy, lx, ly)
@@ -37,14 +49,18 @@ def cosine(p, offset, ox, oy, oz, u1, u2, vndf, width):
 
 
 @block
-def ggx(p, offset, ox, oy, oz, u1, u2, vndf, width):
+def ggx(
+    p: NDArray[np.float64], offset: int, ox: float, oy: float, oz: float, u1: float, u2: float, vndf: bool, width: float
+) -> tuple[float, float, float, bool]:
     """GGX at alpha = width: visible normals (Heitz 2018) or the NDF; fails (ok False) when
     an NDF normal faces away from wo."""
     return mf.sample_reflection(ox, oy, oz, width, u1, u2, vndf)
 
 
 @block
-def sheen(p, offset, ox, oy, oz, u1, u2, vndf, width):
+def sheen(
+    p: NDArray[np.float64], offset: int, ox: float, oy: float, oz: float, u1: float, u2: float, vndf: bool, width: float
+) -> tuple[float, float, float, bool]:
     """The LTC sheen's sampler at fuzz roughness = width."""
     mu = min(max(oz, 0.0), 1.0)
     Xx, Xy = ltc_frame(ox, oy)

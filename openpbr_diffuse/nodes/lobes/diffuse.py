@@ -19,7 +19,10 @@ Example
 0.5
 """
 
+from __future__ import annotations
+
 import math
+from typing import TYPE_CHECKING
 
 from ..._jit import INV_PI, block
 from ...models.eon import eon_terms
@@ -30,13 +33,19 @@ from ...sampling.simple import cosine_pdf
 from .._surface_params import D_EON, D_QON, PARAM, S_COSINE, S_EON, UNDER_SPECULAR
 from ._common import norm_or_max
 
+if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import NDArray
+
+    from .._surface_params import Directions, EvalInputs, LayerState
+
 NAME = "diffuse"
 LAYER = UNDER_SPECULAR
 READS_DIFFUSE_MODEL = True  # its pass is compiled once per diffuse model
 
 
 @block
-def weight_color(p, offset, c):
+def weight_color(p: NDArray[np.float64], offset: int, c: int) -> float:
     """K[c], the material part of the weight: the coat's factor, times dielectric, opaque,
     not subsurface, base_weight."""
     base = p[offset + PARAM.BASE_MUL + c] * (1.0 - p[offset + PARAM.METAL])
@@ -45,12 +54,12 @@ def weight_color(p, offset, c):
 
 
 @block
-def constant_albedo(p, offset, c):
+def constant_albedo(p: NDArray[np.float64], offset: int, c: int) -> float:
     return 1.0  # unused: the score is the quadratic of PARAM.DIFFUSE_SCORE
 
 
 @block
-def is_on(p, offset):
+def is_on(p: NDArray[np.float64], offset: int) -> bool:
     dielectric = 1.0 - p[offset + PARAM.METAL]
     return (
         dielectric * (1.0 - p[offset + PARAM.TRANS_W]) * (1.0 - p[offset + PARAM.SSS_W]) * p[offset + PARAM.BASE_WEIGHT]
@@ -59,7 +68,7 @@ def is_on(p, offset):
 
 
 @block
-def diffuse_gh(dmodel, p, offset, iz, oz, s):
+def diffuse_gh(dmodel: int, p: NDArray[np.float64], offset: int, iz: float, oz: float, s: float) -> tuple[float, float]:
     """(g, h) of the BSDF f = rho g + rho_ms h, channel-free: EON Eq. 16-19, QON Eq. 1 (the
     material's A, B: PARAM.QON_AB) or Lambert (h = 0 for both)."""
     if dmodel == D_EON:
@@ -71,7 +80,7 @@ def diffuse_gh(dmodel, p, offset, iz, oz, s):
 
 
 @block
-def eval(p, offset, d, x):
+def eval(p: NDArray[np.float64], offset: int, d: Directions, x: EvalInputs) -> tuple[float, float, float]:
     up = (d.wi_z > 0.0) & (d.wo_z > 0.0)
     s = d.wi_x * d.wo_x + d.wi_y * d.wo_y + d.wi_z * d.wo_z - d.wi_z * d.wo_z
     g, h = diffuse_gh(x.dmodel, p, offset, d.wi_z, d.wo_z, s)
@@ -85,7 +94,7 @@ def eval(p, offset, d, x):
 
 
 @block
-def pdf(p, offset, d, dmodel, vndf, ggx_pdf):
+def pdf(p: NDArray[np.float64], offset: int, d: Directions, dmodel: int, vndf: bool, ggx_pdf: float) -> float:
     if dmodel == D_EON:
         Xx, Xy = ltc_frame(d.wo_x, d.wo_y)
         lx, ly = to_frame(Xx, Xy, d.wi_x, d.wi_y)
@@ -96,29 +105,31 @@ def pdf(p, offset, d, dmodel, vndf, ggx_pdf):
 
 
 @block
-def sampler(dmodel):
+def sampler(dmodel: int) -> int:
     return S_EON if dmodel == D_EON else S_COSINE
 
 
 @block
-def sample_setup(p, offset):
+def sample_setup(p: NDArray[np.float64], offset: int) -> tuple[float, float]:
     """(width, side) of the sampler: the EON sampler reads r = base_diffuse_roughness."""
     return p[offset + PARAM.R_DIFF], 1.0
 
 
 @block
-def diffuse_albedo(rho, rho_ms, eg, eh):
+def diffuse_albedo(rho: float, rho_ms: float, eg: float, eh: float) -> float:
     """One channel of the albedo rho e_g + rho_ms e_h (e_h = 0 for QON and Lambert)."""
     return rho * eg + rho_ms * eh
 
 
 @block
-def albedo(c, p, offset, ms, st):
+def albedo(c: int, p: NDArray[np.float64], offset: int, ms: bool, st: LayerState) -> float:
     return diffuse_albedo(p[offset + PARAM.BASE_COLOR + c], p[offset + PARAM.RHO_MS + c], st.diffuse_g, st.diffuse_h)
 
 
 @block
-def score(mx, p, offset, weight_at, constant, ms, st):
+def score(
+    mx: bool, p: NDArray[np.float64], offset: int, weight_at: int, constant: float, ms: bool, st: LayerState
+) -> float:
     """|K E|: by length sqrt(|K rho|^2 e_g^2 + 2 (K rho).(K rho_ms) e_g e_h + |K rho_ms|^2
     e_h^2) from the material's constants; by max over the three channels."""
     eg, eh = st.diffuse_g, st.diffuse_h

@@ -10,11 +10,21 @@ Example
 (0.25, True)
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from ..._jit import block
 from ...microfacet.sheen import sheen_density
 from ...sampling.ltc import ltc_frame, to_frame
 from .._surface_params import ON_TOP, PARAM, S_SHEEN
 from ._common import unit_albedo
+
+if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import NDArray
+
+    from .._surface_params import Directions, EvalInputs, LayerState
 
 NAME = "fuzz"
 LAYER = ON_TOP
@@ -23,17 +33,17 @@ constant_albedo = unit_albedo
 
 
 @block
-def weight_color(p, offset, c):
+def weight_color(p: NDArray[np.float64], offset: int, c: int) -> float:
     return p[offset + PARAM.FUZZ_W] * p[offset + PARAM.FUZZ_COLOR + c]
 
 
 @block
-def is_on(p, offset):
+def is_on(p: NDArray[np.float64], offset: int) -> bool:
     return p[offset + PARAM.FUZZ_W] > 0.0
 
 
 @block
-def eval(p, offset, d, x):
+def eval(p: NDArray[np.float64], offset: int, d: Directions, x: EvalInputs) -> tuple[float, float, float]:
     up = (d.wi_z > 0.0) & (d.wo_z > 0.0)
     Xx, Xy = ltc_frame(d.wo_x, d.wo_y)
     lx, ly = to_frame(Xx, Xy, d.wi_x, d.wi_y)
@@ -43,27 +53,29 @@ def eval(p, offset, d, x):
 
 
 @block
-def pdf(p, offset, d, dmodel, vndf, ggx_pdf):
+def pdf(p: NDArray[np.float64], offset: int, d: Directions, dmodel: int, vndf: bool, ggx_pdf: float) -> float:
     Xx, Xy = ltc_frame(d.wo_x, d.wo_y)
     lx, ly = to_frame(Xx, Xy, d.wi_x, d.wi_y)
     return sheen_density(lx, ly, d.wi_z, d.wo_z, p[offset + PARAM.FUZZ_R])
 
 
 @block
-def sampler(dmodel):
+def sampler(dmodel: int) -> int:
     return S_SHEEN
 
 
 @block
-def sample_setup(p, offset):
+def sample_setup(p: NDArray[np.float64], offset: int) -> tuple[float, float]:
     return p[offset + PARAM.FUZZ_R], 1.0
 
 
 @block
-def albedo(c, p, offset, ms, st):
+def albedo(c: int, p: NDArray[np.float64], offset: int, ms: bool, st: LayerState) -> float:
     return st.fuzz
 
 
 @block
-def score(mx, p, offset, weight_at, constant, ms, st):
+def score(
+    mx: bool, p: NDArray[np.float64], offset: int, weight_at: int, constant: float, ms: bool, st: LayerState
+) -> float:
     return st.fuzz * constant

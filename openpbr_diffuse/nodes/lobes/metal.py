@@ -11,11 +11,21 @@ Example
 (1.0, True)
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from ..._jit import block, opaque
 from ...microfacet import fresnel
 from ...microfacet import kernels as mf
 from .._surface_params import PARAM, S_GGX, UNDER_COAT
 from ._common import metal_albedo, norm_or_max, unit_albedo
+
+if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import NDArray
+
+    from .._surface_params import Directions, EvalInputs, LayerState
 
 NAME = "metal"
 LAYER = UNDER_COAT
@@ -24,17 +34,17 @@ constant_albedo = unit_albedo
 
 
 @block
-def weight_color(p, offset, c):
+def weight_color(p: NDArray[np.float64], offset: int, c: int) -> float:
     return p[offset + PARAM.BASE_MUL + c] * p[offset + PARAM.METAL] * p[offset + PARAM.SPEC_WEIGHT]
 
 
 @block
-def is_on(p, offset):
+def is_on(p: NDArray[np.float64], offset: int) -> bool:
     return (p[offset + PARAM.METAL] > 0.0) and (p[offset + PARAM.SPEC_WEIGHT] > 0.0)
 
 
 @block
-def eval(p, offset, d, x):
+def eval(p: NDArray[np.float64], offset: int, d: Directions, x: EvalInputs) -> tuple[float, float, float]:
     F0r, F0g, F0b = p[offset + PARAM.METAL_F0], p[offset + PARAM.METAL_F0 + 1], p[offset + PARAM.METAL_F0 + 2]
     m, c, E1, ms = x.ggx_f, x.ggx_cos, x.e1_specular, x.multiscatter
     return (
@@ -45,27 +55,29 @@ def eval(p, offset, d, x):
 
 
 @block
-def pdf(p, offset, d, dmodel, vndf, ggx_pdf):
+def pdf(p: NDArray[np.float64], offset: int, d: Directions, dmodel: int, vndf: bool, ggx_pdf: float) -> float:
     return ggx_pdf
 
 
 @block
-def sampler(dmodel):
+def sampler(dmodel: int) -> int:
     return S_GGX
 
 
 @block
-def sample_setup(p, offset):
+def sample_setup(p: NDArray[np.float64], offset: int) -> tuple[float, float]:
     return p[offset + PARAM.ALPHA_S], 1.0
 
 
 @block
-def albedo(c, p, offset, ms, st):
+def albedo(c: int, p: NDArray[np.float64], offset: int, ms: bool, st: LayerState) -> float:
     return metal_albedo(p, offset, c, st.e1_specular, st.e5_specular, st.e6_specular, ms)
 
 
 @block
-def score(mx, p, offset, weight_at, constant, ms, st):
+def score(
+    mx: bool, p: NDArray[np.float64], offset: int, weight_at: int, constant: float, ms: bool, st: LayerState
+) -> float:
     E1, E5, E6 = st.e1_specular, st.e5_specular, st.e6_specular
     m0 = p[weight_at] * metal_albedo(p, offset, opaque(0), E1, E5, E6, ms)
     m1 = p[weight_at + 1] * metal_albedo(p, offset, opaque(1), E1, E5, E6, ms)

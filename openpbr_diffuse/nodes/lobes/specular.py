@@ -12,11 +12,21 @@ Example
 (0.5, True)
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from ..._jit import block
 from ...microfacet import fresnel
 from ...microfacet import kernels as mf
 from .._surface_params import PARAM, S_GGX, UNDER_COAT
 from ._common import unit_albedo
+
+if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import NDArray
+
+    from .._surface_params import Directions, EvalInputs, LayerState
 
 NAME = "specular"
 LAYER = UNDER_COAT
@@ -25,12 +35,12 @@ constant_albedo = unit_albedo
 
 
 @block
-def weight_color(p, offset, c):
+def weight_color(p: NDArray[np.float64], offset: int, c: int) -> float:
     return p[offset + PARAM.BASE_MUL + c] * (1.0 - p[offset + PARAM.METAL]) * p[offset + PARAM.SPEC_COLOR + c]
 
 
 @block
-def is_on(p, offset):
+def is_on(p: NDArray[np.float64], offset: int) -> bool:
     tinted = (
         (p[offset + PARAM.SPEC_COLOR] > 0.0)
         or (p[offset + PARAM.SPEC_COLOR + 1] > 0.0)
@@ -40,7 +50,7 @@ def is_on(p, offset):
 
 
 @block
-def eval(p, offset, d, x):
+def eval(p: NDArray[np.float64], offset: int, d: Directions, x: EvalInputs) -> tuple[float, float, float]:
     ior_x = p[offset + PARAM.X_S]
     v = (
         x.ggx_f
@@ -51,25 +61,27 @@ def eval(p, offset, d, x):
 
 
 @block
-def pdf(p, offset, d, dmodel, vndf, ggx_pdf):
+def pdf(p: NDArray[np.float64], offset: int, d: Directions, dmodel: int, vndf: bool, ggx_pdf: float) -> float:
     return ggx_pdf
 
 
 @block
-def sampler(dmodel):
+def sampler(dmodel: int) -> int:
     return S_GGX
 
 
 @block
-def sample_setup(p, offset):
+def sample_setup(p: NDArray[np.float64], offset: int) -> tuple[float, float]:
     return p[offset + PARAM.ALPHA_S], 1.0
 
 
 @block
-def albedo(c, p, offset, ms, st):
+def albedo(c: int, p: NDArray[np.float64], offset: int, ms: bool, st: LayerState) -> float:
     return st.specular
 
 
 @block
-def score(mx, p, offset, weight_at, constant, ms, st):
+def score(
+    mx: bool, p: NDArray[np.float64], offset: int, weight_at: int, constant: float, ms: bool, st: LayerState
+) -> float:
     return st.specular * constant

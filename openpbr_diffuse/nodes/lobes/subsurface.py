@@ -12,10 +12,20 @@ Example
 (1.0, 0.5)
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from ..._jit import INV_PI, block
 from ...models.qon import qon_terms
 from ...sampling.simple import cosine_pdf
 from .._surface_params import PARAM, S_COSINE, UNDER_SPECULAR
+
+if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import NDArray
+
+    from .._surface_params import Directions, EvalInputs, LayerState
 
 NAME = "subsurface"
 LAYER = UNDER_SPECULAR
@@ -23,7 +33,7 @@ READS_DIFFUSE_MODEL = False
 
 
 @block
-def weight_color(p, offset, c):
+def weight_color(p: NDArray[np.float64], offset: int, c: int) -> float:
     solid = p[offset + PARAM.BASE_MUL + c] * (1.0 - p[offset + PARAM.METAL]) * (1.0 - p[offset + PARAM.TRANS_W])
     S, g = p[offset + PARAM.SSS_W], p[offset + PARAM.SSS_ANISO]
     thin = p[offset + PARAM.THIN] > 0.0
@@ -31,17 +41,17 @@ def weight_color(p, offset, c):
 
 
 @block
-def constant_albedo(p, offset, c):
+def constant_albedo(p: NDArray[np.float64], offset: int, c: int) -> float:
     return p[offset + PARAM.SSS_COLOR + c]
 
 
 @block
-def is_on(p, offset):
+def is_on(p: NDArray[np.float64], offset: int) -> bool:
     return (1.0 - p[offset + PARAM.METAL]) * (1.0 - p[offset + PARAM.TRANS_W]) * p[offset + PARAM.SSS_W] > 0.0
 
 
 @block
-def eval(p, offset, d, x):
+def eval(p: NDArray[np.float64], offset: int, d: Directions, x: EvalInputs) -> tuple[float, float, float]:
     up = (d.wi_z > 0.0) & (d.wo_z > 0.0)
     s = d.wi_x * d.wo_x + d.wi_y * d.wo_y + d.wi_z * d.wo_z - d.wi_z * d.wo_z
     qon = qon_terms(d.wi_z, d.wo_z, s, p[offset + PARAM.QON_AB], p[offset + PARAM.QON_AB + 1])
@@ -53,26 +63,28 @@ def eval(p, offset, d, x):
 
 
 @block
-def pdf(p, offset, d, dmodel, vndf, ggx_pdf):
+def pdf(p: NDArray[np.float64], offset: int, d: Directions, dmodel: int, vndf: bool, ggx_pdf: float) -> float:
     density = cosine_pdf(d.wi_z)
     return density if d.wi_z > 0.0 else 0.0
 
 
 @block
-def sampler(dmodel):
+def sampler(dmodel: int) -> int:
     return S_COSINE
 
 
 @block
-def sample_setup(p, offset):
+def sample_setup(p: NDArray[np.float64], offset: int) -> tuple[float, float]:
     return 0.0, 1.0
 
 
 @block
-def albedo(c, p, offset, ms, st):
+def albedo(c: int, p: NDArray[np.float64], offset: int, ms: bool, st: LayerState) -> float:
     return p[offset + PARAM.SSS_COLOR + c] * st.thin_reflection
 
 
 @block
-def score(mx, p, offset, weight_at, constant, ms, st):
+def score(
+    mx: bool, p: NDArray[np.float64], offset: int, weight_at: int, constant: float, ms: bool, st: LayerState
+) -> float:
     return st.thin_reflection * constant

@@ -10,9 +10,19 @@ Example
 (0.25, True)
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from ..._jit import INV_PI, block
 from ...sampling.simple import cosine_pdf
 from .._surface_params import PARAM, S_COSINE, UNDER_SPECULAR
+
+if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import NDArray
+
+    from .._surface_params import Directions, EvalInputs, LayerState
 
 NAME = "subsurface_transmission"
 LAYER = UNDER_SPECULAR
@@ -20,18 +30,18 @@ READS_DIFFUSE_MODEL = False
 
 
 @block
-def weight_color(p, offset, c):
+def weight_color(p: NDArray[np.float64], offset: int, c: int) -> float:
     solid = p[offset + PARAM.BASE_MUL + c] * (1.0 - p[offset + PARAM.METAL]) * (1.0 - p[offset + PARAM.TRANS_W])
     return solid * p[offset + PARAM.SSS_W] * 0.5 * p[offset + PARAM.SSS_COLOR + c] * (1.0 + p[offset + PARAM.SSS_ANISO])
 
 
 @block
-def constant_albedo(p, offset, c):
+def constant_albedo(p: NDArray[np.float64], offset: int, c: int) -> float:
     return p[offset + PARAM.SSS_COLOR + c]
 
 
 @block
-def is_on(p, offset):
+def is_on(p: NDArray[np.float64], offset: int) -> bool:
     dielectric = 1.0 - p[offset + PARAM.METAL]
     return (p[offset + PARAM.THIN] > 0.0) and (
         dielectric * (1.0 - p[offset + PARAM.TRANS_W]) * p[offset + PARAM.SSS_W] > 0.0
@@ -39,32 +49,34 @@ def is_on(p, offset):
 
 
 @block
-def eval(p, offset, d, x):
+def eval(p: NDArray[np.float64], offset: int, d: Directions, x: EvalInputs) -> tuple[float, float, float]:
     g = INV_PI if (d.wi_z < 0.0) & (d.wo_z > 0.0) else 0.0
     color = offset + PARAM.SSS_COLOR
     return p[color] * g, p[color + 1] * g, p[color + 2] * g
 
 
 @block
-def pdf(p, offset, d, dmodel, vndf, ggx_pdf):
+def pdf(p: NDArray[np.float64], offset: int, d: Directions, dmodel: int, vndf: bool, ggx_pdf: float) -> float:
     return cosine_pdf(-d.wi_z)
 
 
 @block
-def sampler(dmodel):
+def sampler(dmodel: int) -> int:
     return S_COSINE
 
 
 @block
-def sample_setup(p, offset):
+def sample_setup(p: NDArray[np.float64], offset: int) -> tuple[float, float]:
     return 0.0, -1.0
 
 
 @block
-def albedo(c, p, offset, ms, st):
+def albedo(c: int, p: NDArray[np.float64], offset: int, ms: bool, st: LayerState) -> float:
     return p[offset + PARAM.SSS_COLOR + c]
 
 
 @block
-def score(mx, p, offset, weight_at, constant, ms, st):
+def score(
+    mx: bool, p: NDArray[np.float64], offset: int, weight_at: int, constant: float, ms: bool, st: LayerState
+) -> float:
     return constant
