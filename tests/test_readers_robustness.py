@@ -1,5 +1,5 @@
 """The readers on damaged and unusual files, each written here: bounded memory on corrupt USD
-packages and crate files, one outcome for a corrupt texture shared by several materials,
+packages and crate files (checked by one child process, replaced when it dies), one outcome for a corrupt texture shared by several materials,
 connections between outputs and inputs of different types, a MaterialX document as the root
 of a .usdz, a float written as several numbers, leftovers of killed processes, and text
 layers that are not UTF-8.
@@ -188,6 +188,211 @@ def test_compressed_package_member_is_refused_naming_it(tmp_path, capfd):
     assert main(["eval", str(pkg)]) == 2
     err = capfd.readouterr().err.strip().splitlines()
     assert len(err) == 1 and str(pkg) in err[0] and "'scene.usdc' is compressed" in err[0]
+
+
+# ----------------------------------------------------------------------------- one checking child
+def _children(script):
+    """Pids of this process's children running ``script`` (from /proc, not from the guard)."""
+    me, found = os.getpid(), set()
+    for name in os.listdir("/proc"):
+        if not name.isdigit():
+            continue
+        try:
+            with open(f"/proc/{name}/stat", "rb") as f:
+                stat = f.read()
+            with open(f"/proc/{name}/cmdline", "rb") as f:
+                cmd = f.read()
+        except OSError:
+            continue
+        fields = stat[stat.rfind(b")") + 2 :].split()
+        if int(fields[1]) == me and fields[0] != b"Z" and script.encode() in cmd:
+            found.add(int(name))
+    return found
+
+
+def _gone(pid, seconds=5.0):
+    """Whether ``pid`` has ended (gone, or a zombie nobody reaped) within ``seconds``."""
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        try:
+            with open(f"/proc/{pid}/stat", "rb") as f:
+                stat = f.read()
+        except OSError:
+            return True
+        if stat[stat.rfind(b")") + 2 :].split()[0] == b"Z":
+            return True
+        time.sleep(0.05)
+    return False
+
+
+def _referencing(path):
+    """A text layer with a composition arc (checked in the child) holding one material."""
+    path.write_text(f'#usda 1.0\ndef "A" (references = @{path.name}@</M>) {{}}\ndef Material "M" {{}}\n')
+    return path
+
+
+@pytest.fixture
+def checker(monkeypatch):
+    from openpbr_diffuse.readers import guard
+
+    guard.CHECKER.stop()  # the process's own child, from the tests before: not counted here
+    fresh = guard.StageChecker()
+    monkeypatch.setattr(guard, "CHECKER", fresh)
+    yield fresh
+    fresh.stop()
+
+
+def test_twenty_stages_are_checked_by_one_child(tmp_path, checker):
+    from openpbr_diffuse.readers import guard
+
+    files = [_referencing(tmp_path / f"s{k}.usda") for k in range(10)]
+    files += [_usdc(tmp_path / f"s{k}.usdc") for k in range(10)]
+    seen = set()
+    t0 = time.monotonic()
+    for f in files:
+        assert guard.needs_child(str(f))
+        guard.check_stage(str(f))
+        seen |= _children("_usd_child.py")
+    assert len(seen) == 1, seen  # one Python start and import of usd-core for all 20
+    assert time.monotonic() - t0 < 15
+
+
+def test_a_stage_that_kills_the_child_fails_alone_and_the_next_gets_a_fresh_child(tmp_path, checker):
+    from openpbr_diffuse.readers import guard
+
+    good = _usdc(tmp_path / "good.usdc")
+    guard.check_stage(str(good))
+    (first,) = _children("_usd_child.py")
+    with pytest.raises(ValueError, match="needs more than 512 MB of memory"):
+        guard.check_stage(str(_crafted_usdc(tmp_path, "FIELDS")))
+    assert _gone(first)
+    other = _usdc(tmp_path / "other.usdc")
+    guard.check_stage(str(other))  # not blamed for its predecessor
+    (second,) = _children("_usd_child.py")
+    assert second != first
+
+
+def test_a_child_killed_between_stages_is_replaced_without_blaming_the_next(tmp_path, checker):
+    from openpbr_diffuse.readers import guard
+
+    guard.check_stage(str(_referencing(tmp_path / "a.usda")))
+    (first,) = _children("_usd_child.py")
+    os.kill(first, signal.SIGKILL)
+    assert _gone(first)
+    guard.check_stage(str(_referencing(tmp_path / "b.usda")))
+    (second,) = _children("_usd_child.py")
+    assert second != first
+
+
+def test_the_child_outlives_a_thread_that_started_it(tmp_path, checker):
+    """PR_SET_PDEATHSIG fires when the thread that forked a child ends: the child must not."""
+    import threading
+
+    from openpbr_diffuse.readers import guard
+
+    t = threading.Thread(target=guard.check_stage, args=(str(_referencing(tmp_path / "a.usda")),))
+    t.start()
+    t.join()
+    (first,) = _children("_usd_child.py") or {None}
+    time.sleep(0.3)
+    guard.check_stage(str(_referencing(tmp_path / "b.usda")))
+    assert _children("_usd_child.py") == {first}
+
+
+def test_the_child_dies_with_its_parent(tmp_path):
+    f = _referencing(tmp_path / "a.usda")
+    code = (
+        "import sys, time\nfrom openpbr_diffuse.readers import guard\n"
+        f"guard.check_stage({str(f)!r})\nprint(guard.CHECKER.proc.pid, flush=True)\ntime.sleep(60)\n"
+    )
+    parent = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
+    try:
+        child = int(parent.stdout.readline())
+        assert not _gone(child, 0.2)
+    finally:
+        parent.kill()
+        parent.wait()
+    assert _gone(child)
+
+
+# A stand-in for ``_usd_child.py`` (its protocol: "+" on receipt, then one JSON line): its
+# stages named *.slow take a minute, those named *.grow leave it 100 MB larger.
+_FAKE_CHILD = """
+import json, sys, time
+out = sys.stdout.buffer
+for line in iter(sys.stdin.buffer.readline, b""):
+    path = json.loads(line)["path"]
+    out.write(b"+")
+    out.flush()
+    if path.endswith(".slow"):
+        open(path + ".started", "w").close()
+        time.sleep(60)
+    vm = 100 << 20 if path.endswith(".grow") else 0
+    out.write(json.dumps({"status": 0, "base": 0, "warm": 0, "vm": vm, "rss": 0, "layers": 0}).encode() + b"\\n")
+    out.flush()
+"""
+
+
+@pytest.fixture
+def fake(tmp_path):
+    from openpbr_diffuse.readers import guard
+
+    script = tmp_path / "fake_child.py"
+    script.write_text(_FAKE_CHILD)
+    c = guard.StageChecker([sys.executable, str(script)])
+    yield c
+    c.stop(kill=True)
+
+
+def test_a_child_killed_during_a_stage_fails_that_stage_and_is_replaced(tmp_path, fake):
+    import threading
+
+    slow = tmp_path / "x.slow"
+    out = []
+    t = threading.Thread(target=lambda: out.append(fake.check(str(slow))))
+    t.start()
+    deadline = time.monotonic() + 10
+    while not (tmp_path / "x.slow.started").exists() and time.monotonic() < deadline:
+        time.sleep(0.02)
+    (first,) = _children("fake_child.py")
+    os.kill(first, signal.SIGKILL)
+    t.join(10)
+    assert out == [("died", -signal.SIGKILL)]
+    assert fake.check(str(tmp_path / "next.usda")) == ("ok", 0)
+    assert _children("fake_child.py") - {first}
+
+
+def test_a_stage_past_the_time_limit_is_refused_and_its_child_killed(tmp_path, fake):
+    t0 = time.monotonic()
+    assert fake.check(str(tmp_path / "x.slow"), timeout=0.5) == ("timeout", 0)
+    assert time.monotonic() - t0 < 5
+    assert not _children("fake_child.py")
+    assert fake.check(str(tmp_path / "next.usda")) == ("ok", 0)
+
+
+def test_a_timeout_is_one_line_naming_the_file(tmp_path, fake, monkeypatch):
+    from openpbr_diffuse.readers import guard
+
+    f = _referencing(tmp_path / "a.usda")
+    monkeypatch.setattr(guard, "CHECKER", fake)
+    monkeypatch.setattr(guard, "STAGE_TIMEOUT", 0.5)
+    monkeypatch.setattr(fake, "check", lambda *a, **k: ("timeout", 0))
+    with pytest.raises(ValueError, match=r"not read: usd-core did not finish opening it within 0.5 s") as e:
+        guard.check_stage(str(f))
+    assert str(f) in str(e.value) and "\n" not in str(e.value)
+
+
+def test_the_child_is_replaced_after_its_quota_of_stages_and_when_it_grew(tmp_path, fake, monkeypatch):
+    from openpbr_diffuse.readers import guard
+
+    monkeypatch.setattr(guard, "CHILD_FILES", 3)
+    pids = []
+    for k in range(7):
+        assert fake.check(str(tmp_path / f"{k}.usda")) == ("ok", 0)
+        pids.append(_children("fake_child.py"))
+    assert [len(p) for p in pids] == [1, 1, 0, 1, 1, 0, 1]  # stopped after the 3rd and 6th stage
+    assert fake.check(str(tmp_path / "a.grow")) == ("ok", 0)  # 100 MB > CHILD_GROWTH_MB
+    assert not _children("fake_child.py")
 
 
 # ----------------------------------------------------------------------------- shared corrupt texture
