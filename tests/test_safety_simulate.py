@@ -35,7 +35,9 @@ def _server(mode):
 @pytest.mark.parametrize("mode", ["silent", "close"])
 def test_scheduler_that_is_not_dask_gives_one_line(capsys, monkeypatch, mode):
     pytest.importorskip("distributed")
-    monkeypatch.setattr(api, "SCHEDULER_TIMEOUT_S", 2.0)
+    from openpbr_diffuse.simulation import _dask
+
+    monkeypatch.setattr(_dask, "SCHEDULER_TIMEOUT_S", 2.0)
     s, held = _server(mode)
     try:
         code = main(

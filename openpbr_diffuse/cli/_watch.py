@@ -247,11 +247,13 @@ def _grade_code(args: argparse.Namespace) -> tuple[list[dict], dict]:
 def _grade_file(args: argparse.Namespace) -> tuple[list[dict], dict]:
     """Grade a results FILE once (as ``check FILE``)."""
     from ..conformance.grade import grade_chunks
+    from ..conformance.tiers import check_from_grade
     from ..conformance.vectors import iter_results
-    from .check import _values_check
 
     g = grade_chunks(iter_results(args.file), model=args.model, precision=args.precision)
-    checks = [{"id": "values", **_values_check(g)}] + [c for c in g.properties if c["status"] != "skip"]
+    values = check_from_grade("values", g)
+    checks = [{"id": "values", "status": values["status"], "detail": values["detail"]}]
+    checks += [c for c in g.properties if c["status"] != "skip"]
     return checks, {"values": (float(g.max_abs_error), g.diagnosis)}
 
 

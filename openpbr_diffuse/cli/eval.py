@@ -127,8 +127,10 @@ def run(args: argparse.Namespace) -> int:
         return run_jsonl(args, ti, to, ph)
     if args.force:
         raise ValueError("eval: --force applies to --jsonl OUT only")
-    if args.more or os.path.isdir(args.file):
-        raise ValueError("eval: several files or a folder need --jsonl OUT (one JSON line per material)")
+    if os.path.isdir(args.file):
+        raise ValueError(f"eval: {args.file} is a directory: a folder needs --jsonl OUT (one JSON line per material)")
+    if args.more:
+        raise ValueError("eval: several files need --jsonl OUT (one JSON line per material)")
     materials = load(args)
     results = [(m, evaluate(m, ti, to, ph)) for m in materials]
     # 0: every material read (unsupported shaders listed as such); 1: some could not be

@@ -104,7 +104,7 @@ def _bar(iterable, progress, total=None):
 def execute(run_task: Callable[[Any], Any], tasks: Sequence[Any], options: RunOptions) -> list:
     """``run_task`` over the chunk ``tasks`` (locally on ``options.workers`` threads, or on a
     Dask cluster: ``run_task`` must then be a module-level function), results in task order."""
-    from .api import _client  # connects to a scheduler address (api.SCHEDULER_TIMEOUT_S)
+    from ._dask import _client  # connects to a scheduler address (_dask.SCHEDULER_TIMEOUT_S)
 
     cl, own = _client(options.client, options.scheduler)
     if cl is not None:
