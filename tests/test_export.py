@@ -109,6 +109,40 @@ def test_glsl_export_passes_its_grade_line(tmp_path):
     assert "CONFORMS" in run.stdout and "[pass] sampler_pdf.reference" in run.stdout
 
 
+@requires("vulkan")
+def test_wgsl_export_passes_its_grade_line(tmp_path):
+    path = write_export("wgsl", tmp_path / "eon.wgsl")
+    run = subprocess.run(_grade_argv(path, "wgsl"), capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert "wgsl:eon.wgsl:eon_f: CONFORMS" in run.stdout and "result: conforms" in run.stdout
+
+
+@requires("vulkan")
+def test_wgsl_with_roughness_squared_does_not_conform_and_is_named(tmp_path):
+    text = export_text("wgsl")
+    call = "return eon_lobe(wi, wo, roughness, rho, false, false);"
+    assert text.count(call) == 1
+    path = tmp_path / "squared.wgsl"
+    path.write_text(text.replace(call, "return eon_lobe(wi, wo, roughness * roughness, rho, false, false);"))
+    run = subprocess.run(_grade_argv(path, "wgsl"), capture_output=True, text=True, timeout=300)
+    assert run.returncode == 1, run.stdout + run.stderr
+    assert "DOES NOT CONFORM" in run.stdout and "roughness_squared" in run.stdout
+
+
+@requires("vulkan")
+def test_check_wgsl_names_a_missing_function_and_code_that_does_not_compile(tmp_path):
+    path = write_export("wgsl", tmp_path / "eon.wgsl")
+    run = _cli("check", "--wgsl", str(path), "--function", "eon_g")
+    assert run.returncode == 2 and run.stderr.strip().splitlines() == [
+        f"openpbr-diffuse check: error: no function eon_g(...) in {path}"
+    ], run.stderr
+    bad = tmp_path / "bad.wgsl"
+    bad.write_text("fn f(wi: vec3<f32>, wo: vec3<f32>, r: f32, rho: vec3<f32>) -> vec3<f32> { return rho * 1.0.x; }\n")
+    run = _cli("check", "--wgsl", str(bad), "--function", "f")
+    assert run.returncode == 2 and len(run.stderr.strip().splitlines()) == 1, run.stderr
+    assert "Traceback" not in run.stderr and "WGSL" in run.stderr
+
+
 @pytest.mark.slow
 @requires("gl")
 def test_glsl_export_passes_its_grade_line_as_written(tmp_path):
@@ -211,6 +245,37 @@ def test_cpp_export_matches_the_library_within_its_stated_precision_and_is_finit
     run = subprocess.run([str(exe)], input=lines, capture_output=True, text=True, timeout=60, check=True)
     got = np.array([[float(x) for x in ln.split()] for ln in run.stdout.splitlines()])
     _check(got, _expected(wi, wo, r, rho), precision)
+
+
+#: a CUDA kernel calling the C++ export's eon_f on the device (EON_HOST_DEVICE is __host__ __device__ under nvcc)
+_CUDA_KERNEL = """
+__global__ void eon_kernel(const float* in, float* out, int n) {
+    int i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= n) return;
+    const float* x = in + 10 * i;
+    eon_vec3 f = eon_f(eon_vec3_make(x[0], x[1], x[2]), eon_vec3_make(x[3], x[4], x[5]), x[6],
+                       eon_vec3_make(x[7], x[8], x[9]));
+    out[3 * i] = f.x; out[3 * i + 1] = f.y; out[3 * i + 2] = f.z;
+}
+"""
+
+
+@pytest.mark.parametrize("precision", ["float", "double"])
+def test_cpp_export_compiles_as_cuda_device_code(tmp_path, precision):
+    import shutil
+
+    nvcc = shutil.which("nvcc") or ("/usr/local/cuda/bin/nvcc" if Path("/usr/local/cuda/bin/nvcc").exists() else None)
+    if nvcc is None:  # CUDA is not installed in CI: the test runs where it is
+        pytest.skip("nvcc not installed")
+    src = tmp_path / "eon.cu"
+    src.write_text(export_text("cpp", precision) + _CUDA_KERNEL)
+    run = subprocess.run(
+        [nvcc, "-x", "cu", "-std=c++17", "-Werror", "all-warnings", "-c", "-o", "/dev/null", str(src)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert run.returncode == 0, run.stderr
 
 
 @requires("vulkan")

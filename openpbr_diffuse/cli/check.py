@@ -2,6 +2,7 @@
 
     openpbr-diffuse check results.csv [--model eon] [--json]
     openpbr-diffuse check results.csv --watch     (also with --glsl FILE / --cpp FILE)
+    openpbr-diffuse check --wgsl FILE --function NAME [--albedo-function NAME]
 
 Rows whose out_r, out_g, out_b are blank are skipped (and counted). Exit status: 0 conforms,
 1 does not conform, 2 unusable file (missing columns, non-numeric values, rows that do not
@@ -39,7 +40,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     )
     from ..renderers import RENDERERS
 
-    graders_cli.add_arguments(p, renderers=list(RENDERERS))  # --implementation / --glsl / --cpp
+    graders_cli.add_arguments(p, renderers=list(RENDERERS))  # --implementation / --glsl / --cpp / --wgsl
     graders_cli.add_tier_arguments(p)  # --precision / --expect-fail
     _check_image.add_arguments(p)  # --image / --chart: a rendered conformance chart
     p.set_defaults(run=run)

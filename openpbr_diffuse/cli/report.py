@@ -126,22 +126,22 @@ def _under_test(args):
         grade_vectors_file,
     )
 
-    code = [m for m in ("implementation", "glsl", "cpp") if getattr(args, m, None)]
+    code = [m for m in ("implementation", "glsl", "cpp", "wgsl") if getattr(args, m, None)]
     if args.vectors and code:
-        raise ValueError("report: give one of --vectors, --glsl, --cpp, --implementation")
+        raise ValueError("report: give one of --vectors, --glsl, --cpp, --wgsl, --implementation")
     if args.vectors:
         return grade_vectors_file(args.vectors), None
     if not code:
         for opt in ("function", "albedo_function", "sample_function", "pdf_function"):
             if getattr(args, opt, None):
-                raise ValueError(f"report: --{opt.replace('_', '-')} needs --glsl or --cpp")
+                raise ValueError(f"report: --{opt.replace('_', '-')} needs --glsl, --cpp or --wgsl")
         return None, None
     from ..graders.errors import GraderUnavailable
 
-    label = args.implementation or args.glsl or args.cpp
+    label = args.implementation or args.glsl or args.cpp or args.wgsl
     from pathlib import Path
 
-    for opt in ("glsl", "cpp"):
+    for opt in ("glsl", "cpp", "wgsl"):
         if getattr(args, opt, None) and not Path(getattr(args, opt)).is_file():
             raise FileNotFoundError(f"report: --{opt} {getattr(args, opt)}: no such file")
     try:
@@ -151,6 +151,15 @@ def _under_test(args):
         ut.verdicts = [Verdict(q, COULD_NOT_RUN, detail=ut.error) for q in ("brdf",)]
         return ut, None
     return grade_subject_under_test(subject, quick=True, sampler_model=getattr(args, "sampler_model", None)), subject
+
+
+def _explorer(args):
+    """The GLSL function the report's explorer shows beside the reference (``--glsl`` with ``--function``)."""
+    if not (getattr(args, "glsl", None) and getattr(args, "function", None)):
+        return None
+    from ..report.explore import explorer_subject
+
+    return explorer_subject(args.glsl, args.function, args.include, args.define)
 
 
 def _sections(args, under):
@@ -215,6 +224,7 @@ def run(args: argparse.Namespace) -> int:
             under_test=under,
             subject=subject,
             library=library,
+            explorer=_explorer(args),
         )
     finally:
         library.close()

@@ -34,9 +34,9 @@ GRADES = {
         "strategy's; finite at mu = 0, r = 0, rho = 0 and 1"
     ),
     "wgsl": (
-        "no `openpbr-diffuse check --wgsl` exists; run through wgpu (lavapipe) by the package's tests: "
-        "f, the fit and white_tint variants, albedo and pdf against the library in float32; finite at "
-        "mu = 0, r = 0, rho = 0 and 1"
+        "passes `openpbr-diffuse check --wgsl` through wgpu on Mesa lavapipe (float32): BRDF and albedo "
+        "vectors of model eon; and, run by the package's tests, f, the fit and white_tint variants, "
+        "albedo and pdf against the library in float32; finite at mu = 0, r = 0, rho = 0 and 1"
     ),
     "cpp": (
         "passes `openpbr-diffuse check --cpp` (g++, GLM adapters) in float and double: BRDF and albedo "
@@ -81,7 +81,7 @@ def grade_command(lang: str, path: str = "FILE") -> str:
     if lang == "cpp":
         return f"openpbr-diffuse check --cpp {path} --define EON_GLM=1 {_FUNCTIONS}"
     if lang == "wgsl":
-        return "none: openpbr-diffuse check has no --wgsl (the package's tests run this file through wgpu)"
+        return f"openpbr-diffuse check --wgsl {path} --function eon_f --albedo-function eon_albedo"
     if lang == "osl":
         return "none: openpbr-diffuse check has no --osl"
     if lang == "mtlx":

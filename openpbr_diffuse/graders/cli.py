@@ -3,9 +3,10 @@
     openpbr-diffuse check --implementation NAME [--source PATH] [--json]
     openpbr-diffuse check --glsl FILE --function NAME [--albedo-function NAME] [--include DIR] [--define N=V]
     openpbr-diffuse check --cpp FILE --function NAME [--albedo-function NAME] [--include DIR] [--define N=V]
+    openpbr-diffuse check --wgsl FILE --function NAME [--albedo-function NAME]
     openpbr-diffuse check --glsl FILE --sample-function S --pdf-function P [--sampler-model eon] [--function F]
 
---glsl and --cpp compile and run the given code with the user's rights, each compile and run in a
+--glsl, --cpp and --wgsl compile and run the given code with the user's rights, each compile and run in a
 child process under a wall-time limit (--timeout, default 60 s) and a 4 GiB memory limit; its whole
 process group is killed on timeout or when the command is interrupted.
 
@@ -78,6 +79,13 @@ def add_arguments(parser: argparse.ArgumentParser | argparse._ArgumentGroup, ren
         "--cpp",
         metavar="FILE",
         help="a C++ file holding FUNCTION (see --function); compiled with g++ and run with your rights",
+    )
+    g.add_argument(
+        "--wgsl",
+        metavar="FILE",
+        help="a WGSL file holding FUNCTION, fn NAME(wi: vec3<f32>, wo: vec3<f32>, roughness: f32, rho: vec3<f32>) "
+        "-> vec3<f32> (and the albedo fn NAME(mu: f32, roughness: f32, rho: vec3<f32>) -> vec3<f32>); run through "
+        "wgpu (lavapipe) with your rights",
     )
     g.add_argument(
         "--function",
@@ -305,6 +313,7 @@ _UNDECLARED = (
     r"[‘'`]{name}[’']? was not declared",
     r"no function with name '{name}'",
     r"[‘']{name}[’'] is not a member",
+    r"no definition in scope for identifier: [`']?{name}\b",
 )
 
 
@@ -339,14 +348,22 @@ def subject_from_args(args: argparse.Namespace) -> Subject | None:
     if getattr(args, "timeout", None) is not None:
         limits.set_limits(timeout=args.timeout)
 
-    modes = [m for m in ("implementation", "glsl", "cpp") if getattr(args, m, None)]
+    modes = [m for m in ("implementation", "glsl", "cpp", "wgsl") if getattr(args, m, None)]
     if not modes:
         for opt in ("source", "function", "albedo_function", "sample_function", "pdf_function", "sampler_model"):
             if getattr(args, opt, None):
                 raise ValueError(f"check: --{opt.replace('_', '-')} needs --implementation, --glsl or --cpp")
         return None
     if len(modes) > 1 or getattr(args, "file", None):
-        raise ValueError("check: give one of FILE, --implementation, --glsl, --cpp")
+        raise ValueError("check: give one of FILE, --implementation, --glsl, --cpp, --wgsl")
+    if getattr(args, "wgsl", None):
+        from .wgsl import wgsl_subject
+
+        for opt in ("source", "sample_function", "pdf_function", "sampler_model", "include", "define"):
+            if getattr(args, opt, None):
+                raise ValueError(f"check: --{opt.replace('_', '-')} is not available with --wgsl")
+        _check_functions(args.wgsl, (args.function, args.albedo_function))
+        return wgsl_subject(args.wgsl, args.function, args.albedo_function, model=getattr(args, "model", None) or "eon")
     if args.implementation:
         if (
             args.function
@@ -398,10 +415,11 @@ def run(args: argparse.Namespace) -> int | None:
     from .errors import GraderUnavailable
     from .grading import grade_subject
 
-    if not any(getattr(args, m, None) for m in ("implementation", "glsl", "cpp")):
+    if not any(getattr(args, m, None) for m in ("implementation", "glsl", "cpp", "wgsl")):
         subject_from_args(args)  # ValueError for an option that needs a mode
         return None
-    expected = prepare(args, [x for x in (args.glsl, args.cpp) if x])  # before any compile
+    code = args.glsl or args.cpp or getattr(args, "wgsl", None)
+    expected = prepare(args, [code] if code else [])  # before any compile
     _exit_on_sigterm()  # so a SIGTERM unwinds through run_limited, which kills the child's group
     try:
         subject = subject_from_args(args)
@@ -414,7 +432,6 @@ def run(args: argparse.Namespace) -> int | None:
         )
     except GraderUnavailable as exc:  # a compiler's "not declared": the function is missing
         names = [getattr(args, k, None) for k in ("function", "albedo_function", "sample_function", "pdf_function")]
-        code = args.glsl or args.cpp
         missing = _missing_function(str(exc), code, names) if code else None
         if missing is None:
             raise

@@ -61,7 +61,7 @@ MARKER = ".openpbr-diffuse-report"
 #: Name of the owner stamp a staging folder holds while its report is built (JSON: pid, host).
 STAMP = ".openpbr-diffuse-staging"
 #: What a staging folder holds before its marker is written (the runner's layout).
-_STAGED = ("index.html", "report.json", "images")
+_STAGED = ("index.html", "report.json", "explore.html", "images")
 _IMAGES = "images"
 #: The random part of a ``tempfile.mkdtemp`` name.
 _RANDOM = r"[a-z0-9_]{8}"

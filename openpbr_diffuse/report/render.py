@@ -83,6 +83,9 @@ openpbr-diffuse report --glsl mine.glsl --function f</code></pre>
 <p>The guide: &ldquo;The conformance report&rdquo; of the documentation (<code>docs/guide/report.md</code> in the
 source; <code>openpbr-diffuse report --help</code>).</p></div>
 {% endif %}
+{% if doc.explorer %}<p id="explorer-link">Lobe explorer (WebGL2, offline): <a href="{{ doc.explorer.file }}">{{ doc.explorer.file }}</a>:
+the EON lobe, Lambert and QON computed by the GLSL export{% if doc.explorer.subject %}, and your <code>{{ doc.explorer.function }}</code>
+({{ doc.explorer.subject }}) beside the reference with |theirs &minus; reference|{% endif %}, at sliders for r, &rho;, &theta;<sub>o</sub> and the light.</p>{% endif %}
 {% if doc.evidence.n_checks == 0 %}<p id="overall" class="na">The reference's evidence: not run (no check ran{% if doc.select %}; --select {{ doc.select | join(' ') }}{% endif %}).</p>
 {% else %}<p id="overall" class="{{ 'pass' if doc.passed else 'fail' }}">The reference's evidence: {{ "ALL CHECKS PASS" if doc.passed else "SOME CHECKS FAIL" }}:
 {{ doc.evidence.n_checks - doc.evidence.n_failed }} of {{ doc.evidence.n_checks }} checks pass{% if doc.evidence.n_not_run %}; {{ doc.evidence.n_not_run }} not run{% endif %}.</p>{% endif %}

@@ -21,6 +21,8 @@ only when everything was written: an existing report is replaced only by a compl
                    "findings" (int|null: a findings section's count of failing quantities),
                    "figures": [{"file" ("images/<key>_*.png"), "caption"}]}],
      "checks": [CHECK],       # every check of every section, flattened
+     "explorer": {"file" ("explore.html"), "subject" (str|null: the GLSL file shown beside the
+                  reference), "function" (str|null), "message" (str: why its GLSL is not in the page)},
      "materials": [MATERIAL]} # every material of the materials section, in file order ([] without it)
     CHECK = {"id" ("section.check_slug", stable), "section", "name", "measured", "threshold",
              "comparison" ("<=", ">=", "=="), "expected" (null unless "=="), "unit",
@@ -72,6 +74,7 @@ from .model import Check, Context, SectionResult, slug
 if TYPE_CHECKING:
     from ..graders.subject import Subject
     from ..library import LibraryOptions
+    from .explore import ExplorerSubject
     from .subject import UnderTest
 
 SCHEMA = "openpbr-diffuse-report/2"
@@ -443,8 +446,10 @@ def run_report(
     under_test: UnderTest | None = None,
     subject: Subject | None = None,
     library: LibraryOptions | None = None,
+    explorer: ExplorerSubject | None = None,
 ) -> ReportRun:
-    """Run the report and write ``out/index.html``, ``out/report.json`` and ``out/images/``.
+    """Run the report and write ``out/index.html``, ``out/report.json``, ``out/images/`` and
+    ``out/explore.html`` (the lobe explorer, :mod:`.explore`).
 
     Parameters
     ----------
@@ -470,6 +475,9 @@ def run_report(
         How the materials section reads the files (:mod:`openpbr_diffuse.library`): worker
         processes, cache, Dask cluster, number of previews (default: in this process, no
         cache; its progress follows ``progress``).
+    explorer : ExplorerSubject, optional
+        A GLSL implementation under test (:func:`.explore.explorer_subject`): the explorer page
+        shows its function beside the reference, with the difference.
 
     Raises
     ------
@@ -530,6 +538,9 @@ def run_report(
             figures=figures,
             materials=ctx.extra.get("materials", ()),
         )
+        from .explore import write_explorer_into
+
+        doc["explorer"] = write_explorer_into(tmp, explorer)
         run.document = doc
         (tmp / "report.json").write_text(json.dumps(doc, indent=1, allow_nan=False) + "\n")
         (tmp / "index.html").write_text(render_html(doc, image_dir), encoding="utf-8")
