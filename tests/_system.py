@@ -147,6 +147,11 @@ PROGRAMS = {
         "python3.11 -m venv bpy-env && bpy-env/bin/pip install bpy; export OPENPBR_DIFFUSE_BPY_PYTHON=$PWD/bpy-env/bin/python",
         _bpy_ok,
     ),
+    "xvfb": (
+        "Xvfb (MaterialX's GlslRenderer makes its GL context through GLX)",
+        "apt-get install xvfb",
+        lambda: shutil.which("Xvfb") is not None,
+    ),
     "node": ("node and npm", "apt-get install nodejs npm", lambda: bool(shutil.which("node") and shutil.which("npm"))),
 }
 

@@ -243,6 +243,22 @@ def test_the_ramp_scatter_is_a_stated_floor_and_not_a_curve(scene, tmp_path, cap
     assert d["image_tolerance"]["renderer_floor"] == 0.0
 
 
+def test_an_image_with_most_tiles_missing_does_not_conform(scene, tmp_path, capsys):
+    """Only a few tiles rendered (the rest black, one ramp tile too): the ramp's scatter is
+    no renderer floor to widen the tolerance with -- capped, and the image does not conform."""
+    img = _image(scene[0], _eon)
+    tests = [t for t in scene[0]["tiles"] if t["role"] == "test"]
+    ramp = [t for t in scene[0]["tiles"] if t["role"] == "ramp"]
+    for t in tests[3:] + ramp[:1]:
+        x0, y0, x1, y1 = t["rect"]
+        img[y0:y1, x0:x1] = 0.0
+    code, d = _check(tmp_path, capsys, scene, img)
+    assert code == 1 and not d["passed"]
+    tol = d["image_tolerance"]
+    assert tol["renderer_floor"] <= 0.02 < tol["renderer_floor_measured"]
+    assert "capped" in tol["rule"]
+
+
 def test_a_ramp_off_by_a_third_of_a_percent_is_linear_but_gamma_1_05_is_not(scene, tmp_path, capsys):
     img = _image(scene[0], _eon)
     ramp = [t for t in scene[0]["tiles"] if t["role"] == "ramp"]

@@ -26,7 +26,8 @@ a tolerance of their own (a grazing tile where a few samples miss), so that they
 widen the tolerance of the others.
 The renderer's floor is its own error at roughness 0, where every model is rho/pi: the
 largest scatter of a ramp / white tile about the exposure line beyond that tile's noise
-band (0 for a path tracer whose ramp is within its noise; EEVEE: 3.6e-3).
+band (0 for a path tracer whose ramp is within its noise; EEVEE: 3.6e-3), at most
+:data:`FLOOR_CAP` (a ramp scattering more is a broken image, not a renderer's small error).
 With K = :data:`K_SIGMA` standard errors of a tile's mean (a path tracer's noise), q half a
 code value of an integer file (rasteriser output), sigma_c the standard error of the
 exposure factor.  IMAGE_REL_TOL covers half-float storage (4.9e-4 relative) and the
@@ -61,6 +62,10 @@ IMAGE_REL_TOL = 2e-3
 DARK = 1e-2
 #: A tile whose relative noise is above this many times the median tile's is graded apart.
 NOISY_FACTOR = 4.0
+#: Largest renderer floor accepted (relative): a ramp that scatters more than this about the
+#: exposure line is not a renderer's own small error but a broken image (tiles missing,
+#: clamped, shadowed); the floor is capped here and the image is graded with the cap.
+FLOOR_CAP = 0.02
 #: A power law fitted to the ramp is linear output when it moves the ramp, end to end, by at
 #: most this (|gamma - 1| ln(e_max / e_min)) or by no more than the ramp's scatter about it:
 #: a rasteriser's own error at roughness 0 is of this size (EEVEE: 0.36 % on the darkest ramp
@@ -251,7 +256,8 @@ def grade_image(
     with np.errstate(divide="ignore", invalid="ignore"):
         beyond = np.abs(m / (c_fit * e) - 1.0) - band / np.abs(c_fit * e)
     floor = float(np.max(np.where(np.isfinite(beyond) & (e > 0), beyond, 0.0), initial=0.0))
-    floor = max(floor, 0.0)
+    floor_measured = max(floor, 0.0)
+    floor = min(floor_measured, FLOOR_CAP)
     rows = [t for t, s in zip(tiles, test, strict=True) if s]
     n = len(rows)
     wo = np.array([t["wo"] for t in rows], float)
@@ -305,10 +311,17 @@ def grade_image(
         "absolute": ab,
         "k_sigma": k_sigma,
         "renderer_floor": floor,
+        "renderer_floor_measured": floor_measured,
         "rule": (
             f"|out - ref| <= {ab:.3g} + {rel:.3g} |ref| per tile: {IMAGE_REL_TOL:g} (half float, float32 geometry) "
             f"+ the interreflection bound + the renderer's own error on the ramp ({floor:.2g}: its scatter "
-            f"about the exposure line beyond the tiles' noise) + {k_sigma:g} standard errors of the exposure + "
+            f"about the exposure line beyond the tiles' noise"
+            + (
+                f", measured {floor_measured:.2g}, capped at {FLOOR_CAP:g}: the calibration tiles themselves are wrong"
+                if floor_measured > FLOOR_CAP
+                else ""
+            )
+            + f") + {k_sigma:g} standard errors of the exposure + "
             f"{k_sigma:g} standard "
             "errors of the noisiest tile's mean and half a code value, relative to its value (absolute for "
             f"BRDF values < {DARK:g})"

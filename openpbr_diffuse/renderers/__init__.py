@@ -14,6 +14,8 @@ eevee              Blender EEVEE (Principled BSDF), OpenGL (EGL)    render_blend
 storm              Blender Hydra Storm (hydra_storm add-on), GL     render_blender  bpy, EGL
 threejs-render     three.js WebGLRenderer, GLTFLoader               chart.gltf      Chromium
 babylonjs-render   Babylon.js Engine, glTF loader                   chart.gltf      Chromium
+luxcore            LuxCoreRender roughmatte (Oren-Nayar), PATHCPU   chart.json      pyluxcore
+materialx-render   MaterialX GlslRenderer, one render per tile      chart.mtlx      Xvfb (GLX)
 =================  ===============================================  ==============  ==========
 
 ``openpbr-diffuse check --implementation NAME`` (one of the names above) renders and grades.
@@ -65,6 +67,9 @@ RENDERERS = {
         Renderer("storm", "storm", "Blender Hydra Storm (Principled BSDF)", "blender"),
         Renderer("threejs-render", "threejs", "three.js WebGLRenderer (GLTFLoader)", "gltf"),
         Renderer("babylonjs-render", "babylonjs", "Babylon.js (glTF loader)", "gltf"),
+        # LuxCore reads chart.json (written with every format): the smallest format is asked for
+        Renderer("luxcore", "luxcore", "LuxCoreRender (roughmatte, PATHCPU)", "mtlx"),
+        Renderer("materialx-render", "materialx_render", "MaterialX GlslRenderer (open_pbr_surface)", "mtlx"),
     )
 }
 
@@ -105,7 +110,7 @@ def renderer(name: str) -> Renderer:
     >>> renderer("povray")
     Traceback (most recent call last):
     ...
-    ValueError: renderer: 'povray' is not one of cycles-render, eevee, storm, threejs-render, babylonjs-render
+    ValueError: renderer: 'povray' is not one of cycles-render, eevee, storm, threejs-render, babylonjs-render, luxcore, materialx-render
     """
     if name not in RENDERERS:
         raise ValueError(f"renderer: {name!r} is not one of {', '.join(RENDERERS)}")
