@@ -3,7 +3,7 @@
 :func:`process_file` is what a worker process (or a Dask worker) runs for one file.  It
 returns plain, JSON-ready data only (no Material, node or stage survives it), so that a
 library's memory does not grow with its heavy objects, results travel between processes
-cheaply and the cache stores them as they are.  Three kinds of :class:`Task`:
+cheaply and the cache stores them as they are.  Four kinds of :class:`Task`:
 
 - ``"report"``: one record per material (the report's table row, :func:`material_record`):
   verdict, reasons, shader kind, base colour, diffuse roughness, the diffuse lobe's weight
@@ -12,6 +12,8 @@ cheaply and the cache stores them as they are.  Three kinds of :class:`Task`:
   and how far the lobe selection probabilities are from summing to 1;
 - ``"eval"``: one record per material as ``eval --json`` lists it (``Material.to_dict()``
   plus ``"evaluation"`` at the task's directions);
+- ``"colours"``: one record per material of its diffuse colour and roughness
+  (:mod:`.colours`, what the colour-shift validation reads);
 - ``"detail"``: for a few chosen materials of the file, a preview render and an albedo plot
   (PNG bytes, base64), the albedo curve and the table of resolved parameters with provenance.
 
@@ -53,7 +55,7 @@ RACY_S = 1.0
 #: Inputs shown in the parameter table even when they hold their default.
 KEY_INPUTS = ("base_color", "base_diffuse_roughness", "base_weight", "color", "roughness")
 
-KINDS = ("report", "eval", "detail")
+KINDS = ("report", "eval", "detail", "colours")
 VERDICTS = ("fail", "flagged", "unsupported", "pass")
 
 _LOCK = threading.Lock()
@@ -65,7 +67,7 @@ class Task:
 
     Parameters
     ----------
-    kind : {"report", "eval", "detail"}
+    kind : {"report", "eval", "detail", "colours"}
     n_mu : int
         Points of the albedo curve over theta_o in [0, 89] deg (report: the check; detail: the plot).
     uv, time, variants, purpose, material
@@ -84,7 +86,7 @@ class Task:
     >>> Task(kind="nope")
     Traceback (most recent call last):
     ...
-    ValueError: kind must be one of report, eval, detail, got 'nope'
+    ValueError: kind must be one of report, eval, detail, colours, got 'nope'
     """
 
     kind: str = "report"
@@ -366,6 +368,10 @@ def _payload(mats: list, task: Task) -> dict[str, Any]:
 
     if task.kind == "report":
         return {"records": [material_record(m, task.n_mu) for m in mats], "error": None}
+    if task.kind == "colours":
+        from .colours import colour_record
+
+        return {"records": [colour_record(m) for m in mats], "error": None}
     if task.kind == "eval":
         records = []
         for m in mats:

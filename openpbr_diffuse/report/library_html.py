@@ -30,19 +30,27 @@ SCRIPT = """
   var input = document.getElementById("materials-filter");
   var verdict = document.getElementById("materials-verdict");
   var shown = document.getElementById("materials-shown");
+  var more = document.getElementById("materials-more");
+  // at most `limit` matching rows are laid out (a 10^4-row table costs seconds of layout);
+  // "show all" lifts the limit
+  var limit = parseInt(table.getAttribute("data-page"), 10) || Infinity;
   function apply() {
     var terms = input.value.toLowerCase().split(/\\s+/).filter(Boolean);
     var want = verdict.value, n = 0;
     items.forEach(function (it) {
       var ok = !want || it.row.getAttribute("data-verdict") === want;
       for (var j = 0; ok && j < terms.length; j++) { ok = it.text.indexOf(terms[j]) >= 0; }
-      it.row.hidden = !ok;
       if (ok) { n++; }
+      var hide = !ok || n > limit;
+      if (it.row.hidden !== hide) { it.row.hidden = hide; }
     });
-    shown.textContent = n + " of " + items.length + " materials shown";
+    shown.textContent = n + " of " + items.length + " materials shown" +
+      (n > limit ? " (the first " + limit + " listed)" : "");
+    more.hidden = !(n > limit);
   }
   input.addEventListener("input", apply);
   verdict.addEventListener("change", apply);
+  more.addEventListener("click", function () { limit = Infinity; apply(); });
   var heads = table.tHead.rows[0].cells;
   Array.prototype.forEach.call(heads, function (th, c) {
     th.addEventListener("click", function () {
@@ -65,6 +73,7 @@ SCRIPT = """
       var frag = document.createDocumentFragment();
       items = keyed.map(function (k) { frag.appendChild(k.it.row); return k.it; });
       body.appendChild(frag);
+      apply();  // the first rows of the new order are the ones listed
     });
   });
   apply();
@@ -99,6 +108,10 @@ STYLE = """
 #materials-table .sw { display: inline-block; width: .9em; height: .9em; border: 1px solid #888; vertical-align: middle; margin-right: .3em; }
 """
 
+#: Rows of the materials table laid out at first (and per filter): the rest are in the page,
+#: hidden until a filter matches them or "show all" (laying out 10^4 rows costs seconds).
+PAGE = 500
+
 #: Column headers and their widths (%), in the table's order.
 COLUMNS = (
     ("verdict", 6, "text"),
@@ -132,12 +145,13 @@ TEMPLATE = """{% if lib.worst %}<table id="materials-worst" class="data"><captio
 <div class="controls"><input id="materials-filter" type="search" placeholder="filter: words found in any column" aria-label="filter the materials">
 <select id="materials-verdict" aria-label="verdict"><option value="">every verdict</option>
 {% for v in verdicts %}<option value="{{ v }}">{{ v }}</option>{% endfor %}</select>
-<span id="materials-shown">{{ rows | length }} materials</span></div>
-<table id="materials-table" class="data"><caption>Materials, worst first (click a header to sort)</caption>
+<span id="materials-shown">{{ rows | length }} materials</span>
+<button id="materials-more" type="button"{% if rows | length <= page %} hidden{% endif %}>show all</button></div>
+<table id="materials-table" class="data" data-page="{{ page }}"><caption>Materials, worst first (click a header to sort{% if rows | length > page %}; the first {{ page }} listed until a filter or "show all"{% endif %})</caption>
 <colgroup>{% for name, width, kind in columns %}<col style="width: {{ width }}%">{% endfor %}</colgroup>
 <thead><tr>{% for name, width, kind in columns %}<th data-type="{{ kind }}">{{ name }}</th>{% endfor %}</tr></thead>
 <tbody>
-{% for r in rows %}<tr data-verdict="{{ r.verdict }}"><td class="{{ verdict_class(r.verdict) }}">{{ r.verdict }}</td>
+{% for r in rows %}<tr data-verdict="{{ r.verdict }}"{% if loop.index > page %} hidden{% endif %}><td class="{{ verdict_class(r.verdict) }}">{{ r.verdict }}</td>
 <td>{{ r.relpath }}</td><td>{{ r.material or '-' }}</td><td>{{ r.kind }}</td>
 <td>{{ r.node or '-' }}{% if r.diffuse_model %} ({{ r.diffuse_model }}){% endif %}</td>
 <td data-v="{{ mean(r.base_color) }}">{% if r.base_color %}<span class="sw" style="background: {{ swatch(r.base_color) }}"></span>{{ r.base_color | vec }}{% else %}-{% endif %}</td>
@@ -256,6 +270,7 @@ def context(doc: dict[str, Any]) -> dict[str, Any]:
     return {
         "parts": parts,
         "rows": sorted(doc.get("materials") or [], key=worst_key),
+        "page": PAGE,
         "verdicts": VERDICTS,
         "columns": COLUMNS,
         "swatch": swatch,

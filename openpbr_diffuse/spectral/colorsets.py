@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..library.colours import DIFFUSE_COLOR_INPUTS, DIFFUSE_ROUGHNESS_INPUTS  # noqa: F401 -- part of this API
 from .colorimetry import _colour
 from .recovery import check_rgb, resolve_method, rgb_to_spectra
 
@@ -34,10 +35,6 @@ if TYPE_CHECKING:
     from .colorimetry import Colorimetry
 
 CHECKER = "BabelColor Average"
-#: diffuse-colour parameter names by material shader (first present wins).
-DIFFUSE_COLOR_INPUTS = ("base_color", "color", "diffuseColor")
-#: diffuse-roughness inputs of the library nodes (OpenPBRSurface, OrenNayarDiffuseBSDF).
-DIFFUSE_ROUGHNESS_INPUTS = ("base_diffuse_roughness", "roughness")
 MATERIAL_SUFFIXES = (".usd", ".usda", ".usdc", ".usdz", ".mtlx")
 #: fewest wavelength rows of a spectra CSV (colour-science's Sprague interpolation needs 6).
 MIN_CSV_SAMPLES = 6
@@ -195,29 +192,6 @@ def from_spectra_csv(path: str | os.PathLike[str], cm: Colorimetry) -> ColourSet
     return _measured(header[1:], spectra, cm, str(path))
 
 
-def _material_inputs(material):
-    # the library node's inputs after the reader's mapping, else the shader's own
-    return getattr(material, "node_inputs", None) or material.parameters
-
-
-def _material_rgb(material):
-    inputs = _material_inputs(material)
-    for key in DIFFUSE_COLOR_INPUTS:
-        p = inputs.get(key)
-        if p is not None:
-            return key, np.asarray(p.value, np.float64).reshape(-1)
-    return None, None
-
-
-def _material_roughness(material):
-    inputs = _material_inputs(material)
-    for key in DIFFUSE_ROUGHNESS_INPUTS:
-        p = inputs.get(key)
-        if p is not None:
-            return float(np.asarray(p.value, np.float64).reshape(-1)[0])
-    return None
-
-
 def from_materials(
     paths: Iterable[str | os.PathLike[str]], cm: Colorimetry, method: str = "auto"
 ) -> tuple[ColourSet, list[str]]:
@@ -238,36 +212,61 @@ def from_materials(
         from ..readers import load_materials
     except ImportError as exc:
         raise ValueError(f"reading material files needs openpbr_diffuse.readers ({exc})") from None
+    from ..library.colours import colour_record
+
+    records = [colour_record(m) for path in paths for m in load_materials(path)]
+    return from_colour_records(records, cm, method)
+
+
+def from_colour_records(records: Sequence[dict], cm: Colorimetry, method: str = "auto") -> tuple[ColourSet, list[str]]:
+    """:func:`from_materials` of the materials' colour records
+    (:func:`openpbr_diffuse.library.colours.colour_record`, as the library cache keeps them).
+
+    Examples
+    --------
+    >>> from openpbr_diffuse.library.colours import colour_record
+    >>> from openpbr_diffuse.readers import BUNDLED_MATERIALS, load_materials
+    >>> from openpbr_diffuse.spectral.colorimetry import colorimetry
+    >>> cs, warnings = from_colour_records(
+    ...     [colour_record(m) for m in load_materials(BUNDLED_MATERIALS / "clay_rough.mtlx")], colorimetry()
+    ... )
+    >>> cs.names, cs.extra[0]["material_diffuse_roughness"], warnings
+    (['clay_rough'], 1.0, [])
+    """
     from .. import readers
 
     source_space = getattr(readers, "WORKING_SPACE", "acescg")
-    names, rgbs, sources, extra, warnings = [], [], [], [], []
-    for path in paths:
-        for m in load_materials(path):
-            warnings += [f"{m.file}:{m.path}: {w}" for w in m.warnings]
-            key, rgb = _material_rgb(m)
-            if not m.supported or rgb is None or rgb.size != 3:
-                why = f"unsupported shader {m.shader_id}" if not m.supported else "no diffuse colour"
-                warnings.append(f"{m.file}:{m.path}: skipped ({why})")
-                continue
-            rgb = _to_working_space(rgb, source_space, cm)
-            clipped = np.clip(rgb, 0.0, 1.0)
-            if np.any(abs(clipped - rgb) > 1e-9):
-                warnings.append(
-                    f"{m.file}:{m.path}: {key} {np.round(rgb, 6).tolist()} ({cm.working_space}) clipped to [0, 1]"
-                )
-            names.append(m.name)
-            rgbs.append(clipped)
-            sources.append(f"material {m.file}:{m.path} {key}")
-            extra.append(
-                {
-                    "material_file": str(m.file),
-                    "material_path": str(m.path),
-                    "material_shader": str(m.shader_id),
-                    "material_diffuse_model": getattr(m, "diffuse_model", "") or None,
-                    "material_diffuse_roughness": _material_roughness(m),
-                }
-            )
+    # the colours of every usable record are converted at once; each record's warnings keep
+    # their place (its reader warnings, then why it is skipped or clipped)
+    kept, texts = [], []
+    for r in records:
+        where = f"{r['file']}:{r['path']}"
+        texts.append([f"{where}: {w}" for w in r["warnings"]])
+        rgb = None if r["rgb"] is None else np.array([float(v) for v in r["rgb"]], np.float64)
+        if not r["supported"] or rgb is None or rgb.size != 3:
+            why = f"unsupported shader {r['shader']}" if not r["supported"] else "no diffuse colour"
+            texts[-1].append(f"{where}: skipped ({why})")
+            continue
+        kept.append((len(texts) - 1, r, where, rgb))
+    converted = _to_working_space(np.array([k[3] for k in kept]), source_space, cm) if kept else []
+    names, rgbs, sources, extra = [], [], [], []
+    for (at, r, where, _), rgb in zip(kept, converted):
+        clipped = np.clip(rgb, 0.0, 1.0)
+        if np.any(abs(clipped - rgb) > 1e-9):
+            texts[at].append(f"{where}: {r['key']} {np.round(rgb, 6).tolist()} ({cm.working_space}) clipped to [0, 1]")
+        names.append(r["name"])
+        rgbs.append(clipped)
+        sources.append(f"material {where} {r['key']}")
+        extra.append(
+            {
+                "material_file": r["file"],
+                "material_path": r["path"],
+                "material_shader": r["shader"],
+                "material_diffuse_model": r["diffuse_model"],
+                "material_diffuse_roughness": None if r["roughness"] is None else float(r["roughness"]),
+            }
+        )
+    warnings = [t for ts in texts for t in ts]
     if not names:
         return ColourSet([], np.zeros((0, cm.wavelengths.size)), np.zeros((0, 3)), [], np.zeros(0)), warnings
     name = resolve_method(method, cm)

@@ -5,6 +5,9 @@ Computes with ``openpbr_diffuse.spectral`` on the 24 measured ColorChecker spect
 references (colour-science's own ``sd_to_XYZ``, the quadrature albedo tables, the shipped
 colour-shift table), the r = 1 summary per working space, the round trip of the recovery
 methods and how much the recovered spectrum changes the answer, a plot and a swatch image.
+The materials' diffuse colours come from the library's runner (``ctx.extra["library"]``:
+worker processes and the library cache, task ``"colours"``), so a second run over an
+unchanged library reads no material file.
 """
 
 from __future__ import annotations
@@ -296,10 +299,24 @@ def _figure(ctx, res):
     )
 
 
+def _material_colours(ctx, files):
+    """Per file of ``files``: (colour records, None) or (None, the file's read error), read by
+    the library's runner (``ctx.extra["library"]``: workers, the library cache)."""
+    from ...library import LibraryOptions, Task
+
+    opts = ctx.extra.get("library") or LibraryOptions()
+    out = [(None, "not read")] * len(files)
+    with opts.runner() as runner:
+        for o in runner.run([(str(f), Task(kind="colours")) for f in files]):
+            out[o.index] = (None, o.payload["error"]) if o.payload.get("error") else (o.payload["records"], None)
+    return out
+
+
 def _materials_table(ctx, cm):
     """The colour shift of the materials of ``ctx.paths`` (default: the bundled library) at
     each material's own diffuse roughness and at r = 1, mu = 1; (Table or None, warnings)."""
     from ...spectral import colour_shift, from_materials
+    from ...spectral.colorsets import from_colour_records
 
     try:
         from ...readers import BUNDLED_MATERIALS, find_material_files
@@ -307,44 +324,79 @@ def _materials_table(ctx, cm):
         return None, [f"materials not evaluated: openpbr_diffuse.readers unavailable ({exc})"]
     files = find_material_files(ctx.paths or [BUNDLED_MATERIALS])
     warnings, sets = [], []
-    for f in files:
+
+    def add(f, read):
         try:
-            cs, w = from_materials([f], cm)
+            cs, w = read()
         except (ValueError, OSError) as exc:
             warnings.append(f"{f}: {exc}")
-            continue
-        warnings += w
+            return
+        warnings.extend(w)
         if len(cs):
             sets.append(cs)
+
+    def add_run(run):
+        # the colours of consecutive readable files at once; file by file when one of them
+        # cannot be used (its error is then that file's warning, as for a file alone)
+        try:
+            cs, w = from_colour_records([r for _, recs in run for r in recs], cm)
+        except (ValueError, OSError):
+            for f, recs in run:
+                add(f, lambda recs=recs: from_colour_records(recs, cm))
+            return
+        warnings.extend(w)
+        if len(cs):
+            sets.append(cs)
+
+    run: list = []
+    for f, (records, error) in zip(files, _material_colours(ctx, files)):
+        if error is None:
+            run.append((f, records))
+            continue
+        add_run(run)
+        run = []
+        # a file the work could not read is read here again, for its own error text
+        add(f, lambda f=f: from_materials([f], cm))
+    add_run(run)
     if not sets:
         return None, warnings + ["no material with a diffuse colour"]
     from ...spectral import ColourSet
 
     cs = ColourSet.concat(sets)
     res = colour_shift(cs, [1.0], [1.0], cm)
-    rows = []
-    for p, name in enumerate(cs.names):
-        r_own = cs.extra[p].get("material_diffuse_roughness")
+    # EON at each material's own roughness: one evaluation per distinct roughness (each
+    # colour's result depends on its own spectrum only)
+    own_r = [cs.extra[p].get("material_diffuse_roughness") for p in range(len(cs))]
+    own_de = np.empty((len(cs), 2))
+    groups: dict[str, tuple[float, list[int]]] = {}
+    for p, r in enumerate(own_r):
+        groups.setdefault(repr(r or 0.0), (r or 0.0, []))[1].append(p)
+    for r_own, idx in groups.values():
         own = colour_shift(
             ColourSet(
-                [name],
-                cs.spectra[p : p + 1],
-                cs.rho_rgb[p : p + 1],
-                cs.source[p : p + 1],
-                cs.roundtrip_delta_e[p : p + 1],
+                [cs.names[p] for p in idx],
+                cs.spectra[idx],
+                cs.rho_rgb[idx],
+                [cs.source[p] for p in idx],
+                cs.roundtrip_delta_e[idx],
             ),
-            [r_own or 0.0],
+            [r_own],
             [1.0],
             cm,
         )
+        own_de[idx, 0] = own.delta_e_rgb_vs_spectral[:, 0, 0]
+        own_de[idx, 1] = own.delta_e_shift[:, 0, 0]
+    rows = []
+    for p, name in enumerate(cs.names):
+        r_own = own_r[p]
         rows.append(
             [
                 name,
                 Path(cs.extra[p].get("material_file", "")).name,
                 cs.extra[p].get("material_diffuse_model") or "",
                 "-" if r_own is None else round(r_own, 4),
-                round(float(own.delta_e_rgb_vs_spectral[0, 0, 0]), 4),
-                round(float(own.delta_e_shift[0, 0, 0]), 4),
+                round(float(own_de[p, 0]), 4),
+                round(float(own_de[p, 1]), 4),
                 round(float(res.delta_e_rgb_vs_spectral[p, 0, 0]), 4),
                 round(float(res.delta_e_shift[p, 0, 0]), 4),
                 round(float(cs.roundtrip_delta_e[p]), 4),
