@@ -2,9 +2,12 @@
 
 import json
 
-import colour
 import numpy as np
 import pytest
+
+from openpbr_diffuse._colour import _colour
+
+colour = _colour()  # colour-science through the package: NumPy's print options left as they were
 
 pytestmark = pytest.mark.filterwarnings("ignore::colour.utilities.ColourRuntimeWarning")
 

@@ -7,7 +7,6 @@ form; OpenImageIO's OCIO colour conversion (Bradford) between working spaces; La
 (E = rho) where EON must reduce to it.
 """
 
-import colour
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -15,6 +14,9 @@ from hypothesis import strategies as st
 
 import openpbr_diffuse as od  # noqa: E402
 from openpbr_diffuse import spectral as sp  # noqa: E402
+from openpbr_diffuse._colour import _colour  # noqa: E402
+
+colour = _colour()  # colour-science through the package: NumPy's print options left as they were
 from openpbr_diffuse.spectral import recovery  # noqa: E402
 
 # colour-science notes every re-shaping of a distribution it aligns for sd_to_XYZ

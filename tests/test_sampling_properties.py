@@ -278,7 +278,7 @@ def test_tenth_power_matches_numpy(rng):
 YARDSTICK = Path(__file__).resolve().parents[2] / "shared" / "bench" / "eon_scalar.c"
 
 
-@pytest.mark.skipif(not YARDSTICK.exists(), reason="the C yardstick tests/subjects file is absent")
+@pytest.mark.skipif(not YARDSTICK.exists(), reason="the C yardstick ../shared/bench/eon_scalar.c is absent")
 @requires("gcc")
 def test_eon_sampler_matches_the_c_yardstick(tmp_path, rng):
     """Listing 4 written independently in C (float32): same directions and pdf for the same u.

@@ -190,8 +190,8 @@ def accepted_reference(vectors: VectorSet, out: np.ndarray, absolute: float = AB
     >>> from openpbr_diffuse.conformance.vectors import default_vectors
     >>> v = default_vectors()
     >>> v = v.subset((v.kind == "albedo") & (v.mu == 0) & (v.model == "eon"))
-    >>> accepted_reference(v, np.zeros((len(v), 3))).max(), round(float(accepted_reference(v, np.ones((len(v), 3))).max()), 6)
-    (np.float64(0.0), 1.0)
+    >>> float(accepted_reference(v, np.zeros((len(v), 3))).max()), round(float(accepted_reference(v, np.ones((len(v), 3))).max()), 6)
+    (0.0, 1.0)
     """
     from .deviations import reference
 

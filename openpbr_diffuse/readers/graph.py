@@ -295,8 +295,8 @@ class Resolver:
         --------
         >>> from openpbr_diffuse.readers.material import Material
         >>> r = Resolver("x.mtlx", (0.25, 0.75), "acescg", Material("", "", "", "", False))
-        >>> r.convert(Parameter(np.array([0.25, 0.75]), "uv", "uv"), "vector2", "color3", "S/base_color").value
-        array([0.25, 0.75, 0.  ])
+        >>> r.convert(Parameter(np.array([0.25, 0.75]), "uv", "uv"), "vector2", "color3", "S/base_color").value.tolist()
+        [0.25, 0.75, 0.0]
         """
         name = f"ND_convert_{src}_{want}"
         if mxlib.nodedef(name) is None:
