@@ -35,7 +35,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
 LANGUAGES = ("bash", "console", "python")
 #: Options whose command writes a file a later snippet may read.
-WRITERS = ("--out", "--junit", "--image")
+WRITERS = ("--out", "--junit", "--image", "--expected-image", "--jsonl")
 TIMEOUT = 1800
 
 #: (page, text the command contains, why it does not run here).
