@@ -206,7 +206,8 @@ def test_pathtracer_values_against_the_models(tgp_graded):
 
 @pytest.mark.slow
 def test_cli_end_to_end(three_folder, tgp_folder):
-    """``check --implementation``: exit 1 (not conforming as the claimed eon), the diagnosis printed."""
+    """``check --implementation``: the Eq. 14 fit where exact EON is claimed conforms with
+    warnings (exit 0), the deviation named."""
     need("gl", "vulkan")
     for name in ("threejs", "three-gpu-pathtracer"):
         r = subprocess.run(
@@ -215,9 +216,9 @@ def test_cli_end_to_end(three_folder, tgp_folder):
             text=True,
             timeout=300,
         )
-        assert r.returncode == 1, r.stderr
+        assert r.returncode == 0, r.stderr
         d = json.loads(r.stdout)
-        assert d["model"] == "eon" and not d["passed"]
+        assert d["model"] == "eon" and d["tier"] == "conforms with warnings"
         failed = [q for q in d["quantities"] if not q["passed"]]
         assert [q["diagnosis"] for q in failed] == ["eq14_fit_for_exact"]
 

@@ -483,6 +483,12 @@ def _precision(vectors, out, ref, rel, ab):
     pos = float((d[fail] > 0).mean())
     if not 0.2 <= pos <= 0.8:
         return None  # one-signed: a bias, not noise
+    # noise has no place: failing values gathered in one region (e.g. every one at rho < 0.1,
+    # as a clamp of dark albedos gives) are a formula's structure, not precision
+    fail_rows = fail.reshape(len(vectors), -1).any(axis=1)
+    for name, mask in region_masks(vectors).items():
+        if name != "all" and 10 <= mask.sum() and mask.mean() <= 0.5 and fail_rows[mask].sum() >= 0.9 * fail_rows.sum():
+            return None
     return (
         f"precision ~ {med:.1g} (median relative error; 95 % within {q95:.1g}, {pos:.0%} of the failing "
         "values too large, the rest too small), not a formula bug: no known deviation explains it; keep "
@@ -955,12 +961,15 @@ class _Accumulator:
             (name, detail, g.candidates, g.candidate_details, g.candidate_match_fractions) = _diagnose(
                 sub, out[rest], ref[rest], e[rest], rel, ab, singles
             )
-            if name is None:
+            # a named deviation that explains half the failing values or more: structure,
+            # not precision noise (the rest is another effect, left unexplained)
+            partly = max(g.candidate_match_fractions.values(), default=0.0) >= 0.5
+            if name is None and not partly:
                 prec = _precision(sub, out[rest], ref[rest], rel, ab)
                 if prec is not None:
                     name, detail = "precision", prec
-                else:
-                    g.closest = _closest(singles, out[rest], ref[rest], rel, ab)
+            if name is None:
+                g.closest = _closest(singles, out[rest], ref[rest], rel, ab)
             explained = name is not None
             if explained:
                 names.append(name)
