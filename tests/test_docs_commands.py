@@ -50,6 +50,11 @@ SKIP = [
     ("docs/guide/graded-implementations.md", "npm install", "installs Babylon.js from the npm registry"),
     ("docs/guide/graded-implementations.md", "--implementation cycles", "needs a Python with bpy"),
     ("docs/guide/simulation.md", "--scheduler tcp://", "needs a Dask cluster"),
+    (
+        "docs/guide/renderer-conformance.md",
+        "python tools/renderer_conformance.py",
+        "rewrites this page from fresh renders (tests/test_renderers.py asserts each verdict)",
+    ),
 ]
 
 #: (page, text the command or block contains, why it is run with ``-m slow`` only).
@@ -67,11 +72,6 @@ SLOW = [
     ("docs/guide/report.md", "report --quick", "the quick report: every evidence section"),
     ("docs/guide/report.md", "report --select", "runs two sections of the report"),
     ("docs/guide/simulation.md", "simulate", "Monte Carlo simulations of the microsurface"),
-    (
-        "docs/guide/renderer-conformance.md",
-        "python tools/renderer_conformance.py",
-        "renders the chart in Blender (bpy), three.js and Babylon.js (Chromium): ~40 s, rewrites the page",
-    ),
     ("docs/guide/chart.md", "check --implementation eevee", "renders the chart with Blender EEVEE (bpy, EGL)"),
     ("docs/guide/layered.md", "simulate_layered_albedo", "a Monte Carlo simulation of 10^6 paths"),
 ]

@@ -50,6 +50,10 @@ def _row(s: dict, date: str) -> str:
     )
 
 
+#: Everything from this line on in the page is written by hand and kept on regeneration.
+NOTES = "<!-- notes below: kept by tools/renderer_conformance.py -->"
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default=str(DEFAULT_OUT), help="the page to write (default: %(default)s)")
@@ -85,6 +89,10 @@ def main() -> int:
         "exposure is calibrated on the chart's grey ramp (1 = the renderer's light units match).",
         "",
     ]
+    # the notes a person wrote below the marker are kept as they are
+    old = Path(a.out).read_text() if Path(a.out).is_file() else ""
+    if NOTES in old:
+        lines += [old[old.index(NOTES) :].rstrip("\n"), ""]
     Path(a.out).write_text("\n".join(lines))
     print(f"wrote {a.out}")
     return 0
