@@ -33,10 +33,8 @@ CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 
 
 @functools.cache
-def _gl_ok() -> bool:
-    """An OpenGL 4.3 context through EGL (Mesa llvmpipe), asked of a child process so that a
-    missing driver cannot crash the test process."""
-    code = "from openpbr_diffuse.graders.glsl import gl_context; gl_context()"
+def _child_ok(code: str) -> bool:
+    """``code`` runs in a child Python without error (a missing driver cannot crash the tests)."""
     try:
         r = subprocess.run([sys.executable, "-c", code], capture_output=True, timeout=120)
     except (OSError, subprocess.TimeoutExpired):
@@ -50,61 +48,15 @@ def _glm_ok() -> bool:
 
 
 @functools.cache
-def _vulkan_ok() -> bool:
-    """wgpu finds an adapter (Mesa's lavapipe without a GPU), asked of a child process."""
-    code = "import wgpu; wgpu.gpu.request_adapter_sync(power_preference='high-performance')"
-    try:
-        r = subprocess.run([sys.executable, "-c", code], capture_output=True, timeout=120)
-    except (OSError, subprocess.TimeoutExpired):
-        return False
-    return r.returncode == 0
-
-
-@functools.cache
-def _babylon_ok() -> bool:
-    from openpbr_diffuse.graders import babylon
-    from openpbr_diffuse.graders.errors import GraderUnavailable
-
-    try:
-        babylon.package_folder()
-    except GraderUnavailable:
-        return False
-    return True
-
-
-@functools.cache
-def _babylon_loaders_ok() -> bool:
-    from openpbr_diffuse.graders.errors import GraderUnavailable
-    from openpbr_diffuse.renderers import babylonjs
-
-    try:
-        babylonjs.version()
-    except GraderUnavailable:
-        return False
-    return True
-
-
-@functools.cache
-def _npm_ok(module: str) -> bool:
-    """The npm package the grader module ``module`` reads is in the project's npm cache."""
+def _grader_ok(module: str, function: str) -> bool:
+    """``openpbr_diffuse.MODULE.FUNCTION()`` finds what it reads (an npm package, bpy): it
+    raises GraderUnavailable, naming the install command, when that is missing."""
     import importlib
 
     from openpbr_diffuse.graders.errors import GraderUnavailable
 
     try:
-        importlib.import_module(f"openpbr_diffuse.graders.{module}").package_folder()
-    except GraderUnavailable:
-        return False
-    return True
-
-
-@functools.cache
-def _bpy_ok() -> bool:
-    from openpbr_diffuse.graders import cycles
-    from openpbr_diffuse.graders.errors import GraderUnavailable
-
-    try:
-        cycles.bpy_version()
+        getattr(importlib.import_module(f"openpbr_diffuse.{module}"), function)()
     except GraderUnavailable:
         return False
     return True
@@ -119,33 +71,38 @@ PROGRAMS = {
     "gl": (
         "OpenGL 4.3 through EGL (Mesa llvmpipe)",
         "apt-get install libgl1-mesa-dri libegl1 libegl-mesa0",
-        _gl_ok,
+        lambda: _child_ok("from openpbr_diffuse.graders.glsl import gl_context; gl_context()"),
     ),
-    "vulkan": ("a Vulkan driver for wgpu (Mesa lavapipe)", "apt-get install mesa-vulkan-drivers", _vulkan_ok),
+    "vulkan": (
+        "a Vulkan driver for wgpu (Mesa lavapipe)",
+        "apt-get install mesa-vulkan-drivers",
+        # wgpu finds an adapter (Mesa's lavapipe without a GPU)
+        lambda: _child_ok("import wgpu; wgpu.gpu.request_adapter_sync(power_preference='high-performance')"),
+    ),
     "babylonjs": (
         "Babylon.js (npm @babylonjs/core)",
         "npm install --prefix ~/.cache/openpbr-diffuse/npm @babylonjs/core",
-        _babylon_ok,
+        lambda: _grader_ok("graders.babylon", "package_folder"),
     ),
     "babylonjs-loaders": (
         "Babylon.js's glTF loader (npm @babylonjs/loaders)",
         "npm install --prefix ~/.cache/openpbr-diffuse/npm --ignore-scripts @babylonjs/core @babylonjs/loaders",
-        _babylon_loaders_ok,
+        lambda: _grader_ok("renderers.babylonjs", "version"),
     ),
     "threejs": (
         "three.js (npm three)",
         "npm install --prefix ~/.cache/openpbr-diffuse/npm --ignore-scripts three",
-        lambda: _npm_ok("threejs"),
+        lambda: _grader_ok("graders.threejs", "package_folder"),
     ),
     "three-gpu-pathtracer": (
         "three-gpu-pathtracer (npm)",
         "npm install --prefix ~/.cache/openpbr-diffuse/npm --ignore-scripts three three-gpu-pathtracer",
-        lambda: _npm_ok("threejs_pathtracer"),
+        lambda: _grader_ok("graders.threejs_pathtracer", "package_folder"),
     ),
     "bpy": (
         "Blender's bpy in a Python of its own",
         "python3.11 -m venv bpy-env && bpy-env/bin/pip install bpy; export OPENPBR_DIFFUSE_BPY_PYTHON=$PWD/bpy-env/bin/python",
-        _bpy_ok,
+        lambda: _grader_ok("graders.cycles", "bpy_version"),
     ),
     "xvfb": (
         "Xvfb (MaterialX's GlslRenderer makes its GL context through GLX)",
