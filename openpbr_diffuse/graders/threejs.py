@@ -43,7 +43,7 @@ from numpy.typing import ArrayLike
 
 from . import glsl, limits
 from ._arrays import rows
-from .babylon import CACHE_VARIABLE, npm_prefix
+from .babylon import CACHE_VARIABLE, npm_prefix, package_version
 from .errors import GraderUnavailable
 from .subject import Subject
 
@@ -117,15 +117,6 @@ def package_folder(prefix: Path | str | None = None) -> Path:
         if (folder / "package.json").is_file() and (folder / CHUNK_FOLDER).is_dir():
             return folder
     raise GraderUnavailable(f"npm package {PACKAGE} is not installed in {root}: {INSTALL}")
-
-
-def package_version(folder: Path) -> str:
-    """The ``version`` of the installed package's package.json.
-
-    >>> package_version(package_folder()).startswith("0.")
-    True
-    """
-    return str(json.loads((Path(folder) / "package.json").read_text())["version"])
 
 
 def chunk_files(folder: Path) -> list[Path]:

@@ -39,7 +39,7 @@ import numpy as np
 
 from . import glsl, limits
 from ._arrays import rows
-from .babylon import CACHE_VARIABLE, _run_wgsl, npm_prefix
+from .babylon import CACHE_VARIABLE, _run_wgsl, npm_prefix, package_version
 from .errors import GraderUnavailable
 from .subject import Subject
 
@@ -140,15 +140,6 @@ def package_folder(prefix: Path | str | None = None) -> Path:
         if (folder / "package.json").is_file() and (folder / MODULE).is_file():
             return folder
     raise GraderUnavailable(f"npm package {PACKAGE} is not installed in {root}: {INSTALL}")
-
-
-def package_version(folder: Path) -> str:
-    """The ``version`` of the installed package's package.json.
-
-    >>> package_version(package_folder()).count(".")
-    2
-    """
-    return str(json.loads((Path(folder) / "package.json").read_text())["version"])
 
 
 def _squash(text: str) -> str:
