@@ -4,6 +4,7 @@ worker processes, cache, Dask cluster, previews."""
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
 import os
 from typing import TYPE_CHECKING
 
@@ -11,24 +12,23 @@ if TYPE_CHECKING:
     from ..library import LibraryOptions
 
 
-def _positive(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
-    return value
+def _whole(low: int, bound: str) -> Callable[[str], int]:
+    """An argparse type: a whole number of at least ``low`` (``bound`` says so in the message)."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
+        if value < low:
+            raise argparse.ArgumentTypeError(f"must be {bound}, got {value}")
+        return value
+
+    return parse
 
 
-def _count(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be 0 or more, got {value}")
-    return value
+_positive = _whole(1, "at least 1")
+_count = _whole(0, "0 or more")
 
 
 def add_library_options(p: argparse.ArgumentParser, previews: bool = False) -> None:
