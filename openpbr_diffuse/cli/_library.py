@@ -4,8 +4,8 @@ worker processes, cache, Dask cluster, previews."""
 from __future__ import annotations
 
 import argparse
-from collections.abc import Callable
 import os
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
