@@ -15,8 +15,15 @@ from openpbr_diffuse.report import runner
 from openpbr_diffuse.report.model import Check, SectionResult, Table
 from openpbr_diffuse.report.sections import SECTIONS
 
+#: every result's fields (openpbr_diffuse.result.Result), then a check's own
 CHECK_KEYS = {
     "id",
+    "kind",
+    "quantity",
+    "verdict",
+    "tier",
+    "finding",
+    "worst",
     "status",
     "not_run",
     "section",

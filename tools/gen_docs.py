@@ -5,9 +5,10 @@
 - the import table of ``docs/design/layering.md`` (between its ``<!-- layering:begin -->`` and
   ``<!-- layering:end -->`` markers): which sub-package imports which, read from every module's
   ``import`` statements (lazy ones inside functions included) with ``ast``;
-- the module-size table of ``docs/design/surface-engine.md`` (between its
-  ``<!-- module-sizes:begin -->`` and ``<!-- module-sizes:end -->`` markers): the lines of
-  each module of the surface engine and the first line of its docstring.
+- the module-size tables of the design pages ``docs/design/surface-engine.md``,
+  ``report.md`` and ``graders.md`` (between their ``<!-- module-sizes:begin -->`` and
+  ``<!-- module-sizes:end -->`` markers): the lines of each module the page describes and
+  the first sentence of its docstring.
 
 Usage::
 
@@ -144,29 +145,54 @@ def layering_page(current: str) -> str:
     return f"{head}{BEGIN}\n{layering_table()}\n{END}{tail}"
 
 
-def module_sizes_table() -> str:
-    """| module | lines | holds | of the surface engine's modules and its lobe modules."""
+def _engine_modules() -> tuple[str, ...]:
     lobes = sorted(p.relative_to(PACKAGE).as_posix() for p in (PACKAGE / "nodes" / "lobes").glob("[!_]*.py"))
+    return (*ENGINE_MODULES, *lobes)
+
+
+def _package_modules(*folders: str) -> tuple[str, ...]:
+    """Every module of the given sub-packages, ``__init__`` first, then by name."""
+    out: list[str] = []
+    for folder in folders:
+        paths = sorted((PACKAGE / folder).glob("*.py"), key=lambda p: (p.name != "__init__.py", p.name))
+        out += [p.relative_to(PACKAGE).as_posix() for p in paths]
+    return tuple(out)
+
+
+#: the design pages with a generated module-size table, and the modules each describes
+DESIGN_PAGES = {
+    ENGINE_PAGE: _engine_modules,
+    ROOT / "docs" / "design" / "report.md": lambda: ("result.py", *_package_modules("report", "report/sections")),
+    ROOT / "docs" / "design" / "graders.md": lambda: _package_modules("graders", "conformance"),
+}
+
+
+def module_sizes_table(modules: tuple[str, ...] | None = None) -> str:
+    """| module | lines | holds | of ``modules`` (default: the surface engine's and its lobes')."""
     rows = ["| module | lines | holds |", "|---|---|---|"]
-    for rel in (*ENGINE_MODULES, *lobes):
+    for rel in modules or _engine_modules():
         text = (PACKAGE / rel).read_text(encoding="utf-8")
         doc = ast.get_docstring(ast.parse(text)) or ""
         first = " ".join(doc.split("\n\n")[0].split()).split(". ")[0].rstrip(".") + "."
+        first = first.replace("|", "\\|")
         rows.append(f"| `{rel}` | {len(text.splitlines())} | {first} |")
     return "\n".join(rows)
 
 
-def module_sizes_page(current: str) -> str:
+def module_sizes_page(current: str, modules: tuple[str, ...] | None = None) -> str:
     head, rest = current.split(SIZES_BEGIN, 1)
     _, tail = rest.split(SIZES_END, 1)
-    return f"{head}{SIZES_BEGIN}\n{module_sizes_table()}\n{SIZES_END}{tail}"
+    return f"{head}{SIZES_BEGIN}\n{module_sizes_table(modules)}\n{SIZES_END}{tail}"
 
 
 def targets() -> dict[Path, str]:
     return {
         CLI_PAGE: cli_page() + "\n",
         LAYERING_PAGE: layering_page(LAYERING_PAGE.read_text(encoding="utf-8")),
-        ENGINE_PAGE: module_sizes_page(ENGINE_PAGE.read_text(encoding="utf-8")),
+        **{
+            page: module_sizes_page(page.read_text(encoding="utf-8"), modules())
+            for page, modules in DESIGN_PAGES.items()
+        },
     }
 
 

@@ -41,13 +41,20 @@ from __future__ import annotations
 
 import collections
 import math
-import sys
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..result import (  # re-exported: grade.json_safe, grade.OUT_OF_RANGE
+    CONFORMS,
+    CONFORMS_WITH_WARNINGS,
+    DOES_NOT_CONFORM,
+    OUT_OF_RANGE,
+    Result,
+    json_safe,
+)
 from .tolerance import ABS_TOL, REL_TOL  # re-exported: grade.ABS_TOL, grade.REL_TOL
 
 if TYPE_CHECKING:
@@ -66,8 +73,6 @@ EXPLAIN_FRACTION = 0.9
 NOT_EXPLAINED = "no known deviation explains this"
 #: How many of the worst rows are listed.
 N_WORST = 10
-#: The three tiers of a grade.
-CONFORMS, CONFORMS_WITH_WARNINGS, DOES_NOT_CONFORM = "conforms", "conforms with warnings", "does not conform"
 #: Named deviations that are bounded and legitimate in practice: a grade whose only diagnosis
 #: is one of them is "conforms with warnings" (with what it is and its size).
 WARNING_DEVIATIONS = {
@@ -89,37 +94,14 @@ def ulp_half(x: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(a), 2.0 ** (e - 10), np.inf)
 
 
-#: An error ratio that a finite result makes too large for a float (|out - ref| / tolerance
-#: above 1.8e308, e.g. out = 1e308) is recorded as this, the largest float; infinity is
-#: kept for NaN and Inf results, so that the two are told apart.
-OUT_OF_RANGE = sys.float_info.max
-
-
-def json_safe(x: Any) -> Any:
-    """``x`` with NumPy scalars as Python numbers and non-finite floats as JSON can hold them:
-    NaN -> null, +-inf -> "inf" / "-inf" (the convention of ``check --json``)."""
-    if isinstance(x, np.generic):
-        x = x.item()
-    if isinstance(x, float) and not math.isfinite(x):
-        return None if math.isnan(x) else ("inf" if x > 0 else "-inf")
-    if isinstance(x, dict):
-        return {k: json_safe(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [json_safe(v) for v in x]
-    return x
-
-
 @dataclass
-class Grade:
-    """The result of :func:`grade` (see the module docstring; ``to_dict()`` for JSON)."""
+class Grade(Result):
+    """The result of :func:`grade`: a :class:`~openpbr_diffuse.result.Result` (``measured``:
+    the largest error in tolerances, ``threshold`` 1, its tier, ``finding`` the named deviation,
+    ``worst`` the worst rows) with the diagnosis's details (see the module docstring;
+    ``to_dict()`` for JSON).  ``passed``: every value within the tolerance."""
 
-    passed: bool
-    max_abs_error: float
-    rms_error: float
-    tolerance: dict
-    tolerance_reason: str
-    worst: list = field(default_factory=list)
-    diagnosis: str | None = None
+    kind: str = "quantity"
     diagnosis_detail: str = ""
     candidates: dict = field(default_factory=dict)
     candidate_details: dict = field(default_factory=dict)
@@ -129,28 +111,28 @@ class Grade:
     max_normalised_error: float = 0.0
     models: list = field(default_factory=list)
     version: str = ""
-    regions: list = field(default_factory=list)
     n_nan: int = 0
     n_inf: int = 0
     n_skipped: int = 0
     candidate_match_fractions: dict = field(default_factory=dict)
     #: which EON term the failing values get wrong (:func:`.terms.which_term`), or None
     terms: str | None = None
-    #: "conforms", "conforms with warnings" (a named, bounded deviation, :data:`WARNING_DEVIATIONS`,
-    #: or float16 noise under ``precision="half"``) or "does not conform"
-    tier: str = ""
-    #: why the tier is "conforms with warnings"
-    warnings: list = field(default_factory=list)
     #: the properties the rows show (:func:`.properties.vector_properties`): checks with ids
     properties: list = field(default_factory=list)
     #: when nothing is named: the deviation that comes closest (:func:`_closest`), with its
     #: residual beyond the tolerance -- None when none reduces the error enough
     closest: dict | None = None
 
+    @property
+    def passed(self) -> bool:
+        """Every value within the tolerance (tier "conforms"; a warning tier is not a pass)."""
+        return self.tier == CONFORMS
+
     def to_dict(self) -> dict[str, Any]:
         extra = {"closest": self.closest} if self.closest else {}
         return json_safe(
             {
+                **Result.to_dict(self),
                 **extra,
                 "passed": self.passed,
                 "version": self.version,
@@ -913,7 +895,11 @@ class _Accumulator:
         rel, ab = self.rel, self.ab
         passed = bool(self.finite and self.max_norm <= 1.0)
         g = Grade(
-            passed=passed,
+            quantity="values",
+            measured=self.max_norm,
+            threshold=1.0,
+            unit="x tolerance",
+            tier=CONFORMS if passed else DOES_NOT_CONFORM,
             max_abs_error=self.max_abs if self.finite else math.inf,
             rms_error=self.scale * math.sqrt(self.sum_sq / self.n_values) if self.finite else math.inf,
             tolerance={"relative": rel, "absolute": ab, "rule": "|out - ref| <= absolute + relative |ref|"},
@@ -935,9 +921,7 @@ class _Accumulator:
         g.properties = vector_properties(self.sample[2], self.sample[3], rel, ab, self.half)
         if passed:
             g.diagnosis_detail = "conforms: every value within the tolerance"
-            g.tier = CONFORMS
             return g
-        g.tier = DOES_NOT_CONFORM
         _, _, vectors, out = self.sample
         ref = accepted_reference(vectors, out, ab)
         e = _normalised(out, ref, rel, ab)

@@ -108,7 +108,9 @@ def _dir(mu, phi):
 
 
 def _check(pid, status, detail, measured=None, threshold=None):
-    return {"id": pid, "status": status, "measured": measured, "threshold": threshold, "detail": detail}
+    from ..result import sub_check
+
+    return sub_check(pid, status, measured, threshold, detail).to_dict()
 
 
 def _tol(x, rel, ab):

@@ -13,8 +13,8 @@ Exit status of ``check``: 0 conforms (also with warnings), 1 does not conform
 from __future__ import annotations
 
 from pathlib import Path
-from xml.sax.saxutils import escape, quoteattr
 
+from ..result import Result
 from .grade import CONFORMS, CONFORMS_WITH_WARNINGS, DOES_NOT_CONFORM, Grade
 
 #: exit status per tier
@@ -26,10 +26,13 @@ MAX_EXPECT_BYTES = 1 << 20
 
 
 def check_from_grade(check_id: str, g: Grade | dict) -> dict:
-    """A values grade as one check: pass / warn (its tier is "conforms with warnings") / fail.
+    """A values grade as one check (a :class:`~openpbr_diffuse.result.Result` as JSON): pass /
+    warn (its tier is "conforms with warnings") / fail, with the largest error in tolerances as
+    ``measured``, the named deviation as ``finding`` and the worst rows.
 
-    >>> check_from_grade("values.eon", {"tier": "conforms", "passed": True, "diagnosis_detail": "ok"})["status"]
-    'pass'
+    >>> c = check_from_grade("values.eon", {"tier": "conforms", "passed": True, "diagnosis_detail": "ok"})
+    >>> c["status"], c["tier"], c["detail"]
+    ('pass', 'conforms', 'ok')
     """
     d = g if isinstance(g, dict) else g.to_dict()
     tier = d.get("tier") or (CONFORMS if d["passed"] else DOES_NOT_CONFORM)
@@ -39,7 +42,18 @@ def check_from_grade(check_id: str, g: Grade | dict) -> dict:
         detail = "; ".join(d.get("warnings") or []) or detail
     elif status == "fail" and d.get("diagnosis"):
         detail = f"{d['diagnosis']} -- {detail}"
-    return {"id": check_id, "status": status, "detail": detail}
+    return Result(
+        id=check_id,
+        quantity=check_id,
+        measured=d.get("max_normalised_error"),
+        threshold=1.0,
+        unit="x tolerance",
+        outcome=status,
+        tier=tier,
+        diagnosis=None if status == "pass" else d.get("diagnosis"),
+        worst=list(d.get("worst") or [])[:3],
+        detail=detail,
+    ).to_dict()
 
 
 def tier_of(checks: list[dict]) -> str:
@@ -106,10 +120,10 @@ def apply_expected(checks: list[dict], expected: list[str], path: str = "FILE") 
         c = dict(c)
         if c["id"] in listed:
             if c["status"] == "fail":
-                c["status"] = EXPECTED_FAILURE
+                c["status"] = c["verdict"] = EXPECTED_FAILURE
                 c["detail"] = f"expected failure (listed in {path}): {c['detail']}"
             elif c["status"] in ("pass", "warn"):
-                c["status"] = UNEXPECTED_PASS
+                c["status"] = c["verdict"] = UNEXPECTED_PASS
                 c["detail"] = f"unexpectedly passes: remove it from {path} ({c['detail']})"
         out.append(c)
     ids = {c["id"] for c in checks}
@@ -127,40 +141,27 @@ def print_checks(checks: list[dict], indent: str = "  ") -> None:
 
 
 def junit_xml(name: str, checks: list[dict], tier: str) -> str:
-    """JUnit XML of the checks: one testcase per check; ``fail`` is a ``<failure>``, ``skip`` a
+    """JUnit XML of the checks: one testcase per check
+    (:func:`openpbr_diffuse.result.junit_case`): ``fail`` is a ``<failure>``, ``skip`` a
     ``<skipped>``; a ``warn``, ``expected failure`` or ``unexpectedly passes`` is a passed
     testcase with a ``<properties>`` entry (``status``) and the note in ``<system-out>``.
 
     >>> x = junit_xml("mine.csv", [{"id": "values.eon", "status": "warn", "detail": "eq14"}], "conforms with warnings")
-    >>> '<property name="status" value="warn"/>' in x, "<failure" in x
+    >>> '<property name="status" value="warn" />' in x, "<failure" in x
     (True, False)
     """
-    n_fail = sum(c["status"] == "fail" for c in checks)
-    n_skip = sum(c["status"] == "skip" for c in checks)
-    lines = [
-        '<?xml version="1.0" encoding="UTF-8"?>',
-        f'<testsuites name="openpbr-diffuse check" tests="{len(checks)}" failures="{n_fail}">',
-        f"  <testsuite name={quoteattr(name)} tests=\"{len(checks)}\" failures=\"{n_fail}\" skipped=\"{n_skip}\">",
-        "    <properties>",
-        f'      <property name="tier" value={quoteattr(tier)}/>',
-        "    </properties>",
-    ]
+    from xml.etree import ElementTree as ET
+
+    from ..result import junit_case
+
+    root = ET.Element("testsuites", name="openpbr-diffuse check", tests=str(len(checks)))
+    root.set("failures", str(sum(c["status"] == "fail" for c in checks)))
+    suite = ET.SubElement(root, "testsuite", name=name, tests=str(len(checks)), failures=root.get("failures", "0"))
+    suite.set("skipped", str(sum(c["status"] == "skip" for c in checks)))
+    ET.SubElement(ET.SubElement(suite, "properties"), "property", name="tier", value=tier)
     for c in checks:
-        cls, _, short = c["id"].rpartition(".")
-        lines.append(f"    <testcase classname={quoteattr(cls or 'check')} name={quoteattr(c['id'])}>")
-        detail = escape(str(c.get("detail", "")))
-        if c["status"] == "fail":
-            lines.append(f"      <failure message={quoteattr(str(c.get('detail', ''))[:500])}>{detail}</failure>")
-        elif c["status"] == "skip":
-            lines.append(f"      <skipped message={quoteattr(str(c.get('detail', ''))[:500])}/>")
-        elif c["status"] != "pass":
-            lines.append("      <properties>")
-            lines.append(f"        <property name=\"status\" value={quoteattr(c['status'])}/>")
-            lines.append("      </properties>")
-            lines.append(f"      <system-out>{detail}</system-out>")
-        lines.append("    </testcase>")
-    lines += ["  </testsuite>", "</testsuites>", ""]
-    return "\n".join(lines)
+        junit_case(suite, c, c["id"].rpartition(".")[0] or "check")
+    return ET.tostring(root, encoding="unicode", xml_declaration=True) + "\n"
 
 
 __all__ = [

@@ -163,19 +163,19 @@ def checks_of(result: ImplementationGrade) -> list[dict]:
     """The checks (id, status, detail) of an implementation's grade: ``values.<quantity>`` for
     the values, the sub-checks (``property.*``, ``sampler_*``) of the others."""
     from ..conformance.tiers import check_from_grade
+    from ..result import sub_check
 
     checks = []
     for q in result.quantities:
         if q.checks:
             for c in q.checks:
                 status = {"info": "pass"}.get(c["status"], c["status"])
-                checks.append({"id": c["id"], "status": status, "detail": c["detail"]})
+                checks.append({**c, "status": status, "verdict": status})
         elif q.values is not None:
             checks.append(check_from_grade(f"values.{q.quantity.replace(' ', '_')}", q.values))
         else:
-            checks.append(
-                {"id": q.quantity.replace(" ", "_"), "status": "pass" if q.passed else "fail", "detail": q.detail}
-            )
+            name = q.quantity.replace(" ", "_")
+            checks.append(sub_check(name, "pass" if q.passed else "fail", q.measured, q.threshold, q.detail).to_dict())
     return checks
 
 

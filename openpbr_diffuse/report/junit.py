@@ -16,6 +16,7 @@ from pathlib import Path
 from xml.etree import ElementTree as ET
 
 from .._outfile import output_file
+from ..result import junit_case
 
 
 def _case(suite: ET.Element, classname: str, name: str, elapsed: float = 0.0) -> ET.Element:
@@ -23,7 +24,9 @@ def _case(suite: ET.Element, classname: str, name: str, elapsed: float = 0.0) ->
 
 
 def junit_xml(doc: dict) -> str:
-    """The JUnit XML text of a report document (``report.json``).
+    """The JUnit XML text of a report document (``report.json``): every result -- a check, an
+    implementation's verdict, a verdict's sub-check -- is one ``<testcase>`` made by
+    :func:`openpbr_diffuse.result.junit_case`.
 
     Examples
     --------
@@ -41,19 +44,9 @@ def junit_xml(doc: dict) -> str:
         ET.SubElement(props, "property", name="tier", value=str(ut.get("status", "")))
         ET.SubElement(props, "property", name="verdict", value=str(ut.get("verdict_line", "")))
         for v in ut.get("verdicts", []):
-            case = _case(suite, "implementation", v["id"])
-            if v["status"] == "does not conform":
-                ET.SubElement(case, "failure", message=f"does not conform: {v['sentence']}").text = v.get("where", "")
-            elif v["status"] == "conforms with warnings":
-                ET.SubElement(case, "system-out").text = f"conforms with warnings: {v['sentence']}"
-            elif v["status"] == "could not run":
-                ET.SubElement(case, "error", message=f"could not run: {v.get('detail', '')}")
+            junit_case(suite, v, "implementation")
             for c in v.get("checks") or ():  # sub-checks (the sampler's), by their stable ids
-                sub = _case(suite, "implementation", c["id"])
-                if c.get("status") == "fail":
-                    ET.SubElement(sub, "failure", message=f"{c['id']}: {c.get('detail', '')}")
-                elif c.get("status") == "warn":
-                    ET.SubElement(sub, "system-out").text = f"warning: {c.get('detail', '')}"
+                junit_case(suite, c, "implementation")
         if ut.get("error") or not ut.get("verdicts"):
             case = _case(suite, "implementation", "implementation.run")
             ET.SubElement(case, "error", message=f"could not run: {ut.get('error') or 'nothing to grade'}")
@@ -68,19 +61,7 @@ def junit_xml(doc: dict) -> str:
                 ET.SubElement(case, "skipped", message=f"{s.get('status')}: {why}")
             continue
         for c in s["checks"]:
-            case = _case(suite, s["key"], c["id"])
-            status = c.get("status") or ("pass" if c.get("passed") else "fail")
-            if status == "fail":
-                ET.SubElement(
-                    case,
-                    "failure",
-                    message=(
-                        f"{c['name']}: measured {c.get('measured')} {c.get('comparison')} {c.get('threshold')}"
-                        + (f" (expected {c['expected']})" if c.get("expected") is not None else "")
-                    ),
-                ).text = c.get("detail", "")
-            elif status == "not run":
-                ET.SubElement(case, "skipped", message=f"not run: {c.get('not_run')}")
+            junit_case(suite, c, s["key"])
     _material_cases(root, doc.get("materials") or ())
     for suite in root:
         cases = suite.findall("testcase")

@@ -168,6 +168,7 @@ TEMPLATE = """{% if lib.worst %}<table id="materials-worst" class="data"><captio
 
 @functools.lru_cache(maxsize=1)
 def _to_srgb_linear() -> Any:
+    """The matrix from ACEScg to linear sRGB (Rec.709 primaries)."""
     import numpy as np
 
     from ..readers.colorspace import matrix

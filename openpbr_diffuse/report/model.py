@@ -9,65 +9,56 @@ string), so a section never writes HTML itself.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ..result import Result
 
-@dataclass
-class Check:
-    """One pass/fail check: ``measured`` compared with ``threshold``.
+
+def Check(  # noqa: N802 -- the constructor of a report check, kept under its name
+    name: str,
+    measured: Any,
+    threshold: Any,
+    comparison: str = "<=",
+    reference: str = "",
+    expected: float | None = None,
+    unit: str = "",
+    detail: str = "",
+    section: str = "",
+    not_run: str | None = None,
+    id: str = "",
+) -> Result:
+    """One check of the report: a :class:`~openpbr_diffuse.result.Result` whose ``measured``
+    is compared with ``threshold``.
 
     ``comparison`` says how: ``"<="`` (measured must not exceed threshold, e.g. an error),
     ``">="`` (e.g. a variance ratio), or ``"=="`` with the tolerance in ``threshold``
     against ``expected``.  ``reference`` is the provenance of what was compared against
     (e.g. "Gauss-Legendre quadrature of evaluate, order 16", "data/albedo_eon.csv",
-    "paper Table 1").
+    "paper Table 1"); ``not_run``: why the check did not run (no GL driver, no compiler, bpy
+    absent) -- it then neither passes nor fails and is shown as "not run".
+
+    >>> c = Check("white furnace |E - 1|", 2e-4, 1e-3, reference="quadrature")
+    >>> c.status, c.passed, c.to_dict()["tier"]
+    ('pass', True, 'conforms')
     """
-
-    name: str
-    measured: float
-    threshold: float
-    comparison: str = "<="
-    reference: str = ""
-    expected: float | None = None
-    unit: str = ""
-    detail: str = ""
-    section: str = ""
-    #: why the check did not run (no GL driver, no compiler, bpy absent): it then neither
-    #: passes nor fails and is shown as "not run"
-    not_run: str | None = None
-    id: str = ""
-
-    @property
-    def status(self) -> str:
-        """ "pass", "fail" or "not run"."""
-        if self.not_run:
-            return "not run"
-        return "pass" if self.passed else "fail"
-
-    @property
-    def passed(self) -> bool:
-        if self.not_run:
-            return False
-        m = self.measured
-        if m is None or (isinstance(m, float) and math.isnan(m)):
-            return False
-        if self.comparison == "<=":
-            return m <= self.threshold
-        if self.comparison == ">=":
-            return m >= self.threshold
-        if self.comparison == "==":
-            return abs(m - self.expected) <= self.threshold  # type: ignore[operator]  # '==' checks give expected
-        raise ValueError(f"comparison must be '<=', '>=' or '==', got {self.comparison!r}")
-
-    def to_dict(self) -> dict[str, Any]:
-        d = asdict(self)
-        d["passed"] = self.passed
-        d["status"] = self.status
-        return d
+    return Result(
+        id=id,
+        quantity=name,
+        measured=measured,
+        threshold=threshold,
+        comparison=comparison,
+        reference=reference,
+        expected=expected,
+        unit=unit,
+        detail=detail,
+        section=section,
+        not_run=not_run,
+    )
 
 
 #: Why a check that ``report --quick`` leaves out did not run (its compile or run time is the
@@ -101,7 +92,7 @@ def grey(v: float) -> tuple:
     return (v, v, v)
 
 
-def skipped_in_quick(name: str, reference: str = "", detail: str = "", unit: str = "") -> Check:
+def skipped_in_quick(name: str, reference: str = "", detail: str = "", unit: str = "") -> Result:
     """A check that ``report --quick`` does not run: listed as "not run", never passed.
 
     >>> c = skipped_in_quick("live simulation vs the closed form")
@@ -145,7 +136,7 @@ class SectionResult:
 
     key: str
     title: str
-    checks: list[Check] = field(default_factory=list)
+    checks: list[Result] = field(default_factory=list)
     tables: list[Table] = field(default_factory=list)
     figures: list[Figure] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
@@ -202,8 +193,35 @@ class CheckSpec:
     unit: str = ""
 
 
+#: The static registry of the report's checks: one tab-separated row per check (id, quick
+#: yes/no, reference, unit, title), in page order.  Ids are stable (``--select`` and
+#: ``--expect-fail`` lists name them); a section's ``CHECKS`` is its rows.
+REGISTRY = Path(__file__).resolve().parent.parent / "data" / "report_checks.tsv"
+
+
+@functools.cache
+def registry() -> tuple[CheckSpec, ...]:
+    """Every declared check of the report, read from :data:`REGISTRY` (comment lines skipped).
+
+    >>> specs = registry()
+    >>> specs[0].id, len({s.id for s in specs}) == len(specs)
+    ('models.lambert_reciprocity_f_wi_wo_f_wo_wi', True)
+    """
+    specs = []
+    for n, line in enumerate(REGISTRY.read_text(encoding="utf-8").splitlines(), 1):
+        if not line.strip() or line.startswith("#"):
+            continue
+        parts = line.split("\t")
+        if len(parts) != 5 or parts[1] not in ("yes", "no"):
+            raise ValueError(f"{REGISTRY.name} line {n}: expected id, yes/no, reference, unit, title separated by tabs")
+        cid, quick, reference, unit, title = parts
+        specs.append(CheckSpec(cid, title, quick == "yes", reference, unit))
+    return tuple(specs)
+
+
 class CheckTable:
-    """A section's checks, declared once at module level (``CHECKS``) in page order.
+    """A section's checks in page order (``CHECKS = CheckTable.declared(key)``: its rows of
+    the static :func:`registry`).
 
     ``build`` makes its checks with :meth:`check` (by title or id: an undeclared one raises
     KeyError); the runner gives every declared check that ``report --quick`` leaves out a
@@ -231,6 +249,18 @@ class CheckTable:
         if bad or len(self._by_id) != len(self.specs):
             raise ValueError(f"CheckTable {section!r}: ids must be unique and start with {section + '.'!r}: {bad}")
 
+    @classmethod
+    def declared(cls, section: str) -> CheckTable:
+        """The table of ``section``: its rows of the static registry :data:`REGISTRY`, in order.
+
+        >>> t = CheckTable.declared("albedo")
+        >>> t.ids[0], t.spec(t.ids[0]).quick
+        ('albedo.lambert_directional_albedo_closed_form_vs_table', True)
+        >>> CheckTable.declared("graders").ids  # a findings section declares none
+        ()
+        """
+        return cls(section, [s for s in registry() if s.id.split(".", 1)[0] == section])
+
     @property
     def ids(self) -> tuple:
         return tuple(s.id for s in self.specs)
@@ -244,12 +274,12 @@ class CheckTable:
 
     def check(
         self, key: str, measured: float, threshold: float, comparison: str = "<=", reference: str = "", **kw: Any
-    ) -> Check:
-        """A :class:`Check` of the declared check ``key`` (its title as name, its id)."""
+    ) -> Result:
+        """A report check (:func:`Check`) of the declared check ``key`` (its title as name, its id)."""
         s = self.spec(key)
         return Check(s.title, measured, threshold, comparison, reference, id=s.id, section=self.section, **kw)
 
-    def not_run_in_quick(self) -> list[Check]:
+    def not_run_in_quick(self) -> list[Result]:
         """The checks ``report --quick`` leaves out, as "not run"."""
         return [
             Check(

@@ -15,6 +15,7 @@ These verdicts are never mixed with the library's own evidence (the report's sec
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -23,13 +24,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..result import CONFORMS, CONFORMS_WITH_WARNINGS, COULD_NOT_RUN, DOES_NOT_CONFORM, Result, sub_check
+
 if TYPE_CHECKING:
-    from ..graders.grading import QuantityGrade
     from ..graders.subject import Subject
 
-CONFORMS, DOES_NOT_CONFORM, COULD_NOT_RUN = "conforms", "does not conform", "could not run"
-#: The middle tier (``conformance.grade``): a named, bounded deviation or float16 noise; exit 0.
-CONFORMS_WITH_WARNINGS = "conforms with warnings"
 #: The sentence when a failure matches no known deviation.
 NO_KNOWN = "no known deviation explains this"
 #: Exit status of ``report`` when the implementation could not be run.
@@ -43,51 +42,62 @@ _QUANTITY_LABEL = {
 }
 
 
-@dataclass
-class Verdict:
-    """One quantity's verdict: ``status`` is its tier ("conforms", "conforms with warnings",
-    "does not conform") or "could not run"."""
+def Verdict(  # noqa: N802 -- the constructor of a quantity's verdict, kept under its name
+    quantity: str,
+    status: str,
+    diagnosis: str | None = None,
+    sentence: str = "",
+    max_abs_error: float | None = None,
+    where: str = "",
+    n: int = 0,
+    n_failed: int = 0,
+    detail: str = "",
+    worst: list | None = None,
+    regions: Any = None,
+    checks: list | None = None,
+    warnings: list | None = None,
+    plot: Any = None,
+) -> Result:
+    """One quantity's verdict on the report's first screen: a :class:`~openpbr_diffuse.result.Result`
+    of kind "quantity" whose ``status`` is its tier ("conforms", "conforms with warnings", "does
+    not conform") or "could not run"; id ``implementation.<quantity>``, its sub-checks'
+    ids prefixed alike, its regions as [[region, text]] rows.
 
-    quantity: str
-    status: str
-    diagnosis: str | None = None
-    sentence: str = ""
-    max_abs_error: float | None = None
-    where: str = ""
-    n: int = 0
-    n_failed: int = 0
-    detail: str = ""
-    worst: list = field(default_factory=list)
-    regions: Any = None
-    #: sub-checks with stable ids (the sampler's: normalisation, reference pdf, chi2, valid, variance)
-    checks: list = field(default_factory=list)
-    warnings: list = field(default_factory=list)
-    #: data for the pictures (the sampler's histograms); not serialised
-    plot: Any = field(default=None, repr=False, compare=False)
+    >>> v = Verdict("sampler pdf", DOES_NOT_CONFORM, "pdf_not_normalised")
+    >>> v.id, v.status, v.verdict, v.finding
+    ('implementation.sampler_pdf', 'does not conform', 'fail', 'pdf_not_normalised')
+    """
+    return Result(
+        id="implementation." + quantity.replace(" ", "_"),
+        quantity=quantity,
+        kind="quantity",
+        tier=status,
+        diagnosis=diagnosis,
+        sentence=sentence,
+        max_abs_error=max_abs_error,
+        where=where,
+        n=n,
+        n_failed=n_failed,
+        detail=detail,
+        worst=list(worst or ()),
+        regions=_regions_rows(regions),
+        checks=[_implementation_check(c) for c in checks or ()],
+        warnings=list(warnings or ()),
+        plot=plot,
+    )
 
-    @property
-    def id(self) -> str:
-        return "implementation." + self.quantity.replace(" ", "_")
 
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "id": self.id,
-            "quantity": self.quantity,
-            "label": _QUANTITY_LABEL.get(self.quantity, self.quantity),
-            "status": self.status,
-            "tier": self.status,
-            "diagnosis": self.diagnosis,
-            "sentence": self.sentence,
-            "max_abs_error": self.max_abs_error,
-            "where": self.where,
-            "n": self.n,
-            "n_failed": self.n_failed,
-            "detail": self.detail,
-            "worst": self.worst,
-            "regions": _regions_rows(self.regions),
-            "checks": [_json_safe({**c, "id": "implementation." + c["id"]}) for c in self.checks],
-            "warnings": list(self.warnings),
-        }
+def _implementation_check(c: Result | dict) -> Result:
+    """A sub-check of an implementation's quantity, its id prefixed with ``implementation.``."""
+    if isinstance(c, dict):
+        c = sub_check(c["id"], c.get("status", ""), c.get("measured"), c.get("threshold"), c.get("detail", ""))
+    if not c.id.startswith("implementation."):
+        c = dataclasses.replace(c, id="implementation." + c.id)
+    return c
+
+
+def _verdict_dict(v: Result) -> dict[str, Any]:
+    return {**v.to_dict(), "label": _QUANTITY_LABEL.get(v.quantity, v.quantity)}
 
 
 @dataclass
@@ -168,14 +178,8 @@ class UnderTest:
             "error": self.error,
             "version": {k: str(v) for k, v in self.version.items()},
             "notes": list(self.notes),
-            "verdicts": [v.to_dict() for v in self.verdicts],
+            "verdicts": [_verdict_dict(v) for v in self.verdicts],
         }
-
-
-def _json_safe(x):
-    from ..conformance.grade import json_safe
-
-    return json_safe(x)
 
 
 def _regions_rows(regions: Any) -> list | None:
@@ -243,8 +247,8 @@ def _finite(x: Any) -> float | None:
     return x if math.isfinite(x) else (math.inf if x > 0 else None)
 
 
-def verdict_from_grade(quantity: str, g: dict) -> Verdict:
-    """A :class:`Verdict` from ``Grade.to_dict()`` (or a ``QuantityGrade``'s ``grade``).
+def verdict_from_grade(quantity: str, g: dict) -> Result:
+    """A quantity's verdict (:func:`Verdict`) from ``Grade.to_dict()`` (or a graded quantity's ``grade``).
 
     Examples
     --------
@@ -293,8 +297,8 @@ def verdict_from_grade(quantity: str, g: dict) -> Verdict:
     )
 
 
-def verdict_from_quantity(q: QuantityGrade) -> Verdict:
-    """A :class:`Verdict` from a ``graders.grading.QuantityGrade``.
+def verdict_from_quantity(q: Result) -> Result:
+    """A quantity's verdict (:func:`Verdict`) from a graded quantity (``graders.grading``).
 
     The sampler's quantities carry their own one-sentence diagnosis (``q.sentence``, e.g. "pdf
     integrates to 0.9 at grazing mu_o 0.05, roughness 0.5"), sub-checks and per-case breakdown.

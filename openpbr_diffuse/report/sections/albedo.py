@@ -9,101 +9,26 @@ forms (Eq. 8-9, 12-15, 20).  The Eq. 14 fit of E_F is compared with the FON tabl
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
-from .._plot import pyplot, save
+from ...result import Result
+from .._plot import pyplot
 from ..model import QUICK_MODELS, WHITE, CheckTable, Context, Figure, SectionResult, Table
+from ._common import label_panels, roughness_max, save_panels
 
 TITLE = "Albedo: closed forms against the reference tables"
 
-#: The section's checks, declared once: (id, title, runs in --quick); ``--list-checks`` reads
-#: this table, ``--quick`` lists the checks marked False as not run.
-CHECKS = CheckTable(
-    'albedo',
-    [
-        (
-            'albedo.lambert_directional_albedo_closed_form_vs_table',
-            'lambert: directional albedo, closed form vs table',
-            True,
-        ),
-        ('albedo.lambert_average_albedo_closed_form_vs_table', 'lambert: average albedo, closed form vs table', True),
-        ('albedo.qon_directional_albedo_closed_form_vs_table', 'qon: directional albedo, closed form vs table', True),
-        ('albedo.qon_average_albedo_closed_form_vs_table', 'qon: average albedo, closed form vs table', True),
-        (
-            'albedo.qon_footnote_directional_albedo_closed_form_vs_table',
-            'qon_footnote: directional albedo, closed form vs table',
-            False,
-        ),
-        (
-            'albedo.qon_footnote_average_albedo_closed_form_vs_table',
-            'qon_footnote: average albedo, closed form vs table',
-            False,
-        ),
-        (
-            'albedo.qon_van_ouwerkerk_directional_albedo_closed_form_vs_table',
-            'qon_van_ouwerkerk: directional albedo, closed form vs table',
-            False,
-        ),
-        (
-            'albedo.qon_van_ouwerkerk_average_albedo_closed_form_vs_table',
-            'qon_van_ouwerkerk: average albedo, closed form vs table',
-            False,
-        ),
-        (
-            'albedo.qon_fujii_directional_albedo_closed_form_vs_table',
-            'qon_fujii: directional albedo, closed form vs table',
-            False,
-        ),
-        (
-            'albedo.qon_fujii_average_albedo_closed_form_vs_table',
-            'qon_fujii: average albedo, closed form vs table',
-            False,
-        ),
-        ('albedo.fon_directional_albedo_closed_form_vs_table', 'fon: directional albedo, closed form vs table', True),
-        ('albedo.fon_average_albedo_closed_form_vs_table', 'fon: average albedo, closed form vs table', True),
-        (
-            'albedo.gotanda_directional_albedo_closed_form_vs_table',
-            'gotanda: directional albedo, closed form vs table',
-            False,
-        ),
-        ('albedo.gotanda_average_albedo_closed_form_vs_table', 'gotanda: average albedo, closed form vs table', False),
-        ('albedo.eon_directional_albedo_closed_form_vs_table', 'eon: directional albedo, closed form vs table', True),
-        ('albedo.eon_average_albedo_closed_form_vs_table', 'eon: average albedo, closed form vs table', True),
-        (
-            'albedo.eon_approx_directional_albedo_closed_form_vs_table',
-            'eon_approx: directional albedo, closed form vs table',
-            True,
-        ),
-        (
-            'albedo.eon_approx_average_albedo_closed_form_vs_table',
-            'eon_approx: average albedo, closed form vs table',
-            True,
-        ),
-        ('albedo.stated_value_e_f_mu_1_r_1', 'stated value E_F(mu = 1, r = 1)', True),
-        ('albedo.stated_value_e_f_mu_0_7_r_1', 'stated value E_F(mu = 0.7, r = 1)', True),
-        ('albedo.stated_value_e_f_mu_0_3_r_0_5', 'stated value E_F(mu = 0.3, r = 0.5)', True),
-        ('albedo.stated_value_e_f_r_0_5', 'stated value <E_F>(r = 0.5)', False),
-        ('albedo.stated_value_e_f_r_1', 'stated value <E_F>(r = 1)', False),
-        ('albedo.stated_value_e_qon_mu_0_5_sigma_pi_4', 'stated value E_QON(mu = 0.5, sigma = pi/4)', True),
-        ('albedo.stated_value_e_qon_sigma_pi_4', 'stated value <E_QON>(sigma = pi/4)', False),
-        (
-            'albedo.stated_value_full_on_e_mu_0_05_sigma_0_5_rho_1',
-            'stated value full ON E(mu = 0.05, sigma = 0.5), rho = 1',
-            False,
-        ),
-        ('albedo.eq_14_fit_of_e_f_max_fractional_error', 'Eq. 14 fit of E_F: max fractional error', False),
-    ],
-)
+#: The section's checks: its rows of the static registry ``data/report_checks.tsv``.
+CHECKS = CheckTable.declared("albedo")
 
 #: Closed form vs table: the tables' interpolation error is < 3e-6 (stated in each file).
 TABLE_TOL = 1e-5
 #: The paper: the Eq. 14 fit "has fractional error of less than 0.1% over all directions".
 FIT_TOL = 1e-3
-
-
-def _rmax(info):
-    return min(info.roughness_max, 1.0 if info.roughness_name == "r" else 0.5 * math.pi)
+#: The colours of the table comparison.
+COLOURS = (WHITE, [0.8, 0.5, 0.2], [0.05, 0.3, 0.9])
 
 
 def _fit_error(ctx, n_mu, n_r):
@@ -174,16 +99,50 @@ def _stated(ctx, res):
     )
 
 
-def build(ctx: Context) -> SectionResult:
+def _table_errors(ctx: Context, m: str, info: Any) -> tuple[float, float, int]:
+    """Largest |closed form - table| of model ``m``: directional, average; how many roughness values."""
     import openpbr_diffuse as od
 
+    mu = np.linspace(0.01, 1.0, 12 if ctx.quick else 40)
+    rough = np.linspace(0.0, 1.0, 4 if ctx.quick else 9) * roughness_max(info)
+    worst = 0.0
+    worst_avg = 0.0
+    for rho in COLOURS:
+        for rr in rough:
+            E = od.directional_albedo(m, mu, rr, rho)
+            R = od.reference_albedo(m, mu, rr, rho)
+            worst = max(worst, float(np.abs(E - R).max()))
+        Ea = od.average_albedo(m, rough, rho)
+        Ra = od.reference_average_albedo(m, rough, rho)
+        worst_avg = max(worst_avg, float(np.abs(Ea - Ra).max()))
+    return worst, worst_avg, len(rough)
+
+
+def _table_checks(ctx: Context, m: str, info: Any) -> tuple[list[Result], list[Any]]:
+    """Model ``m``'s closed forms against its reference table: the two checks and the table row."""
     from ...albedo.tables import load_table, table_path
+
+    table = load_table(m)
+    worst, worst_avg, n_rough = _table_errors(ctx, m, info)
+    ref = f"data/{table_path(m).name} (quadrature of evaluate; interpolation error {table.interpolation_error:.1e})"
+    checks = [
+        CHECKS.check(
+            f"{m}: directional albedo, closed form vs table",
+            worst,
+            TABLE_TOL,
+            "<=",
+            reference=ref,
+            detail=f"mu in [0.01, 1], {n_rough} roughness values, 3 colours",
+        ),
+        CHECKS.check(f"{m}: average albedo, closed form vs table", worst_avg, TABLE_TOL, "<=", reference=ref),
+    ]
+    return checks, [m, worst, worst_avg, float(table.interpolation_error)]
+
+
+def _closed_forms(ctx: Context, res: SectionResult) -> None:
+    """Every closed-form model against its reference table: checks and the summary table."""
     from ...models.registry import INFO
 
-    res = SectionResult("albedo", TITLE)
-    mu = np.linspace(0.01, 1.0, 12 if ctx.quick else 40)
-    fracs = np.linspace(0.0, 1.0, 4 if ctx.quick else 9)
-    colours = (WHITE, [0.8, 0.5, 0.2], [0.05, 0.3, 0.9])
     rows = []
     for m, info in INFO.items():
         if not info.closed_form_albedo:
@@ -191,33 +150,9 @@ def build(ctx: Context) -> SectionResult:
         if ctx.quick and m not in QUICK_MODELS:  # listed as not run (the full report runs them)
             continue
         ctx.progress(f"albedo {m}")
-        table = load_table(m)
-        rough = fracs * _rmax(info)
-        worst = 0.0
-        worst_avg = 0.0
-        for rho in colours:
-            for rr in rough:
-                E = od.directional_albedo(m, mu, rr, rho)
-                R = od.reference_albedo(m, mu, rr, rho)
-                worst = max(worst, float(np.abs(E - R).max()))
-            Ea = od.average_albedo(m, rough, rho)
-            Ra = od.reference_average_albedo(m, rough, rho)
-            worst_avg = max(worst_avg, float(np.abs(Ea - Ra).max()))
-        ref = f"data/{table_path(m).name} (quadrature of evaluate; interpolation error {table.interpolation_error:.1e})"
-        res.checks.append(
-            CHECKS.check(
-                f"{m}: directional albedo, closed form vs table",
-                worst,
-                TABLE_TOL,
-                "<=",
-                reference=ref,
-                detail=f"mu in [0.01, 1], {len(rough)} roughness values, 3 colours",
-            )
-        )
-        res.checks.append(
-            CHECKS.check(f"{m}: average albedo, closed form vs table", worst_avg, TABLE_TOL, "<=", reference=ref)
-        )
-        rows.append([m, worst, worst_avg, float(table.interpolation_error)])
+        checks, row = _table_checks(ctx, m, info)
+        res.checks += checks
+        rows.append(row)
     res.tables.append(
         Table(
             "Largest |closed form - reference table| (rho = 1, (0.8, 0.5, 0.2), (0.05, 0.3, 0.9))",
@@ -225,7 +160,10 @@ def build(ctx: Context) -> SectionResult:
             rows,
         )
     )
-    _stated(ctx, res)
+
+
+def _fit(ctx: Context, res: SectionResult) -> None:
+    """The Eq. 14 fit of E_F against the FON table: its check, note and figure (Fig. 6)."""
     ctx.progress("Eq. 14 fit")
     mu_g, r_g, exact, fit = _fit_error(ctx, 101 if ctx.quick else 401, 11 if ctx.quick else 21)
     err = fit - exact
@@ -246,6 +184,12 @@ def build(ctx: Context) -> SectionResult:
         f"{abs(err[k]):.3e} at r = {r_g[k[0]]:.3g}, mu = {mu_g[k[1]]:.3g}; at mu = 0 it reaches "
         f"E_F = {fit[-1, 0]:.6f} at r = 1 (exact: 1)."
     )
+    res.figures.append(_fit_figure(ctx, mu_g, r_g, exact, fit))
+
+
+def _fit_figure(ctx: Context, mu_g: np.ndarray, r_g: np.ndarray, exact: np.ndarray, fit: np.ndarray) -> Figure:
+    """Fig. 6: E_F and the Eq. 14 fit (left), the fit's fractional error (right)."""
+    err = fit - exact
     plt = pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(13, 4.2))
     for i in range(0, len(r_g), max(1, len(r_g) // 5)):
@@ -254,10 +198,14 @@ def build(ctx: Context) -> SectionResult:
         axes[1].plot(mu_g, 100.0 * err[i] / exact[i], label=f"r = {r_g[i]:.2f}")
     axes[0].set_title("E_F(mu): exact (table, solid) and Eq. 14 fit (dotted)")
     axes[1].set_title("Eq. 14 fit: fractional error (%) (EON paper Fig. 6 right)")
-    for ax in axes:
-        ax.set_xlabel("mu = cos theta_o (unitless)")
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7)
-    fig.subplots_adjust(left=0.07, right=0.98, bottom=0.15, top=0.85, wspace=0.28, hspace=0.5)
-    res.figures.append(Figure(save(fig, ctx, "albedo_fit.png"), "FON albedo E_F and the Eq. 14 fit (Fig. 6)"))
+    label_panels(axes, "mu = cos theta_o (unitless)", 7)
+    return Figure(save_panels(fig, ctx, "albedo_fit.png"), "FON albedo E_F and the Eq. 14 fit (Fig. 6)")
+
+
+def build(ctx: Context) -> SectionResult:
+    """Closed forms against the tables, the stated values, the Eq. 14 fit."""
+    res = SectionResult("albedo", TITLE)
+    _closed_forms(ctx, res)
+    _stated(ctx, res)
+    _fit(ctx, res)
     return res

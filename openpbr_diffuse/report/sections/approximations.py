@@ -12,65 +12,19 @@ from __future__ import annotations
 import csv
 import importlib.resources
 import math
+from typing import Any
 
 import numpy as np
 
+from ...result import Result
+from .._plot import pyplot, save
 from ..model import WHITE, CheckTable, Context, Figure, SectionResult, Table, grey
 
 KEY = "approximations"
 TITLE = "Real-time approximations (Gotanda 2012, table-based energy compensation)"
 
-#: The section's checks, declared once: (id, title, runs in --quick); ``--list-checks`` reads
-#: this table, ``--quick`` lists the checks marked False as not run.
-CHECKS = CheckTable(
-    'approximations',
-    [
-        (
-            'approximations.gotanda_eq27_vs_e25_live_recomputation_at_the_stated_worst_p',
-            'gotanda_eq27_vs_e25: live recomputation at the stated worst point',
-            False,
-        ),
-        (
-            'approximations.gotanda_eq25_vs_fullon_live_recomputation_at_the_stated_wors',
-            'gotanda_eq25_vs_fullon: live recomputation at the stated worst point',
-            False,
-        ),
-        (
-            'approximations.kc_zh_e0_live_recomputation_at_the_stated_worst_point',
-            'kc_zh_E0: live recomputation at the stated worst point',
-            True,
-        ),
-        (
-            'approximations.kc_zh_e1_live_recomputation_at_the_stated_worst_point',
-            'kc_zh_E1: live recomputation at the stated worst point',
-            True,
-        ),
-        (
-            'approximations.kc_zh_e2_live_recomputation_at_the_stated_worst_point',
-            'kc_zh_E2: live recomputation at the stated worst point',
-            True,
-        ),
-        (
-            'approximations.kc_tau_factor_albedo_live_recomputation_at_the_stated_worst_',
-            'kc_tau_factor_albedo: live recomputation at the stated worst point',
-            True,
-        ),
-        (
-            'approximations.k_c_on_qon_white_furnace_at_mu_o_1_sigma_1_2_live_quadrature',
-            'K-C on QON: white furnace at mu_o = 1, sigma = 1.2 (live quadrature)',
-            True,
-        ),
-        (
-            'approximations.k_c_on_qon_white_furnace_table_error_only',
-            'K-C on QON: white furnace (table error only)',
-            True,
-        ),
-        ('approximations.eon_white_furnace', 'EON: white furnace', True),
-        ('approximations.k_c_on_fon_with_eon_s_rho_ms_is_eon', "K-C on FON with EON's rho_ms is EON", True),
-        ('approximations.sh_route_with_exact_zh_equals_brute_force', 'SH route with exact ZH equals brute force', True),
-        ('approximations.eq_20_is_qon', 'Eq. 20 is QON', True),
-    ],
-)
+#: The section's checks: its rows of the static registry ``data/report_checks.tsv``.
+CHECKS = CheckTable.declared("approximations")
 
 
 ERRATA = [
@@ -127,6 +81,7 @@ ERRATA = [
 
 
 def _rows():
+    """The shipped grading table: its header lines and its rows by id."""
     text = (importlib.resources.files("openpbr_diffuse") / "data" / "approximation_errors.csv").read_text()
     header = [ln[2:] for ln in text.splitlines() if ln.startswith("#")]
     rows = list(csv.DictReader([ln for ln in text.splitlines() if not ln.startswith("#")]))
@@ -134,6 +89,7 @@ def _rows():
 
 
 def _at(row):
+    """The worst point of a row (``at``: ``name=value, ...``) as numbers."""
     return {k.strip(): float(v) for k, v in (p.split("=") for p in row["at"].split(","))}
 
 
@@ -144,51 +100,48 @@ _GOTANDA_LIVE = {
 }
 
 
-def _live_checks(rows, quick=False):
-    """Recompute a few rows at their worst points with independent code paths (``quick``: the
-    rows of models outside ``QUICK_MODELS`` listed as not run)."""
+def _same(rows: dict, rid: str, value: float, ref_text: str, tol: float = 1e-4) -> Result:
+    """Row ``rid`` recomputed live (``value``) against its stated worst error, to ``tol`` relative."""
+    stated = float(rows[rid]["max_error"])
+    return CHECKS.check(
+        f"{rid}: live recomputation at the stated worst point",
+        float(value),
+        tol * max(stated, 1e-12),
+        "==",
+        ref_text,
+        expected=stated,
+        detail=rows[rid]["at"],
+    )
+
+
+def _gotanda_live(rows: dict) -> list[Result]:
+    """The Gotanda rows: Eq. 27 against the Eq. 25 lobe's albedo, Eq. 25 against full ON."""
     import openpbr_diffuse as od
 
     from ...approximations import gotanda2012 as gt
+
+    p = _at(rows["gotanda_eq27_vs_e25"])
+    eq27 = abs(
+        gt.dc_scale_eq27(p["mu_o"], p["sigma"]) - od.directional_albedo("gotanda", p["mu_o"], p["sigma"], WHITE)[0]
+    )
+    checks = [_same(rows, "gotanda_eq27_vs_e25", eq27, _GOTANDA_LIVE["gotanda_eq27_vs_e25"])]
+    p = _at(rows["gotanda_eq25_vs_fullon"])
+    s_i = math.sqrt(1 - p["mu_i"] ** 2)
+    wi = np.array([s_i * math.cos(p["phi"]), s_i * math.sin(p["phi"]), p["mu_i"]])
+    wo = np.array([math.sqrt(1 - p["mu_o"] ** 2), 0.0, p["mu_o"]])
+    full = od.evaluate("full_on", wi, wo, p["sigma"], grey(0.9))[0] / 0.9
+    eq25 = abs(math.pi * (gt.improved(wi, wo, p["sigma"], WHITE)[0] - full) * p["mu_i"])
+    checks.append(_same(rows, "gotanda_eq25_vs_fullon", eq25, _GOTANDA_LIVE["gotanda_eq25_vs_fullon"], 1e-6))
+    return checks
+
+
+def _zh_live(rows: dict) -> list[Result]:
+    """The post's ZH fits E0-E2 against the exact ZH of QON's multiple-scattering lobe."""
+    import openpbr_diffuse as od
+
     from ...approximations import kulla_conty as kc
 
     checks = []
-
-    def same(rid, value, ref_text, tol=1e-4):
-        stated = float(rows[rid]["max_error"])
-        checks.append(
-            CHECKS.check(
-                f"{rid}: live recomputation at the stated worst point",
-                float(value),
-                tol * max(stated, 1e-12),
-                "==",
-                ref_text,
-                expected=stated,
-                detail=rows[rid]["at"],
-            )
-        )
-
-    if not quick:  # the Gotanda and full Oren-Nayar models' drivers are the full report's to compile
-        p = _at(rows["gotanda_eq27_vs_e25"])
-        same(
-            "gotanda_eq27_vs_e25",
-            abs(
-                gt.dc_scale_eq27(p["mu_o"], p["sigma"])
-                - od.directional_albedo("gotanda", p["mu_o"], p["sigma"], WHITE)[0]
-            ),
-            _GOTANDA_LIVE["gotanda_eq27_vs_e25"],
-        )
-        p = _at(rows["gotanda_eq25_vs_fullon"])
-        s_i = math.sqrt(1 - p["mu_i"] ** 2)
-        wi = np.array([s_i * math.cos(p["phi"]), s_i * math.sin(p["phi"]), p["mu_i"]])
-        wo = np.array([math.sqrt(1 - p["mu_o"] ** 2), 0.0, p["mu_o"]])
-        full = od.evaluate("full_on", wi, wo, p["sigma"], grey(0.9))[0] / 0.9
-        same(
-            "gotanda_eq25_vs_fullon",
-            abs(math.pi * (gt.improved(wi, wo, p["sigma"], WHITE)[0] - full) * p["mu_i"]),
-            _GOTANDA_LIVE["gotanda_eq25_vs_fullon"],
-            1e-6,
-        )
     for l in range(3):
         rid = f"kc_zh_E{l}"
         a = _at(rows[rid])["alpha"]
@@ -201,17 +154,33 @@ def _live_checks(rows, quick=False):
             math.sqrt(5 / (16 * math.pi)) * (3 * mu * mu - 1),
         )[l]
         exact = 2 * math.pi * np.sum(w * Y * (1 - E) * mu)
-        same(rid, abs(kc.zh_fit_oren_nayar(a)[l] - exact), "QON closed-form albedo (EON Eq. 8), Gauss-Legendre", 1e-3)
+        ref = "QON closed-form albedo (EON Eq. 8), Gauss-Legendre"
+        checks.append(_same(rows, rid, abs(kc.zh_fit_oren_nayar(a)[l] - exact), ref, 1e-3))
+    return checks
+
+
+def _tau_live(rows: dict) -> Result:
+    """The post's tau = 0.2843 rho factor against EON's rho_ms with QON's own <E>."""
+    import openpbr_diffuse as od
+
+    from ...approximations import kulla_conty as kc
+
     p = _at(rows["kc_tau_factor_albedo"])
     avg = od.average_albedo("qon", p["sigma"], WHITE)[0]  # RGB, as every call of the report
     E1 = od.directional_albedo("qon", p["mu_o"], p["sigma"], WHITE)[0]
     rho = p["rho"]
-    same(
+    return _same(
+        rows,
         "kc_tau_factor_albedo",
         abs(kc.rho_factor(rho)[0] - rho * rho * avg / (1 - rho * (1 - avg))) * (1 - E1),
         "QON closed-form <E> (EON Eq. 9) in EON Eq. 18",
     )
-    # white furnace of the compensated QON lobe at one point by a small quadrature (not the CSV's grid)
+
+
+def _kc_furnace() -> Result:
+    """White furnace of the compensated QON lobe at one point by a small quadrature (not the CSV's grid)."""
+    from ...approximations import kulla_conty as kc
+
     x, w = np.polynomial.legendre.leggauss(40)
     th = 0.25 * math.pi * (x + 1)
     ph = math.pi * (x + 1)
@@ -220,33 +189,45 @@ def _live_checks(rows, quick=False):
     wgt = np.outer(0.25 * math.pi * w, math.pi * w) * np.sin(T) * np.cos(T)
     wo = np.array([0.0, 0.0, 1.0])
     E = float(np.sum(kc.compensated("qon", wi, wo, 1.2, WHITE)[..., 0] * wgt))
-    checks.append(
-        CHECKS.check(
-            "K-C on QON: white furnace at mu_o = 1, sigma = 1.2 (live quadrature)",
-            abs(E - 1.0),
-            1e-5,
-            "<=",
-            "Gauss-Legendre 40 x 40 of od.evaluate('qon') + f_ms",
-        )
+    return CHECKS.check(
+        "K-C on QON: white furnace at mu_o = 1, sigma = 1.2 (live quadrature)",
+        abs(E - 1.0),
+        1e-5,
+        "<=",
+        "Gauss-Legendre 40 x 40 of od.evaluate('qon') + f_ms",
     )
+
+
+def _live_checks(rows, quick=False):
+    """Recompute a few rows at their worst points with independent code paths (``quick``: the
+    rows of models outside ``QUICK_MODELS`` listed as not run)."""
+    checks = []
+    if not quick:  # the Gotanda and full Oren-Nayar models' drivers are the full report's to compile
+        checks += _gotanda_live(rows)
+    checks += _zh_live(rows)
+    checks.append(_tau_live(rows))
+    checks.append(_kc_furnace())
     return checks
 
 
-def _plots(ctx, figures):
-    import matplotlib
+def _finish(ctx: Context, fig: Any, axes: Any, name: str, caption: str) -> Figure:
+    """Legends and grids on ``axes``, ``fig`` laid out tight and written as ``<KEY>_<name>.png``."""
+    for ax in axes:
+        ax.legend(fontsize=6)
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return Figure(save(fig, ctx, f"{KEY}_{name}.png", dpi=100), caption)
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
+def _plot_gotanda(ctx: Context) -> Figure:
+    """Gotanda's SH DC and linear scales against the exact projections (cf. the notes' Figures 8-9)."""
     import openpbr_diffuse as od
 
     from ...approximations import gotanda2012 as gt
-    from ...approximations import kulla_conty as kc
     from ...approximations import sh
 
-    ctx.image_dir.mkdir(parents=True, exist_ok=True)
+    plt = pyplot()
     mu = np.linspace(0.0, 1.0, 41)
-    # 1. Gotanda DC and linear scales (cf. the notes' Figures 8-9)
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8))
     for sig, c in ((0.5, "C0"), (1.0, "C1")):
         axes[0].plot(
@@ -268,20 +249,23 @@ def _plots(ctx, figures):
         axes[1].plot(mu, gt.linear_scale_eq29(mu, sig), c, ls="--", label="Eq. 29")
     axes[0].set(xlabel="N.E", ylabel="SH DC scale", title="Gotanda Eq. 27-28 vs exact")
     axes[1].set(xlabel="N.E", ylabel="SH linear scale", title="Gotanda Eq. 29 vs exact (Eq. 25 lobe)")
-    for a in axes:
-        a.legend(fontsize=6)
-        a.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(ctx.image_dir / f"{KEY}_gotanda_sh.png", dpi=100)
-    plt.close(fig)
-    figures.append(
-        Figure(
-            f"{KEY}_gotanda_sh.png",
-            "Gotanda's SH scales (dashed) against the exact SH projections "
-            "of the Eq. 25 lobe (solid) and fullON (dotted), rho = 1",
-        )
+    return _finish(
+        ctx,
+        fig,
+        axes,
+        "gotanda_sh",
+        "Gotanda's SH scales (dashed) against the exact SH projections "
+        "of the Eq. 25 lobe (solid) and fullON (dotted), rho = 1",
     )
-    # 2. ZH fits and LTC magnitude (patapom)
+
+
+def _plot_kulla_conty(ctx: Context) -> Figure:
+    """The post's ZH fits and LTC magnitude, and the rho factor, against the exact quantities."""
+    import openpbr_diffuse as od
+
+    from ...approximations import kulla_conty as kc
+
+    plt = pyplot()
     a = np.linspace(0.0, 1.0, 101)
     exact = kc.zh_exact("qon", kc.sigma_of_alpha(a))
     fit_c, fit_t = kc.zh_fit_oren_nayar(a), kc.zh_fit_oren_nayar(a, form="text")
@@ -306,23 +290,70 @@ def _plots(ctx, figures):
             label=f"F(rho), QON's own <E>, sigma={sig:.2f}",
         )
     axes[1].set(xlabel="alpha  |  rho", title="LTC magnitude and the rho factor")
-    for ax in axes:
-        ax.legend(fontsize=6)
-        ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(ctx.image_dir / f"{KEY}_kulla_conty.png", dpi=100)
-    plt.close(fig)
-    figures.append(
-        Figure(
-            f"{KEY}_kulla_conty.png",
-            "Energy compensation by tables: the post's ZH fits as coded "
-            "(dashed) and as printed (dotted) against the exact ZH of QON's MS lobe; LTC magnitude and "
-            "the rho factor against the exact quantities",
-        )
+    return _finish(
+        ctx,
+        fig,
+        axes,
+        "kulla_conty",
+        "Energy compensation by tables: the post's ZH fits as coded "
+        "(dashed) and as printed (dotted) against the exact ZH of QON's MS lobe; LTC magnitude and "
+        "the rho factor against the exact quantities",
     )
 
 
+def _plots(ctx, figures):
+    """The Gotanda and the table-compensation figures."""
+    ctx.image_dir.mkdir(parents=True, exist_ok=True)
+    figures.append(_plot_gotanda(ctx))
+    figures.append(_plot_kulla_conty(ctx))
+
+
+def _errors_table(rows: dict) -> Table:
+    """The shipped grading table."""
+    return Table(
+        "Approximation errors over each domain (shipped table, data/approximation_errors.csv)",
+        ["approximation", "equation", "approximates", "metric", "max error", "RMS error", "worst at", "note"],
+        [
+            [
+                r["approximation"],
+                r["equation"],
+                r["approximates"],
+                r["metric"],
+                float(r["max_error"]),
+                float(r["rms_error"]),
+                r["at"],
+                r["note"],
+            ]
+            for r in rows.values()
+        ],
+    )
+
+
+def _colour_shift_table() -> Table:
+    """Albedo / rho per channel of each lobe at its roughest setting."""
+    from ...approximations.grading import colour_shift
+
+    cs = colour_shift()
+    return Table(
+        "Colour shift at mu_o = 0.5, rho = (0.8, 0.5, 0.2), roughest setting: albedo / rho per channel "
+        "(1 everywhere = no energy loss; a falling row = saturation)",
+        ["lobe", "E_R/rho_R", "E_G/rho_G", "E_B/rho_B"],
+        [[n, *(float(v) for v in ratio)] for n, _, ratio in cs],
+    )
+
+
+#: The shipped rows checked against a limit: (row id, limit, check title).
+_TABLE_LIMITS = (
+    ("kc_qon_white_furnace", 1e-6, "K-C on QON: white furnace (table error only)"),
+    ("eon_white_furnace", 2e-7, "EON: white furnace"),
+    ("kc_fon_exact_vs_eon", 3e-6, "K-C on FON with EON's rho_ms is EON"),
+    ("kc_sh_response_exact", 1e-6, "SH route with exact ZH equals brute force"),
+    ("gotanda_eq20_vs_qon", 1e-12, "Eq. 20 is QON"),
+)
+
+
 def build(ctx: Context) -> SectionResult:
+    """The shipped grading table, the errata, the colour shift, the live checks and the plots."""
     header, rows = _rows()
     res = SectionResult(KEY, TITLE)
     res.notes.append(
@@ -330,25 +361,7 @@ def build(ctx: Context) -> SectionResult:
         "of the exact lobe, Gauss-Legendre quadrature, the reference albedo tables). Provenance of the "
         "table: " + " | ".join(header)
     )
-    res.tables.append(
-        Table(
-            "Approximation errors over each domain (shipped table, data/approximation_errors.csv)",
-            ["approximation", "equation", "approximates", "metric", "max error", "RMS error", "worst at", "note"],
-            [
-                [
-                    r["approximation"],
-                    r["equation"],
-                    r["approximates"],
-                    r["metric"],
-                    float(r["max_error"]),
-                    float(r["rms_error"]),
-                    r["at"],
-                    r["note"],
-                ]
-                for r in rows.values()
-            ],
-        )
-    )
+    res.tables.append(_errors_table(rows))
     res.tables.append(
         Table(
             "Published errata and ambiguities (with the evidence)",
@@ -357,26 +370,10 @@ def build(ctx: Context) -> SectionResult:
         )
     )
     ctx.progress("approximations: colour shift")
-    from ...approximations.grading import colour_shift
-
-    cs = colour_shift()
-    res.tables.append(
-        Table(
-            "Colour shift at mu_o = 0.5, rho = (0.8, 0.5, 0.2), roughest setting: albedo / rho per channel "
-            "(1 everywhere = no energy loss; a falling row = saturation)",
-            ["lobe", "E_R/rho_R", "E_G/rho_G", "E_B/rho_B"],
-            [[n, *(float(v) for v in ratio)] for n, _, ratio in cs],
-        )
-    )
+    res.tables.append(_colour_shift_table())
     ctx.progress("approximations: live recomputation")
     res.checks += _live_checks(rows, ctx.quick)
-    for rid, limit, why in (
-        ("kc_qon_white_furnace", 1e-6, "K-C on QON: white furnace (table error only)"),
-        ("eon_white_furnace", 2e-7, "EON: white furnace"),
-        ("kc_fon_exact_vs_eon", 3e-6, "K-C on FON with EON's rho_ms is EON"),
-        ("kc_sh_response_exact", 1e-6, "SH route with exact ZH equals brute force"),
-        ("gotanda_eq20_vs_qon", 1e-12, "Eq. 20 is QON"),
-    ):
+    for rid, limit, why in _TABLE_LIMITS:
         checks_row = rows[rid]
         res.checks.append(
             CHECKS.check(

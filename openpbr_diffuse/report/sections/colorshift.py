@@ -13,57 +13,23 @@ unchanged library reads no material file.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from ...result import Result
+from .._plot import pyplot, save
 from ..model import CheckTable, Context, Figure, SectionResult, Table
 
 KEY = "colorshift"
 TITLE = "Spectral versus RGB: the EON colour shift"
 
-#: The section's checks, declared once: (id, title, runs in --quick); ``--list-checks`` reads
-#: this table, ``--quick`` lists the checks marked False as not run.
-CHECKS = CheckTable(
-    'colorshift',
-    [
-        (
-            'colorshift.r_0_rgb_and_spectral_evaluation_agree_eon_is_lambert',
-            'r = 0: RGB and spectral evaluation agree (EON is Lambert)',
-            True,
-        ),
-        ('colorshift.r_0_no_colour_shift', 'r = 0: no colour shift', True),
-        ('colorshift.spectrally_flat_reflectance_rgb_spectral', 'spectrally flat reflectance: RGB = spectral', True),
-        ('colorshift.flat_reflectance_albedo_quadrature_table', 'flat reflectance: albedo = quadrature table', True),
-        (
-            'colorshift.pipeline_xyz_of_the_patches_colour_sd_to_xyz',
-            'pipeline XYZ of the patches = colour.sd_to_XYZ',
-            True,
-        ),
-        (
-            'colorshift.white_then_tint_keeps_the_chromaticity_of_rho',
-            'white then tint keeps the chromaticity of rho',
-            True,
-        ),
-        (
-            'colorshift.saturation_c_l_grows_strictly_with_r_chromatic_patches_mu_0',
-            'saturation C*/L* grows strictly with r (chromatic patches, mu > 0)',
-            True,
-        ),
-        (
-            'colorshift.white_furnace_per_wavelength_rho_1_at_81_wavelengths',
-            'white furnace per wavelength (rho = 1 at 81 wavelengths)',
-            True,
-        ),
-        (
-            'colorshift.shipped_colorchecker_colour_shift_table_reproduced',
-            'shipped ColorChecker colour-shift table reproduced',
-            True,
-        ),
-    ],
-)
+#: The section's checks: its rows of the static registry ``data/report_checks.tsv``.
+CHECKS = CheckTable.declared("colorshift")
 
 
 def _grid(quick):
+    """The (roughness, mu) grid of the ColorChecker evaluation."""
     if quick:
         return np.array([0.0, 0.5, 1.0]), np.array([0.2, 1.0])
     from ...spectral.reference import TABLE_MU, TABLE_ROUGHNESS
@@ -71,15 +37,10 @@ def _grid(quick):
     return np.array(TABLE_ROUGHNESS), np.array(TABLE_MU)
 
 
-def _checks(res, cm, colour):
-    import openpbr_diffuse as od
-
-    from ...spectral import ColourSet, colour_shift
-
-    checks = []
+def _lambert_checks(res: Any, k0: int) -> list[Result]:
+    """At r = 0 EON is Lambert: RGB equals spectral evaluation and there is no colour shift."""
     inside = ~res.rho_rgb_clipped
-    k0 = int(np.argmin(res.roughness))
-    checks.append(
+    return [
         CHECKS.check(
             "r = 0: RGB and spectral evaluation agree (EON is Lambert)",
             float(res.delta_e_rgb_vs_spectral[inside, k0].max()),
@@ -89,13 +50,19 @@ def _checks(res, cm, colour):
             unit="dE2000",
             detail=f"{int(inside.sum())} in-gamut patches; clipped: "
             + (", ".join(n for n, c in zip(res.colours.names, res.rho_rgb_clipped) if c) or "none"),
-        )
-    )
-    checks.append(
+        ),
         CHECKS.check(
             "r = 0: no colour shift", float(res.delta_e_shift[:, k0].max()), 1e-6, "<=", "Lambert limit", unit="dE2000"
-        )
-    )
+        ),
+    ]
+
+
+def _flat_checks(res: Any, cm: Any) -> list[Result]:
+    """Spectrally flat reflectance: RGB equals spectral, and its albedo is the quadrature table's."""
+    import openpbr_diffuse as od
+
+    from ...spectral import ColourSet, colour_shift
+
     flat = np.linspace(0.05, 1.0, 8)[:, None] * np.ones((1, cm.wavelengths.size))
     fs = ColourSet(
         [f"flat {v:.2f}" for v in flat[:, 0]],
@@ -105,7 +72,8 @@ def _checks(res, cm, colour):
         np.full(len(flat), np.nan),
     )
     fr = colour_shift(fs, res.roughness, res.mu, cm)
-    checks.append(
+    E_ref = od.reference_albedo("eon", res.mu[None, None, :], res.roughness[None, :, None], flat[:, None, None, :1])
+    return [
         CHECKS.check(
             "spectrally flat reflectance: RGB = spectral",
             float(fr.delta_e_rgb_vs_spectral.max()),
@@ -113,23 +81,28 @@ def _checks(res, cm, colour):
             "<=",
             "grey spectra 0.05-1",
             unit="dE2000",
-        )
-    )
-    E_ref = od.reference_albedo("eon", res.mu[None, None, :], res.roughness[None, :, None], flat[:, None, None, :1])
-    checks.append(
+        ),
         CHECKS.check(
             "flat reflectance: albedo = quadrature table",
             float(abs(fr.albedo_spectral - E_ref).max()),
             1e-5,
             "<=",
             "data/albedo_eon.csv (reference_albedo)",
-        )
-    )
+        ),
+    ]
+
+
+def _xyz_checks(res: Any, cm: Any, colour: Any, k0: int) -> list[Result]:
+    """The pipeline's XYZ against colour-science's, and white-then-tint's chromaticity."""
     sds = colour.SDS_COLOURCHECKERS["BabelColor Average"]
     XYZ_ref = np.array(
         [colour.sd_to_XYZ(sds[n], cm.cmfs, cm.illuminant_sd, method="Integration") for n in res.colours.names]
     )
-    checks.append(
+
+    def xy(X):
+        return X[..., :2] / X.sum(-1, keepdims=True)
+
+    return [
         CHECKS.check(
             "pipeline XYZ of the patches = colour.sd_to_XYZ",
             float(abs(res.XYZ["spectral"][:, k0] - XYZ_ref[:, None]).max()),
@@ -137,13 +110,7 @@ def _checks(res, cm, colour):
             "<=",
             "colour.sd_to_XYZ (Integration), measured spectra",
             unit="XYZ (Y = 100)",
-        )
-    )
-
-    def xy(X):
-        return X[..., :2] / X.sum(-1, keepdims=True)
-
-    checks.append(
+        ),
         CHECKS.check(
             "white then tint keeps the chromaticity of rho",
             float(abs(xy(res.XYZ["white_tint"]) - xy(XYZ_ref)[:, None, None]).max()),
@@ -151,39 +118,57 @@ def _checks(res, cm, colour):
             "<=",
             "xy of colour.sd_to_XYZ of the patch",
             unit="xy",
-        )
-    )
+        ),
+    ]
+
+
+def _saturation_check(res: Any, k0: int) -> Result:
+    """The saturation C*/L* of the chromatic patches grows strictly with r."""
     Lab = res.Lab["spectral"]
     C = np.hypot(Lab[..., 1], Lab[..., 2])
     chrom = C[:, k0, 0] > 2.0
     pos = res.mu > 0
     sat = (C / Lab[..., 0])[chrom][:, :, pos]
     bad = int((np.diff(sat, axis=1) <= 0).sum()) if len(res.roughness) > 1 else 0
-    checks.append(
-        CHECKS.check(
-            "saturation C*/L* grows strictly with r (chromatic patches, mu > 0)",
-            bad,
-            0,
-            "<=",
-            "monotonicity over the roughness grid",
-            unit="non-increasing steps",
-            detail=f"{int(chrom.sum())} chromatic patches (C*ab > 2 at r = 0)",
-        )
+    return CHECKS.check(
+        "saturation C*/L* grows strictly with r (chromatic patches, mu > 0)",
+        bad,
+        0,
+        "<=",
+        "monotonicity over the roughness grid",
+        unit="non-increasing steps",
+        detail=f"{int(chrom.sum())} chromatic patches (C*ab > 2 at r = 0)",
     )
+
+
+def _furnace_check(res: Any, cm: Any) -> Result:
+    """EON's white furnace at every wavelength."""
+    import openpbr_diffuse as od
+
     E1 = od.directional_albedo("eon", res.mu[None, :], res.roughness[:, None], np.ones(cm.wavelengths.size))
-    checks.append(
-        CHECKS.check(
-            "white furnace per wavelength (rho = 1 at 81 wavelengths)",
-            float(abs(E1 - 1).max()),
-            1e-6,
-            "<=",
-            "energy conservation of EON",
-        )
+    return CHECKS.check(
+        "white furnace per wavelength (rho = 1 at 81 wavelengths)",
+        float(abs(E1 - 1).max()),
+        1e-6,
+        "<=",
+        "energy conservation of EON",
     )
-    return checks
+
+
+def _checks(res: Any, cm: Any, colour: Any) -> list[Result]:
+    """The property checks of the ColorChecker result ``res`` against independent references."""
+    k0 = int(np.argmin(res.roughness))
+    return [
+        *_lambert_checks(res, k0),
+        *_flat_checks(res, cm),
+        *_xyz_checks(res, cm, colour, k0),
+        _saturation_check(res, k0),
+        _furnace_check(res, cm),
+    ]
 
 
 def _table_check(quick):
+    """The shipped ColorChecker colour-shift table, recomputed."""
     from ...spectral import checker, colorimetry, colour_shift
     from ...spectral import reference as ref
 
@@ -207,6 +192,7 @@ def _table_check(quick):
 
 
 def _summary_rows(name_ws, res):
+    """The r = 1 summary rows of one working space, one per mu."""
     rows = []
     for mu, s in res.summary(1.0).items():
         a, b = s["delta_e_rgb_vs_spectral"], s["delta_e_shift"]
@@ -260,11 +246,8 @@ def _recovery_table(cm, measured, quick):
 
 
 def _figure(ctx, res):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    """dE2000 of the colour shift and of RGB vs spectral against roughness, a line per patch."""
+    plt = pyplot()
     m = int(np.argmax(res.mu))
     srgb = np.clip(res.rho_rgb, 0, 1) ** (1 / 2.2)
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
@@ -289,11 +272,8 @@ def _figure(ctx, res):
     for ax in axes:
         ax.set_facecolor("0.35")
         ax.grid(alpha=0.3)
-    path = ctx.image_dir / f"{KEY}_delta_e.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
     return Figure(
-        path.name,
+        save(fig, ctx, f"{KEY}_delta_e.png", dpi=110),
         "ColorChecker (measured spectra, D65, lin_rec709): dE2000 of the colour shift and "
         "of RGB vs spectral evaluation against roughness, one line per patch in its colour",
     )
@@ -312,18 +292,13 @@ def _material_colours(ctx, files):
     return out
 
 
-def _materials_table(ctx, cm):
-    """The colour shift of the materials of ``ctx.paths`` (default: the bundled library) at
-    each material's own diffuse roughness and at r = 1, mu = 1; (Table or None, warnings)."""
-    from ...spectral import colour_shift, from_materials
+def _material_sets(ctx: Context, cm: Any, files: list) -> tuple[list, list[str]]:
+    """The diffuse colours of ``files`` as colour sets, and the warnings of reading them."""
+    from ...spectral import from_materials
     from ...spectral.colorsets import from_colour_records
 
-    try:
-        from ...readers import BUNDLED_MATERIALS, find_material_files
-    except ImportError as exc:
-        return None, [f"materials not evaluated: openpbr_diffuse.readers unavailable ({exc})"]
-    files = find_material_files(ctx.paths or [BUNDLED_MATERIALS])
-    warnings, sets = [], []
+    warnings: list[str] = []
+    sets: list = []
 
     def add(f, read):
         try:
@@ -358,14 +333,14 @@ def _materials_table(ctx, cm):
         # a file the work could not read is read here again, for its own error text
         add(f, lambda f=f: from_materials([f], cm))
     add_run(run)
-    if not sets:
-        return None, warnings + ["no material with a diffuse colour"]
-    from ...spectral import ColourSet
+    return sets, warnings
 
-    cs = ColourSet.concat(sets)
-    res = colour_shift(cs, [1.0], [1.0], cm)
-    # EON at each material's own roughness: one evaluation per distinct roughness (each
-    # colour's result depends on its own spectrum only)
+
+def _own_roughness_de(cs: Any, cm: Any) -> tuple[list, np.ndarray]:
+    """Each colour's material roughness and (dE rgb vs spectral, dE shift) of EON at it (mu = 1)."""
+    from ...spectral import ColourSet, colour_shift
+
+    # one evaluation per distinct roughness (each colour's result depends on its own spectrum only)
     own_r = [cs.extra[p].get("material_diffuse_roughness") for p in range(len(cs))]
     own_de = np.empty((len(cs), 2))
     groups: dict[str, tuple[float, list[int]]] = {}
@@ -386,6 +361,39 @@ def _materials_table(ctx, cm):
         )
         own_de[idx, 0] = own.delta_e_rgb_vs_spectral[:, 0, 0]
         own_de[idx, 1] = own.delta_e_shift[:, 0, 0]
+    return own_r, own_de
+
+
+#: The columns of the materials' table.
+_MATERIAL_COLUMNS = [
+    "material",
+    "file",
+    "diffuse model",
+    "own r",
+    "dE rgb vs spectral (own r)",
+    "dE shift (own r)",
+    "dE rgb vs spectral (r = 1)",
+    "dE shift (r = 1)",
+    "upsampling round trip dE",
+]
+
+
+def _materials_table(ctx, cm):
+    """The colour shift of the materials of ``ctx.paths`` (default: the bundled library) at
+    each material's own diffuse roughness and at r = 1, mu = 1; (Table or None, warnings)."""
+    from ...spectral import ColourSet, colour_shift
+
+    try:
+        from ...readers import BUNDLED_MATERIALS, find_material_files
+    except ImportError as exc:
+        return None, [f"materials not evaluated: openpbr_diffuse.readers unavailable ({exc})"]
+    sets, warnings = _material_sets(ctx, cm, find_material_files(ctx.paths or [BUNDLED_MATERIALS]))
+    if not sets:
+        return None, warnings + ["no material with a diffuse colour"]
+    cs = ColourSet.concat(sets)
+    res = colour_shift(cs, [1.0], [1.0], cm)
+    # EON at each material's own roughness
+    own_r, own_de = _own_roughness_de(cs, cm)
     rows = []
     for p, name in enumerate(cs.names):
         r_own = own_r[p]
@@ -406,39 +414,15 @@ def _materials_table(ctx, cm):
         "Materials (diffuse colour read by openpbr_diffuse.readers, ACEScg -> lin_rec709, upsampled by "
         "Mallett 2019), mu = 1: EON at the material's own diffuse roughness (as r, whatever its diffuse "
         "model) and at r = 1",
-        [
-            "material",
-            "file",
-            "diffuse model",
-            "own r",
-            "dE rgb vs spectral (own r)",
-            "dE shift (own r)",
-            "dE rgb vs spectral (r = 1)",
-            "dE shift (r = 1)",
-            "upsampling round trip dE",
-        ],
+        _MATERIAL_COLUMNS,
         rows,
     )
     return table, warnings
 
 
-def build(ctx: Context) -> SectionResult:
-    from ...spectral import checker, colorimetry, colour_shift
-    from ...spectral.colorimetry import _colour
-
-    colour = _colour()
-    ctx.image_dir.mkdir(parents=True, exist_ok=True)
-    r, mu = _grid(ctx.quick)
-    ctx.progress("colorshift: ColorChecker, lin_rec709")
-    cm = colorimetry("D65", "lin_rec709")
-    res = colour_shift(checker(cm), r, mu, cm)
-    checks = _checks(res, cm, colour)
-    ctx.progress("colorshift: reference table")
-    checks.append(_table_check(ctx.quick))
-    ctx.progress("colorshift: ACEScg")
-    cm_aces = colorimetry("D65", "acescg")
-    res_aces = colour_shift(checker(cm_aces), [0.0, 1.0], [0.2, 0.5, 1.0], cm_aces)
-    summary = Table(
+def _summary_table(res: Any, res_aces: Any) -> Table:
+    """The ColorChecker at r = 1 in both working spaces: largest and median dE2000."""
+    return Table(
         "ColorChecker at r = 1 (D65): largest and median dE2000 with patch names",
         [
             "working space",
@@ -453,8 +437,12 @@ def build(ctx: Context) -> SectionResult:
         ],
         _summary_rows("lin_rec709", res) + _summary_rows("acescg", res_aces),
     )
+
+
+def _per_patch_table(res: Any) -> Table:
+    """Each patch at the largest roughness and mu of the grid."""
     k1, m1 = int(np.argmax(res.roughness)), int(np.argmax(res.mu))
-    per_patch = Table(
+    return Table(
         f"Each patch at r = {res.roughness[k1]:g}, mu = {res.mu[m1]:g} (D65, lin_rec709; * = outside Rec.709, clipped)",
         [
             "patch",
@@ -478,8 +466,13 @@ def build(ctx: Context) -> SectionResult:
             for p, n in enumerate(res.colours.names)
         ],
     )
-    ctx.progress("colorshift: recovery methods")
-    recovery = Table(
+
+
+def _recovery(cm: Any, quick: bool) -> Table:
+    """The table of the RGB -> spectrum upsampling methods on the ColorChecker."""
+    from ...spectral import checker, colour_shift
+
+    return Table(
         "RGB -> spectrum upsampling (colour.recovery) on the in-gamut patches' rho_rgb: round trip, "
         "and dE2000 of the r = 1, mu = 1 spectral albedo from the recovered vs the measured spectrum",
         [
@@ -490,38 +483,69 @@ def build(ctx: Context) -> SectionResult:
             "max dE albedo (recovered vs measured)",
             "patch",
         ],
-        _recovery_table(cm, colour_shift(checker(cm), [1.0], [1.0], cm), ctx.quick),
+        _recovery_table(cm, colour_shift(checker(cm), [1.0], [1.0], cm), quick),
     )
-    ctx.progress("colorshift: materials")
-    mat_table, warnings = _materials_table(ctx, cm)
-    figures = [_figure(ctx, res)]
-    ctx.progress("colorshift: swatches")
+
+
+def _swatches(ctx: Context, cm: Any) -> Figure:
+    """The swatch image at r = 0 and r = 1, mu = 1."""
+    from ...spectral import checker, colour_shift
     from ...spectral.swatches import write_swatches
 
     sw = colour_shift(checker(cm), [0.0, 1.0], [1.0], cm)
     path = write_swatches(sw, ctx.image_dir / f"{KEY}_swatches.png")
-    figures.append(
-        Figure(
-            path.name,
-            "Swatches at r = 0 and r = 1, mu = 1: L Lambert (rho), R RGB-evaluated, "
-            "S spectral, W white then tint (sRGB display encoding)",
-        )
+    return Figure(
+        path.name,
+        "Swatches at r = 0 and r = 1, mu = 1: L Lambert (rho), R RGB-evaluated, "
+        "S spectral, W white then tint (sRGB display encoding)",
     )
-    notes = [
-        "Pipeline: measured reflectance (colour-science 'BabelColor Average', 380-730 nm / 10 nm aligned to "
-        "380-780 nm / 5 nm) -> EON directional albedo per wavelength (Eq. 20) -> XYZ under D65, CIE 1931 2 degree "
-        "observer (perfect reflector Y = 100) -> working-space RGB with Bradford adaptation; Lab with the "
-        "illuminant's white; CIEDE2000.",
-        "White then tint evaluates EON at rho = 1 (albedo 1: the white furnace) and multiplies by rho, so it "
-        "equals the Lambertian colour; delta_e_shift is therefore the whole EON change of colour, darkening "
-        "included (rel_luminance_diff_shift), chroma_diff_shift its chroma part.",
-        "At mu = 0 E_F = 1 for every r, so there is no shift at exactly grazing view; it grows towards normal view.",
-        "'cyan' lies outside linear Rec.709 (R < 0): its RGB evaluation uses rho clipped to [0, 1], which accounts "
-        "for most of its RGB-vs-spectral difference; in ACEScg all 24 patches are inside.",
-        "Per RGB channel the shift always raises saturation; per wavelength it need not: a spectrum whose most "
-        "reflective wavelengths have another hue than its colour (a blue reflecting most in the deep red, say) can "
-        "lose saturation as r grows while the per-channel evaluation says it gains (tests: "
-        "test_metameric_spectrum_can_lose_saturation). All 19 chromatic ColorChecker patches gain.",
-    ]
+
+
+#: The section's notes: the pipeline and how to read its numbers.
+NOTES = (
+    "Pipeline: measured reflectance (colour-science 'BabelColor Average', 380-730 nm / 10 nm aligned to "
+    "380-780 nm / 5 nm) -> EON directional albedo per wavelength (Eq. 20) -> XYZ under D65, CIE 1931 2 degree "
+    "observer (perfect reflector Y = 100) -> working-space RGB with Bradford adaptation; Lab with the "
+    "illuminant's white; CIEDE2000.",
+    "White then tint evaluates EON at rho = 1 (albedo 1: the white furnace) and multiplies by rho, so it "
+    "equals the Lambertian colour; delta_e_shift is therefore the whole EON change of colour, darkening "
+    "included (rel_luminance_diff_shift), chroma_diff_shift its chroma part.",
+    "At mu = 0 E_F = 1 for every r, so there is no shift at exactly grazing view; it grows towards normal view.",
+    "'cyan' lies outside linear Rec.709 (R < 0): its RGB evaluation uses rho clipped to [0, 1], which accounts "
+    "for most of its RGB-vs-spectral difference; in ACEScg all 24 patches are inside.",
+    "Per RGB channel the shift always raises saturation; per wavelength it need not: a spectrum whose most "
+    "reflective wavelengths have another hue than its colour (a blue reflecting most in the deep red, say) can "
+    "lose saturation as r grows while the per-channel evaluation says it gains (tests: "
+    "test_metameric_spectrum_can_lose_saturation). All 19 chromatic ColorChecker patches gain.",
+)
+
+
+def build(ctx: Context) -> SectionResult:
+    """The ColorChecker's checks and tables, the recovery methods, the materials and the figures."""
+    from ...spectral import checker, colorimetry, colour_shift
+    from ...spectral.colorimetry import _colour
+
+    colour = _colour()
+    ctx.image_dir.mkdir(parents=True, exist_ok=True)
+    r, mu = _grid(ctx.quick)
+    ctx.progress("colorshift: ColorChecker, lin_rec709")
+    cm = colorimetry("D65", "lin_rec709")
+    res = colour_shift(checker(cm), r, mu, cm)
+    checks = _checks(res, cm, colour)
+    ctx.progress("colorshift: reference table")
+    checks.append(_table_check(ctx.quick))
+    ctx.progress("colorshift: ACEScg")
+    cm_aces = colorimetry("D65", "acescg")
+    res_aces = colour_shift(checker(cm_aces), [0.0, 1.0], [0.2, 0.5, 1.0], cm_aces)
+    summary, per_patch = _summary_table(res, res_aces), _per_patch_table(res)
+    ctx.progress("colorshift: recovery methods")
+    recovery = _recovery(cm, ctx.quick)
+    ctx.progress("colorshift: materials")
+    mat_table, warnings = _materials_table(ctx, cm)
+    figures = [_figure(ctx, res)]
+    ctx.progress("colorshift: swatches")
+    figures.append(_swatches(ctx, cm))
     tables = [summary, per_patch, recovery] + ([mat_table] if mat_table else [])
-    return SectionResult(KEY, TITLE, checks=checks, tables=tables, figures=figures, notes=notes, warnings=warnings)
+    return SectionResult(
+        KEY, TITLE, checks=checks, tables=tables, figures=figures, notes=list(NOTES), warnings=warnings
+    )

@@ -18,12 +18,13 @@ from __future__ import annotations
 
 import math
 import os
+from typing import Any
 
 from ..model import CheckTable, Context, SectionResult, Table
 
 TITLE = "Third-party implementations, graded by running their own code (findings)"
 #: The section holds findings, not checks (a third party's verdict is not a failed check).
-CHECKS = CheckTable("graders", [])
+CHECKS = CheckTable.declared("graders")
 KEY = "graders"
 
 
@@ -50,6 +51,7 @@ def _fmt(x):
 
 
 def _version(v: dict) -> str:
+    """What was run, in words: MaterialX / Blender version and source hash."""
     parts = []
     for key in ("materialx", "blender"):
         if v.get(key):
@@ -59,7 +61,47 @@ def _version(v: dict) -> str:
     return ", ".join(parts) or "—"
 
 
+def _table_rows(name: str, g: Any) -> list[list[Any]]:
+    """The table rows of implementation ``name``'s grade ``g``: one per quantity."""
+    return [
+        [
+            name,
+            _version(g.version),
+            q.quantity,
+            _fmt(q.max_abs_error),
+            _fmt(q.rms_error),
+            q.tolerance,
+            "pass" if q.passed else "FAIL",
+            q.diagnosis or "—",
+        ]
+        for q in g.quantities
+    ]
+
+
+def _summary(name: str, g: Any) -> dict[str, Any]:
+    """The listed summary of implementation ``name``'s grade ``g``: its verdicts, version and notes."""
+    items = [
+        f"{q.quantity}: {'conforms' if q.passed else 'FINDING: does not conform'}"
+        + (f" ({q.diagnosis})" if q.diagnosis and not q.passed else "")
+        + f", max abs error {_fmt(q.max_abs_error)}"
+        for q in g.quantities
+    ]
+    items.append("version: " + ("; ".join(f"{k} = {v}" for k, v in g.version.items() if v) or "—"))
+    items += list(g.notes)
+    return {"title": name, "items": items}
+
+
+#: The caption of the graded implementations' table.
+CAPTION = (
+    "Implementations run on this machine and graded against the reference (conformance.grade on "
+    "the default vectors for BRDF and albedo; sampler: reported pdf against the reference "
+    "strategies and chi-square of its samples against its own pdf; surface: diffuse weight x "
+    "albedo and selection probability against OpenPBRSurface)"
+)
+
+
 def build(ctx: Context) -> SectionResult:
+    """Every planned implementation graded: the table of its quantities, its summary, the findings."""
     from ...graders import grade_implementation
     from ...graders.errors import GraderUnavailable
 
@@ -73,47 +115,19 @@ def build(ctx: Context) -> SectionResult:
             result.warnings.append(f"{name}: not graded: {exc}")
             continue
         run.append(g.to_dict())
-        for q in g.quantities:
-            rows.append(
-                [
-                    name,
-                    _version(g.version),
-                    q.quantity,
-                    _fmt(q.max_abs_error),
-                    _fmt(q.rms_error),
-                    q.tolerance,
-                    "pass" if q.passed else "FAIL",
-                    q.diagnosis or "—",
-                ]
-            )
-        items = [
-            f"{q.quantity}: {'conforms' if q.passed else 'FINDING: does not conform'}"
-            + (f" ({q.diagnosis})" if q.diagnosis and not q.passed else "")
-            + f", max abs error {_fmt(q.max_abs_error)}"
-            for q in g.quantities
-        ]
-        items.append("version: " + ("; ".join(f"{k} = {v}" for k, v in g.version.items() if v) or "—"))
-        items += list(g.notes)
-        result.lists.append({"title": name, "items": items})
-    result.tables.append(
-        Table(
-            caption="Implementations run on this machine and graded against the reference (conformance.grade on "
-            "the default vectors for BRDF and albedo; sampler: reported pdf against the reference "
-            "strategies and chi-square of its samples against its own pdf; surface: diffuse weight x "
-            "albedo and selection probability against OpenPBRSurface)",
-            columns=[
-                "implementation",
-                "version",
-                "quantity",
-                "max abs error",
-                "RMS error",
-                "tolerance",
-                "verdict",
-                "diagnosis",
-            ],
-            rows=rows,
-        )
-    )
+        rows += _table_rows(name, g)
+        result.lists.append(_summary(name, g))
+    columns = [
+        "implementation",
+        "version",
+        "quantity",
+        "max abs error",
+        "RMS error",
+        "tolerance",
+        "verdict",
+        "diagnosis",
+    ]
+    result.tables.append(Table(caption=CAPTION, columns=columns, rows=rows))
     ctx.extra.setdefault("graders", run)
     result.findings = sum(r[6] == "FAIL" for r in rows)
     if not rows:

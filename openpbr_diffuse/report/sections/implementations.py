@@ -8,101 +8,77 @@ their own code are graded in the next section ("graders").
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
+from ...result import Result
 from ..model import CheckTable, Context, SectionResult, Table
 
 TITLE = "Grader self-test: test vectors and known deviations"
 
-#: The section's checks, declared once: (id, title, runs in --quick); ``--list-checks`` reads
-#: this table, ``--quick`` lists the checks marked False as not run.
-CHECKS = CheckTable(
-    'implementations',
-    [
-        ('implementations.reference_rounded_to_float32_conforms', 'reference rounded to float32 conforms', True),
-        (
-            'implementations.no_energy_compensation_qon_fails_and_is_diagnosed',
-            'no_energy_compensation_qon: fails and is diagnosed',
-            True,
-        ),
-        (
-            'implementations.no_energy_compensation_fon_fails_and_is_diagnosed',
-            'no_energy_compensation_fon: fails and is diagnosed',
-            True,
-        ),
-        (
-            'implementations.rho_ms_extra_inv_pi_fails_and_is_diagnosed',
-            'rho_ms_extra_inv_pi: fails and is diagnosed',
-            True,
-        ),
-        ('implementations.rho_ms_extra_rho_fails_and_is_diagnosed', 'rho_ms_extra_rho: fails and is diagnosed', True),
-        ('implementations.ldotv_clamped_fails_and_is_diagnosed', 'ldotv_clamped: fails and is diagnosed', True),
-        ('implementations.white_tint_fails_and_is_diagnosed', 'white_tint: fails and is diagnosed', True),
-        ('implementations.times_cos_theta_i_fails_and_is_diagnosed', 'times_cos_theta_i: fails and is diagnosed', True),
-        (
-            'implementations.roughness_sigma_vs_r_fails_and_is_diagnosed',
-            'roughness_sigma_vs_r: fails and is diagnosed',
-            True,
-        ),
-        ('implementations.roughness_squared_fails_and_is_diagnosed', 'roughness_squared: fails and is diagnosed', True),
-        (
-            'implementations.no_energy_compensation_lambert_fails_and_is_diagnosed',
-            'no_energy_compensation_lambert: fails and is diagnosed',
-            True,
-        ),
-        (
-            'implementations.eq14_fit_for_exact_fails_and_is_diagnosed',
-            'eq14_fit_for_exact: fails and is diagnosed',
-            True,
-        ),
-        ('implementations.constant_factor_fails_and_is_diagnosed', 'constant_factor: fails and is diagnosed', True),
-        ('implementations.ms_missing_inv_pi_fails_and_is_diagnosed', 'ms_missing_inv_pi: fails and is diagnosed', True),
-        (
-            'implementations.divided_by_cos_theta_i_fails_and_is_diagnosed',
-            'divided_by_cos_theta_i: fails and is diagnosed',
-            True,
-        ),
-        ('implementations.roughness_degrees_fails_and_is_diagnosed', 'roughness_degrees: fails and is diagnosed', True),
-        ('implementations.rho_srgb_encoded_fails_and_is_diagnosed', 'rho_srgb_encoded: fails and is diagnosed', True),
-        ('implementations.mu_floor_fails_and_is_diagnosed', 'mu_floor: fails and is diagnosed', True),
-        (
-            'implementations.roughness_sigma_over_sqrt2_fails_and_is_diagnosed',
-            'roughness_sigma_over_sqrt2: fails and is diagnosed',
-            True,
-        ),
-        (
-            'implementations.qon_fujii_constants_fails_and_is_diagnosed',
-            'qon_fujii_constants: fails and is diagnosed',
-            True,
-        ),
-        (
-            'implementations.rho_ms_from_scalar_rho_fails_and_is_diagnosed',
-            'rho_ms_from_scalar_rho: fails and is diagnosed',
-            True,
-        ),
-        (
-            'implementations.ms_missing_mu_i_factor_fails_and_is_diagnosed',
-            'ms_missing_mu_i_factor: fails and is diagnosed',
-            True,
-        ),
-        (
-            'implementations.avg_albedo_constant_fails_and_is_diagnosed',
-            'avg_albedo_constant: fails and is diagnosed',
-            True,
-        ),
-        ('implementations.roughness_floor_fails_and_is_diagnosed', 'roughness_floor: fails and is diagnosed', True),
-        (
-            'implementations.nonzero_below_horizon_fails_and_is_diagnosed',
-            'nonzero_below_horizon: fails and is diagnosed',
-            True,
-        ),
-    ],
-)
+#: The section's checks: its rows of the static registry ``data/report_checks.tsv``.
+CHECKS = CheckTable.declared("implementations")
+
+
+def _deviation(v: Any, name: str, dev: Any) -> tuple[Result, list[Any]]:
+    """A float32 implementation with the known deviation ``name``: its check (fails, diagnosed) and table row."""
+    from ...conformance.grade import grade
+
+    pred = dev(v)
+    known = np.isfinite(pred).all(axis=1)
+    sub = v.subset(known)
+    g = grade(sub, pred[known].astype(np.float32))
+    ok = (not g.passed) and g.diagnosis == name
+    detail = g.candidate_details.get(name, {})
+    check = CHECKS.check(
+        f"{name}: fails and is diagnosed",
+        1.0 if ok else 0.0,
+        0.0,
+        "==",
+        expected=1.0,
+        reference=f"{dev.source}; predicted with the library's models ({dev.variants[0][0]})",
+        detail=f"diagnosis {g.diagnosis}; {g.n_failed_rows} of {g.n_rows} rows outside the tolerance",
+    )
+    row = [
+        name,
+        dev.description,
+        dev.source,
+        g.n_failed_rows,
+        g.n_rows,
+        g.max_abs_error,
+        g.max_normalised_error,
+        g.diagnosis or "none",
+        detail.get("explained_fraction", float("nan")),
+    ]
+    return check, row
+
+
+def _deviations_table(rows: list[list[Any]]) -> Table:
+    """The known deviations as graded float32 implementations."""
+    from ...conformance.grade import ABS_TOL, REL_TOL
+
+    return Table(
+        f"Known deviations as float32 implementations, graded at |out - ref| <= {ABS_TOL:g} + {REL_TOL:g} |ref|",
+        [
+            "deviation",
+            "what",
+            "seen in",
+            "rows failing",
+            "rows",
+            "max abs error",
+            "max error / tolerance",
+            "diagnosis",
+            "failing values explained",
+        ],
+        rows,
+    )
 
 
 def build(ctx: Context) -> SectionResult:
+    """The test vectors, the float32 reference's conformance and each known deviation's diagnosis."""
     from ...conformance.deviations import DEVIATIONS, reference
-    from ...conformance.grade import ABS_TOL, REL_TOL, TOLERANCE_REASON, grade
+    from ...conformance.grade import TOLERANCE_REASON, grade
     from ...conformance.vectors import default_vectors
 
     v = default_vectors()
@@ -132,51 +108,8 @@ def build(ctx: Context) -> SectionResult:
     rows = []
     for name, dev in DEVIATIONS.items():
         ctx.progress(f"deviation {name}")
-        pred = dev(v)
-        known = np.isfinite(pred).all(axis=1)
-        sub = v.subset(known)
-        g = grade(sub, pred[known].astype(np.float32))
-        ok = (not g.passed) and g.diagnosis == name
-        detail = g.candidate_details.get(name, {})
-        res.checks.append(
-            CHECKS.check(
-                f"{name}: fails and is diagnosed",
-                1.0 if ok else 0.0,
-                0.0,
-                "==",
-                expected=1.0,
-                reference=f"{dev.source}; predicted with the library's models ({dev.variants[0][0]})",
-                detail=f"diagnosis {g.diagnosis}; {g.n_failed_rows} of {g.n_rows} rows outside the tolerance",
-            )
-        )
-        rows.append(
-            [
-                name,
-                dev.description,
-                dev.source,
-                g.n_failed_rows,
-                g.n_rows,
-                g.max_abs_error,
-                g.max_normalised_error,
-                g.diagnosis or "none",
-                detail.get("explained_fraction", float("nan")),
-            ]
-        )
-    res.tables.append(
-        Table(
-            f"Known deviations as float32 implementations, graded at |out - ref| <= {ABS_TOL:g} + {REL_TOL:g} |ref|",
-            [
-                "deviation",
-                "what",
-                "seen in",
-                "rows failing",
-                "rows",
-                "max abs error",
-                "max error / tolerance",
-                "diagnosis",
-                "failing values explained",
-            ],
-            rows,
-        )
-    )
+        check, row = _deviation(v, name, dev)
+        res.checks.append(check)
+        rows.append(row)
+    res.tables.append(_deviations_table(rows))
     return res

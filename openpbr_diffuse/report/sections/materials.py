@@ -37,25 +37,8 @@ from ..model import CheckTable, Context, Figure, SectionResult, Table
 
 TITLE = "Materials"
 
-#: The section's checks, declared once: (id, title, runs in --quick); ``--list-checks`` reads
-#: this table, ``--quick`` lists the checks marked False as not run.
-CHECKS = CheckTable(
-    'materials',
-    [
-        ('materials.every_given_material_file_is_read', 'every given material file is read', True),
-        ('materials.every_material_found_is_evaluated', 'every material found is evaluated', True),
-        (
-            'materials.every_material_s_directional_albedo_1_within_its_diffuse_mod',
-            "every material's directional albedo <= 1 (within its diffuse model's allowance)",
-            True,
-        ),
-        (
-            'materials.every_material_s_lobe_selection_probabilities_sum_to_1',
-            "every material's lobe selection probabilities sum to 1",
-            True,
-        ),
-    ],
-)
+#: The section's checks: its rows of the static registry ``data/report_checks.tsv``.
+CHECKS = CheckTable.declared("materials")
 
 KEY = "materials"
 #: Rows of the worst-materials table; entries of a check's detail; warnings listed.
@@ -65,15 +48,18 @@ WARNINGS_LISTED = 30
 
 
 def _slug(k: int, name: str) -> str:
+    """A file-name part for the ``k``-th drawn material."""
     return f"{k:02d}_" + re.sub(r"[^A-Za-z0-9]+", "_", name or "material").strip("_")[:40]
 
 
 def _listing(items: list[str], limit: int = DETAIL_ITEMS) -> str:
+    """At most ``limit`` items joined, with how many more."""
     more = len(items) - limit
     return "; ".join(items[:limit]) + (f"; ... and {more} more" if more > 0 else "")
 
 
 def _fmt(v: Any) -> str:
+    """A value of a record as table text."""
     if v is None:
         return "-"
     if isinstance(v, (tuple, list)):
@@ -126,6 +112,7 @@ def read_library(ctx: Context, opts: Any, runner: Any) -> tuple[list, list, list
 
 
 def _checks(res: SectionResult, files: list, records: list, unreadable: list) -> None:
+    """The section's checks: every file read, every material evaluated, albedo and probabilities."""
     from ...library.summary import FILE_NOT_READ, excess
 
     mats = [r for r in records if FILE_NOT_READ not in r["reasons"]]
@@ -188,6 +175,7 @@ def _checks(res: SectionResult, files: list, records: list, unreadable: list) ->
 
 
 def _tables(res: SectionResult, records: list) -> None:
+    """The summary tables: by verdict, by shader kind, by reason, the worst materials."""
     from ...library.summary import by_kind, by_reason, by_verdict, worst_key
 
     res.tables.append(Table("Materials by verdict", ["verdict", "materials"], by_verdict(records)))
@@ -309,7 +297,51 @@ def _figures(ctx: Context, res: SectionResult, runner: Any, records: list, cap: 
     return n
 
 
+def _notes(
+    ctx: Context, opts: Any, runner: Any, read: tuple[int, int], files: list, records: list, drawn: int
+) -> list[str]:
+    """What was read and how (``read``: files computed, from the cache), and what the previews show."""
+    computed, cached = read
+    n_mats = sum(r["material"] is not None for r in records)
+    how = (
+        f"on the Dask cluster {opts.scheduler or ''}".rstrip()
+        if runner.remote
+        else f"{opts.jobs} worker processes"
+        if opts.jobs > 1
+        else "in one process"
+    )
+    cache = f", {cached} from the cache ({opts.cache.folder})" if opts.cache is not None else " (no cache)"
+    return [
+        f"{n_mats} materials from {len(files)} files"
+        + (" (the bundled library)" if not ctx.paths else "")
+        + ". Colours in ACEScg (the readers' working space); evaluated at uv (0.5, 0.5), default time and "
+        f"variants. Diffuse weight, probability and albedo at theta_o = {THETA_O:g} deg; the weight includes "
+        "base_weight, (1 - metalness) and the albedo scaling 1 - E_specular(mu_o).",
+        f"Previews and albedo plots: {drawn} of {n_mats} materials (at most {opts.previews}: failing first, then "
+        "flagged, then in file order). Every material is in the table below and in report.json (\"materials\").",
+        f"Files: {computed} read {how}{cache}.",
+    ]
+
+
+def _warnings(opts: Any, records: list, unreadable: list) -> list[str]:
+    """The files and materials that could not be read or evaluated (at most ``WARNINGS_LISTED``), cache and reader warnings."""
+    warnings = [f"cannot be read: {text}" for text in unreadable[:WARNINGS_LISTED]]
+    bad = [r for r in records if "not evaluated" in r["reasons"]]
+    for r in bad[: max(0, WARNINGS_LISTED - len(unreadable))]:
+        warnings.append(f"{r['relpath']} {r['material']}: not evaluated: {r['detail']}")
+    more = len(unreadable) + len(bad) - WARNINGS_LISTED
+    if more > 0:
+        warnings.append(f"... and {more} more files or materials that could not be read (see the table)")
+    if opts.cache is not None and opts.cache.write_error:
+        warnings.append(f"the cache could not be written (the results were not kept): {opts.cache.write_error}")
+    n_warned = sum(bool(r.get("n_warnings")) for r in records)
+    if n_warned:
+        warnings.append(f"{n_warned} materials carry reader warnings (listed per material in the table)")
+    return warnings
+
+
 def build(ctx: Context) -> SectionResult:
+    """Read every material file, check the records, summarise them and draw the chosen materials."""
     from ...library import LibraryOptions
 
     res = SectionResult(KEY, TITLE)
@@ -317,7 +349,7 @@ def build(ctx: Context) -> SectionResult:
     with opts.runner() as runner:
         ctx.progress("materials: reading")
         files, records, unreadable = read_library(ctx, opts, runner)
-        computed, cached = runner.computed, runner.cached
+        read = runner.computed, runner.cached  # the reading's counts, before the figures' work
         ctx.extra["materials"] = records
         _checks(res, files, records, unreadable)
         _tables(res, records)
@@ -331,40 +363,8 @@ def build(ctx: Context) -> SectionResult:
                 )
             )
         drawn = _figures(ctx, res, runner, records, opts.previews)
-    n_mats = sum(r["material"] is not None for r in records)
-    res.notes.append(
-        f"{n_mats} materials from {len(files)} files"
-        + (" (the bundled library)" if not ctx.paths else "")
-        + ". Colours in ACEScg (the readers' working space); evaluated at uv (0.5, 0.5), default time and "
-        f"variants. Diffuse weight, probability and albedo at theta_o = {THETA_O:g} deg; the weight includes "
-        "base_weight, (1 - metalness) and the albedo scaling 1 - E_specular(mu_o)."
-    )
-    res.notes.append(
-        f"Previews and albedo plots: {drawn} of {n_mats} materials (at most {opts.previews}: failing first, then "
-        "flagged, then in file order). Every material is in the table below and in report.json (\"materials\")."
-    )
-    how = (
-        f"on the Dask cluster {opts.scheduler or ''}".rstrip()
-        if runner.remote
-        else f"{opts.jobs} worker processes"
-        if opts.jobs > 1
-        else "in one process"
-    )
-    cache = f", {cached} from the cache ({opts.cache.folder})" if opts.cache is not None else " (no cache)"
-    res.notes.append(f"Files: {computed} read {how}{cache}.")
-    for text in unreadable[:WARNINGS_LISTED]:
-        res.warnings.append(f"cannot be read: {text}")
-    bad = [r for r in records if "not evaluated" in r["reasons"]]
-    for r in bad[: max(0, WARNINGS_LISTED - len(unreadable))]:
-        res.warnings.append(f"{r['relpath']} {r['material']}: not evaluated: {r['detail']}")
-    more = len(unreadable) + len(bad) - WARNINGS_LISTED
-    if more > 0:
-        res.warnings.append(f"... and {more} more files or materials that could not be read (see the table)")
-    if opts.cache is not None and opts.cache.write_error:
-        res.warnings.append(f"the cache could not be written (the results were not kept): {opts.cache.write_error}")
-    n_warned = sum(bool(r.get("n_warnings")) for r in records)
-    if n_warned:
-        res.warnings.append(f"{n_warned} materials carry reader warnings (listed per material in the table)")
+    res.notes += _notes(ctx, opts, runner, read, files, records, drawn)
+    res.warnings += _warnings(opts, records, unreadable)
     return res
 
 

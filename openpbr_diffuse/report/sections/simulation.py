@@ -16,52 +16,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ...result import Result
+from .._plot import pyplot
 from ..model import CheckTable, Context, Figure, SectionResult, Table, grey
+from ._common import copy_figure, within_errors
 
 TITLE = "Physical ground truth: simulated rough Lambertian microsurfaces"
 
-#: The section's checks, declared once: (id, title, runs in --quick); ``--list-checks`` reads
-#: this table, ``--quick`` lists the checks marked False as not run.
-CHECKS = CheckTable(
-    'simulation',
-    [
-        (
-            'simulation.live_v_cavity_simulation_reproduces_the_shipped_e_sigma_0_4_',
-            'live V-cavity simulation reproduces the shipped E (sigma 0.4, mu 0.537, rho 0.8)',
-            False,
-        ),
-        (
-            'simulation.live_v_cavity_simulation_reproduces_the_shipped_e1_sigma_0_4',
-            'live V-cavity simulation reproduces the shipped E1 (sigma 0.4, mu 0.537, rho 0.8)',
-            False,
-        ),
-        (
-            'simulation.live_v_cavity_simulation_reproduces_the_shipped_e2_sigma_0_4',
-            'live V-cavity simulation reproduces the shipped E2 (sigma 0.4, mu 0.537, rho 0.8)',
-            False,
-        ),
-        (
-            'simulation.simulator_white_furnace_v_cavity_albedo_at_rho_1',
-            'simulator white furnace: V-cavity albedo at rho = 1',
-            False,
-        ),
-        (
-            'simulation.eon_albedo_vs_vcavity_within_eon_s_roughness_range_fitted_r_',
-            "EON albedo vs vcavity within EON's roughness range (fitted r < 1)",
-            True,
-        ),
-        (
-            'simulation.eon_albedo_vs_smith_beckmann_within_eon_s_roughness_range_fi',
-            "EON albedo vs smith-beckmann within EON's roughness range (fitted r < 1)",
-            True,
-        ),
-        (
-            'simulation.eon_albedo_vs_smith_ggx_within_eon_s_roughness_range_fitted_',
-            "EON albedo vs smith-ggx within EON's roughness range (fitted r < 1)",
-            True,
-        ),
-    ],
-)
+#: The section's checks: its rows of the static registry ``data/report_checks.tsv``.
+CHECKS = CheckTable.declared("simulation")
 
 KEY = "simulation"
 GEOMETRY_LABEL = {
@@ -74,12 +37,14 @@ MODEL_STYLE = {"full_on": "C0", "qon": "C1", "qon_fujii": "C2", "fon": "C3", "eo
 
 
 def _tables(directory=None):
+    """The shipped simulation tables by name: (header, columns)."""
     from ...simulation import grading as gr
 
     return {name: gr.load(name, directory) for name in gr.TABLES}
 
 
 def _grading_rows(g, fit="albedo"):
+    """The grading table's rows (as dicts) of one fit (albedo or BRDF)."""
     n = len(g["model"])
     return [{k: g[k][i] for k in g} for i in range(n) if g["fit"][i] == fit]
 
@@ -95,28 +60,12 @@ def fit_power_law(x: ArrayLike, y: ArrayLike) -> tuple[float, float] | None:
     return float(np.exp(-c / p)), float(p)
 
 
-def plot_all(
-    table_dir: str | os.PathLike[str], image_dir: str | os.PathLike[str], prefix: str = "simulation"
-) -> list[Path]:
-    """Figures from the shipped tables; returns the written paths."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from ...simulation import grading as gr
-
-    t = _tables(table_dir)
+def _plot_albedo_error(plt: Any, t: dict) -> Any:
+    """Albedo error, BRDF error and fitted roughness against the simulated roughness."""
     g = t["grading"][1]
-    image_dir = Path(image_dir)
-    paths = []
-    geoms = list(GEOMETRY_LABEL)
-    rows = _grading_rows(g)
-    brows = _grading_rows(g, "brdf")
-    plt.rcParams.update({"font.size": 8})
-    # 1. albedo error and fitted roughness against the simulated roughness
+    rows, brows = _grading_rows(g), _grading_rows(g, "brdf")
     fig, axes = plt.subplots(3, 3, figsize=(13, 10), constrained_layout=True)
-    for j, geom in enumerate(geoms):
+    for j, geom in enumerate(GEOMETRY_LABEL):
         for model, color in MODEL_STYLE.items():
             rr = [r for r in rows if r["geometry"] == geom and r["model"] == model]
             bb = [r for r in brows if r["geometry"] == geom and r["model"] == model]
@@ -131,14 +80,14 @@ def plot_all(
         axes[2, j].set_ylabel("fitted roughness (o: albedo fit, x: BRDF fit)")
         axes[2, j].set_xlabel("simulated roughness")
     axes[0, 0].legend(fontsize=8)
-    p = image_dir / f"{prefix}_albedo_error.png"
-    fig.savefig(p, dpi=90)
-    plt.close(fig)
-    paths.append(p)
-    # 2. colour shift: multi-bounce colour and albedo nonlinearity, EON vs simulation
+    return fig
+
+
+def _plot_colorshift(plt: Any, t: dict) -> Any:
+    """Multi-bounce colour and albedo nonlinearity, EON against the simulation."""
     _, cs = t["colorshift"]
     fig, axes = plt.subplots(2, 3, figsize=(13, 7), constrained_layout=True)
-    for j, geom in enumerate(geoms):
+    for j, geom in enumerate(GEOMETRY_LABEL):
         rough = sorted({float(r) for gg, r in zip(cs["geometry"], cs["roughness"]) if gg == geom})
         for k, s in enumerate(rough[1::2]):
             sel = (cs["geometry"] == geom) & np.isclose(cs["roughness"], s)
@@ -154,16 +103,18 @@ def plot_all(
         axes[1, j].set_ylabel("<E>(rho) / rho (dashed: EON)")
         axes[1, j].set_xlabel("microfacet albedo rho")
         axes[0, j].legend(fontsize=7)
-    p = image_dir / f"{prefix}_colorshift.png"
-    fig.savefig(p, dpi=90)
-    plt.close(fig)
-    paths.append(p)
-    # 3. BRDF slices at one roughness per geometry, theta_i = 60 deg, rho = 0.8
+    return fig
+
+
+def _plot_brdf_slices(plt: Any, t: dict) -> Any:
+    """BRDF slices at one roughness per geometry, theta_i = 60 deg, rho = 0.8."""
     from ...models import evaluate
+    from ...simulation import grading as gr
 
     _, b = t["brdf"]
+    brows = _grading_rows(t["grading"][1], "brdf")
     fig, axes = plt.subplots(1, 3, figsize=(13, 4), constrained_layout=True)
-    for j, geom in enumerate(geoms):
+    for j, geom in enumerate(GEOMETRY_LABEL):
         target = {"vcavity": 0.4, "smith-beckmann": 0.5, "smith-ggx": 0.3}[geom]
         sel = (
             (b["geometry"] == geom)
@@ -188,10 +139,27 @@ def plot_all(
         axes[j].set_xlabel("theta_o (deg; < 0: towards the light)")
         axes[j].set_ylabel("f (1/sr)")
         axes[j].legend(fontsize=7)
-    p = image_dir / f"{prefix}_brdf_slices.png"
-    fig.savefig(p, dpi=90)
-    plt.close(fig)
-    paths.append(p)
+    return fig
+
+
+#: How each figure of :data:`FIGURES` is drawn from the tables.
+_PLOTS = {"albedo_error": _plot_albedo_error, "colorshift": _plot_colorshift, "brdf_slices": _plot_brdf_slices}
+
+
+def plot_all(
+    table_dir: str | os.PathLike[str], image_dir: str | os.PathLike[str], prefix: str = "simulation"
+) -> list[Path]:
+    """Figures from the shipped tables; returns the written paths."""
+    plt = pyplot()
+    t = _tables(table_dir)
+    paths = []
+    plt.rcParams.update({"font.size": 8})
+    for name in FIGURES:
+        fig = _PLOTS[name](plt, t)
+        p = Path(image_dir) / f"{prefix}_{name}.png"
+        fig.savefig(p, dpi=90)
+        plt.close(fig)
+        paths.append(p)
     return paths
 
 
@@ -208,6 +176,7 @@ def _live_row(albedo_cols):
 
 
 def _live_name(col, mu):
+    """The title of the live check of column ``col``."""
     return f"live V-cavity simulation reproduces the shipped {col} (sigma 0.4, mu {mu:.3f}, rho 0.8)"
 
 
@@ -232,49 +201,40 @@ def _live_check(albedo_cols, quick):
     return mu, paths, seconds, out, est
 
 
-def build(ctx: Context) -> SectionResult:
+def _live_checks(ctx: Context, alb: dict) -> list[Result]:
+    """The live simulation against the shipped table, and the simulator's white furnace."""
     from ...simulation import grading as gr
 
-    res = SectionResult(key=KEY, title=TITLE)
-    t = _tables()
-    alb_header, alb = t["albedo"]
-    g = t["grading"][1]
-    rows = _grading_rows(g)
-    if ctx.quick:  # the live simulation compiles the simulator's kernels: the full report runs it
-        res.notes.append(
-            "Quick run: the live simulation (a fresh V-cavity estimate against the shipped table, and the "
-            "simulator's white furnace) was not run; `openpbr-diffuse report` runs it. The tables and figures "
-            "below are the shipped simulation results."
+    ctx.progress("simulation: live check")
+    mu, paths, seconds, live, est = _live_check(alb, ctx.quick)
+    checks = []
+    for col, (v, s, ref, ref_se) in live.items():
+        z = abs(v - ref) / np.hypot(s, ref_se)
+        detail = (
+            f"live {v:.5f} +- {s:.1e} ({paths} paths, seed 7, {seconds:.1f} s) vs shipped {ref:.5f} +- {ref_se:.1e}"
         )
-    else:
-        ctx.progress("simulation: live check")
-        mu, paths, seconds, live, est = _live_check(alb, ctx.quick)
-        for col, (v, s, ref, ref_se) in live.items():
-            z = abs(v - ref) / np.hypot(s, ref_se)
-            res.checks.append(
-                CHECKS.check(
-                    _live_name(col, mu),
-                    measured=float(z),
-                    threshold=4.5,
-                    unit="standard errors",
-                    reference=gr.TABLES["albedo"],
-                    detail=f"live {v:.5f} +- {s:.1e} ({paths} paths, seed 7, {seconds:.1f} s) vs shipped {ref:.5f} +- {ref_se:.1e}",
-                )
-            )
-        res.checks.append(
-            CHECKS.check(
-                _FURNACE,
-                measured=float(abs(est.albedo[0, 1] - 1.0)),
-                threshold=1e-12,
-                reference="every path leaves an open cavity",
-            )
+        checks.append(within_errors(CHECKS, _live_name(col, mu), z, 4.5, gr.TABLES["albedo"], detail))
+    checks.append(
+        CHECKS.check(
+            _FURNACE,
+            measured=float(abs(est.albedo[0, 1] - 1.0)),
+            threshold=1e-12,
+            reference="every path leaves an open cavity",
         )
-    # EON against the microsurfaces where its roughness range reaches them (fitted r < 1)
+    )
+    return checks
+
+
+def _eon_checks(rows: list[dict]) -> list[Result]:
+    """EON against the microsurfaces where its roughness range reaches them (fitted r < 1)."""
+    from ...simulation import grading as gr
+
+    checks = []
     for geom in GEOMETRY_LABEL:
         rr = [r for r in rows if r["model"] == "eon" and r["geometry"] == geom and r["model_roughness"] < 0.99]
         if rr:
             worst = max(rr, key=lambda r: r["albedo_rms"])
-            res.checks.append(
+            checks.append(
                 CHECKS.check(
                     f"EON albedo vs {geom} within EON's roughness range (fitted r < 1)",
                     measured=float(worst["albedo_rms"]),
@@ -284,39 +244,46 @@ def build(ctx: Context) -> SectionResult:
                     "threshold: the documented agreement, not a physical law",
                 )
             )
-    # tables: per geometry, roughness x model: albedo RMS at the albedo fit, BRDF error at the BRDF fit
-    brows = _grading_rows(g, "brdf")
+    return checks
+
+
+def _error_table(geom: str, rough: list[float], label: str, rows: list[dict], key: str) -> Table:
+    """One geometry's error ``key`` at the fitted roughness, roughness ``rough`` x model."""
+    from ...simulation import grading as gr
+
+    table_rows = []
+    for sv in rough:
+        cells: list[Any] = [float(sv)]
+        for model in gr.GRADED_MODELS:
+            r = next(r for r in rows if r["geometry"] == geom and r["model"] == model and r["roughness"] == sv)
+            cells.append(f"{r[key]:.4f} ({r['model_roughness']:.3f})")
+        table_rows.append(cells)
+    return Table(
+        caption=f"{GEOMETRY_LABEL[geom]}: {label} (fitted roughness in brackets)",
+        columns=[GEOMETRY_LABEL[geom].split(", ")[-1]] + list(gr.GRADED_MODELS),
+        rows=table_rows,
+    )
+
+
+def _error_tables(rows: list[dict], brows: list[dict]) -> list[Table]:
+    """Per geometry: albedo RMS at the albedo fit, BRDF error at the BRDF fit."""
+    from ...simulation import grading as gr
+
+    albedo = "RMS error of the directional albedo (rho = 0.2, 0.5, 0.8; 10 mu) at the roughness fitted to it"
+    brdf = (
+        f"RMS relative error of the in-plane BRDF slices (rho = {gr.BRDF_RHO:g}, theta_i = "
+        "30/60/80 deg, 18 theta_o) at the roughness fitted to them"
+    )
+    tables = []
     for geom in GEOMETRY_LABEL:
         rough = sorted({r["roughness"] for r in rows if r["geometry"] == geom})
-        name = GEOMETRY_LABEL[geom].split(", ")[-1]
-        for label, rr, key in (
-            (
-                "RMS error of the directional albedo (rho = 0.2, 0.5, 0.8; 10 mu) at the roughness fitted to it",
-                rows,
-                "albedo_rms",
-            ),
-            (
-                f"RMS relative error of the in-plane BRDF slices (rho = {gr.BRDF_RHO:g}, theta_i = "
-                "30/60/80 deg, 18 theta_o) at the roughness fitted to them",
-                brows,
-                "brdf_rel_rms",
-            ),
-        ):
-            table_rows = []
-            for sv in rough:
-                cells: list[Any] = [float(sv)]
-                for model in gr.GRADED_MODELS:
-                    r = next(r for r in rr if r["geometry"] == geom and r["model"] == model and r["roughness"] == sv)
-                    cells.append(f"{r[key]:.4f} ({r['model_roughness']:.3f})")
-                table_rows.append(cells)
-            res.tables.append(
-                Table(
-                    caption=f"{GEOMETRY_LABEL[geom]}: {label} (fitted roughness in brackets)",
-                    columns=[name] + list(gr.GRADED_MODELS),
-                    rows=table_rows,
-                )
-            )
-    # sigma <-> r correspondence
+        for label, rr, key in ((albedo, rows, "albedo_rms"), (brdf, brows, "brdf_rel_rms")):
+            tables.append(_error_table(geom, rough, label, rr, key))
+    return tables
+
+
+def _fit_table(rows: list[dict], brows: list[dict]) -> Table:
+    """The sigma <-> r correspondence: fitted r per simulated surface and a power law through it."""
     fit_rows = []
     for geom in GEOMETRY_LABEL:
         name = GEOMETRY_LABEL[geom].split(", ")[-1]
@@ -335,74 +302,95 @@ def build(ctx: Context) -> SectionResult:
                         f">= {min(sat):g}" if sat else "none",
                     ]
                 )
-    res.tables.append(
-        Table(
-            caption="Best-fitting r for each simulated surface (fitted to the albedo or to the BRDF "
-            "slices) and a power law through the unsaturated points",
-            columns=["geometry", "model", "fit", "simulated -> fitted r", "power-law fit", "saturates (r = 1) from"],
-            rows=fit_rows,
-        )
+    return Table(
+        caption="Best-fitting r for each simulated surface (fitted to the albedo or to the BRDF "
+        "slices) and a power law through the unsaturated points",
+        columns=["geometry", "model", "fit", "simulated -> fitted r", "power-law fit", "saturates (r = 1) from"],
+        rows=fit_rows,
     )
-    # colour shift
-    _, cs = t["colorshift"]
-    cs_rows = []
-    for i in range(len(cs["rho"])):
-        if np.isclose(cs["rho"][i], [0.2, 0.5, 0.8]).any():
-            cs_rows.append(
-                [
-                    str(cs["geometry"][i]),
-                    float(cs["roughness"][i]),
-                    round(float(cs["r_eon"][i]), 3),
-                    float(cs["rho"][i]),
-                    round(float(cs["ms_sim"][i]), 4),
-                    round(float(cs["ms_eon"][i]), 4),
-                    round(float(cs["E_sim"][i]), 4),
-                    round(float(cs["E_eon"][i]), 4),
-                    round(float(cs["ms_fraction_sim"][i]), 4),
-                    round(float(cs["ms_fraction_eon"][i]), 4),
-                ]
-            )
-    res.tables.append(
-        Table(
-            caption="EON's multiple-scattering colour against the simulation (average albedo): ms = E_>=2(rho)/E_>=2(1) "
-            "(EON: rho_ms, Eq. 18); E = <E>(rho); ms fraction = share of multiple scattering at rho = 1",
-            columns=[
-                "geometry",
-                "roughness",
-                "EON r",
-                "rho",
-                "ms sim",
-                "ms EON",
-                "<E> sim",
-                "<E> EON",
-                "ms fraction sim",
-                "ms fraction EON",
-            ],
-            rows=cs_rows,
-        )
+
+
+#: The colour-shift table's columns: (header, column of the shipped table, decimals; None: as is).
+_COLORSHIFT_COLUMNS = (
+    ("geometry", "geometry", None),
+    ("roughness", "roughness", None),
+    ("EON r", "r_eon", 3),
+    ("rho", "rho", None),
+    ("ms sim", "ms_sim", 4),
+    ("ms EON", "ms_eon", 4),
+    ("<E> sim", "E_sim", 4),
+    ("<E> EON", "E_eon", 4),
+    ("ms fraction sim", "ms_fraction_sim", 4),
+    ("ms fraction EON", "ms_fraction_eon", 4),
+)
+
+
+def _colorshift_table(cs: dict) -> Table:
+    """EON's multiple-scattering colour against the simulation at rho = 0.2, 0.5, 0.8."""
+
+    def cell(col: str, digits: int | None, i: int) -> Any:
+        if col == "geometry":
+            return str(cs[col][i])
+        return float(cs[col][i]) if digits is None else round(float(cs[col][i]), digits)
+
+    cs_rows = [
+        [cell(col, digits, i) for _, col, digits in _COLORSHIFT_COLUMNS]
+        for i in range(len(cs["rho"]))
+        if np.isclose(cs["rho"][i], [0.2, 0.5, 0.8]).any()
+    ]
+    return Table(
+        caption="EON's multiple-scattering colour against the simulation (average albedo): ms = E_>=2(rho)/E_>=2(1) "
+        "(EON: rho_ms, Eq. 18); E = <E>(rho); ms fraction = share of multiple scattering at rho = 1",
+        columns=[header for header, _, _ in _COLORSHIFT_COLUMNS],
+        rows=cs_rows,
     )
-    ctx.progress("simulation: figures")
+
+
+#: The captions of :data:`FIGURES`.
+_CAPTIONS = {
+    "albedo_error": "RMS albedo error (top) and best-fitting model roughness (bottom) against the simulated roughness",
+    "colorshift": "Colour of multiply scattered light (top) and albedo nonlinearity <E>/rho (bottom): "
+    "simulation (solid) vs EON at its fitted r (dashed)",
+    "brdf_slices": "In-plane BRDF slices: simulation (points, +- 1 standard error) vs the models at "
+    "the roughness fitted to the slices",
+}
+
+
+def _figures(ctx: Context) -> list[Figure]:
+    """The shipped figures, copied (re-plotted from the shipped tables only if one is missing)."""
     from ...simulation.grading import DATA
 
+    ctx.progress("simulation: figures")
     # the figures are drawn from the shipped tables by the same tool that writes them
     # (plot_all); copying them keeps the section fast, re-plotting only if one is missing
     shipped = [DATA / f"{KEY}_{name}.png" for name in FIGURES]
     if all(p.is_file() for p in shipped):
-        import shutil
-
-        figures = [Path(shutil.copy(p, Path(ctx.image_dir) / p.name)) for p in shipped]
+        figures = [copy_figure(p, ctx) for p in shipped]
     else:
         figures = plot_all(DATA, ctx.image_dir)
-    for p in figures:
-        caption = {
-            "albedo_error": "RMS albedo error (top) and best-fitting model roughness (bottom) against the "
-            "simulated roughness",
-            "colorshift": "Colour of multiply scattered light (top) and albedo nonlinearity <E>/rho (bottom): "
-            "simulation (solid) vs EON at its fitted r (dashed)",
-            "brdf_slices": "In-plane BRDF slices: simulation (points, +- 1 standard error) vs the models at "
-            "the roughness fitted to the slices",
-        }[p.stem.replace("simulation_", "")]
-        res.figures.append(Figure(file=p.name, caption=caption))
+    return [Figure(file=p.name, caption=_CAPTIONS[p.stem.replace("simulation_", "")]) for p in figures]
+
+
+def build(ctx: Context) -> SectionResult:
+    """The live checks, EON against the microsurfaces, the grading tables and figures."""
+    res = SectionResult(key=KEY, title=TITLE)
+    t = _tables()
+    alb_header, alb = t["albedo"]
+    rows = _grading_rows(t["grading"][1])
+    if ctx.quick:  # the live simulation compiles the simulator's kernels: the full report runs it
+        res.notes.append(
+            "Quick run: the live simulation (a fresh V-cavity estimate against the shipped table, and the "
+            "simulator's white furnace) was not run; `openpbr-diffuse report` runs it. The tables and figures "
+            "below are the shipped simulation results."
+        )
+    else:
+        res.checks += _live_checks(ctx, alb)
+    res.checks += _eon_checks(rows)
+    brows = _grading_rows(t["grading"][1], "brdf")
+    res.tables += _error_tables(rows, brows)
+    res.tables.append(_fit_table(rows, brows))
+    res.tables.append(_colorshift_table(t["colorshift"][1]))
+    res.figures += _figures(ctx)
     res.notes.append(
         "Simulated by openpbr_diffuse.simulation (Monte Carlo with every interreflection; V-cavities after Oren & "
         "Nayar 1994 with their Gaussian slope-area distribution, Smith random walk after Heitz et al. 2016). "

@@ -16,22 +16,18 @@ from __future__ import annotations
 
 import math
 import time
+from typing import Any, NamedTuple
 
 import numpy as np
 
-from .._plot import pyplot, save
+from .._plot import pyplot
 from ..model import QUICK_MODELS, CheckTable, Context, Figure, SectionResult, Table, in_quick
+from ._common import random_directions, save_panels
 
 TITLE = "Timings (the paper's Table 1 on this machine)"
 
-#: The section's checks, declared once: (id, title, runs in --quick); ``--list-checks`` reads
-#: this table, ``--quick`` lists the checks marked False as not run.
-CHECKS = CheckTable(
-    'timings',
-    [
-        ('timings.every_table_1_entry_measured', 'every Table 1 entry measured', True),
-    ],
-)
+#: The section's checks: its rows of the static registry ``data/report_checks.tsv``.
+CHECKS = CheckTable.declared("timings")
 
 #: EON paper Table 1 (ns): eval, cosine sample, CLTC sample (None: not given).
 PAPER = {
@@ -53,6 +49,7 @@ LABELS = {
 
 
 def _best(fn, reps):
+    """The best of ``reps`` timed calls of ``fn`` after a warm-up call, in seconds."""
     fn()  # warm-up (compilation or cache load)
     best = math.inf
     for _ in range(reps):
@@ -62,47 +59,90 @@ def _best(fn, reps):
     return best
 
 
-def build(ctx: Context) -> SectionResult:
-    import numba
+class _Inputs(NamedTuple):
+    """The random inputs of the timed calls, as in the paper: directions, roughness, albedo."""
 
-    import openpbr_diffuse as od
+    wi: np.ndarray
+    wo: np.ndarray
+    rho: np.ndarray
+    r01: np.ndarray
+    u: np.ndarray
 
-    res = SectionResult("timings", TITLE)
-    n = 20_000 if ctx.quick else 200_000
-    reps = 2 if ctx.quick else 4
+
+def _inputs(n: int) -> _Inputs:
+    """``n`` rows of random inputs (float64: the dtype every other section uses, no extra compilation)."""
     rng = np.random.default_rng(1)
-    dt = np.float64  # the dtype every other section uses: no extra compilation
-
-    def dirs():
-        z = rng.uniform(0.01, 1.0, n)
-        phi = rng.uniform(0.0, 2.0 * math.pi, n)
-        s = np.sqrt(1.0 - z * z)
-        return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=-1).astype(dt)
-
-    wi, wo = dirs(), dirs()
+    dt = np.float64
+    wi, wo = random_directions(rng, n).astype(dt), random_directions(rng, n).astype(dt)
     rho = rng.uniform(0.0, 1.0, (n, 3)).astype(dt)
     r01 = rng.uniform(0.0, 1.0, n).astype(dt)
     u = rng.uniform(0.0, 1.0, (n, 2)).astype(dt)
     u = np.minimum(u, dt(0.99999994))
+    return _Inputs(wi, wo, rho, r01, u)
+
+
+def _time_model(m: str, x: _Inputs, reps: int) -> tuple[float, float, float | None]:
+    """ns per row of model ``m``: evaluate; cosine sample + evaluate; CLTC sample + evaluate (None: not in the paper)."""
+    import openpbr_diffuse as od
+
+    n = len(x.wi)
+
+    def sampled(strategy: str) -> Any:
+        w, _ = od.sample(strategy, x.wo, x.r01, x.u)
+        return od.evaluate(m, w, x.wo, x.r01, x.rho)
+
+    t_eval = _best(lambda: od.evaluate(m, x.wi, x.wo, x.r01, x.rho), reps) / n * 1e9
+    t_cos = _best(lambda: sampled("cosine"), reps) / n * 1e9
+    t_cltc = None if PAPER[m][2] is None else _best(lambda: sampled("eon"), reps) / n * 1e9
+    return t_eval, t_cos, t_cltc
+
+
+def _figure(ctx: Context, rows: list[list[Any]]) -> Figure:
+    """The evaluation times here and in the paper, per BRDF (log scale)."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(10, 3.8))
+    x = np.arange(len(rows))
+    ax.bar(x - 0.2, [r[1] for r in rows], 0.4, label="eval, here (ns/row)")
+    ax.bar(x + 0.2, [r[2] for r in rows], 0.4, label="eval, paper (ns/call)")
+    ax.set_xticks(x, [r[0] for r in rows])
+    ax.set_yscale("log")
+    ax.grid(True, axis="y", alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title("BRDF evaluation time: this machine vs EON paper Table 1")
+    return Figure(save_panels(fig, ctx, "timings_table1.png"), "Evaluation time per BRDF (log scale)")
+
+
+def _table(n: int, reps: int, rows: list[list[Any]]) -> Table:
+    """Table 1: the times here beside the paper's."""
+    import numba
+
+    return Table(
+        f"ns per row, float64, batches of {n}, best of {reps}, {numba.get_num_threads()} numba thread(s); "
+        "paper: ns per scalar call, C++/glm, one thread of an AMD 3970X",
+        [
+            "BRDF",
+            "eval (here)",
+            "eval (paper)",
+            "cosine sample (here)",
+            "cosine sample (paper)",
+            "CLTC sample (here)",
+            "CLTC sample (paper)",
+        ],
+        rows,
+    )
+
+
+def build(ctx: Context) -> SectionResult:
+    """Table 1 on this machine, its check, note and figure."""
+    res = SectionResult("timings", TITLE)
+    n = 20_000 if ctx.quick else 200_000
+    reps = 2 if ctx.quick else 4
+    x = _inputs(n)
     rows, measured = [], []
     for m in in_quick(ctx, tuple(PAPER), QUICK_MODELS):  # --quick: full ON's row in the full report
         p_eval, p_cos, p_cltc = PAPER[m]
         ctx.progress(f"timing {m}")
-        t_eval = _best(lambda: od.evaluate(m, wi, wo, r01, rho), reps) / n * 1e9
-
-        def cos_sample():
-            w, _ = od.sample("cosine", wo, r01, u)
-            return od.evaluate(m, w, wo, r01, rho)
-
-        t_cos = _best(cos_sample, reps) / n * 1e9
-        t_cltc = None
-        if p_cltc is not None:
-
-            def cltc_sample():
-                w, _ = od.sample("eon", wo, r01, u)
-                return od.evaluate(m, w, wo, r01, rho)
-
-            t_cltc = _best(cltc_sample, reps) / n * 1e9
+        t_eval, t_cos, t_cltc = _time_model(m, x, reps)
         measured += [t for t in (t_eval, t_cos, t_cltc) if t is not None]
         rows.append(
             [
@@ -115,22 +155,7 @@ def build(ctx: Context) -> SectionResult:
                 p_cltc if p_cltc is not None else "—",
             ]
         )
-    res.tables.append(
-        Table(
-            f"ns per row, float64, batches of {n}, best of {reps}, {numba.get_num_threads()} numba thread(s); "
-            "paper: ns per scalar call, C++/glm, one thread of an AMD 3970X",
-            [
-                "BRDF",
-                "eval (here)",
-                "eval (paper)",
-                "cosine sample (here)",
-                "cosine sample (paper)",
-                "CLTC sample (here)",
-                "CLTC sample (paper)",
-            ],
-            rows,
-        )
-    )
+    res.tables.append(_table(n, reps, rows))
     ok = sum(1 for t in measured if math.isfinite(t) and t > 0)
     res.checks.append(
         CHECKS.check(
@@ -148,16 +173,5 @@ def build(ctx: Context) -> SectionResult:
         "(e.g. exact vs approximate EON, CLTC vs cosine sampling), not the absolute numbers. "
         "tools/bench.py compares against a scalar C port of the listings on this machine."
     )
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(10, 3.8))
-    x = np.arange(len(rows))
-    ax.bar(x - 0.2, [r[1] for r in rows], 0.4, label="eval, here (ns/row)")
-    ax.bar(x + 0.2, [r[2] for r in rows], 0.4, label="eval, paper (ns/call)")
-    ax.set_xticks(x, [r[0] for r in rows])
-    ax.set_yscale("log")
-    ax.grid(True, axis="y", alpha=0.3)
-    ax.legend(fontsize=8)
-    ax.set_title("BRDF evaluation time: this machine vs EON paper Table 1")
-    fig.subplots_adjust(left=0.07, right=0.98, bottom=0.15, top=0.85, wspace=0.28, hspace=0.5)
-    res.figures.append(Figure(save(fig, ctx, "timings_table1.png"), "Evaluation time per BRDF (log scale)"))
+    res.figures.append(_figure(ctx, rows))
     return res
