@@ -396,46 +396,51 @@ def alpha_grid(quick: bool = False) -> NDArray[np.float64]:
 
 def grade_kc_zh(quick: bool = False) -> list[Row]:
     a = alpha_grid(quick)
-    exact = kc.zh_exact("qon", kc.sigma_of_alpha(a))
+    ggx_note = "GGX table accuracy <= 6e-4 (3e-3 for alpha < 0.04)"
+    # (row id prefix, lobe, its ZH fit, exact ZH, what the fit approximates (per l), reference,
+    # the notes of the "code" and "text" forms of the fit)
+    lobes = (
+        (
+            "kc_zh",
+            "Oren-Nayar",
+            kc.zh_fit_oren_nayar,
+            kc.zh_exact("qon", kc.sigma_of_alpha(a)),
+            "E_{l} = 2 pi int Y_{l}0 (1 - E(mu)) mu dmu of QON, sigma = alpha pi/2",
+            "Gauss-Legendre (64) of the QON reference table",
+            (
+                "as the post's HLSL evaluates it: beta (c0 + c1 a + c2 a^2 + c3 a^3)",
+                "as the post's text prints it: c0 b + c1 b^2 + c2 b^3 + c3 b^4 (erratum)",
+            ),
+        ),
+        (
+            "kc_ggx_zh",
+            "GGX",
+            kc.zh_fit_ggx,
+            kc.zh_exact(kc.GGX, a),
+            "E_{l} of the GGX (F = 1) MS lobe, alpha = GGX alpha",
+            "Gauss-Legendre (64) of the GGX albedo table (microfacet.tables, E1)",
+            (ggx_note, ggx_note),
+        ),
+    )
     rows = []
-    for form, tag, note in (
-        ("code", "", "as the post's HLSL evaluates it: beta (c0 + c1 a + c2 a^2 + c3 a^3)"),
-        ("text", "_text", "as the post's text prints it: c0 b + c1 b^2 + c2 b^3 + c3 b^4 (erratum)"),
-    ):
-        fit = kc.zh_fit_oren_nayar(a, form=form)
-        for l in range(3):
-            rows.append(
-                _row(
-                    f"kc_zh_E{l}{tag}",
-                    f"ZH fit E{l}(beta), Oren-Nayar ({form} form)",
-                    "post Pt. 2 SH fits",
-                    f"E_{l} = 2 pi int Y_{l}0 (1 - E(mu)) mu dmu of QON, sigma = alpha pi/2",
-                    "Gauss-Legendre (64) of the QON reference table",
-                    "alpha in [0, 1]",
-                    "|fit - exact|",
-                    fit[:, l] - exact[:, l],
-                    lambda idx: _fmt(alpha=a[idx[0]]),
-                    note,
+    for prefix, lobe, zh_fit, exact, approximates, reference, notes in lobes:
+        for form, tag, note in zip(("code", "text"), ("", "_text"), notes):
+            fit = zh_fit(a, form=form)
+            for l in range(3):
+                rows.append(
+                    _row(
+                        f"{prefix}_E{l}{tag}",
+                        f"ZH fit E{l}(beta), {lobe} ({form} form)",
+                        "post Pt. 2 SH fits",
+                        approximates.format(l=l),
+                        reference,
+                        "alpha in [0, 1]",
+                        "|fit - exact|",
+                        fit[:, l] - exact[:, l],
+                        lambda idx: _fmt(alpha=a[idx[0]]),
+                        note,
+                    )
                 )
-            )
-    exact = kc.zh_exact(kc.GGX, a)
-    for form, tag in (("code", ""), ("text", "_text")):
-        fit = kc.zh_fit_ggx(a, form=form)
-        for l in range(3):
-            rows.append(
-                _row(
-                    f"kc_ggx_zh_E{l}{tag}",
-                    f"ZH fit E{l}(beta), GGX ({form} form)",
-                    "post Pt. 2 SH fits",
-                    f"E_{l} of the GGX (F = 1) MS lobe, alpha = GGX alpha",
-                    "Gauss-Legendre (64) of the GGX albedo table (microfacet.tables, E1)",
-                    "alpha in [0, 1]",
-                    "|fit - exact|",
-                    fit[:, l] - exact[:, l],
-                    lambda idx: _fmt(alpha=a[idx[0]]),
-                    "GGX table accuracy <= 6e-4 (3e-3 for alpha < 0.04)",
-                )
-            )
     return rows
 
 

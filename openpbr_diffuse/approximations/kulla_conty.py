@@ -388,9 +388,7 @@ def sh_response(
     -------
     ndarray, shape (..., C)
     """
-    env = ar.as_float("env", env, np.float64)
-    if env.ndim < 2 or env.shape[-2] != 9:
-        raise ValueError(f"env must have shape (..., 9, C), got {env.shape}")
+    env = sh.environment(env)
     mu_o = ar.in_range("mu_o", mu_o, np.float64, 0.0, 1.0, " (cosine of the view angle)")
     if zh is None:
         zh = zh_exact(model, roughness)

@@ -168,6 +168,25 @@ def hemisphere_nodes(mu_o: ArrayLike, n: int = 32) -> tuple[NDArray[np.float64],
     return wi, weight
 
 
+def environment(env: ArrayLike, detail: str = "") -> NDArray[np.float64]:
+    """``env`` as float64 SH radiance coefficients of shape (..., 9, C); ValueError otherwise
+    (``detail`` follows the expected shape in its message).
+
+    Example
+    -------
+    >>> environment(np.ones((9, 3))).shape
+    (9, 3)
+    >>> environment(np.ones(9))
+    Traceback (most recent call last):
+    ...
+    ValueError: env must have shape (..., 9, C), got (9,)
+    """
+    env = ar.as_float("env", env, np.float64)
+    if env.ndim < 2 or env.shape[-2] != 9:
+        raise ValueError(f"env must have shape (..., 9, C){detail}, got {env.shape}")
+    return env
+
+
 def wo_of(mu_o: ArrayLike) -> NDArray[np.float64]:
     """wo = (sqrt(1 - mu_o^2), 0, mu_o): the local-frame view direction for ``lobe_transfer``."""
     mu_o = np.asarray(mu_o, dtype=np.float64)
@@ -390,9 +409,7 @@ def shade(
     -------
     ndarray, shape (..., C)
     """
-    env = ar.as_float("env", env, np.float64)
-    if env.ndim < 2 or env.shape[-2] != 9:
-        raise ValueError(f"env must have shape (..., 9, C) (SH coefficients per channel), got {env.shape}")
+    env = environment(env, " (SH coefficients per channel)")
     R = frame(normal, wo)
     mu_o = np.clip(np.einsum("...i,...i->...", np.asarray(normal, float), np.asarray(wo, float)), 0.0, 1.0)
     T = lobe_transfer(model, mu_o, roughness, rho, n=n)

@@ -19,8 +19,10 @@ def _binomial_series(a, n):
     return tuple(c)
 
 
-#: (1 - t)^0.1 to t^13: for t <= 1 - 2^-1/8 the first omitted term is < 4e-18.
-_B0, _B1, _B2, _B3, _B4, _B5, _B6, _B7, _B8, _B9, _B10, _B11, _B12, _B13 = _binomial_series(0.1, 14)
+#: (1 - t)^0.1 to t^13: for t <= 1 - 2^-1/8 the first omitted term is < 4e-18.  Stored from
+#: the highest power down (Horner's order): the leading coefficient and the others.
+_SERIES = _binomial_series(0.1, 14)
+_B_TOP, _B_REST = _SERIES[-1], _SERIES[-2::-1]
 
 
 def _stage(k):
@@ -31,7 +33,6 @@ def _stage(k):
 _STAGES = tuple(
     _stage(k) for k in (1000.0, 512.0, 256.0, 128.0, 64.0, 32.0, 16.0, 8.0, 4.0, 2.0, 1.0, 0.5, 0.25, 0.125)
 )
-(_S0, _S1, _S2, _S3, _S4, _S5, _S6, _S7, _S8, _S9, _S10, _S11, _S12, _S13) = _STAGES
 
 
 @kernel
@@ -48,38 +49,17 @@ def pow_tenth(r: float) -> float:
 
     Range reduction by selects: r = 2^-e x with x in [2^-1/8, 1] (exponent stages 2^-1000
     for subnormal r, then 2^-512, ..., 2^-1, 2^-1/2, 2^-1/4, 2^-1/8), r^0.1 = 2^(-e/10)
-    x^0.1, and x^0.1 = (1 - t)^0.1 by its binomial series in t = 1 - x <= 0.083.
-    r = 0 gives 0.
+    x^0.1, and x^0.1 = (1 - t)^0.1 by its binomial series in t = 1 - x <= 0.083 (Horner).
+    r = 0 gives 0.  Both loops run over constant tuples: LLVM unrolls them and the batch loops
+    that call this stay vectorised.
     """
-    x, f = _reduce(r, 1.0, _S0)
-    x, f = _reduce(x, f, _S1)
-    x, f = _reduce(x, f, _S2)
-    x, f = _reduce(x, f, _S3)
-    x, f = _reduce(x, f, _S4)
-    x, f = _reduce(x, f, _S5)
-    x, f = _reduce(x, f, _S6)
-    x, f = _reduce(x, f, _S7)
-    x, f = _reduce(x, f, _S8)
-    x, f = _reduce(x, f, _S9)
-    x, f = _reduce(x, f, _S10)
-    x, f = _reduce(x, f, _S11)
-    x, f = _reduce(x, f, _S12)
-    x, f = _reduce(x, f, _S13)
+    x, f = r, 1.0
+    for stage in _STAGES:
+        x, f = _reduce(x, f, stage)
     t = 1.0 - x
-    p = _B13
-    p = p * t + _B12
-    p = p * t + _B11
-    p = p * t + _B10
-    p = p * t + _B9
-    p = p * t + _B8
-    p = p * t + _B7
-    p = p * t + _B6
-    p = p * t + _B5
-    p = p * t + _B4
-    p = p * t + _B3
-    p = p * t + _B2
-    p = p * t + _B1
-    p = p * t + _B0
+    p = _B_TOP
+    for b in _B_REST:
+        p = p * t + b
     return f * p if r > 0.0 else 0.0
 
 

@@ -6,24 +6,7 @@
 - ``grading``: the shipped grading tables of the library's models against the simulation
 """
 
-from .api import (
-    CHUNK_PATHS,
-    GEOMETRIES,
-    MAX_BOUNCES,
-    AlbedoEstimate,
-    BRDFEstimate,
-    simulate_albedo,
-    simulate_average_albedo,
-    simulate_brdf,
-)
+from . import api
+from .api import *  # noqa: F403  (the names of ``api.__all__``)
 
-__all__ = [
-    "GEOMETRIES",
-    "CHUNK_PATHS",
-    "MAX_BOUNCES",
-    "AlbedoEstimate",
-    "BRDFEstimate",
-    "simulate_albedo",
-    "simulate_average_albedo",
-    "simulate_brdf",
-]
+__all__ = list(api.__all__)

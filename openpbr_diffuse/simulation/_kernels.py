@@ -2,6 +2,8 @@
 
 One compiled kernel per microgeometry (so that using one compiles only its own walk)."""
 
+import functools
+
 import numpy as np
 
 from .._jit import walk
@@ -35,47 +37,38 @@ def _buffers(m, C):
     )
 
 
-@walk
-def run_chunk_vcavity(sigma, wi, random_wi, wo, rho, n_paths, seed, max_bounces):
-    np.random.seed(seed)
-    m, C = wo.shape[0], rho.shape[0]
-    alb_s1, alb_s2, nee_s1, nee_s2, path_nee, rk, stats = _buffers(m, C)
-    wo_g = np.empty((m, 3))
-    wx, wy, wz = wi[0], wi[1], wi[2]
-    for _ in range(n_paths):
-        if random_wi:
-            wx, wy, wz = cosine_hemisphere()
-        k, escaped = vcavity.walk(wx, wy, wz, wo, sigma, rho, rk, wo_g, path_nee, max_bounces)
-        stats[0] += 1
-        stats[1] += min(k, max_bounces)
-        stats[2] += 0 if escaped else 1
-        tally_path(k, escaped, rho, path_nee, alb_s1, alb_s2, nee_s1, nee_s2)
-    return alb_s1, alb_s2, nee_s1, nee_s2, stats
+@functools.cache
+def _chunk_kernel(dist):
+    """The chunk kernel of one microgeometry (a value of ``GEOMETRY_IDS``), a compile-time
+    constant: the kernel compiles its own walk only."""
+    vcav = dist < 0
 
+    @walk
+    def run(roughness, wi, random_wi, wo, rho, n_paths, seed, max_bounces):
+        np.random.seed(seed)
+        m, C = wo.shape[0], rho.shape[0]
+        alb_s1, alb_s2, nee_s1, nee_s2, path_nee, rk, stats = _buffers(m, C)
+        wo_g = np.empty((m, 3))  # the V-cavity walk's scratch
+        wx, wy, wz = wi[0], wi[1], wi[2]
+        for _ in range(n_paths):
+            if random_wi:
+                wx, wy, wz = cosine_hemisphere()
+            if vcav:
+                k, escaped = vcavity.walk(wx, wy, wz, wo, roughness, rho, rk, wo_g, path_nee, max_bounces)
+            else:
+                k, escaped = smith.walk(wx, wy, wz, wo, roughness, dist, rho, rk, path_nee, max_bounces)
+            stats[0] += 1
+            stats[1] += min(k, max_bounces)
+            stats[2] += 0 if escaped else 1
+            tally_path(k, escaped, rho, path_nee, alb_s1, alb_s2, nee_s1, nee_s2)
+        return alb_s1, alb_s2, nee_s1, nee_s2, stats
 
-@walk
-def run_chunk_smith(alpha, dist, wi, random_wi, wo, rho, n_paths, seed, max_bounces):
-    np.random.seed(seed)
-    m, C = wo.shape[0], rho.shape[0]
-    alb_s1, alb_s2, nee_s1, nee_s2, path_nee, rk, stats = _buffers(m, C)
-    wx, wy, wz = wi[0], wi[1], wi[2]
-    for _ in range(n_paths):
-        if random_wi:
-            wx, wy, wz = cosine_hemisphere()
-        k, escaped = smith.walk(wx, wy, wz, wo, alpha, dist, rho, rk, path_nee, max_bounces)
-        stats[0] += 1
-        stats[1] += min(k, max_bounces)
-        stats[2] += 0 if escaped else 1
-        tally_path(k, escaped, rho, path_nee, alb_s1, alb_s2, nee_s1, nee_s2)
-    return alb_s1, alb_s2, nee_s1, nee_s2, stats
+    return run
 
 
 def run_chunk(geometry, roughness, wi, random_wi, wo, rho, n_paths, seed, max_bounces):
     """One chunk on ``geometry`` (a name of ``GEOMETRY_IDS``)."""
-    dist = GEOMETRY_IDS[geometry]
-    if dist < 0:
-        return run_chunk_vcavity(roughness, wi, random_wi, wo, rho, n_paths, seed, max_bounces)
-    return run_chunk_smith(roughness, dist, wi, random_wi, wo, rho, n_paths, seed, max_bounces)
+    return _chunk_kernel(GEOMETRY_IDS[geometry])(roughness, wi, random_wi, wo, rho, n_paths, seed, max_bounces)
 
 
 run_chunk.__doc__ = (run_chunk.__doc__ or "") + "\n\n    " + _DOC

@@ -24,7 +24,7 @@ from numpy.typing import ArrayLike, NDArray
 from .. import _arrays as ar
 from ._common import N_ORDERS
 from ._dask import SCHEDULER_TIMEOUT_S, _client  # noqa: F401  (re-exported: the library's pool uses them)
-from ._run import RunOptions, execute
+from ._run import CHUNK_PATHS, RunOptions, albedo_queries, chunk_seed, chunk_sum, mean_err, run_chunks, run_fields
 
 #: microgeometry name -> (roughness name, allowed range)
 GEOMETRIES = {
@@ -32,8 +32,6 @@ GEOMETRIES = {
     "smith-beckmann": ("alpha", 0.0, 2.0),
     "smith-ggx": ("alpha", 0.0, 2.0),
 }
-#: paths per chunk (the unit of work and of reproducibility)
-CHUNK_PATHS = 1 << 15
 #: a path still inside the surface after this many bounces is cut (counted in ``truncated``)
 #: and scored rho^(MAX_BOUNCES + 1): exact at rho = 1, high by < rho^MAX_BOUNCES otherwise
 #: (deep V-grooves, slope near pi/2, trap light for very many bounces)
@@ -60,12 +58,6 @@ def _rho(rho: ArrayLike) -> NDArray[np.float64]:
     return np.ascontiguousarray(r)
 
 
-def _chunk_seed(seed, kind, geometry, key, chunk):
-    bits = np.frombuffer(np.asarray(key, dtype=np.float64).tobytes(), dtype=np.uint32)
-    entropy = [int(seed), _KIND[kind], list(GEOMETRIES).index(geometry), *map(int, bits), int(chunk)]
-    return int(np.random.SeedSequence(entropy).generate_state(1)[0])
-
-
 def _run_task(task):
     """One chunk (module-level so that Dask workers can import it)."""
     from ._kernels import run_chunk
@@ -78,30 +70,17 @@ def _run_task(task):
 MU_MIN = 1e-100
 
 
-def _plan(kind, geometry, roughness, queries, random_wi, rho, paths, seed):
-    """Chunk tasks for each query (wi, wo, key); returns tasks and each query's task slice."""
-    tasks, spans = [], []
-    n_chunks = -(-paths // CHUNK_PATHS)
-    for wi, wo, key in queries:
-        start = len(tasks)
-        for i in range(n_chunks):
-            n = min(CHUNK_PATHS, paths - i * CHUNK_PATHS)
-            tasks.append((geometry, roughness, wi, random_wi, wo, rho, n, _chunk_seed(seed, kind, geometry, key, i)))
-        spans.append((start, len(tasks)))
-    return tasks, spans
+def _run(kind, geometry, roughness, queries, rho, run):
+    """The chunks of each query (wi, wo, key) run: results and each query's task slice."""
+    identity = [list(GEOMETRIES).index(geometry)]
+    random_wi = kind == "average"
 
+    def task(query, i, n):
+        wi, wo, key = query
+        seed = chunk_seed(run.seed, _KIND[kind], identity, key, i)
+        return (geometry, roughness, wi, random_wi, wo, rho, n, seed)
 
-def _sum(results, span, index):
-    out = results[span[0]][index].copy()
-    for r in results[span[0] + 1 : span[1]]:
-        out += r[index]
-    return out
-
-
-def _mean_err(s1, s2, n):
-    mean = s1 / n
-    var = np.maximum(s2 - s1 * s1 / n, 0.0) / max(n - 1, 1)
-    return mean, np.sqrt(var / n)
+    return run_chunks(_run_task, queries, task, run)
 
 
 @dataclass
@@ -156,11 +135,7 @@ class AlbedoEstimate:
             "geometry": self.geometry,
             name: self.roughness,
             "roughness": self.roughness,
-            "rho": self.rho.tolist(),
-            "paths": self.paths,
-            "seed": self.seed,
-            "average": self.mu is None,
-            "rows": rows,
+            **run_fields(self.rho, self.paths, self.seed, self.mu, rows),
         }
 
 
@@ -184,7 +159,9 @@ class BRDFEstimate:
     stderr_by_order: np.ndarray
 
 
-def _albedo_result(geometry, roughness, mu, rho, paths, seed, results, spans):
+def _albedo(geometry, roughness, mu, rho, run):
+    """The directional albedo at each ``mu``, or the average albedo (``mu`` None)."""
+    results, spans = _run("average" if mu is None else "albedo", geometry, roughness, albedo_queries(mu), rho, run)
     n, C = len(spans), rho.shape[0]
     E = np.empty((n, C))
     se = np.empty((n, C))
@@ -193,13 +170,13 @@ def _albedo_result(geometry, roughness, mu, rho, paths, seed, results, spans):
     bounces = np.empty(n)
     trunc = np.empty(n, dtype=np.int64)
     for q, span in enumerate(spans):
-        s1, s2, stats = _sum(results, span, 0), _sum(results, span, 1), _sum(results, span, 4)
+        s1, s2, stats = chunk_sum(results, span, 0), chunk_sum(results, span, 1), chunk_sum(results, span, 4)
         N = int(stats[0])
-        Eo[q], seo[q] = _mean_err(s1, s2, N)
-        E[q], se[q] = _mean_err(s1.sum(axis=0), s2.sum(axis=0), N)  # classes are disjoint
+        Eo[q], seo[q] = mean_err(s1, s2, N)
+        E[q], se[q] = mean_err(s1.sum(axis=0), s2.sum(axis=0), N)  # classes are disjoint
         bounces[q] = stats[1] / N
         trunc[q] = stats[2]
-    return AlbedoEstimate(geometry, roughness, mu, rho, paths, seed, E, se, Eo, seo, bounces, trunc)
+    return AlbedoEstimate(geometry, roughness, mu, rho, run.paths, run.seed, E, se, Eo, seo, bounces, trunc)
 
 
 def simulate_albedo(
@@ -263,13 +240,7 @@ def simulate_albedo(
             f"mu must be in [1e-100, 1] (cosine of the incident angle; MU_MIN = 1e-100), got {mu[bad][0]!r}"
         )
     rho = _rho(rho)
-    run = RunOptions.check(paths, seed, workers, client, scheduler, progress)
-    paths, seed = run.paths, run.seed
-    no_wo = np.zeros((0, 3))
-    queries = [(np.array([math.sqrt(max(0.0, 1.0 - m * m)), 0.0, m]), no_wo, [m]) for m in mu]
-    tasks, spans = _plan("albedo", geometry, roughness, queries, False, rho, paths, seed)
-    results = execute(_run_task, tasks, run)
-    return _albedo_result(geometry, roughness, mu, rho, paths, seed, results, spans)
+    return _albedo(geometry, roughness, mu, rho, RunOptions.check(paths, seed, workers, client, scheduler, progress))
 
 
 def simulate_average_albedo(
@@ -297,12 +268,7 @@ def simulate_average_albedo(
     """
     roughness = _check_geometry(geometry, roughness)
     rho = _rho(rho)
-    run = RunOptions.check(paths, seed, workers, client, scheduler, progress)
-    paths, seed = run.paths, run.seed
-    queries = [(np.array([0.0, 0.0, 1.0]), np.zeros((0, 3)), [-1.0])]
-    tasks, spans = _plan("average", geometry, roughness, queries, True, rho, paths, seed)
-    results = execute(_run_task, tasks, run)
-    return _albedo_result(geometry, roughness, None, rho, paths, seed, results, spans)
+    return _albedo(geometry, roughness, None, rho, RunOptions.check(paths, seed, workers, client, scheduler, progress))
 
 
 def simulate_brdf(
@@ -361,7 +327,6 @@ def simulate_brdf(
             raise ValueError(f"{name} must be above the horizon (z > 0)")
     rho = _rho(rho)
     run = RunOptions.check(paths, seed, workers, client, scheduler, progress)
-    paths, seed = run.paths, run.seed
     uniq, inverse = np.unique(wi, axis=0, return_inverse=True)
     inverse = inverse.reshape(-1)
     queries, rows = [], []
@@ -369,19 +334,18 @@ def simulate_brdf(
         idx = np.flatnonzero(inverse == g)
         rows.append(idx)
         queries.append((np.ascontiguousarray(uniq[g]), np.ascontiguousarray(wo[idx]), uniq[g]))
-    tasks, spans = _plan("brdf", geometry, roughness, queries, False, rho, paths, seed)
-    results = execute(_run_task, tasks, run)
+    results, spans = _run("brdf", geometry, roughness, queries, rho, run)
     C = rho.shape[0]
     f = np.empty((n, C))
     se = np.empty((n, C))
     fo = np.empty((n, N_ORDERS, C))
     seo = np.empty((n, N_ORDERS, C))
     for idx, span in zip(rows, spans):
-        s1, s2, N = _sum(results, span, 2), _sum(results, span, 3), int(_sum(results, span, 4)[0])
-        mean, err = _mean_err(s1, s2, N)
+        s1, s2, N = chunk_sum(results, span, 2), chunk_sum(results, span, 3), int(chunk_sum(results, span, 4)[0])
+        mean, err = mean_err(s1, s2, N)
         f[idx], se[idx] = mean[:, N_ORDERS], err[:, N_ORDERS]
         fo[idx], seo[idx] = mean[:, :N_ORDERS], err[:, :N_ORDERS]
-    return BRDFEstimate(geometry, roughness, np.array(wi), np.array(wo), rho, paths, seed, f, se, fo, seo)
+    return BRDFEstimate(geometry, roughness, np.array(wi), np.array(wo), rho, run.paths, run.seed, f, se, fo, seo)
 
 
 __all__ = [

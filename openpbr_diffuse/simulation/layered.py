@@ -35,13 +35,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _arrays as ar
-from ._run import RunOptions, execute
-from .api import _mean_err
+from ._run import CHUNK_PATHS as CHUNK_PATHS  # public, as in ``api``: the paths per chunk
+from ._run import RunOptions, albedo_queries, chunk_seed, chunk_sum, mean_err, run_chunks, run_fields
 
 INTERFACES = ("smooth", "ggx")
 BASES = ("lambert", "eon", "smith-ggx")
-#: paths per chunk (the unit of work and of reproducibility)
-CHUNK_PATHS = 1 << 15
 #: a path that reached the base more often than this is cut (counted in ``truncated``)
 MAX_BOUNCES = 10_000
 _KIND = {"albedo": 11, "average": 12, "brdf": 13}
@@ -150,12 +148,6 @@ def _mu(mu: ArrayLike) -> np.ndarray:
     return m
 
 
-def _chunk_seed(seed: int, kind: str, surface: LayeredSurface, key: ArrayLike, chunk: int) -> int:
-    bits = np.frombuffer(np.asarray(key, dtype=np.float64).tobytes(), dtype=np.uint32)
-    entropy = [int(seed), _KIND[kind], *surface.key(), *map(int, bits), int(chunk)]
-    return int(np.random.SeedSequence(entropy).generate_state(1)[0])
-
-
 def _run_task(task):
     """One chunk (module-level so that Dask workers can import it)."""
     from ._layered_kernels import EON, LAMBERT, SMITH, chunk_kernel
@@ -165,30 +157,29 @@ def _run_task(task):
     return chunk_kernel(b)(alpha, eta, tau, r, rho, wi, random_wi, wo, n, seed, MAX_BOUNCES)
 
 
-def _plan(kind, surface, queries, random_wi, rho, tau, paths, seed):
-    tasks, spans = [], []
-    n_chunks = -(-paths // CHUNK_PATHS)
-    for wi, wo, key in queries:
-        start = len(tasks)
-        for i in range(n_chunks):
-            n = min(CHUNK_PATHS, paths - i * CHUNK_PATHS)
-            tasks.append(
-                (
-                    surface.interface_alpha,
-                    surface.ior,
-                    tau,
-                    surface.base,
-                    surface.roughness,
-                    rho,
-                    wi,
-                    random_wi,
-                    wo,
-                    n,
-                    _chunk_seed(seed, kind, surface, key, i),
-                )
-            )
-        spans.append((start, len(tasks)))
-    return tasks, spans
+def _run(kind, surface, queries, rho, tau, run):
+    """The chunks of each query (wi, wo, key) run: results and each query's task slice."""
+    identity = surface.key()
+    random_wi = kind == "average"
+
+    def task(query, i, n):
+        wi, wo, key = query
+        seed = chunk_seed(run.seed, _KIND[kind], identity, key, i)
+        return (
+            surface.interface_alpha,
+            surface.ior,
+            tau,
+            surface.base,
+            surface.roughness,
+            rho,
+            wi,
+            random_wi,
+            wo,
+            n,
+            seed,
+        )
+
+    return run_chunks(_run_task, queries, task, run)
 
 
 @dataclass
@@ -238,11 +229,7 @@ class LayeredAlbedo:
             "tau": s.tau.tolist(),
             "base": s.base,
             "roughness": s.roughness,
-            "rho": self.rho.tolist(),
-            "paths": self.paths,
-            "seed": self.seed,
-            "average": self.mu is None,
-            "rows": rows,
+            **run_fields(self.rho, self.paths, self.seed, self.mu, rows),
         }
 
 
@@ -264,34 +251,25 @@ def _albedo(kind, surface, mu, rho, paths, seed, workers, client, scheduler):
     if not isinstance(surface, LayeredSurface):
         raise TypeError(f"surface must be a LayeredSurface, got {type(surface).__name__}")
     run = RunOptions.check(paths, seed, workers, client, scheduler, min_paths=2)
-    paths, seed = run.paths, run.seed
     r, tau = _channels(surface, rho)
-    wo = np.zeros((0, 3))
-    if kind == "average":
-        queries = [(np.array([0.0, 0.0, 1.0]), wo, [-1.0])]
-    else:
-        queries = [(np.array([math.sqrt(max(0.0, 1.0 - m * m)), 0.0, m]), wo, [m]) for m in mu]
-    tasks, spans = _plan(kind, surface, queries, kind == "average", r, tau, paths, seed)
-    results = execute(_run_task, tasks, run)
+    results, spans = _run(kind, surface, albedo_queries(None if kind == "average" else mu), r, tau, run)
     n, C = len(spans), r.size
     out = {k: np.empty((n, C)) for k in ("s", "se", "d", "de", "t", "te")}
     ev = np.empty(n)
     tr = np.empty(n, dtype=np.int64)
-    for q, (a, b) in enumerate(spans):
-        s1 = sum(results[i][0] for i in range(a, b))
-        s2 = sum(results[i][1] for i in range(a, b))
-        st = sum(results[i][4] for i in range(a, b))
+    for q, span in enumerate(spans):
+        s1, s2, st = chunk_sum(results, span, 0), chunk_sum(results, span, 1), chunk_sum(results, span, 4)
         N = int(st[0])
         for row, (m_, e_) in enumerate((("s", "se"), ("d", "de"), ("t", "te"))):
-            out[m_][q], out[e_][q] = _mean_err(s1[row], s2[row], N)
+            out[m_][q], out[e_][q] = mean_err(s1[row], s2[row], N)
         ev[q] = st[1] / N
         tr[q] = st[2]
     return LayeredAlbedo(
         surface,
         None if kind == "average" else mu,
         r,
-        paths,
-        seed,
+        run.paths,
+        run.seed,
         out["s"],
         out["se"],
         out["d"],
@@ -408,22 +386,18 @@ def simulate_layered_brdf(
             "simulate_layered_brdf needs base 'lambert' or 'eon' (the microsurface base has no closed-form BRDF)"
         )
     run = RunOptions.check(paths, seed, workers, client, scheduler, min_paths=2)
-    paths, seed = run.paths, run.seed
     wi, wo = _dirs("wi", wi), _dirs("wo", wo)
     if wi.shape != wo.shape:
         raise ValueError(f"wi and wo must have the same shape, got {wi.shape} and {wo.shape}")
     r, tau = _channels(surface, rho)
     queries = [(wi[i], wo[i : i + 1].copy(), [*wi[i], *wo[i]]) for i in range(wi.shape[0])]
-    tasks, spans = _plan("brdf", surface, queries, False, r, tau, paths, seed)
-    results = execute(_run_task, tasks, run)
+    results, spans = _run("brdf", surface, queries, r, tau, run)
     f = np.empty((len(spans), r.size))
     se = np.empty_like(f)
-    for q, (a, b) in enumerate(spans):
-        s1 = sum(results[i][2][0] for i in range(a, b))
-        s2 = sum(results[i][3][0] for i in range(a, b))
-        N = int(sum(results[i][4][0] for i in range(a, b)))
-        f[q], se[q] = _mean_err(s1, s2, N)
-    return LayeredBRDF(surface, wi, wo, r, paths, seed, f, se)
+    for q, span in enumerate(spans):
+        s1, s2, st = chunk_sum(results, span, 2), chunk_sum(results, span, 3), chunk_sum(results, span, 4)
+        f[q], se[q] = mean_err(s1[0], s2[0], int(st[0]))
+    return LayeredBRDF(surface, wi, wo, r, run.paths, run.seed, f, se)
 
 
 # ---------------------------------------------------------------------------------------
