@@ -30,19 +30,22 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _junit(path: str, result: ImageGrade, image: str, force: bool) -> None:
+    """The image's verdict as JUnit XML: its linearity and its BRDF, one result each
+    (:func:`openpbr_diffuse.result.junit_case`)."""
     import xml.etree.ElementTree as ET
 
     from .._outfile import write_output_file
+    from ..result import junit_case, sub_check
 
     root = ET.Element("testsuites", name="openpbr-diffuse check --image")
     suite = ET.SubElement(root, "testsuite", name=image)
-    lin = ET.SubElement(suite, "testcase", classname="chart", name="linear output")
-    if result.non_linear:
-        ET.SubElement(lin, "failure", message=f"non-linear output: {result.non_linear}")
-    brdf = ET.SubElement(suite, "testcase", classname="chart", name="brdf")
-    if not result.brdf_passed:
-        g = result.grade
-        ET.SubElement(brdf, "failure", message=f"does not conform: {g.diagnosis or ''} {g.diagnosis_detail}"[:1000])
+    linear = sub_check("linear output", "fail" if result.non_linear else "pass")
+    linear.detail = f"non-linear output: {result.non_linear}" if result.non_linear else ""
+    g = result.grade
+    brdf = sub_check("brdf", "pass" if result.brdf_passed else "fail")
+    brdf.detail = "" if result.brdf_passed else f"does not conform: {g.diagnosis or ''} {g.diagnosis_detail}"
+    for r in (linear, brdf):
+        junit_case(suite, r.to_dict(), "chart")
     text = '<?xml version="1.0" encoding="utf-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
     write_output_file(path, text, option="--junit", force=force, inputs=[image])
 

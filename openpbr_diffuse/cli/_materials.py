@@ -10,8 +10,15 @@ if TYPE_CHECKING:
     from ..readers.material import Material
 
 
-def add_material_options(p: argparse.ArgumentParser, material_required: bool = False) -> None:
-    p.add_argument("file", metavar="FILE", help="USD stage (.usda/.usdc/.usdz) or MaterialX document (.mtlx)")
+#: What the FILE argument reads.
+FILE_HELP = "USD stage (.usda/.usdc/.usdz) or MaterialX document (.mtlx)"
+
+
+def add_material_options(
+    p: argparse.ArgumentParser, material_required: bool = False, file_help: str = FILE_HELP
+) -> None:
+    """FILE, ``--material``, ``--uv``, ``--time``, ``--variant`` and ``--purpose``."""
+    p.add_argument("file", metavar="FILE", help=file_help)
     p.add_argument(
         "--material",
         metavar="PRIM_OR_NAME",

@@ -20,7 +20,10 @@ import numpy as np
 
 from ..models import average_albedo, directional_albedo
 from ..models.registry import COLOR_MODES, MIX_RHO_MS, MODELS, model_info
+from ._options import add_command, add_numbers
 
+#: The command's line in ``openpbr-diffuse --help``.
+HELP = "directional / average albedo of a lobe model; EXR LUT export"
 DESCRIPTION = "Directional or average albedo of a lobe model, or its EXR lookup textures (--export)."
 EPILOG = """examples:
   openpbr-diffuse albedo eon --roughness 1 --mu 0.3 0.8 --rho 0.8 0.5 0.2
@@ -42,9 +45,11 @@ _QUERY_OPTIONS = (
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     import argparse
 
-    p = subparsers.add_parser(
+    p = add_command(
+        subparsers,
         "albedo",
-        help="directional / average albedo of a lobe model; EXR LUT export",
+        HELP,
+        run,
         description=DESCRIPTION,
         epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -56,15 +61,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         metavar="R",
         help="sigma in radians [0, pi/2] (qon*, full_on, gotanda) or r in [0, 1] (fon, eon*); lambert has none",
     )
-    p.add_argument("--mu", type=float, nargs="+", metavar="MU", help="cosine(s) of the view angle in [0, 1]")
-    p.add_argument(
-        "--rho",
-        type=float,
-        nargs="+",
-        metavar="RHO",
-        default=None,
-        help="albedo per channel in [0, 1] (1, 3 or N values; default 1)",
-    )
+    add_numbers(p, "--mu", metavar="MU", help="cosine(s) of the view angle in [0, 1]")
+    add_numbers(p, "--rho", metavar="RHO", help="albedo per channel in [0, 1] (1, 3 or N values; default 1)")
     p.add_argument(
         "--color-mode",
         choices=COLOR_MODES,
@@ -84,7 +82,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--size", type=int, default=None, metavar="N", help="texture size for --export (default 32)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr during --export")
     p.add_argument("--force", action="store_true", help="replace the --export files if they exist (regular files)")
-    p.set_defaults(run=run)
     return p
 
 

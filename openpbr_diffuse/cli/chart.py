@@ -17,14 +17,14 @@ import argparse
 from ..chart.layout import LIGHTS
 from ..chart.write import FORMATS
 from ..models import MODELS
+from ._options import add_command
+
+#: The command's line in ``openpbr-diffuse --help``.
+HELP = "write the conformance chart (scenes for renderers) or its expected image"
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    p = subparsers.add_parser(
-        "chart",
-        help="write the conformance chart (scenes for renderers) or its expected image",
-        description=__doc__.splitlines()[0].strip("`").replace("``", ""),
-    )
+    p = add_command(subparsers, "chart", HELP, run, doc=__doc__)
     p.add_argument(
         "--format",
         choices=FORMATS + ("all",),
@@ -40,7 +40,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--chart", metavar="FILE", help="a scene's chart.json (with --expected-image)")
     p.add_argument("--model", choices=MODELS, default="eon", help="the model of the expected image (default eon)")
     p.add_argument("--force", action="store_true", help="replace the --expected-image FILE if it exists")
-    p.set_defaults(run=run)
     return p
 
 

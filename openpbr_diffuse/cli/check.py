@@ -17,17 +17,18 @@ from typing import TYPE_CHECKING
 from ..conformance.vectors import ALL_VECTOR_MODELS
 from ..graders import cli as graders_cli
 from . import _check_image
+from ._options import add_command
 
 if TYPE_CHECKING:
     from ..conformance.grade import Grade
 
 
+#: The command's line in ``openpbr-diffuse --help``.
+HELP = "grade an implementation's results on the test vectors"
+
+
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    p = subparsers.add_parser(
-        "check",
-        help="grade an implementation's results on the test vectors",
-        description=__doc__.splitlines()[0].strip("`").replace("``", ""),
-    )
+    p = add_command(subparsers, "check", HELP, run, doc=__doc__)
     p.add_argument(
         "file", metavar="FILE", nargs="?", help="the vectors file with out_r, out_g, out_b filled in (CSV or JSON)"
     )
@@ -43,7 +44,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     graders_cli.add_arguments(p, renderers=list(RENDERERS))  # --implementation / --glsl / --cpp / --wgsl
     graders_cli.add_tier_arguments(p)  # --precision / --expect-fail
     _check_image.add_arguments(p)  # --image / --chart: a rendered conformance chart
-    p.set_defaults(run=run)
     return p
 
 

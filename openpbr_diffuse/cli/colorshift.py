@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 from ..spectral.colorimetry import DEFAULT_ILLUMINANT, DEFAULT_WORKING_SPACE, WORKING_SPACES
 from ..spectral.recovery import RECOVERY_METHODS
 from ..spectral.validation import DEFAULT_MU, DEFAULT_ROUGHNESS
+from ._options import add_command, add_numbers
 
 if TYPE_CHECKING:
     from ..spectral.colorimetry import Colorimetry
@@ -36,12 +37,12 @@ if TYPE_CHECKING:
 METHOD_ALIASES = {"auto": "auto", **{m.lower().replace(" ", ""): m for m in RECOVERY_METHODS}}
 
 
+#: The command's line in ``openpbr-diffuse --help``.
+HELP = "spectral vs RGB colour shift of EON (ColorChecker, RGB colours, material files)"
+
+
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    p = subparsers.add_parser(
-        "colorshift",
-        help="spectral vs RGB colour shift of EON (ColorChecker, RGB colours, material files)",
-        description=__doc__.splitlines()[0].strip("`").replace("``", ""),
-    )
+    p = add_command(subparsers, "colorshift", HELP, run, doc=__doc__)
     p.add_argument(
         "--colors",
         nargs="+",
@@ -50,22 +51,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         help="'checker', R,G,B (linear working-space RGB in [0, 1]) or FILE (.csv spectra, "
         ".usd/.usda/.usdc/.usdz/.mtlx materials); default: checker",
     )
-    p.add_argument(
-        "--roughness",
-        type=float,
-        nargs="+",
-        default=list(DEFAULT_ROUGHNESS),
-        metavar="R",
-        help=f"EON roughness r in [0, 1] (default {' '.join(map(str, DEFAULT_ROUGHNESS))})",
-    )
-    p.add_argument(
-        "--mu",
-        type=float,
-        nargs="+",
-        default=list(DEFAULT_MU),
-        metavar="MU",
-        help=f"cosine of the view angle in [0, 1] (default {' '.join(map(str, DEFAULT_MU))})",
-    )
+    for flag, metavar, what, default in (
+        ("--roughness", "R", "EON roughness r in [0, 1]", DEFAULT_ROUGHNESS),
+        ("--mu", "MU", "cosine of the view angle in [0, 1]", DEFAULT_MU),
+    ):
+        add_numbers(
+            p, flag, metavar=metavar, default=list(default), help=f"{what} (default {' '.join(map(str, default))})"
+        )
     p.add_argument(
         "--method",
         default="auto",
@@ -88,7 +80,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--json", action="store_true", help="one JSON document: settings and rows")
     p.add_argument("--image", metavar="PATH", help="write a labelled swatch image (PNG, EXR, ... by suffix)")
     p.add_argument("--force", action="store_true", help="replace the --image PATH if it exists (a regular file)")
-    p.set_defaults(run=run)
     return p
 
 

@@ -30,44 +30,28 @@ import sys
 import numpy as np
 
 from ._library import add_library_options
-from ._materials import add_material_options, load
+from ._materials import FILE_HELP, add_material_options, load
+from ._options import add_command, add_numbers
+
+#: The direction options (degrees): flag, default, help.
+_DIRECTION_OPTIONS = (
+    ("--theta-i", 30.0, "incidence angle(s) of wi from the normal, degrees in [0, 90] (default 30)"),
+    ("--theta-o", 30.0, "view angle(s) of wo, degrees in [0, 90] (default 30)"),
+    ("--phi", 180.0, "azimuth of wi relative to wo, degrees (default 180)"),
+)
+
+
+#: The command's line in ``openpbr-diffuse --help``.
+HELP = "evaluate the materials of a USD / MaterialX file"
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    p = subparsers.add_parser(
-        "eval",
-        help="evaluate the materials of a USD / MaterialX file",
-        description=__doc__.splitlines()[0].strip("`").replace("``", ""),
-    )
-    add_material_options(p)
-    for action in p._actions:  # with --jsonl the FILE may be a folder, and more may follow
-        if action.dest == "file":
-            action.help = "USD stage (.usda/.usdc/.usdz) or MaterialX document (.mtlx); with --jsonl also folders"
+    p = add_command(subparsers, "eval", HELP, run, doc=__doc__)
+    # with --jsonl the FILE may be a folder, and more may follow
+    add_material_options(p, file_help=FILE_HELP + "; with --jsonl also folders")
     p.add_argument("more", nargs="*", metavar="FILE", help="more files or folders (with --jsonl)")
-    p.add_argument(
-        "--theta-i",
-        type=float,
-        nargs="+",
-        default=[30.0],
-        metavar="DEG",
-        help="incidence angle(s) of wi from the normal, degrees in [0, 90] (default 30)",
-    )
-    p.add_argument(
-        "--theta-o",
-        type=float,
-        nargs="+",
-        default=[30.0],
-        metavar="DEG",
-        help="view angle(s) of wo, degrees in [0, 90] (default 30)",
-    )
-    p.add_argument(
-        "--phi",
-        type=float,
-        nargs="+",
-        default=[180.0],
-        metavar="DEG",
-        help="azimuth of wi relative to wo, degrees (default 180)",
-    )
+    for flag, default, help in _DIRECTION_OPTIONS:
+        add_numbers(p, flag, metavar="DEG", default=[default], help=help)
     p.add_argument("--all", action="store_true", help="list every parameter, not only the set and modelled ones")
     p.add_argument("--json", action="store_true", help="one JSON document (schema in the README)")
     p.add_argument(
@@ -79,7 +63,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--force", action="store_true", help="replace the --jsonl OUT file if it exists")
     p.add_argument("--no-progress", action="store_true", help="no progress bar or lines (--jsonl)")
     add_library_options(p)
-    p.set_defaults(run=run)
     return p
 
 

@@ -11,27 +11,23 @@ from __future__ import annotations
 
 import argparse
 
+from ._options import add_command, add_output, refusal_is_usage
+
+#: The command's line in ``openpbr-diffuse --help``.
+HELP = "write an offline HTML page exploring the EON lobe (WebGL2, the GLSL export)"
+
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    p = subparsers.add_parser(
-        "explore",
-        help="write an offline HTML page exploring the EON lobe (WebGL2, the GLSL export)",
-        description=__doc__.splitlines()[0].strip("`").replace("``", ""),
-    )
-    p.add_argument("--out", metavar="FILE", required=True, help="output HTML file")
-    p.add_argument("--force", action="store_true", help="replace FILE if it exists")
-    p.set_defaults(run=run)
+    p = add_command(subparsers, "explore", HELP, run, doc=__doc__)
+    add_output(p, "output HTML file")
     return p
 
 
 def run(args: argparse.Namespace) -> int:
     from ..export.explorer import write_explorer
-    from .main import UsageError
 
-    try:
+    with refusal_is_usage():  # a refused --out: one line, exit 2
         path = write_explorer(args.out, force=args.force)
-    except ValueError as exc:  # a refused --out: one line, exit 2
-        raise UsageError(str(exc)) from None
     print(f"wrote {path}; open it in a browser with WebGL2")
     return 0
 

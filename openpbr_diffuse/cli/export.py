@@ -13,33 +13,29 @@ from __future__ import annotations
 
 import argparse
 
+from ._options import add_command, add_output, refusal_is_usage
+
+#: The command's line in ``openpbr-diffuse --help``.
+HELP = "write EON (f, albedo, sampler, pdf) as GLSL, WGSL, C++, OSL or a MaterialX node"
+
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     from ..export import LANGS
 
-    p = subparsers.add_parser(
-        "export",
-        help="write EON (f, albedo, sampler, pdf) as GLSL, WGSL, C++, OSL or a MaterialX node",
-        description=__doc__.splitlines()[0].strip("`").replace("``", ""),
-    )
+    p = add_command(subparsers, "export", HELP, run, doc=__doc__)
     p.add_argument("--lang", required=True, choices=LANGS, help="the language of the file")
     p.add_argument(
         "--precision", choices=("float", "double"), default="float", help="arithmetic (double: cpp only; default float)"
     )
-    p.add_argument("--out", metavar="FILE", required=True, help="output file")
-    p.add_argument("--force", action="store_true", help="replace FILE if it exists")
-    p.set_defaults(run=run)
+    add_output(p, "output file")
     return p
 
 
 def run(args: argparse.Namespace) -> int:
     from ..export import grade_command, write_export
-    from .main import UsageError
 
-    try:
+    with refusal_is_usage():  # unknown precision for the language, a refused --out: one line, exit 2
         path = write_export(args.lang, args.out, precision=args.precision, force=args.force)
-    except ValueError as exc:  # unknown precision for the language, a refused --out: one line, exit 2
-        raise UsageError(str(exc)) from None
     if args.lang == "mtlx":
         from ..export.mtlx import glsl_name
 

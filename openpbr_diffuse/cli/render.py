@@ -18,19 +18,22 @@ import os
 from .._outfile import check_output_file
 from ..readers.preview import render_image, write_image
 from ._materials import add_material_options, load
+from ._options import add_command, add_output
+
+#: The command's line in ``openpbr-diffuse --help``.
+HELP = "preview a material on a sphere (directional and furnace light)"
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    p = subparsers.add_parser(
-        "render",
-        help="preview a material on a sphere (directional and furnace light)",
-        description=__doc__.splitlines()[0].strip("`").replace("``", ""),
-    )
+    p = add_command(subparsers, "render", HELP, run, doc=__doc__)
     add_material_options(p)
-    p.add_argument("--out", required=True, metavar="IMAGE", help="output image (.exr linear, .png sRGB)")
-    p.add_argument("--force", action="store_true", help="replace IMAGE if it exists (a regular file)")
+    add_output(
+        p,
+        "output image (.exr linear, .png sRGB)",
+        metavar="IMAGE",
+        force_help="replace IMAGE if it exists (a regular file)",
+    )
     p.add_argument("--size", type=int, default=256, metavar="N", help="height of the image in pixels (default 256)")
-    p.set_defaults(run=run)
     return p
 
 

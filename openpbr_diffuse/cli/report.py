@@ -30,15 +30,16 @@ if TYPE_CHECKING:
 FAST_EVIDENCE = ("implementations", "approximations")
 
 
+#: The command's line in ``openpbr-diffuse --help``.
+HELP = "does your implementation conform? HTML + JSON + images"
+
+
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Add the ``report`` sub-command."""
     from ._library import add_library_options
+    from ._options import add_command
 
-    p = subparsers.add_parser(
-        "report",
-        help="does your implementation conform? HTML + JSON + images",
-        description=__doc__.splitlines()[0].strip("`").replace("``", ""),
-    )
+    p = add_command(subparsers, "report", HELP, run, doc=__doc__)
     p.add_argument(
         "paths", nargs="*", metavar="PATHS", help="USD / MaterialX files or folders (default: the bundled materials/)"
     )
@@ -78,7 +79,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     )
     c.add_argument("--junit", metavar="FILE", help="also write the checks as JUnit XML")
     c.add_argument("--force", action="store_true", help="replace the --junit FILE if it exists (a regular file)")
-    p.set_defaults(run=run)
     return p
 
 

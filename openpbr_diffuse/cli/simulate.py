@@ -19,14 +19,14 @@ import numpy as np
 
 from ..simulation.api import GEOMETRIES, simulate_albedo, simulate_average_albedo
 from . import simulate_layered
+from ._options import add_command, add_numbers
+
+#: The command's line in ``openpbr-diffuse --help``.
+HELP = "Monte Carlo albedo of a V-cavity / Smith Lambertian microsurface"
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    p = subparsers.add_parser(
-        "simulate",
-        help="Monte Carlo albedo of a V-cavity / Smith Lambertian microsurface",
-        description=__doc__.splitlines()[0].strip("`").replace("``", ""),
-    )
+    p = add_command(subparsers, "simulate", HELP, run, doc=__doc__)
     p.add_argument(
         "--geometry",
         choices=list(GEOMETRIES),
@@ -38,16 +38,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         metavar="S",
         help="sigma in radians [0, pi/2] for vcavity; alpha [0, 2] for smith-*; EON r with --layered",
     )
-    p.add_argument("--mu", type=float, nargs="+", metavar="MU", help="cosine(s) of the incident angle in [1e-100, 1]")
+    add_numbers(p, "--mu", metavar="MU", help="cosine(s) of the incident angle in [1e-100, 1]")
     p.add_argument("--average", action="store_true", help="average albedo <E> instead of E(mu)")
-    p.add_argument(
-        "--rho",
-        type=float,
-        nargs="+",
-        metavar="RHO",
-        default=[1.0],
-        help="microfacet albedo per channel in [0, 1] (default 1)",
-    )
+    add_numbers(p, "--rho", metavar="RHO", default=[1.0], help="microfacet albedo per channel in [0, 1] (default 1)")
     p.add_argument(
         "--paths", type=_count, default=1_000_000, metavar="N", help="paths per mu (default 10^6; 1e6 accepted)"
     )
@@ -65,7 +58,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         "(paths x number of mu; about 25 min on 2 cores)",
     )
     simulate_layered.add_arguments(p)
-    p.set_defaults(run=run)
     return p
 
 

@@ -12,19 +12,19 @@ from __future__ import annotations
 
 import argparse
 
+from ._options import add_command, add_output
+
 _DEFAULT = {"glsl": "diffuse.glsl", "cpp": "diffuse.cpp", "csv": "vectors.csv"}
 
 
+#: The command's line in ``openpbr-diffuse --help``.
+HELP = "write a starting GLSL, C++ or CSV file to grade with check"
+
+
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    p = subparsers.add_parser(
-        "template",
-        help="write a starting GLSL, C++ or CSV file to grade with check",
-        description=__doc__.splitlines()[0].strip("`").replace("``", ""),
-    )
+    p = add_command(subparsers, "template", HELP, run, doc=__doc__)
     p.add_argument("kind", choices=sorted(_DEFAULT), help="glsl, cpp or csv")
-    p.add_argument("--out", metavar="FILE", help="output file (default diffuse.glsl / diffuse.cpp / vectors.csv)")
-    p.add_argument("--force", action="store_true", help="replace FILE if it exists")
-    p.set_defaults(run=run)
+    add_output(p, "output file (default diffuse.glsl / diffuse.cpp / vectors.csv)", required=False)
     return p
 
 

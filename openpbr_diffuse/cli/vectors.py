@@ -13,20 +13,18 @@ import argparse
 
 from .._outfile import check_output_file, output_file
 from ..conformance.vectors import ALL_VECTOR_MODELS, COLUMNS, OUT_COLUMNS, default_vectors, write_vectors
+from ._options import add_command, add_output
+
+#: The command's line in ``openpbr-diffuse --help``.
+HELP = "write the conformance test vectors (CSV or JSON)"
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    p = subparsers.add_parser(
-        "vectors",
-        help="write the conformance test vectors (CSV or JSON)",
-        description=__doc__.splitlines()[0].strip("`").replace("``", ""),
-    )
-    p.add_argument("--out", required=True, metavar="FILE", help="output file (.csv, or .json)")
-    p.add_argument("--force", action="store_true", help="replace FILE if it exists")
+    p = add_command(subparsers, "vectors", HELP, run, doc=__doc__)
+    add_output(p, "output file (.csv, or .json)")
     p.add_argument(
         "--model", choices=ALL_VECTOR_MODELS, help="only the rows of this model (qon_fujii: not in the default set)"
     )
-    p.set_defaults(run=run)
     return p
 
 

@@ -27,19 +27,27 @@ from .._outfile import check_output_file, output_file
 
 KINDS = ("glsl", "cpp", "csv")
 
-_GLSL = """\
-// openpbr-diffuse conformance template (GLSL).
+
+def _header(language: str, option: str) -> str:
+    """The comment that opens a code template: the conventions, the ``check`` command grading it."""
+    return f"""\
+// openpbr-diffuse conformance template ({language}).
 //
 // Local shading frame: the normal is +z; wi (towards the light) and wo (towards the viewer)
 // both point away from the surface.  f is the BRDF value WITHOUT the cosine factor.
 // roughness: r in [0, 1] for FON/EON (sigma in radians for QON); rho: linear RGB albedo.
 //
 // Grade it (THIS_FILE: this file's path; one line, run from a shell):
-//   openpbr-diffuse check --glsl THIS_FILE --function f --albedo-function albedo --sample-function sample_wi --pdf-function pdf
+//   openpbr-diffuse check --{option} THIS_FILE --function f --albedo-function albedo --sample-function sample_wi --pdf-function pdf
 //
 // >>> PLACEHOLDER: a Lambertian lobe, so that this file compiles and runs as it is. <<<
 // >>> Replace the four bodies with your implementation.                             <<<
+"""
 
+
+_GLSL = (
+    _header("GLSL", "glsl")
+    + """
 const float TEMPLATE_PI = 3.14159265358979323846;
 
 vec3 f(vec3 wi, vec3 wo, float roughness, vec3 rho)
@@ -66,19 +74,11 @@ float pdf(vec3 wo, vec3 wi, float roughness)
     return max(wi.z, 0.0) / TEMPLATE_PI;                // PLACEHOLDER (cosine sampling)
 }
 """
+)
 
-_CPP = """\
-// openpbr-diffuse conformance template (C++17, GLM).
-//
-// Local shading frame: the normal is +z; wi (towards the light) and wo (towards the viewer)
-// both point away from the surface.  f is the BRDF value WITHOUT the cosine factor.
-// roughness: r in [0, 1] for FON/EON (sigma in radians for QON); rho: linear RGB albedo.
-//
-// Grade it (THIS_FILE: this file's path; one line, run from a shell):
-//   openpbr-diffuse check --cpp THIS_FILE --function f --albedo-function albedo --sample-function sample_wi --pdf-function pdf
-//
-// >>> PLACEHOLDER: a Lambertian lobe, so that this file compiles and runs as it is. <<<
-// >>> Replace the four bodies with your implementation.                             <<<
+_CPP = (
+    _header("C++17, GLM", "cpp")
+    + """\
 #include <cmath>
 #include <glm/glm.hpp>
 
@@ -108,6 +108,7 @@ float pdf(glm::vec3 wo, glm::vec3 wi, float roughness)
     return std::fmax(wi.z, 0.0f) / TEMPLATE_PI;                 // PLACEHOLDER (cosine sampling)
 }
 """
+)
 
 
 def template_text(kind: str) -> str:

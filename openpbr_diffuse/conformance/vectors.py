@@ -222,6 +222,40 @@ def _pairs():
     return pairs
 
 
+def _roughnesses(model: str) -> tuple[float, ...]:
+    """The roughness values of a model's rows (Lambert: none, NaN)."""
+    from ..models.registry import model_info
+
+    return (math.nan,) if model == "lambert" else _ROUGHNESS[model_info(model).roughness_name]
+
+
+def _albedo_points(mus: tuple[float, ...]) -> list[tuple]:
+    """(wi, wo, mu) of albedo rows: no directions, the given mu."""
+    none = (math.nan,) * 3
+    return [(none, none, mu) for mu in mus]
+
+
+def _add_rows(
+    rows: list[tuple],
+    count: dict[tuple[str, str], int],
+    model: str,
+    kind: str,
+    points: list[tuple],
+    roughs: tuple[float, ...],
+    rhos: tuple[tuple[float, float, float], ...],
+) -> None:
+    """Append the rows of every (wi, wo, mu) of ``points`` x roughness x colour of one model and
+    kind, their ids numbered on from ``count[model, kind]`` (which is updated)."""
+    k = count.get((model, kind), 0)
+    digits = 4 if kind == "brdf" else 3
+    for wi, wo, mu in points:
+        for r in roughs:
+            for rho in rhos:
+                rows.append((f"{model}-{kind}-{k:0{digits}d}", kind, model, wi, wo, mu, r, rho))
+                k += 1
+    count[model, kind] = k
+
+
 def default_vectors(models: tuple[str, ...] | list[str] | None = None) -> VectorSet:
     """The versioned default vector set (version :data:`VERSION`), built deterministically.
 
@@ -239,8 +273,6 @@ def default_vectors(models: tuple[str, ...] | list[str] | None = None) -> Vector
     >>> edge.wi.tolist(), edge.roughness.tolist(), edge.rho.tolist()
     ([[1.0, 0.0, 0.0]], [0.0], [[0.0, 0.0, 0.0]])
     """
-    from ..models.registry import model_info
-
     if models is None:
         models = VECTOR_MODELS
     if isinstance(models, str) or not all(isinstance(m, str) for m in models):
@@ -249,55 +281,26 @@ def default_vectors(models: tuple[str, ...] | list[str] | None = None) -> Vector
     if bad or not models:
         raise ValueError(f"models: expected names among {', '.join(ALL_VECTOR_MODELS)}, got {list(models)!r}")
     models = tuple(m for m in ALL_VECTOR_MODELS if m in models)
-    rows = []
+    rows: list[tuple] = []
     pairs = _pairs()
     nan = math.nan
-    count = {}  # (model, kind) -> rows so far: the edge rows' ids continue the numbering
+    count: dict[tuple[str, str], int] = {}  # (model, kind) -> rows so far: later blocks' ids continue the numbering
+    brdf = [(wi, wo, nan) for wi, wo in pairs]
     for model in models:
-        info = model_info(model)
-        roughs = (nan,) if model == "lambert" else _ROUGHNESS[info.roughness_name]
-        k = 0
-        for wi, wo in pairs:
-            for r in roughs:
-                for rho in _RHOS:
-                    rows.append((f"{model}-brdf-{k:04d}", "brdf", model, wi, wo, nan, r, rho))
-                    k += 1
-        count[model, "brdf"] = k
-        if model not in ALBEDO_MODELS:
-            continue
-        k = 0
-        for mu in _ALBEDO_MU:
-            for r in roughs:
-                for rho in _RHOS:
-                    rows.append((f"{model}-albedo-{k:03d}", "albedo", model, (nan,) * 3, (nan,) * 3, mu, r, rho))
-                    k += 1
-        count[model, "albedo"] = k
+        roughs = _roughnesses(model)
+        _add_rows(rows, count, model, "brdf", brdf, roughs, _RHOS)
+        if model in ALBEDO_MODELS:
+            _add_rows(rows, count, model, "albedo", _albedo_points(_ALBEDO_MU), roughs, _RHOS)
+    edge_brdf = [(wi, wo, nan) for wi, wo, _ in EDGE_PAIRS]
     for model in models:  # the edge rows, after every model's rows (ids and order kept)
-        info = model_info(model)
-        edge_roughs: tuple[float, ...] = (nan,) if model == "lambert" else (0.0, _ROUGHNESS[info.roughness_name][-1])
-        k = count[model, "brdf"]
-        for wi, wo, _ in EDGE_PAIRS:
-            for r in edge_roughs:
-                for rho in EDGE_RHOS:
-                    rows.append((f"{model}-brdf-{k:04d}", "brdf", model, wi, wo, nan, r, rho))
-                    k += 1
-        count[model, "brdf"] = k
-        if model not in ALBEDO_MODELS:
-            continue
-        k = count[model, "albedo"]
-        for mu in EDGE_ALBEDO_MU:
-            for r in edge_roughs:
-                for rho in EDGE_RHOS:
-                    rows.append((f"{model}-albedo-{k:03d}", "albedo", model, (nan,) * 3, (nan,) * 3, mu, r, rho))
-                    k += 1
+        roughs = _roughnesses(model)
+        edge_roughs = roughs if model == "lambert" else (0.0, roughs[-1])
+        _add_rows(rows, count, model, "brdf", edge_brdf, edge_roughs, EDGE_RHOS)
+        if model in ALBEDO_MODELS:
+            _add_rows(rows, count, model, "albedo", _albedo_points(EDGE_ALBEDO_MU), edge_roughs, EDGE_RHOS)
+    swapped = [(pairs[j][1], pairs[j][0], nan) for j in SWAPPED_PAIRS]
     for model in models:  # version 4: the swapped pairs, after the edge rows
-        info = model_info(model)
-        k = count[model, "brdf"]
-        for j in SWAPPED_PAIRS:
-            wi, wo = pairs[j]
-            for r in (nan,) if model == "lambert" else _ROUGHNESS[info.roughness_name]:
-                rows.append((f"{model}-brdf-{k:04d}", "brdf", model, wo, wi, nan, r, SWAPPED_RHO))
-                k += 1
+        _add_rows(rows, count, model, "brdf", swapped, _roughnesses(model), (SWAPPED_RHO,))
     return VectorSet(
         id=np.array([r[0] for r in rows]),
         kind=np.array([r[1] for r in rows]),

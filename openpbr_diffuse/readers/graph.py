@@ -57,6 +57,30 @@ def deep_stack(frames: int = 8 * MAX_CHAIN + 2000) -> Iterator[None]:
         sys.setrecursionlimit(old)
 
 
+def follow(file: str, trail: tuple, key: object, network: str = "graph", nodes: str = "nodes") -> tuple:
+    """``trail + (key,)``: the connections followed so far, and ``key``.  ValueError naming the
+    elements of a connection cycle, or when the chain is deeper than :data:`MAX_CHAIN`
+    connected ``nodes`` (of the shading ``network``).
+
+    Examples
+    --------
+    >>> follow("x.mtlx", ("node:a",), "node:b")
+    ('node:a', 'node:b')
+    >>> follow("x.mtlx", ("node:a", "node:b"), "node:a")
+    Traceback (most recent call last):
+    ...
+    ValueError: x.mtlx: connection cycle: node:a -> node:b -> node:a
+    """
+    if len(trail) > 2 * MAX_CHAIN:
+        raise ValueError(
+            f"{file}: the shading {network} is deeper than {MAX_CHAIN} connected {nodes} (at {key}); not evaluated"
+        )
+    if key in trail:
+        loop = list(trail[trail.index(key) :]) + [key]
+        raise ValueError(f"{file}: connection cycle: {' -> '.join(str(k) for k in loop)}")
+    return trail + (key,)
+
+
 def to_python(v: Any) -> Any:
     """Evaluator value -> Parameter value (tuple of floats for arrays)."""
     if isinstance(v, np.ndarray):
@@ -119,16 +143,6 @@ class Resolver:
         except ValueError as exc:
             raise ValueError(f"{self.file}: {elem.getNamePath()}: {exc}") from None
 
-    def _cycle(self, key: str, trail: tuple) -> tuple:
-        if len(trail) > 2 * MAX_CHAIN:
-            raise ValueError(
-                f"{self.file}: the shading graph is deeper than {MAX_CHAIN} connected nodes (at {key}); not evaluated"
-            )
-        if key in trail:
-            loop = list(trail[trail.index(key) :]) + [key]
-            raise ValueError(f"{self.file}: connection cycle: {' -> '.join(loop)}")
-        return trail + (key,)
-
     def _source_folder(self, elem: Any) -> str:
         """The folder of the document ``elem`` was read from: relative file names resolve
         against it (after MaterialX's ``fileprefix``, applied by ``getResolvedValueString``).
@@ -186,7 +200,7 @@ class Resolver:
     # ----------------------------------------------------------------- ports
     def port(self, port: Any, trail: tuple = (), iface: dict | None = None, library: bool = False) -> Parameter | None:
         """Resolve an input or output element; None when nothing is set (use the default)."""
-        trail = self._cycle("port:" + port.getNamePath(), trail)
+        trail = follow(self.file, trail, "port:" + port.getNamePath())
         if port.hasInterfaceName():
             name = port.getInterfaceName()
             if iface is not None:
@@ -328,7 +342,7 @@ class Resolver:
         return p
 
     def _node_value(self, node: Any, outname: str, trail: tuple, iface: dict | None, library: bool) -> Parameter | None:
-        trail = self._cycle("node:" + node.getNamePath(), trail)
+        trail = follow(self.file, trail, "node:" + node.getNamePath())
         nd = node.getNodeDef()
         cat = node.getCategory()
         if nd is None:
@@ -495,4 +509,4 @@ def _describe(head: str, resolved: dict) -> str:
     return f"{head}({'; '.join(set_)})" if set_ else head
 
 
-__all__ = ["MAX_CHAIN", "deep_stack", "Resolver", "to_python", "convert_color", "check_finite", "VALUE_TYPES"]
+__all__ = ["MAX_CHAIN", "deep_stack", "follow", "Resolver", "to_python", "convert_color", "check_finite", "VALUE_TYPES"]

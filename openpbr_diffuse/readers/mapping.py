@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from . import mxlib
-from .material import Material, Parameter, diffuse_model_available
+from .material import Material, Parameter, diffuse_model_available, empty_material
 
 OPENPBR = "ND_open_pbr_surface_surfaceshader"
 STANDARD_SURFACE = "ND_standard_surface_surfaceshader"
@@ -116,6 +116,28 @@ def _openpbr_inputs(inputs, m):
     return out
 
 
+def _to_openpbr(m, mapped, nodedef, unmodelled, why, approximations):
+    """The OpenPBR inputs of a shader of ``nodedef`` whose inputs were ``mapped`` onto OpenPBR's:
+    the inputs of ``unmodelled`` whose value is not ``nodedef``'s default are listed as
+    unsupported (``why``), the mapping's ``approximations`` are noted."""
+    defaults = mxlib.inputs(nodedef)
+    for name in unmodelled:
+        value = m.parameters[name].value
+        if _differs(value, defaults[name][1]):
+            m.unsupported.append(f"{name} = {_fmt(value)} ({why})")
+    m.approximations += approximations
+    return _openpbr_inputs(mapped, m)
+
+
+def _renamed(parameters, names, shader):
+    """The ``parameters`` of ``names`` (source -> OpenPBR input) under their OpenPBR names."""
+    out = {}
+    for src, dst in names.items():
+        p = parameters[src]
+        out[dst] = Parameter(p.value, f"{shader} {src} -> {dst}: {p.provenance}", "mapped", p.authored)
+    return out
+
+
 def _map_openpbr(m):
     return _openpbr_inputs(m.parameters, m)
 
@@ -182,21 +204,22 @@ def _map_standard_surface(m):
         target = name[:-4] if name.endswith("_out") else name
         mapped[target] = Parameter(value, f"{graph_name}.{name} (Standard Surface -> OpenPBR)", "mapped")
     trans_inputs = mxlib.inputs(TRANSLATION)
-    for name, p in m.parameters.items():
-        t, default, _ = mxlib.inputs(STANDARD_SURFACE)[name]
-        if name not in trans_inputs and _differs(p.value, default):
-            m.unsupported.append(f"{name} = {_fmt(p.value)} (Standard Surface input without an OpenPBR counterpart)")
-    m.approximations += [
-        "diffuse: Standard Surface's Oren-Nayar (QON, sigma = diffuse_roughness in radians, as MaterialX's "
-        "standard_surface graph) evaluated as OpenPBRSurface(diffuse_model='qon')",
-        f"other inputs mapped to OpenPBR by MaterialX's translation graph {TRANSLATION}: base_color is "
-        "multiplied by the coat colour (mixed by coat), specular_weight becomes 1 when metalness > 0 (OpenPBR's "
-        "specular_weight also scales the metal), a black specular_color becomes white, thin film and "
-        "emission rescaled",
-        "the specular/metal Fresnel and the layering are OpenPBR's (exact dielectric Fresnel, F82-tint metal, "
-        "albedo scaling), not Standard Surface's own (Schlick-based metal with edge colour)",
-    ]
-    return _openpbr_inputs(mapped, m)
+    unmodelled = [name for name in m.parameters if name not in trans_inputs]
+    why = "Standard Surface input without an OpenPBR counterpart"
+    return _to_openpbr(m, mapped, STANDARD_SURFACE, unmodelled, why, _STANDARD_SURFACE_APPROXIMATIONS)
+
+
+#: What the mapping of Standard Surface onto OpenPBR changes.
+_STANDARD_SURFACE_APPROXIMATIONS = (
+    "diffuse: Standard Surface's Oren-Nayar (QON, sigma = diffuse_roughness in radians, as MaterialX's "
+    "standard_surface graph) evaluated as OpenPBRSurface(diffuse_model='qon')",
+    f"other inputs mapped to OpenPBR by MaterialX's translation graph {TRANSLATION}: base_color is "
+    "multiplied by the coat colour (mixed by coat), specular_weight becomes 1 when metalness > 0 (OpenPBR's "
+    "specular_weight also scales the metal), a black specular_color becomes white, thin film and "
+    "emission rescaled",
+    "the specular/metal Fresnel and the layering are OpenPBR's (exact dielectric Fresnel, F82-tint metal, "
+    "albedo scaling), not Standard Surface's own (Schlick-based metal with edge colour)",
+)
 
 
 _PREVIEW_MAP = {
@@ -211,11 +234,7 @@ _PREVIEW_MAP = {
 
 
 def _map_preview(m):
-    defs = mxlib.inputs(PREVIEW)
-    mapped = {}
-    for src, dst in _PREVIEW_MAP.items():
-        p = m.parameters[src]
-        mapped[dst] = Parameter(p.value, f"UsdPreviewSurface {src} -> {dst}: {p.provenance}", "mapped", p.authored)
+    mapped = _renamed(m.parameters, _PREVIEW_MAP, "UsdPreviewSurface")
     spec_workflow = int(m.parameters["useSpecularWorkflow"].value) == 1
     if spec_workflow:
         p = m.parameters["specularColor"]
@@ -230,17 +249,19 @@ def _map_preview(m):
             "as OpenPBR's specular_color tint; F0 still comes from ior; metallic is ignored"
         )
         mapped["base_metalness"] = Parameter(0.0, "specular workflow: metallic ignored", "mapped")
-    for name in ("emissiveColor", "normal", "displacement", "occlusion", "opacityThreshold"):
-        t, default, _ = defs[name]
-        if name in m.parameters and _differs(m.parameters[name].value, default):
-            m.unsupported.append(f"{name} = {_fmt(m.parameters[name].value)} (UsdPreviewSurface input not modelled)")
-    m.approximations += [
-        "diffuse: Lambertian, as UsdPreviewSurface defines it: OpenPBRSurface(diffuse_model='lambert')",
-        "roughness is the preview surface's specular roughness (-> specular_roughness); the GGX lobe uses "
-        "OpenPBR's exact dielectric Fresnel of ior instead of the preview surface's Schlick form",
-        "clearcoat maps onto OpenPBR's coat (IOR 1.6 default rather than the preview surface's 1.5)",
+    unmodelled = [
+        n for n in ("emissiveColor", "normal", "displacement", "occlusion", "opacityThreshold") if n in m.parameters
     ]
-    return _openpbr_inputs(mapped, m)
+    return _to_openpbr(m, mapped, PREVIEW, unmodelled, "UsdPreviewSurface input not modelled", _PREVIEW_APPROXIMATIONS)
+
+
+#: What the mapping of UsdPreviewSurface onto OpenPBR changes.
+_PREVIEW_APPROXIMATIONS = (
+    "diffuse: Lambertian, as UsdPreviewSurface defines it: OpenPBRSurface(diffuse_model='lambert')",
+    "roughness is the preview surface's specular roughness (-> specular_roughness); the GGX lobe uses "
+    "OpenPBR's exact dielectric Fresnel of ior instead of the preview surface's Schlick form",
+    "clearcoat maps onto OpenPBR's coat (IOR 1.6 default rather than the preview surface's 1.5)",
+)
 
 
 #: glTF PBR input -> OpenPBR input (MaterialX's ``gltf_pbr`` graph / the glTF 2.0 specification and
@@ -292,10 +313,7 @@ def _map_gltf(m):
     under its specular layer, with the inputs renamed.
     """
     p = m.parameters
-    mapped = {}
-    for src, dst in _GLTF_MAP.items():
-        q = p[src]
-        mapped[dst] = Parameter(q.value, f"glTF PBR {src} -> {dst}: {q.provenance}", "mapped", q.authored)
+    mapped = _renamed(p, _GLTF_MAP, "glTF PBR")
     sheen = p["sheen_color"].value
     on = any(float(x) != 0.0 for x in (sheen if isinstance(sheen, tuple) else (sheen,)))
     mapped["fuzz_weight"] = Parameter(1.0 if on else 0.0, "glTF PBR sheen_color != 0 -> fuzz_weight 1", "mapped")
@@ -309,17 +327,17 @@ def _map_gltf(m):
     mapped["coat_ior"] = Parameter(1.5, "glTF clearcoat IOR 1.5 (KHR_materials_clearcoat)", "mapped")
     opacity, how = _gltf_opacity(p)
     mapped["geometry_opacity"] = Parameter(opacity, f"glTF PBR {how}", "mapped")
-    defs = mxlib.inputs(GLTF_PBR)
-    for name in _GLTF_UNMODELLED:
-        if name in p and p[name].kind != "default" and _differs(p[name].value, defs[name][1]):
-            m.unsupported.append(f"{name} = {_fmt(p[name].value)} (glTF PBR input not modelled)")
-    m.approximations += [
-        "diffuse: Lambertian, as MaterialX's gltf_pbr graph (oren_nayar_diffuse_bsdf of roughness 0): "
-        "OpenPBRSurface(diffuse_model='lambert')",
-        "the specular layer, metal and clearcoat are OpenPBR's (exact dielectric Fresnel, F82-tint metal, "
-        "albedo-scaled layering), not gltf_pbr's generalized Schlick lobes; sheen maps onto OpenPBR's fuzz",
-    ]
-    return _openpbr_inputs(mapped, m)
+    authored = [name for name in _GLTF_UNMODELLED if name in p and p[name].kind != "default"]
+    return _to_openpbr(m, mapped, GLTF_PBR, authored, "glTF PBR input not modelled", _GLTF_APPROXIMATIONS)
+
+
+#: What the mapping of glTF PBR onto OpenPBR changes.
+_GLTF_APPROXIMATIONS = (
+    "diffuse: Lambertian, as MaterialX's gltf_pbr graph (oren_nayar_diffuse_bsdf of roughness 0): "
+    "OpenPBRSurface(diffuse_model='lambert')",
+    "the specular layer, metal and clearcoat are OpenPBR's (exact dielectric Fresnel, F82-tint metal, "
+    "albedo-scaled layering), not gltf_pbr's generalized Schlick lobes; sheen maps onto OpenPBR's fuzz",
+)
 
 
 def _map_oren_nayar(m):
@@ -467,16 +485,7 @@ def build_material(
     time: float | None = None,
 ) -> Material:
     """A Material from a shader adapter (MaterialX node or USD shader prim)."""
-    m = Material(
-        name=name,
-        path=path,
-        file=str(file),
-        shader_id="",
-        supported=False,
-        uv=tuple(float(x) for x in uv),
-        variants=dict(variants or {}),
-        time=time,
-    )
+    m = empty_material(name=name, path=path, file=file, uv=uv, variants=variants, time=time)
     if shader is None or shader.node is None:
         m.unsupported.append("no surface shader is connected to the material")
         return m

@@ -182,6 +182,30 @@ def failed_material(
             text = f"{type(exc).__name__}: {text}" if text else type(exc).__name__
     if file and not text.startswith(str(file)):
         text = f"{file}: {text}"
+    return empty_material(name=name, path=path, file=file, uv=uv, variants=variants, time=time, error=text)
+
+
+def empty_material(
+    *,
+    name: str,
+    path: str,
+    file: str,
+    uv: tuple = (0.5, 0.5),
+    variants: dict | None = None,
+    time: object = None,
+    error: str = "",
+) -> Material:
+    """A Material with no shader and nothing resolved (not supported), ``error`` as given.
+
+    What a reader fills in once it has found the material's shader; with ``error``, a
+    material that could not be evaluated (see :func:`failed_material`).
+
+    Examples
+    --------
+    >>> m = empty_material(name="M", path="/M", file="x.usda", uv=(0, 1), variants={"finish": "gloss"})
+    >>> (m.shader_id, m.supported, m.uv, m.variants, m.error)
+    ('', False, (0.0, 1.0), {'finish': 'gloss'}, '')
+    """
     return Material(
         name=name,
         path=path,
@@ -191,7 +215,7 @@ def failed_material(
         uv=tuple(float(x) for x in uv),
         variants=dict(variants or {}),
         time=time,
-        error=text,
+        error=error,
     )
 
 
@@ -217,4 +241,4 @@ def diffuse_model_available():
     return "diffuse_model" in OpenPBRSurface.signature().parameters
 
 
-__all__ = ["Parameter", "Material", "failed_material", "surface_options", "diffuse_model_available"]
+__all__ = ["Parameter", "Material", "empty_material", "failed_material", "surface_options", "diffuse_model_available"]

@@ -11,6 +11,7 @@ import functools
 import os
 import re
 import struct
+from collections.abc import Callable
 from typing import Any
 
 from ..nodes.materialx_defs import parse_value
@@ -47,17 +48,23 @@ def inputs(name: str, nd: Any = None) -> dict:
     >>> inputs("ND_image_color3")["texcoord"][2]
     'UV0'
     """
+    return _described(name, nd, _inputs_of)
+
+
+def _described(name: str, nd: Any, describe: Callable[[Any], dict]) -> dict:
+    """``describe`` of nodedef ``name``: of ``nd`` when it is a document's own nodedef, else of
+    the data library's (cached; LookupError if the library has no such nodedef)."""
     if _local(name, nd):
-        return _inputs_of(nd)
-    return _library_inputs(name)
+        return describe(nd)
+    return _library_described(name, describe)
 
 
 @functools.cache
-def _library_inputs(name: str) -> dict:
+def _library_described(name: str, describe: Callable[[Any], dict]) -> dict:
     nd = nodedef(name)
     if nd is None:
         raise LookupError(f"the MaterialX data library has no nodedef {name!r}")
-    return _inputs_of(nd)
+    return describe(nd)
 
 
 def _inputs_of(nd: Any) -> dict:
@@ -94,17 +101,7 @@ def outputs(name: str, nd: Any = None) -> dict:
     >>> outputs("ND_image_color3")
     {'out': 'color3'}
     """
-    if _local(name, nd):
-        return _outputs_of(nd)
-    return _library_outputs(name)
-
-
-@functools.cache
-def _library_outputs(name: str) -> dict:
-    nd = nodedef(name)
-    if nd is None:
-        raise LookupError(f"the MaterialX data library has no nodedef {name!r}")
-    return _outputs_of(nd)
+    return _described(name, nd, _outputs_of)
 
 
 def _outputs_of(nd: Any) -> dict:

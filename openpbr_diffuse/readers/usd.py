@@ -38,7 +38,7 @@ import numpy as np
 
 from . import colorspace, mxlib, ops, package, textures
 from ._capture import captured_stderr
-from .graph import MAX_CHAIN, Resolver, _short, check_finite, convert_color, deep_stack, to_python
+from .graph import Resolver, _short, check_finite, convert_color, deep_stack, follow, to_python
 from .mapping import build_material
 from .material import Material, Parameter, failed_material
 
@@ -315,17 +315,6 @@ class _UsdResolver:
         except ValueError as exc:
             raise ValueError(f"{self.file}: {attr.GetPath()}: {exc}") from None
 
-    def _cycle(self, key: object, trail: tuple) -> tuple:
-        if len(trail) > 2 * MAX_CHAIN:
-            raise ValueError(
-                f"{self.file}: the shading network is deeper than {MAX_CHAIN} connected shaders "
-                f"(at {key}); not evaluated"
-            )
-        if key in trail:
-            loop = list(trail[trail.index(key) :]) + [key]
-            raise ValueError(f"{self.file}: connection cycle: {' -> '.join(str(k) for k in loop)}")
-        return trail + (key,)
-
     # ----------------------------------------------------------------- values
     def attr_value(self, attr, mx_type):
         """(value, time note) of an attribute at the resolver's time, or (None, "")."""
@@ -356,7 +345,7 @@ class _UsdResolver:
         _, UsdShade, _ = _pxr()
 
         attr = port.GetAttr()
-        trail = self._cycle(attr.GetPath(), trail)
+        trail = follow(self.file, trail, attr.GetPath(), "network", "shaders")
         # most inputs hold a plain value: ask for connection sources only if any are authored
         sources, invalid = port.GetConnectedSources() if attr.HasAuthoredConnections() else ((), ())
         if sources:
@@ -470,7 +459,7 @@ class _UsdResolver:
     def _shader_value(self, shader: Any, output: str, mx_type: str, trail: tuple) -> Parameter | None:
         sid = shader.GetShaderId() or ""
         path = str(shader.GetPath())
-        trail = self._cycle(shader.GetPath(), trail)
+        trail = follow(self.file, trail, shader.GetPath(), "network", "shaders")
         if sid.startswith("UsdUVTexture"):
             return self.uv_texture(shader, sid, output, mx_type, trail)
         if sid.startswith("UsdPrimvarReader"):
