@@ -168,7 +168,14 @@ def check_output_file(
     return target
 
 
-def _umask() -> int:
+def current_umask() -> int:
+    """This process's file mode creation mask (``os.umask`` only sets it: set and set back).
+
+    >>> old = os.umask(0o027)
+    >>> current_umask() == 0o027
+    True
+    >>> _ = os.umask(old)
+    """
     mask = os.umask(0o022)
     os.umask(mask)
     return mask
@@ -252,7 +259,7 @@ def output_file(
         now = os.lstat(tmp)
         if (now.st_dev, now.st_ino) != (made.st_dev, made.st_ino):
             raise OutputFileError(f"{option} {text}: the temporary file {tmp} was replaced while written")
-        os.fchmod(fd, 0o666 & ~_umask())
+        os.fchmod(fd, 0o666 & ~current_umask())
         os.fsync(fd)
         _signals.check()  # a signal that arrived (and was swallowed) publishes nothing
         check()
@@ -301,4 +308,11 @@ def write_output_file(
     return Path(os.path.abspath(os.fspath(path)))
 
 
-__all__ = ["OutputExistsError", "OutputFileError", "check_output_file", "output_file", "write_output_file"]
+__all__ = [
+    "OutputExistsError",
+    "OutputFileError",
+    "check_output_file",
+    "current_umask",
+    "output_file",
+    "write_output_file",
+]

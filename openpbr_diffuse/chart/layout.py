@@ -153,48 +153,36 @@ def _bound(tiles, centres, radii, furnace):
     return float((term.sum(axis=1) / np.maximum(np.minimum(mu_i, mu_o), 0.1)).max())
 
 
-def build_scene(gamma_deg: float, light: str = "distant", resolution: int = 1024, index: int = 0) -> dict[str, Any]:
-    """One scene of the chart as its chart.json document (a dict; see docs/reference/chart-schema.md).
-
-    Parameters
-    ----------
-    gamma_deg : float
-        Angle between the light and the view, degrees in [0, 180).
-    light : {"distant", "point", "furnace"}
-    resolution : int
-        Image width = height in pixels, a multiple of 16, at least 256.
-    index : int
-        The scene's number (its id ``scene_NN``).
-
-    Example
-    -------
-    >>> s = build_scene(35.0, resolution=256)
-    >>> roles = [t["role"] for t in s["tiles"]]
-    >>> roles.count("ramp"), roles.index("white")
-    (8, 8)
-    """
+def _check_scene(gamma_deg: float, light: str, resolution: int) -> None:
+    """Raise ValueError for a light, resolution or light-view angle build_scene does not take."""
     if light not in LIGHTS:
         raise ValueError(f"light: expected one of {', '.join(LIGHTS)}, got {light!r}")
     if not isinstance(resolution, int) or resolution < 256 or resolution % GRID:
         raise ValueError(f"resolution: expected a multiple of {GRID}, at least 256, got {resolution!r}")
     if not 0.0 <= gamma_deg < 180.0:
         raise ValueError(f"gamma_deg: expected an angle in [0, 180), got {gamma_deg!r}")
-    g = math.radians(gamma_deg)
-    ldir = np.array([math.sin(g), 0.0, math.cos(g)])
-    width = height = resolution
-    pitch = resolution // GRID
-    size = int(round(pitch * TILE_FRACTION))
-    off = (pitch - size) // 2
+
+
+def _tile_specs(g: float, ldir: np.ndarray) -> list[tuple[str, np.ndarray, float, tuple[float, ...]]]:
+    """(role, normal, roughness, rho) of every tile: the ramp, the white tile, then the test
+    tiles (each picked normal with every roughness and rho)."""
     cal_n = _calibration_normal(ldir)
-    specs = [("ramp", cal_n, 0.0, (r, r, r)) for r in RAMP] + [("white", cal_n, 0.0, (1.0, 1.0, 1.0))]
+    specs: list[tuple[str, np.ndarray, float, tuple[float, ...]]] = [("ramp", cal_n, 0.0, (r, r, r)) for r in RAMP]
+    specs.append(("white", cal_n, 0.0, (1.0, 1.0, 1.0)))
     geo = _pick(_normals(g), (GRID * GRID - len(specs)) // (len(ROUGHNESS) * len(RHO)))
     for n, _, _ in geo:
         for rough in ROUGHNESS:
             for rho in RHO:
                 specs.append(("test", n, rough, rho))
+    return specs
+
+
+def _tiles(specs: list, ldir: np.ndarray, pitch: int, size: int) -> list[dict[str, Any]]:
+    """The tiles' documents in grid order (a snake, column by column), with the working
+    entries ``_wi``, ``_wo``, ``_colrow``, ``_k`` and ``area`` that :func:`_finish_tile` drops."""
+    off = (pitch - size) // 2
     v = np.array([0.0, 0.0, 1.0])
     tiles: list[dict[str, Any]] = []
-    geom = []
     for k, (role, n, rough, rho) in enumerate(specs):
         col, row = k // GRID, k % GRID
         if col % 2:  # a snake: consecutive tiles are neighbours
@@ -220,25 +208,109 @@ def build_scene(gamma_deg: float, light: str = "distant", resolution: int = 1024
                 "_k": k,
             }
         )
-        geom.append(n)
-    # the staircase: order along the light's azimuth (+x), column by column
+    return tiles
+
+
+def _staircase(
+    tiles: list[dict[str, Any]], normals: list[np.ndarray], ldir: np.ndarray, size: int, resolution: int, furnace: bool
+) -> tuple[list[np.ndarray], list[np.ndarray], float]:
+    """The tiles' corners and centres on the staircase (ordered along the light's azimuth +x,
+    column by column) whose step is grown until the interreflection bound is small enough,
+    and that bound."""
     sign = -1.0 if ldir[2] < 0 else 1.0
     half = size * PIXEL / 2
-    reach = max(half * (abs(n[0]) + abs(n[1])) / n[2] for n in geom)
+    reach = max(half * (abs(n[0]) + abs(n[1])) / n[2] for n in normals)
     dz = 2.0 * reach + size * PIXEL
     while True:
         centres, radii, corners = [], [], []
         for tile in tiles:
-            col, row = tile["_colrow"]
             zc = -sign * dz * tile["_k"]
-            cs, c = _corners(tile["rect"], np.array(tile["normal"]), zc, width, height)
+            cs, c = _corners(tile["rect"], np.array(tile["normal"]), zc, resolution, resolution)
             corners.append(cs)
             centres.append(c)
             radii.append(float(np.linalg.norm(cs - c, axis=1).max()))
-        bound = _bound(tiles, centres, radii, light == "furnace")
+        bound = _bound(tiles, centres, radii, furnace)
         if bound <= INTERREFLECTION_MAX:
-            break
+            return corners, centres, bound
         dz *= 1.25
+
+
+def _light(light: str, ldir: np.ndarray, zs: np.ndarray, depth: float, width: int) -> dict[str, Any]:
+    """The scene's light document: a distant light along ``ldir``, a point light far along it
+    from the chart's centre, or the furnace."""
+    if light == "distant":
+        return {"kind": "distant", "direction": [float(x) for x in ldir], "irradiance": IRRADIANCE}
+    if light == "point":
+        dist = POINT_DISTANCE * max(depth, width * PIXEL)
+        centre = np.array([0.0, 0.0, 0.5 * (zs.max() + zs.min())])
+        pos = centre + dist * ldir
+        return {
+            "kind": "point",
+            "position": [float(x) for x in pos],
+            "intensity": IRRADIANCE * dist * dist,
+            "irradiance": IRRADIANCE,
+            "irradiance_note": "irradiance = intensity / d^2 on a surface facing the light at distance d",
+        }
+    return {"kind": "furnace", "radiance": RADIANCE, "irradiance": math.pi * RADIANCE}
+
+
+def _finish_tile(tile: dict[str, Any], cs: np.ndarray, c: np.ndarray, light: dict[str, Any]) -> None:
+    """Turn a working tile into its chart.json entry: corners, centre, wo and the light it
+    receives (wi; for a point light also mu_i, the irradiance at its centre and its variation)."""
+    wi, wo = tile.pop("_wi"), tile.pop("_wo")
+    tile.pop("_colrow")
+    tile.pop("_k")
+    tile.pop("area")
+    tile["corners"] = [[float(x) for x in p] for p in cs]
+    tile["centre"] = [float(x) for x in c]
+    tile["wo"] = [float(x) for x in wo]
+    if light["kind"] == "distant":
+        tile["wi"] = [float(x) for x in wi]
+    elif light["kind"] == "point":
+        pos = np.array(light["position"])
+        n = np.array(tile["normal"])
+        vals = []
+        for p in list(cs) + [c]:
+            d = pos - p
+            vals.append(max(float(n @ d), 0.0) / float(np.linalg.norm(d)) ** 3)
+        tile["wi"] = [float(x) for x in _local(_unit(pos - c), n)]
+        tile["mu_i"] = tile["wi"][2]
+        tile["irradiance"] = float(light["intensity"] * vals[-1] / max(tile["wi"][2], 1e-12))
+        tile["variation"] = float(max(abs(x / vals[-1] - 1.0) for x in vals[:-1]))
+    else:
+        tile.pop("mu_i")
+    tile["expected_rel"] = _calibration_value(tile, light)
+
+
+def build_scene(gamma_deg: float, light: str = "distant", resolution: int = 1024, index: int = 0) -> dict[str, Any]:
+    """One scene of the chart as its chart.json document (a dict; see docs/reference/chart-schema.md).
+
+    Parameters
+    ----------
+    gamma_deg : float
+        Angle between the light and the view, degrees in [0, 180).
+    light : {"distant", "point", "furnace"}
+    resolution : int
+        Image width = height in pixels, a multiple of 16, at least 256.
+    index : int
+        The scene's number (its id ``scene_NN``).
+
+    Example
+    -------
+    >>> s = build_scene(35.0, resolution=256)
+    >>> roles = [t["role"] for t in s["tiles"]]
+    >>> roles.count("ramp"), roles.index("white")
+    (8, 8)
+    """
+    _check_scene(gamma_deg, light, resolution)
+    g = math.radians(gamma_deg)
+    ldir = np.array([math.sin(g), 0.0, math.cos(g)])
+    width = height = resolution
+    pitch = resolution // GRID
+    size = int(round(pitch * TILE_FRACTION))
+    specs = _tile_specs(g, ldir)
+    tiles = _tiles(specs, ldir, pitch, size)
+    corners, centres, bound = _staircase(tiles, [n for _, n, _, _ in specs], ldir, size, resolution, light == "furnace")
     zs = np.concatenate([c[:, 2] for c in corners])
     depth = float(zs.max() - zs.min())
     scene: dict[str, Any] = {
@@ -258,46 +330,10 @@ def build_scene(gamma_deg: float, light: str = "distant", resolution: int = 1024
             "near": 0.5,
             "far": depth + 2.0,
         },
+        "light": _light(light, ldir, zs, depth, width),
     }
-    if light == "distant":
-        scene["light"] = {"kind": "distant", "direction": [float(x) for x in ldir], "irradiance": IRRADIANCE}
-    elif light == "point":
-        dist = POINT_DISTANCE * max(depth, width * PIXEL)
-        centre = np.array([0.0, 0.0, 0.5 * (zs.max() + zs.min())])
-        pos = centre + dist * ldir
-        scene["light"] = {
-            "kind": "point",
-            "position": [float(x) for x in pos],
-            "intensity": IRRADIANCE * dist * dist,
-            "irradiance": IRRADIANCE,
-            "irradiance_note": "irradiance = intensity / d^2 on a surface facing the light at distance d",
-        }
-    else:
-        scene["light"] = {"kind": "furnace", "radiance": RADIANCE, "irradiance": math.pi * RADIANCE}
     for tile, cs, c in zip(tiles, corners, centres, strict=True):
-        wi, wo = tile.pop("_wi"), tile.pop("_wo")
-        tile.pop("_colrow")
-        tile.pop("_k")
-        tile.pop("area")
-        tile["corners"] = [[float(x) for x in p] for p in cs]
-        tile["centre"] = [float(x) for x in c]
-        tile["wo"] = [float(x) for x in wo]
-        if light == "distant":
-            tile["wi"] = [float(x) for x in wi]
-        elif light == "point":
-            pos = np.array(scene["light"]["position"])
-            n = np.array(tile["normal"])
-            vals = []
-            for p in list(cs) + [c]:
-                d = pos - p
-                vals.append(max(float(n @ d), 0.0) / float(np.linalg.norm(d)) ** 3)
-            tile["wi"] = [float(x) for x in _local(_unit(pos - c), n)]
-            tile["mu_i"] = tile["wi"][2]
-            tile["irradiance"] = float(scene["light"]["intensity"] * vals[-1] / max(tile["wi"][2], 1e-12))
-            tile["variation"] = float(max(abs(x / vals[-1] - 1.0) for x in vals[:-1]))
-        else:
-            tile.pop("mu_i")
-        tile["expected_rel"] = _calibration_value(tile, scene["light"])
+        _finish_tile(tile, cs, c, scene["light"])
     scene["tiles"] = tiles
     return scene
 

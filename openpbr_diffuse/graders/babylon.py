@@ -56,7 +56,7 @@ import json
 import os
 import re
 import shutil
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -191,12 +191,68 @@ def package_version(folder: Path) -> str:
     return str(json.loads((folder / "package.json").read_text())["version"])
 
 
+def installed_package(prefix: Path | str | None, package: str, holds: Callable[[Path], bool], install: str) -> Path:
+    """``node_modules/<package>`` under ``prefix`` (default :func:`npm_prefix`), or ``prefix``
+    itself when it is the package folder: the first with a package.json for which ``holds``
+    is true.  Raises GraderUnavailable (with the install command ``install``) when neither is.
+
+    >>> installed_package(None, "three", lambda f: (f / "build").is_dir(), "npm install three").name
+    'three'
+    """
+    root = Path(prefix) if prefix is not None else npm_prefix()
+    for folder in (root / "node_modules" / package, root):
+        if (folder / "package.json").is_file() and holds(folder):
+            return folder
+    raise GraderUnavailable(f"npm package {package} is not installed in {root}: {install}")
+
+
+def package_info(key: str, folder: Path, files: list[str]) -> dict[str, Any]:
+    """The ``version`` of a Subject read from the npm package ``folder``: ``{key: its version,
+    "source": folder, "files": files (relative to it), "sha256": the files' hash}``.
+
+    >>> sorted(package_info("babylonjs", package_folder(), ["package.json"]))
+    ['babylonjs', 'files', 'sha256', 'source']
+    """
+    return {
+        key: package_version(folder),
+        "source": str(folder),
+        "files": files,
+        "sha256": glsl.sources_hash([folder / f for f in files]),
+    }
+
+
+def require_node(what: str) -> None:
+    """Raise GraderUnavailable when ``node`` (which reads ``what``) is not installed.
+
+    >>> require_node("three's shader chunks")
+    """
+    if shutil.which("node") is None:
+        raise GraderUnavailable(f"node is not installed (it reads {what}): apt-get install nodejs npm")
+
+
+def run_node(script: str, job: Any, what: str, failure: str | None = None) -> Any:
+    """The JSON that the ES module ``script`` writes to stdout for ``job`` (JSON on its stdin),
+    run with node under the limits of user code.  Raises GraderUnavailable ("node could not
+    import ``failure``", by default ``what``) when node fails.
+
+    >>> run_node('import { readFileSync } from "fs"; '
+    ...          'process.stdout.write(JSON.stringify(2 * JSON.parse(readFileSync(0, "utf8"))))', 21, "a number")
+    42
+    """
+    run = limits.run_limited(
+        ["node", "--input-type=module", "-e", script],
+        input=json.dumps(job).encode(),
+        label=f"reading {what} with node",
+    )
+    if run.returncode != 0:
+        last = (run.stderr.decode(errors="replace").strip().splitlines() or ["?"])[-1]
+        raise GraderUnavailable(f"node could not import {failure or what}: {last}")
+    return json.loads(run.stdout)
+
+
 @lru_cache(maxsize=8)
 def _shaders(folder: Path, names: tuple, wgsl: bool) -> dict:
-    if shutil.which("node") is None:
-        raise GraderUnavailable(
-            f"node is not installed (it reads {PACKAGE}'s shader modules): apt-get install nodejs npm"
-        )
+    require_node(f"{PACKAGE}'s shader modules")
     sub = "ShadersWGSL" if wgsl else "Shaders"
     files = []
     for name in names:
@@ -210,15 +266,7 @@ def _shaders(folder: Path, names: tuple, wgsl: bool) -> dict:
                 f"{folder / sub}: no shader module {name}.js in {PACKAGE} "
                 f"{package_version(folder)} (the grader knows its 9.x layout)"
             )
-    run = limits.run_limited(
-        ["node", "--input-type=module", "-e", _EXTRACT],
-        input=json.dumps(files).encode(),
-        label=f"reading {PACKAGE}'s shader modules with node",
-    )
-    if run.returncode != 0:
-        last = (run.stderr.decode(errors="replace").strip().splitlines() or ["?"])[-1]
-        raise GraderUnavailable(f"node could not import {PACKAGE}'s shader modules: {last}")
-    return json.loads(run.stdout)
+    return run_node(_EXTRACT, files, f"{PACKAGE}'s shader modules")
 
 
 def shaders(names: Iterable[str], folder: Path | None = None, *, wgsl: bool = False) -> dict[str, str]:
@@ -496,13 +544,7 @@ def path_subject(key: str, folder: Path | None = None) -> Subject:
     label, kind = labels[key]
     version = package_version(folder)
     code = "" if key.startswith("wgsl_") else _source(folder, {**_DEFINES, **_PATH_DEFINES.get(key, {})})
-    files = [f"Shaders/ShadersInclude/{n}.js" for n in INCLUDES]
-    info: dict[str, Any] = {
-        "babylonjs": version,
-        "source": str(folder),
-        "files": files,
-        "sha256": glsl.sources_hash([folder / f for f in files]),
-    }
+    info = package_info("babylonjs", folder, [f"Shaders/ShadersInclude/{n}.js" for n in INCLUDES])
     common: dict[str, Any] = {"tolerance": TOLERANCE, "tolerance_reason": TOLERANCE_REASON, "version": info}
     name = f"babylonjs {label}"
     run_label = f"Babylon.js {version} ({label})"

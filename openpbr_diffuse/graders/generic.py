@@ -22,9 +22,11 @@ surface in the local frame whose normal is +z; ``mu`` is cos(theta_o).
 
 from __future__ import annotations
 
+import functools
 import os
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
+from typing import Any, NamedTuple
 
 from . import cpp, glsl, limits
 from ._arrays import rows
@@ -58,31 +60,19 @@ def _names(function, albedo_function, sample_function=None, pdf_function=None):
         raise ValueError("--function, --albedo-function or --sample-function/--pdf-function is required")
 
 
-def glsl_subject(
-    path: str | os.PathLike[str],
-    function: str | None = None,
-    albedo_function: str | None = None,
-    *,
-    includes: Sequence[str | os.PathLike[str]] = (),
-    defines: Iterable[str] | dict = (),
-    model: str = "eon",
-    sample_function: str | None = None,
-    pdf_function: str | None = None,
-) -> Subject:
-    """A GLSL file's BRDF function ``function``, albedo function ``albedo_function`` and/or
-    sampler ``sample_function`` with its pdf ``pdf_function`` (given together)."""
-    path = _check_file(path, "GLSL")
-    _names(function, albedo_function, sample_function, pdf_function)
+def _glsl_functions(path, code_names, includes, defines):
+    """The array functions (brdf, albedo, sample, pdf) of a GLSL file's named functions, and
+    the defines they were built with."""
+    function, albedo_function, sample_function, pdf_function = code_names
     code = glsl.resolve_includes(path, tuple(Path(i) for i in includes))
     defs = _defines(defines)
+    kernel = functools.partial(glsl.Kernel, code=code, defines=defs)
     brdf = albedo = None
     label = str(path)
     if function:
-        k_brdf = glsl.Kernel(
-            code=code,
+        k_brdf = kernel(
             n_in=10,
             n_out=3,
-            defines=defs,
             body=f"""
     vec3 grader_f = {function}(vec3(IN(0), IN(1), IN(2)), vec3(IN(3), IN(4), IN(5)), IN(6), vec3(IN(7), IN(8), IN(9)));
     OUT(0) = grader_f.x; OUT(1) = grader_f.y; OUT(2) = grader_f.z;""",
@@ -92,11 +82,9 @@ def glsl_subject(
             return k_brdf.run(rows(wi, wo, roughness, rho), label)
 
     if albedo_function:
-        k_albedo = glsl.Kernel(
-            code=code,
+        k_albedo = kernel(
             n_in=5,
             n_out=3,
-            defines=defs,
             body=f"""
     vec3 grader_E = {albedo_function}(IN(0), IN(1), vec3(IN(2), IN(3), IN(4)));
     OUT(0) = grader_E.x; OUT(1) = grader_E.y; OUT(2) = grader_E.z;""",
@@ -110,39 +98,13 @@ def glsl_subject(
         if sample_function and pdf_function is not None  # given together (_names)
         else (None, None)
     )
-    return Subject(
-        name=f"glsl:{path.name}:{function or albedo_function or sample_function}",
-        model=model,
-        tolerance=glsl.TOLERANCE,
-        tolerance_reason=glsl.TOLERANCE_REASON,
-        version={
-            "source": str(path.resolve()),
-            "sha256": glsl.sources_hash([path]),
-            "gl": glsl.gl_version(),
-            "defines": defs,
-        },
-        brdf=brdf,
-        albedo=albedo,
-        sample=sample,
-        pdf=pdf,
-    )
+    return (brdf, albedo, sample, pdf), defs
 
 
-def cpp_subject(
-    path: str | os.PathLike[str],
-    function: str | None = None,
-    albedo_function: str | None = None,
-    *,
-    includes: Sequence[str | os.PathLike[str]] = (),
-    defines: Iterable[str] | dict = (),
-    model: str = "eon",
-    sample_function: str | None = None,
-    pdf_function: str | None = None,
-) -> Subject:
-    """A C++ file's BRDF function ``function``, albedo function ``albedo_function`` and/or
-    sampler ``sample_function`` with its pdf ``pdf_function`` (given together)."""
-    path = _check_file(path, "C++")
-    _names(function, albedo_function, sample_function, pdf_function)
+def _cpp_functions(path, code_names, includes, defines):
+    """The array functions (brdf, albedo, sample, pdf) of a C++ file's named functions, and
+    the defines they were compiled with."""
+    function, albedo_function, sample_function, pdf_function = code_names
     entries = {}
     if function:
         entries["brdf"] = cpp.Entry(
@@ -185,19 +147,88 @@ def cpp_subject(
             return h.run("albedo", rows(mu, roughness, rho))
 
     sample, pdf = cpp.sampler_functions(h) if sample_function else (None, None)
+    return (brdf, albedo, sample, pdf), _defines(defines)
+
+
+class _Language(NamedTuple):
+    """How a source file of one language becomes a Subject."""
+
+    what: str  # the language in messages
+    functions: Callable[..., Any]  # (path, names, includes, defines) -> ((brdf, albedo, sample, pdf), defines)
+    tolerance: tuple[float, float] | None  # (relative, absolute); None: check FILE's float32 one
+    tolerance_reason: str
+    tool: str  # the key of the tool's version in Subject.version
+    tool_version: Callable[[], str]
+
+
+_LANGUAGES = {
+    "glsl": _Language("GLSL", _glsl_functions, glsl.TOLERANCE, glsl.TOLERANCE_REASON, "gl", glsl.gl_version),
+    "cpp": _Language(
+        "C++",
+        _cpp_functions,
+        None,
+        "compiled C++: the float32 tolerance of check FILE",
+        "compiler",
+        cpp.compiler_version,
+    ),
+}
+
+
+def _file_subject(kind, path, code_names, includes, defines, model):
+    """The Subject of the functions ``code_names`` = (brdf, albedo, sample, pdf names) of the
+    ``kind`` (``glsl``, ``cpp``) file ``path``."""
+    language = _LANGUAGES[kind]
+    path = _check_file(path, language.what)
+    _names(*code_names)
+    (brdf, albedo, sample, pdf), defs = language.functions(path, code_names, includes, defines)
+    function, albedo_function, sample_function, _ = code_names
     return Subject(
-        name=f"cpp:{path.name}:{function or albedo_function or sample_function}",
+        name=f"{kind}:{path.name}:{function or albedo_function or sample_function}",
         model=model,
-        tolerance=None,
-        tolerance_reason="compiled C++: the float32 tolerance of check FILE",
+        tolerance=language.tolerance,
+        tolerance_reason=language.tolerance_reason,
         version={
             "source": str(path.resolve()),
             "sha256": glsl.sources_hash([path]),
-            "compiler": cpp.compiler_version(),
-            "defines": _defines(defines),
+            language.tool: language.tool_version(),
+            "defines": defs,
         },
         brdf=brdf,
         albedo=albedo,
         sample=sample,
         pdf=pdf,
     )
+
+
+def glsl_subject(
+    path: str | os.PathLike[str],
+    function: str | None = None,
+    albedo_function: str | None = None,
+    *,
+    includes: Sequence[str | os.PathLike[str]] = (),
+    defines: Iterable[str] | dict = (),
+    model: str = "eon",
+    sample_function: str | None = None,
+    pdf_function: str | None = None,
+) -> Subject:
+    """A GLSL file's BRDF function ``function``, albedo function ``albedo_function`` and/or
+    sampler ``sample_function`` with its pdf ``pdf_function`` (given together)."""
+    names = (function, albedo_function, sample_function, pdf_function)
+    return _file_subject("glsl", path, names, includes, defines, model)
+
+
+def cpp_subject(
+    path: str | os.PathLike[str],
+    function: str | None = None,
+    albedo_function: str | None = None,
+    *,
+    includes: Sequence[str | os.PathLike[str]] = (),
+    defines: Iterable[str] | dict = (),
+    model: str = "eon",
+    sample_function: str | None = None,
+    pdf_function: str | None = None,
+) -> Subject:
+    """A C++ file's BRDF function ``function``, albedo function ``albedo_function`` and/or
+    sampler ``sample_function`` with its pdf ``pdf_function`` (given together)."""
+    names = (function, albedo_function, sample_function, pdf_function)
+    return _file_subject("cpp", path, names, includes, defines, model)

@@ -237,33 +237,31 @@ def sampler_functions(
     from ._arrays import rows
 
     defs = dict(defines or {})
-    k_sample = Kernel(
-        code=code,
-        n_in=6,
-        n_out=4,
-        defines=defs,
-        body=f"""
+
+    def kernel(n_in: int, n_out: int, body: str) -> Kernel:
+        return Kernel(code=code, n_in=n_in, n_out=n_out, defines=defs, body=body)
+
+    k_sample = kernel(
+        6,
+        4,
+        f"""
     vec3 grader_wo = vec3(IN(0), IN(1), IN(2));
     float grader_r = IN(5);
     vec3 grader_wi = {sample_function}(grader_wo, vec2(IN(3), IN(4)), grader_r);
     float grader_p = {pdf_function}(grader_wo, grader_wi, grader_r);
     OUT(0) = grader_wi.x; OUT(1) = grader_wi.y; OUT(2) = grader_wi.z; OUT(3) = grader_p;""",
     )
-    k_pdf = Kernel(
-        code=code,
-        n_in=7,
-        n_out=1,
-        defines=defs,
-        body=f"""
+    k_pdf = kernel(
+        7,
+        1,
+        f"""
     OUT(0) = {pdf_function}(vec3(IN(0), IN(1), IN(2)), vec3(IN(3), IN(4), IN(5)), IN(6));""",
     )
     # both in one run: IN(0) = 1 for a sample row (wo, u, -, r), 0 for a pdf row (wo, wi, r)
-    k_both = Kernel(
-        code=code,
-        n_in=8,
-        n_out=4,
-        defines=defs,
-        body=f"""
+    k_both = kernel(
+        8,
+        4,
+        f"""
     vec3 grader_wo = vec3(IN(1), IN(2), IN(3));
     float grader_r = IN(7);
     if (IN(0) > 0.5) {{

@@ -248,6 +248,23 @@ def kill_group(proc: subprocess.Popen, patience: float = 5.0) -> None:
         pass
 
 
+def close_streams(*streams: Any) -> None:
+    """Close each of ``streams`` (a child's pipes) that is not None, passing over an OSError
+    (a pipe whose reader has gone: what is left unwritten is not wanted).
+
+    >>> import io
+    >>> pipe = io.BytesIO()
+    >>> close_streams(pipe, None); pipe.closed
+    True
+    """
+    for stream in streams:
+        if stream is not None:
+            try:
+                stream.close()
+            except OSError:
+                pass
+
+
 def _exit_fd(proc: subprocess.Popen) -> int | None:
     """A pidfd of ``proc`` (readable once it has exited), or None where Linux has none."""
     try:
@@ -327,12 +344,7 @@ def _communicate(proc: subprocess.Popen, data: bytes | None, deadline: float) ->
         sel.close()
         if exit_fd is not None:
             os.close(exit_fd)
-        for stream in (proc.stdin, proc.stdout, proc.stderr):
-            if stream is not None:
-                try:
-                    stream.close()
-                except OSError:
-                    pass
+        close_streams(proc.stdin, proc.stdout, proc.stderr)
     return bytes(out), bytes(err)
 
 
@@ -444,11 +456,7 @@ class Worker:
     def stop(self) -> None:
         """End the child (and every process of its run) if it runs."""
         if self.proc is not None:
-            for stream in (self.proc.stdin, self.proc.stdout):
-                try:
-                    stream.close()  # type: ignore[union-attr]
-                except OSError:
-                    pass
+            close_streams(self.proc.stdin, self.proc.stdout)
             kill_group(self.proc)
             self.proc = None
         if self._exit_fd is not None:

@@ -163,6 +163,26 @@ def wrapped_source(libraries: Path) -> tuple[str, list[Path]]:
     return prologue(generated) + substitute_tokens(text, values), files
 
 
+def _closure_kernel(
+    code: str, n_in: int, n_out: int, frame: str, closure: str, rho_roughness: str, ec: str, more: str = ""
+) -> glsl.Kernel:
+    """A fragment kernel that calls ``mx_oren_nayar_diffuse_bsdf`` once per row: ``frame`` sets
+    V and N (and L) from the row, ``closure`` is the closure type and its light direction,
+    ``rho_roughness`` the colour and roughness arguments; OUT(0..2) is the response, then ``more``."""
+    return glsl.Kernel(
+        code=code,
+        n_in=n_in,
+        n_out=n_out,
+        stage="fragment",
+        body=f"""
+    {frame}
+    ClosureData cd = makeClosureData({closure}, V, N, vec3(0.0), 1.0);
+    BSDF bsdf = BSDF(vec3(0.0), vec3(1.0));
+    mx_oren_nayar_diffuse_bsdf(cd, 1.0, {rho_roughness}, N, {ec}, bsdf);
+    OUT(0) = bsdf.response.x; OUT(1) = bsdf.response.y; OUT(2) = bsdf.response.z;{more}""",
+    )
+
+
 def subject(source: Path | None = None, energy_compensation: bool = True) -> Subject:
     """MaterialX's GLSL closure ``mx_oren_nayar_diffuse_bsdf`` (EON when energy_compensation)."""
     mx = _materialx()
@@ -178,30 +198,24 @@ def subject(source: Path | None = None, energy_compensation: bool = True) -> Sub
     code, files = wrapped_source(libraries)
     ec = "true" if energy_compensation else "false"
     # N = +z, the closure's local frame; P is unused by the node; occlusion 1.
-    k_brdf = glsl.Kernel(
-        code=code,
-        n_in=10,
-        n_out=4,
-        stage="fragment",
-        body=f"""
-    vec3 L = vec3(IN(0), IN(1), IN(2)); vec3 V = vec3(IN(3), IN(4), IN(5)); vec3 N = vec3(0.0, 0.0, 1.0);
-    ClosureData cd = makeClosureData(CLOSURE_TYPE_REFLECTION, L, V, N, vec3(0.0), 1.0);
-    BSDF bsdf = BSDF(vec3(0.0), vec3(1.0));
-    mx_oren_nayar_diffuse_bsdf(cd, 1.0, vec3(IN(7), IN(8), IN(9)), IN(6), N, {ec}, bsdf);
-    OUT(0) = bsdf.response.x; OUT(1) = bsdf.response.y; OUT(2) = bsdf.response.z;
-    OUT(3) = clamp(dot(N, L), M_FLOAT_EPS, 1.0);""",
+    k_brdf = _closure_kernel(
+        code,
+        10,
+        4,
+        "vec3 L = vec3(IN(0), IN(1), IN(2)); vec3 V = vec3(IN(3), IN(4), IN(5)); vec3 N = vec3(0.0, 0.0, 1.0);",
+        "CLOSURE_TYPE_REFLECTION, L",
+        "vec3(IN(7), IN(8), IN(9)), IN(6)",
+        ec,
+        "\n    OUT(3) = clamp(dot(N, L), M_FLOAT_EPS, 1.0);",
     )
-    k_albedo = glsl.Kernel(
-        code=code,
-        n_in=5,
-        n_out=3,
-        stage="fragment",
-        body=f"""
-    float mu = IN(0); vec3 V = vec3(sqrt(max(0.0, 1.0 - mu*mu)), 0.0, mu); vec3 N = vec3(0.0, 0.0, 1.0);
-    ClosureData cd = makeClosureData(CLOSURE_TYPE_INDIRECT, vec3(0.0), V, N, vec3(0.0), 1.0);
-    BSDF bsdf = BSDF(vec3(0.0), vec3(1.0));
-    mx_oren_nayar_diffuse_bsdf(cd, 1.0, vec3(IN(2), IN(3), IN(4)), IN(1), N, {ec}, bsdf);
-    OUT(0) = bsdf.response.x; OUT(1) = bsdf.response.y; OUT(2) = bsdf.response.z;""",
+    k_albedo = _closure_kernel(
+        code,
+        5,
+        3,
+        "float mu = IN(0); vec3 V = vec3(sqrt(max(0.0, 1.0 - mu*mu)), 0.0, mu); vec3 N = vec3(0.0, 0.0, 1.0);",
+        "CLOSURE_TYPE_INDIRECT, vec3(0.0)",
+        "vec3(IN(2), IN(3), IN(4)), IN(1)",
+        ec,
     )
     label = f"MaterialX {mx.getVersionString()} {NODE_FILE}"
 

@@ -31,9 +31,7 @@ not graded here.
 
 from __future__ import annotations
 
-import json
 import re
-import shutil
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -41,9 +39,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import glsl, limits
+from . import glsl
 from ._arrays import rows
-from .babylon import CACHE_VARIABLE, npm_prefix, package_version
+from .babylon import CACHE_VARIABLE, installed_package, package_info, package_version, require_node, run_node
 from .errors import GraderUnavailable
 from .subject import Subject
 
@@ -112,11 +110,7 @@ def package_folder(prefix: Path | str | None = None) -> Path:
     >>> (package_folder() / CHUNK_FOLDER / "common.glsl.js").is_file()
     True
     """
-    root = Path(prefix) if prefix is not None else npm_prefix()
-    for folder in (root / "node_modules" / PACKAGE, root):
-        if (folder / "package.json").is_file() and (folder / CHUNK_FOLDER).is_dir():
-            return folder
-    raise GraderUnavailable(f"npm package {PACKAGE} is not installed in {root}: {INSTALL}")
+    return installed_package(prefix, PACKAGE, lambda folder: (folder / CHUNK_FOLDER).is_dir(), INSTALL)
 
 
 def chunk_files(folder: Path) -> list[Path]:
@@ -135,25 +129,14 @@ def chunks(folder: Path) -> dict[str, str]:
     >>> "vec3 BRDF_EON(" in chunks(package_folder())["lights_physical_pars_fragment"]
     True
     """
-    if shutil.which("node") is None:
-        raise GraderUnavailable(
-            f"node is not installed (it reads {PACKAGE}'s shader chunks): apt-get install nodejs npm"
-        )
+    require_node(f"{PACKAGE}'s shader chunks")
     files = dict(zip(CHUNKS, map(str, chunk_files(folder))))
     for name, f in files.items():
         if not Path(f).is_file():
             raise GraderUnavailable(
                 f"{f}: no shader chunk {name} in {PACKAGE} {package_version(folder)} (the grader knows r187's layout)"
             )
-    run = limits.run_limited(
-        ["node", "--input-type=module", "-e", _EXTRACT],
-        input=json.dumps(files).encode(),
-        label=f"reading {PACKAGE}'s shader chunks with node",
-    )
-    if run.returncode != 0:
-        last = (run.stderr.decode(errors="replace").strip().splitlines() or ["?"])[-1]
-        raise GraderUnavailable(f"node could not import {PACKAGE}'s shader chunks: {last}")
-    return dict(json.loads(run.stdout))
+    return dict(run_node(_EXTRACT, files, f"{PACKAGE}'s shader chunks"))
 
 
 def _squash(text: str) -> str:
@@ -251,13 +234,7 @@ def subject(source_folder: Path | None = None) -> Subject:
     folder = package_folder(source_folder)
     version = package_version(folder)
     source(folder)  # the expected statements, checked before anything runs
-    files = [str(p.relative_to(folder)) for p in chunk_files(folder)]
-    info: dict[str, Any] = {
-        "three": version,
-        "source": str(folder),
-        "files": files,
-        "sha256": glsl.sources_hash(chunk_files(folder)),
-    }
+    info = package_info("three", folder, [str(p.relative_to(folder)) for p in chunk_files(folder)])
 
     def brdf(wi, wo, roughness, rho):
         out = _run_brdf(folder, wi, wo, roughness, rho)

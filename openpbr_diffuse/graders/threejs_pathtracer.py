@@ -27,9 +27,7 @@ the sampler on the ``eon`` path; ``fonBrdf`` as ``fon``.
 
 from __future__ import annotations
 
-import json
 import re
-import shutil
 from collections.abc import Callable
 from functools import lru_cache
 from pathlib import Path
@@ -37,9 +35,17 @@ from typing import Any
 
 import numpy as np
 
-from . import glsl, limits
+from . import glsl
 from ._arrays import rows
-from .babylon import CACHE_VARIABLE, _run_wgsl, npm_prefix, package_version
+from .babylon import (
+    CACHE_VARIABLE,
+    _run_wgsl,
+    installed_package,
+    package_info,
+    package_version,
+    require_node,
+    run_node,
+)
 from .errors import GraderUnavailable
 from .subject import Subject
 
@@ -135,11 +141,7 @@ def package_folder(prefix: Path | str | None = None) -> Path:
     >>> (package_folder() / MODULE).is_file()
     True
     """
-    root = Path(prefix) if prefix is not None else npm_prefix()
-    for folder in (root / "node_modules" / PACKAGE, root):
-        if (folder / "package.json").is_file() and (folder / MODULE).is_file():
-            return folder
-    raise GraderUnavailable(f"npm package {PACKAGE} is not installed in {root}: {INSTALL}")
+    return installed_package(prefix, PACKAGE, lambda folder: (folder / MODULE).is_file(), INSTALL)
 
 
 def _squash(text: str) -> str:
@@ -164,8 +166,7 @@ def wgsl_functions(folder: Path) -> str:
     >>> text.index("struct SurfaceRecord") < text.index("fn eonBrdf(")
     True
     """
-    if shutil.which("node") is None:
-        raise GraderUnavailable(f"node is not installed (it reads {PACKAGE}'s WGSL nodes): apt-get install nodejs npm")
+    require_node(f"{PACKAGE}'s WGSL nodes")
     material = _squash((Path(folder) / MATERIAL).read_text()) if (Path(folder) / MATERIAL).is_file() else ""
     missing = [s for s in EXPECTED if _squash(s) not in material]
     if missing:
@@ -173,15 +174,12 @@ def wgsl_functions(folder: Path) -> str:
             f"{PACKAGE} {package_version(folder)}: {MATERIAL} no longer holds {missing[0]!r}: "
             "the harness replays 0.0.26's calls and would grade something else"
         )
-    run = limits.run_limited(
-        ["node", "--input-type=module", "-e", _EXTRACT],
-        input=json.dumps({"file": str(Path(folder) / MODULE), "names": list(EXPORTS)}).encode(),
-        label=f"reading {PACKAGE}'s WGSL nodes with node",
+    parts = run_node(
+        _EXTRACT,
+        {"file": str(Path(folder) / MODULE), "names": list(EXPORTS)},
+        f"{PACKAGE}'s WGSL nodes",
+        f"{PACKAGE}'s {MODULE} (it needs npm three too)",
     )
-    if run.returncode != 0:
-        last = (run.stderr.decode(errors="replace").strip().splitlines() or ["?"])[-1]
-        raise GraderUnavailable(f"node could not import {PACKAGE}'s {MODULE} (it needs npm three too): {last}")
-    parts = json.loads(run.stdout)
     return "\n".join(p["code"] if "code" in p else _struct(p["struct"], p["members"]) for p in parts)
 
 
@@ -212,12 +210,7 @@ def subject(source_folder: Path | None = None) -> Subject:
     folder = package_folder(source_folder)
     version = package_version(folder)
     run = _runner(folder)
-    info: dict[str, Any] = {
-        "three-gpu-pathtracer": version,
-        "source": str(folder),
-        "files": [MODULE, "src/webgpu/nodes/structs.wgsl.js", MATERIAL],
-        "sha256": glsl.sources_hash([folder / MODULE, folder / "src/webgpu/nodes/structs.wgsl.js", folder / MATERIAL]),
-    }
+    info = package_info(PACKAGE, folder, [MODULE, "src/webgpu/nodes/structs.wgsl.js", MATERIAL])
 
     def brdf_of(which: str) -> Callable[..., np.ndarray]:
         cols = slice(0, 3) if which == "eon" else slice(3, 6)

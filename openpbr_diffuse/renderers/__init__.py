@@ -48,23 +48,31 @@ DEFAULT_RESOLUTION = 256
 
 @dataclass(frozen=True)
 class Renderer:
-    """A registered renderer: its module (``render``, ``version``), label and chart format."""
+    """A registered renderer: its module (``render``, ``version``), label and chart format; a
+    Blender renderer names its engine (the module's ``ENGINES`` entry has ``render``, ``version``)."""
 
     name: str
     module: str
     label: str
     chart_format: str
+    engine: str | None = None
 
     def load(self) -> Any:
-        return importlib.import_module(f"{__name__}.{self.module}")
+        """What renders: the module, or its Blender engine.
+
+        >>> RENDERERS["storm"].load().engine
+        'HYDRA_STORM'
+        """
+        module = importlib.import_module(f"{__name__}.{self.module}")
+        return module.ENGINES[self.engine] if self.engine else module
 
 
 RENDERERS = {
     r.name: r
     for r in (
-        Renderer("cycles-render", "cycles", "Blender Cycles (Principled BSDF, CPU)", "blender"),
-        Renderer("eevee", "eevee", "Blender EEVEE (Principled BSDF)", "blender"),
-        Renderer("storm", "storm", "Blender Hydra Storm (Principled BSDF)", "blender"),
+        Renderer("cycles-render", "_blender", "Blender Cycles (Principled BSDF, CPU)", "blender", "CYCLES"),
+        Renderer("eevee", "_blender", "Blender EEVEE (Principled BSDF)", "blender", "EEVEE"),
+        Renderer("storm", "_blender", "Blender Hydra Storm (Principled BSDF)", "blender", "HYDRA_STORM"),
         Renderer("threejs-render", "threejs", "three.js WebGLRenderer (GLTFLoader)", "gltf"),
         Renderer("babylonjs-render", "babylonjs", "Babylon.js (glTF loader)", "gltf"),
         # LuxCore reads chart.json (written with every format): the smallest format is asked for

@@ -21,11 +21,10 @@ Example
 
 from __future__ import annotations
 
-import json
-import tempfile
 from pathlib import Path
 
 from ..graders.errors import GraderUnavailable
+from ._film import render_film
 
 CHILD = Path(__file__).with_name("_luxcore_child.py")
 #: samples per pixel: a delta light on flat tiles leaves only the tile edges to average
@@ -46,20 +45,8 @@ def version() -> str:
 
 def render(scene_dir: Path, out: Path) -> list[str]:
     """Render ``scene_dir/chart.json`` with LuxCore into the EXR ``out``."""
-    import numpy as np
-
-    from ..chart.image import write_image
-    from ..graders import limits
-
     version()
-    with tempfile.TemporaryDirectory(prefix="openpbr-diffuse-luxcore-") as tmp:
-        raw = Path(tmp) / "film.npy"
-        cmd = limits.script_command(CHILD, str(scene_dir), str(raw), str(SAMPLES))
-        run = limits.run_limited(cmd, label="the LuxCore render")
-        if run.returncode != 0 or not raw.is_file():
-            err = run.stderr.decode(errors="replace").strip().splitlines() or ["no output"]
-            raise GraderUnavailable(f"the LuxCore render failed (exit {run.returncode}): {err[-1][:400]}")
-        write_image(out, np.load(raw), option="--out")
-    lines = run.stdout.decode(errors="replace").strip().splitlines()
-    info = json.loads(lines[-1]) if lines and lines[-1].startswith("{") else {}
+    info = render_film(
+        CHILD, scene_dir, out, what="the LuxCore render", tag="luxcore", film="film.npy", arg=str(SAMPLES)
+    )
     return [f"LuxCore {info.get('version', '?')} PATHCPU, {SAMPLES} samples per pixel, roughmatte with sigma = r pi/2"]

@@ -15,12 +15,11 @@ Example
 
 from __future__ import annotations
 
-import json
 import shutil
-import tempfile
 from pathlib import Path
 
 from ..graders.errors import GraderUnavailable
+from ._film import render_film
 
 CHILD = Path(__file__).with_name("_materialx_child.py")
 XVFB_INSTALL = "apt-get install xvfb"
@@ -40,20 +39,6 @@ def version() -> str:
 
 def render(scene_dir: Path, out: Path) -> list[str]:
     """Render ``scene_dir/chart.mtlx`` on the tiles of ``chart.json`` into the EXR ``out``."""
-    import numpy as np
-
-    from ..chart.image import write_image
-    from ..graders import limits
-
     version()
-    with tempfile.TemporaryDirectory(prefix="openpbr-diffuse-materialx-") as tmp:
-        raw = Path(tmp) / "frame.npy"
-        cmd = limits.script_command(CHILD, str(scene_dir), str(raw), tmp)
-        run = limits.run_limited(cmd, label="the MaterialX GLSL render")
-        if run.returncode != 0 or not raw.is_file():
-            err = run.stderr.decode(errors="replace").strip().splitlines() or ["no output"]
-            raise GraderUnavailable(f"the MaterialX GLSL render failed (exit {run.returncode}): {err[-1][:400]}")
-        write_image(out, np.load(raw), option="--out")
-    lines = run.stdout.decode(errors="replace").strip().splitlines()
-    info = json.loads(lines[-1]) if lines and lines[-1].startswith("{") else {}
+    info = render_film(CHILD, scene_dir, out, what="the MaterialX GLSL render", tag="materialx", film="frame.npy")
     return [f"MaterialX {info.get('version', '?')} GlslRenderer on Xvfb (GLX, llvmpipe), one render per tile"]

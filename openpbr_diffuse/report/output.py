@@ -55,6 +55,7 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 from .. import _signals
+from .._outfile import current_umask
 
 #: Name of the marker file a report folder holds: JSON with the manifest of what was written.
 MARKER = ".openpbr-diffuse-report"
@@ -245,12 +246,6 @@ def check_target(out: os.PathLike | str, inputs: Iterable[os.PathLike | str] = (
     return path
 
 
-def _umask() -> int:
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
-
-
 def _write_stamp(folder: Path) -> None:
     doc = {"tool": _TOOL, "pid": os.getpid(), "host": socket.gethostname()}
     fd = os.open(folder / STAMP, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
@@ -280,7 +275,7 @@ def staging_dir(out: os.PathLike | str) -> Path:
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
     _owned.add(os.path.abspath(tmp))
-    os.chmod(tmp, 0o777 & ~_umask())
+    os.chmod(tmp, 0o777 & ~current_umask())
     _write_stamp(tmp)
     return tmp
 
