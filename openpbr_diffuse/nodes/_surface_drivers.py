@@ -53,6 +53,7 @@ from ._surface_passes import (
     B,
     at,
     choose_pass,
+    clear_rgb_pass,
     compact,
     each_albedo,
     each_eval,
@@ -154,7 +155,8 @@ def _choose(ud, u, first, m, span_rows, f):
 # ``run(t, nt, ...)`` processes the t-th of nt runs of blocks: the rows' blocks
 # [t nb / nt, (t + 1) nb / nt).  It is compiled once per verb and parameter stride and
 # called by both builds of the driver (``_Builds``), so that the serial and the parallel
-# driver share one compiled body.
+# driver share one compiled body.  Every verb's runner is the one frame of ``_RUN`` around
+# the verb's step (``_runner_factory``).
 
 
 @helper
@@ -171,15 +173,19 @@ def _block(b, n):
     return first, m, span(m)
 
 
-def _albedo_run(stride, lobes, dmodel):
+#: The frame of every verb's runner: the registry's key in the closure, the scratch (and the
+#: sampler lists, for a step that reads them), one material's parameters copied to the stack,
+#: then per block of the run wo (and wi, ``load_wi``), the state of mu_o (``state_passes``;
+#: with the diffuse terms and the GGX basis albedos unless ``albedos`` is False) and the
+#: verb's ``step``.
+_RUN = """
+def {factory}(stride, lobes{model}):
     registry = REGISTRY_KEY
 
-    @runner
-    def albedo_run(t, nt, active, ms, p, wo, out):
-        """out (n*3) = sum_k w_k E_k."""
+    def {name}(t, nt, {args}):
         _ = registry  # the cache's index holds it (``REGISTRY_KEY``)
         n = wo.shape[0] // 3
-        f = _scratch()
+        f = _scratch(){buffers}
         if stride == 0:  # one material: a local copy (stride is a constant: the other branch is pruned)
             params = _local_params(p)
         else:  # a material per row: read where they are
@@ -187,210 +193,154 @@ def _albedo_run(stride, lobes, dmodel):
         b0, b1 = _block_range(t, nt, n)
         for b in range(b0, b1):
             first, m, span_rows = _block(b, n)
-            load_pass(wo, first, m, f, ROW.OX)
+            load_pass(wo, first, m, f, ROW.OX){load_wi}
             state_passes(
-                opaque(lobes),
-                active,
-                opaque(dmodel),
-                ms,
-                opaque(True),
-                opaque(True),
-                params,
-                stride,
-                first,
-                span_rows,
-                f,
+                opaque(lobes), active, opaque(dmodel), ms, opaque({albedos}), opaque({albedos}),
+                params, stride, first, span_rows, f,
             )
-            fill_pass(f, ROW.A0, span_rows, 0.0)
-            fill_pass(f, ROW.A1, span_rows, 0.0)
-            fill_pass(f, ROW.A2, span_rows, 0.0)
-            each_albedo(lobes, active, dmodel, ms, params, stride, first, span_rows, f)
-            rgb_out_pass(first, m, f, out)
+            step({step_args})
 
-    return albedo_run
+    return runner({name})
+"""
 
-
-def _eval_run(stride, lobes, dmodel):
-    registry = REGISTRY_KEY
-
-    @runner
-    def eval_run(t, nt, active, only, ms, p, wi, wo, out):
-        """out (n*3) = sum_k w_k f_k, or the unweighted f_only when only >= 0."""
-        _ = registry  # the cache's index holds it (``REGISTRY_KEY``)
-        n = wo.shape[0] // 3
-        on = active if only < 0 else active & (1 << only)
-        f = _scratch()
-        if stride == 0:  # one material: a local copy (stride is a constant: the other branch is pruned)
-            params = _local_params(p)
-        else:  # a material per row: read where they are
-            params = p
-        b0, b1 = _block_range(t, nt, n)
-        for b in range(b0, b1):
-            first, m, span_rows = _block(b, n)
-            load_pass(wo, first, m, f, ROW.OX)
-            load_pass(wi, first, m, f, ROW.IX)
-            state_passes(
-                opaque(lobes),
-                active,
-                opaque(dmodel),
-                ms,
-                opaque(False),
-                opaque(False),
-                params,
-                stride,
-                first,
-                span_rows,
-                f,
-            )
-            ggx_pass(on, params, stride, first, span_rows, f)
-            fill_pass(f, ROW.A0, span_rows, 0.0)
-            fill_pass(f, ROW.A1, span_rows, 0.0)
-            fill_pass(f, ROW.A2, span_rows, 0.0)
-            each_eval(lobes, on, dmodel, only < 0, ms, params, stride, first, span_rows, f)
-            rgb_out_pass(first, m, f, out)
-
-    return eval_run
+#: the frame's names a step may read besides the runner's arguments (``_RUN``)
+_FRAME = ("lobes", "dmodel", "stride", "n", "f", "idx", "cnt", "params", "first", "m", "span_rows")
 
 
-def _lobes_run(stride, lobes):
-    registry = REGISTRY_KEY
-
-    @runner
-    def lobes_run(t, nt, active, dmodel, sel, ms, with_f, p, wi, wo, W, E, P, out):
-        """W, E (n*8*3), P (n*8): weight, albedo and probability of every lobe slot at wo;
-        with ``with_f`` also out (n*3) = sum_k w_k f_k(wi, wo) as ``eval_run`` gives it: a
-        material's lobes and its BSDF from one pass over the rows (the state of mu_o is
-        computed once for both), and one runner compiled for both uses.
-
-        The diffuse model is a run-time argument here (one runner per lobe set serves
-        every model: a process that reads materials of several models compiles it once);
-        the EON diffuse lobe's BSDF pass is typed with the model a constant, so that its
-        loop vectorises as in ``eval_run``."""
-        _ = registry  # the cache's index holds it (``REGISTRY_KEY``)
-        n = wo.shape[0] // 3
-        f = _scratch()
-        if stride == 0:  # one material: a local copy (stride is a constant: the other branch is pruned)
-            params = _local_params(p)
-        else:  # a material per row: read where they are
-            params = p
-        b0, b1 = _block_range(t, nt, n)
-        for b in range(b0, b1):
-            first, m, span_rows = _block(b, n)
-            load_pass(wo, first, m, f, ROW.OX)
-            state_passes(
-                opaque(lobes), active, dmodel, ms, opaque(True), opaque(True), params, stride, first, span_rows, f
-            )
-            probability_pass(lobes, active, sel, params, stride, first, span_rows, f, ms)
-            for k in range(N_LOBES):  # & lobes: a constant, so LLVM drops the slots outside the set
-                lobe_outputs_pass(k, is_on(active & lobes, k), ms, params, stride, first, m, f, W, E, P)
-            if with_f:
-                load_pass(wi, first, m, f, ROW.IX)
-                ggx_pass(active, params, stride, first, span_rows, f)
-                fill_pass(f, ROW.A0, span_rows, 0.0)
-                fill_pass(f, ROW.A1, span_rows, 0.0)
-                fill_pass(f, ROW.A2, span_rows, 0.0)
-                if dmodel == D_EON:
-                    each_eval(lobes, active, D_EON, True, ms, params, stride, first, span_rows, f)
-                else:
-                    each_eval(lobes, active, dmodel, True, ms, params, stride, first, span_rows, f)
-                rgb_out_pass(first, m, f, out)
-
-    return lobes_run
+def _runner_factory(verb, args, step, albedos=True, load_wi=False):
+    """The factory ``_<verb>_run(stride, lobes[, dmodel])`` of a verb's block runner
+    ``<verb>_run(t, nt, *args)`` (``_Builds``): the frame ``_RUN`` around ``step``, an
+    ``inline`` function whose parameters are named after what it reads (the frame's names,
+    ``_FRAME``, or the runner's ``args``).  The diffuse model is a constant of the factory
+    unless ``args`` names it (the ``lobes`` runner); the runner's closure holds plain ints
+    only, so that numba's cache finds it in a new process.  With ``load_wi`` the frame loads
+    the argument wi too, with wo (streaming both before the parameters are read is faster with
+    a material per row)."""
+    names = [a.strip() for a in args.split(",")]
+    code = step.py_func.__code__
+    reads = code.co_varnames[: code.co_argcount]
+    unknown = [a for a in reads if a not in _FRAME and a not in names]
+    if unknown:
+        raise NameError(f"{step.py_func.__name__} reads {', '.join(unknown)}: neither the frame's nor an argument")
+    source = _RUN.format(
+        factory=f"_{verb}_run",
+        name=f"{verb}_run",
+        model="" if "dmodel" in names else ", dmodel",
+        args=args,
+        buffers="\n        idx = _lists()\n        cnt = _counts()" if "idx" in reads else "",
+        albedos=albedos,
+        step_args=", ".join(reads),
+        load_wi="\n            load_pass(wi, first, m, f, ROW.IX)" if load_wi else "",
+    )
+    env = dict(
+        REGISTRY_KEY=REGISTRY_KEY,
+        ROW=ROW,
+        _scratch=_scratch,
+        _lists=_lists,
+        _counts=_counts,
+        _local_params=_local_params,
+        _block_range=_block_range,
+        _block=_block,
+        load_pass=load_pass,
+        state_passes=state_passes,
+        opaque=opaque,
+        runner=runner,
+        step=step,
+    )
+    return _generated(source, f"_{verb}_run", env)
 
 
-def _pdf_run(stride, lobes, dmodel):
-    registry = REGISTRY_KEY
-
-    @runner
-    def pdf_run(t, nt, active, sel, ms, vndf, p, wo, wi, out):
-        """out (n) = sum_k P_k pdf_k(wi | wo); 0 where wo is below the horizon."""
-        _ = registry  # the cache's index holds it (``REGISTRY_KEY``)
-        n = wo.shape[0] // 3
-        f = _scratch()
-        if stride == 0:  # one material: a local copy (stride is a constant: the other branch is pruned)
-            params = _local_params(p)
-        else:  # a material per row: read where they are
-            params = p
-        b0, b1 = _block_range(t, nt, n)
-        for b in range(b0, b1):
-            first, m, span_rows = _block(b, n)
-            load_pass(wo, first, m, f, ROW.OX)
-            load_pass(wi, first, m, f, ROW.IX)
-            state_passes(
-                opaque(lobes),
-                active,
-                opaque(dmodel),
-                ms,
-                opaque(True),
-                opaque(True),
-                params,
-                stride,
-                first,
-                span_rows,
-                f,
-            )
-            probability_pass(lobes, active, sel, params, stride, first, span_rows, f, ms)
-            ggx_pdf_pass(active, vndf, params, stride, first, span_rows, f)
-            fill_pass(f, ROW.MIXTURE_PDF, span_rows, 0.0)
-            each_pdf(lobes, active, dmodel, False, vndf, params, stride, first, span_rows, f)
-            for r in range(m):
-                out[_U(first + r)] = f[at(ROW.MIXTURE_PDF, r)] if f[at(ROW.OZ, r)] > 0.0 else 0.0
-
-    return pdf_run
+@inline
+def _bsdf(lobes, on, dmodel, weighted, ms, params, stride, first, m, span_rows, f, out):
+    """out (rows of the block) = sum_k w_k f_k over the lobes ``on`` (``weighted``), or their
+    unweighted f_k; wi in the scratch."""
+    ggx_pass(on, params, stride, first, span_rows, f)
+    clear_rgb_pass(f, span_rows)
+    if dmodel == D_EON:  # the EON lobe's pass typed with the model a literal, where it is an argument too
+        each_eval(lobes, on, D_EON, weighted, ms, params, stride, first, span_rows, f)
+    else:
+        each_eval(lobes, on, dmodel, weighted, ms, params, stride, first, span_rows, f)
+    rgb_out_pass(first, m, f, out)
 
 
-def _sample_run(stride, lobes, dmodel):
-    registry = REGISTRY_KEY
+@inline
+def _mixture_pdf(lobes, active, dmodel, track, vndf, params, stride, first, span_rows, f):
+    """ROW.MIXTURE_PDF = sum_k P_k pdf_k(wi | wo) (and, when ``track``, ROW.CHOSEN_PDF: the
+    chosen lobe's own pdf); wi and the probabilities in the scratch."""
+    ggx_pdf_pass(active, vndf, params, stride, first, span_rows, f)
+    fill_pass(f, ROW.MIXTURE_PDF, span_rows, 0.0)
+    if track:
+        fill_pass(f, ROW.CHOSEN_PDF, span_rows, 0.0)
+    each_pdf(lobes, active, dmodel, track, vndf, params, stride, first, span_rows, f)
 
-    @runner
-    def sample_run(t, nt, active, sel, ms, vndf, p, wo, u, wi, out):
-        """Pick lobe k with P_k (u[0]), sample it (u[1:3], or u[0] rescaled and u[1] when u has
-        2 columns); wi (n*3), out (n) = the mixture pdf at wi; 0 marks a failed sample."""
-        _ = registry  # the cache's index holds it (``REGISTRY_KEY``)
-        n = wo.shape[0] // 3
-        ud = u.shape[0] // n
-        f = _scratch()
-        idx = _lists()
-        cnt = _counts()
-        if stride == 0:  # one material: a local copy (stride is a constant: the other branch is pruned)
-            params = _local_params(p)
-        else:  # a material per row: read where they are
-            params = p
-        b0, b1 = _block_range(t, nt, n)
-        for b in range(b0, b1):
-            first, m, span_rows = _block(b, n)
-            load_pass(wo, first, m, f, ROW.OX)
-            state_passes(
-                opaque(lobes),
-                active,
-                opaque(dmodel),
-                ms,
-                opaque(True),
-                opaque(True),
-                params,
-                stride,
-                first,
-                span_rows,
-                f,
-            )
-            probability_pass(lobes, active, sel, params, stride, first, span_rows, f, ms)
-            _choose(ud, u, first, m, span_rows, f)
-            compact(opaque(dmodel), span_rows, f, idx, cnt)
-            _each_sampler(vndf, params, stride, first, f, idx, cnt)
-            ggx_pdf_pass(active, vndf, params, stride, first, span_rows, f)
-            fill_pass(f, ROW.MIXTURE_PDF, span_rows, 0.0)
-            fill_pass(f, ROW.CHOSEN_PDF, span_rows, 0.0)
-            each_pdf(lobes, active, dmodel, True, vndf, params, stride, first, span_rows, f)
-            for r in range(m):
-                j = _U(3) * _U(first + r)
-                up = f[at(ROW.OZ, r)] > 0.0
-                good = up & (f[at(ROW.OK, r)] > 0.0) & (f[at(ROW.CHOSEN_PDF, r)] > 0.0)
-                out[_U(first + r)] = f[at(ROW.MIXTURE_PDF, r)] if good else 0.0
-                wi[j] = f[at(ROW.IX, r)] if up else 0.0
-                wi[j + _U(1)] = f[at(ROW.IX + 1, r)] if up else 0.0
-                wi[j + _U(2)] = f[at(ROW.IX + 2, r)] if up else 1.0
 
-    return sample_run
+@inline
+def _albedo_step(lobes, active, dmodel, ms, params, stride, first, m, span_rows, f, out):
+    """out (n*3) = sum_k w_k E_k."""
+    clear_rgb_pass(f, span_rows)
+    each_albedo(lobes, active, dmodel, ms, params, stride, first, span_rows, f)
+    rgb_out_pass(first, m, f, out)
+
+
+@inline
+def _eval_step(lobes, active, only, dmodel, ms, params, stride, first, m, span_rows, f, out):
+    """out (n*3) = sum_k w_k f_k, or the unweighted f_only when only >= 0 (wi loaded by the frame)."""
+    on = active if only < 0 else active & (1 << only)
+    _bsdf(lobes, on, dmodel, only < 0, ms, params, stride, first, m, span_rows, f, out)
+
+
+@inline
+def _lobes_step(lobes, active, dmodel, sel, ms, with_f, params, stride, first, m, span_rows, f, wi, W, E, P, out):
+    """W, E (n*8*3), P (n*8): weight, albedo and probability of every lobe slot at wo; with
+    ``with_f`` also out (n*3) = sum_k w_k f_k(wi, wo) as ``eval`` gives it: a material's lobes
+    and its BSDF from one pass over the rows (the state of mu_o is computed once for both),
+    and one runner compiled for both uses.
+
+    The diffuse model is a run-time argument here (one runner per lobe set serves every
+    model: a process that reads materials of several models compiles it once); the EON
+    diffuse lobe's BSDF pass is typed with the model a constant (``_bsdf``), so that its loop
+    vectorises as in ``eval``."""
+    probability_pass(lobes, active, sel, params, stride, first, span_rows, f, ms)
+    for k in range(N_LOBES):  # & lobes: a constant, so LLVM drops the slots outside the set
+        lobe_outputs_pass(k, is_on(active & lobes, k), ms, params, stride, first, m, f, W, E, P)
+    if with_f:
+        load_pass(wi, first, m, f, ROW.IX)
+        _bsdf(lobes, active, dmodel, True, ms, params, stride, first, m, span_rows, f, out)
+
+
+@inline
+def _pdf_step(lobes, active, dmodel, sel, ms, vndf, params, stride, first, m, span_rows, f, out):
+    """out (n) = sum_k P_k pdf_k(wi | wo); 0 where wo is below the horizon (wi loaded by the frame)."""
+    probability_pass(lobes, active, sel, params, stride, first, span_rows, f, ms)
+    _mixture_pdf(lobes, active, dmodel, False, vndf, params, stride, first, span_rows, f)
+    for r in range(m):
+        out[_U(first + r)] = f[at(ROW.MIXTURE_PDF, r)] if f[at(ROW.OZ, r)] > 0.0 else 0.0
+
+
+@inline
+def _sample_step(lobes, active, dmodel, sel, ms, vndf, params, stride, n, first, m, span_rows, f, idx, cnt, u, wi, out):
+    """Pick lobe k with P_k (u[0]), sample it (u[1:3], or u[0] rescaled and u[1] when u has
+    2 columns); wi (n*3), out (n) = the mixture pdf at wi; 0 marks a failed sample."""
+    probability_pass(lobes, active, sel, params, stride, first, span_rows, f, ms)
+    _choose(u.shape[0] // n, u, first, m, span_rows, f)
+    compact(opaque(dmodel), span_rows, f, idx, cnt)
+    _each_sampler(vndf, params, stride, first, f, idx, cnt)
+    _mixture_pdf(lobes, active, dmodel, True, vndf, params, stride, first, span_rows, f)
+    for r in range(m):
+        j = _U(3) * _U(first + r)
+        up = f[at(ROW.OZ, r)] > 0.0
+        good = up & (f[at(ROW.OK, r)] > 0.0) & (f[at(ROW.CHOSEN_PDF, r)] > 0.0)
+        out[_U(first + r)] = f[at(ROW.MIXTURE_PDF, r)] if good else 0.0
+        wi[j] = f[at(ROW.IX, r)] if up else 0.0
+        wi[j + _U(1)] = f[at(ROW.IX + 1, r)] if up else 0.0
+        wi[j + _U(2)] = f[at(ROW.IX + 2, r)] if up else 1.0
+
+
+_albedo_run = _runner_factory("albedo", "active, ms, p, wo, out", _albedo_step)
+_eval_run = _runner_factory("eval", "active, only, ms, p, wi, wo, out", _eval_step, albedos=False, load_wi=True)
+_lobes_run = _runner_factory("lobes", "active, dmodel, sel, ms, with_f, p, wi, wo, W, E, P, out", _lobes_step)
+_pdf_run = _runner_factory("pdf", "active, sel, ms, vndf, p, wo, wi, out", _pdf_step, load_wi=True)
+_sample_run = _runner_factory("sample", "active, sel, ms, vndf, p, wo, u, wi, out", _sample_step)
 
 
 # --------------------------------------------------------------------------- threads

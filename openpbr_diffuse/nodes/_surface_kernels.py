@@ -83,6 +83,26 @@ RAW = packed_inputs(LOBE_INPUTS)
 INPUT, N_RAW = layout("Input", RAW)
 #: the lobes' own inputs close the packed row; they are copied as they are
 _RAW_LOBE_INPUTS = N_RAW - N_LOBE_INPUT_VALUES
+#: The parameters that are the material's inputs as they are: (PARAM offset, INPUT offset,
+#: width), copied by ``pack_drive``.
+_COPIED = (
+    (PARAM.BASE_COLOR, INPUT.base_color, 3),
+    (PARAM.SPEC_COLOR, INPUT.specular_color, 3),
+    (PARAM.SSS_COLOR, INPUT.subsurface_color, 3),
+    (PARAM.FUZZ_COLOR, INPUT.fuzz_color, 3),
+    (PARAM.R_DIFF, INPUT.base_diffuse_roughness, 1),
+    (PARAM.BASE_WEIGHT, INPUT.base_weight, 1),
+    (PARAM.METAL, INPUT.base_metalness, 1),
+    (PARAM.SPEC_WEIGHT, INPUT.specular_weight, 1),
+    (PARAM.TRANS_W, INPUT.transmission_weight, 1),
+    (PARAM.SSS_W, INPUT.subsurface_weight, 1),
+    (PARAM.SSS_ANISO, INPUT.subsurface_scatter_anisotropy, 1),
+    (PARAM.COAT_W, INPUT.coat_weight, 1),
+    (PARAM.FUZZ_W, INPUT.fuzz_weight, 1),
+    (PARAM.FUZZ_R, INPUT.fuzz_roughness, 1),
+    (PARAM.THIN, INPUT.geometry_thin_walled, 1),
+    (_END, _RAW_LOBE_INPUTS, N_LOBE_INPUT_VALUES),  # the lobes' own inputs
+)
 #: warning bits of ``pack_drive``
 W_SPEC_TIR, W_COAT_TIR, W_F82_NEGATIVE = 1, 2, 4
 
@@ -222,6 +242,19 @@ def _conductor_curve(out, at, axes, C, c):
 
 
 @block
+def _pack_layer(out, offset, ggx, tab, curve, r, x, nCr, nRr, nRx, RT):
+    """A GGX layer's parameters from its roughness r and |sqrt(F0)| x of its modulated index:
+    alpha, r, x and eta at out[offset + ggx:] (PARAM.ALPHA_*, R_*, X_*, ETA_*, in this
+    order), its table axes (PARAM.TAB_*) and its collapsed dielectric curve (PARAM.CURVE_*)."""
+    out[offset + ggx] = mf.alpha_of(r)
+    out[offset + ggx + 1] = r
+    out[offset + ggx + 2] = x
+    out[offset + ggx + 3] = fresnel.eta_of_x(x)
+    _table_axes(out, offset + tab, r, x, nCr, nRr, nRx)
+    _curve(out, offset + curve, offset + tab, RT)
+
+
+@block
 def _pack_weights(out, offset):
     """The material part K_k[c] of every lobe's weight (LOBE_PARAM.WEIGHT_COLOR: each lobe's
     ``weight_color``, following the reference graph open_pbr_surface.mtlx), then the score
@@ -262,20 +295,18 @@ def _pack_drive(raw_rows, out_rows, CT, RT):
     for i in range(m):
         at = i * N_RAW
         offset = i * N_PARAMS
+        for dst, src, width in _COPIED:
+            for c in range(width):
+                out[offset + dst + c] = raw[at + src + c]
         bw, M, sw = raw[at + INPUT.base_weight], raw[at + INPUT.base_metalness], raw[at + INPUT.specular_weight]
         r_s, ior = raw[at + INPUT.specular_roughness], raw[at + INPUT.specular_ior]
-        T, S, g = (
-            raw[at + INPUT.transmission_weight],
-            raw[at + INPUT.subsurface_weight],
-            raw[at + INPUT.subsurface_scatter_anisotropy],
-        )
+        S = raw[at + INPUT.subsurface_weight]
         C, r_c, c_ior, c_dark = (
             raw[at + INPUT.coat_weight],
             raw[at + INPUT.coat_roughness],
             raw[at + INPUT.coat_ior],
             raw[at + INPUT.coat_darkening],
         )
-        F, thin = raw[at + INPUT.fuzz_weight], raw[at + INPUT.geometry_thin_walled]
         # the coat's effect on the base specular [effective_specular_roughness, eta_s]
         r_eff = (1.0 - C) * r_s + C * min(1.0, 2.0 * r_c**4 + r_s**4) ** 0.25
         eta_s = ior
@@ -294,8 +325,6 @@ def _pack_drive(raw_rows, out_rows, CT, RT):
         for c in range(3):
             bc = raw[at + INPUT.base_color + c]
             sc = raw[at + INPUT.specular_color + c]
-            out[offset + PARAM.BASE_COLOR + c] = bc
-            out[offset + PARAM.SPEC_COLOR + c] = sc
             F0 = bw * bc
             out[offset + PARAM.METAL_F0 + c] = F0
             am = fresnel.f82_a(F0, sc)
@@ -308,15 +337,12 @@ def _pack_drive(raw_rows, out_rows, CT, RT):
                 1.0 if raw[at + INPUT.transmission_depth] > 0.0 else raw[at + INPUT.transmission_color + c]
             )
             ssc = raw[at + INPUT.subsurface_color + c]
-            out[offset + PARAM.SSS_COLOR + c] = ssc
             # base darkening and coat attenuation [Kcoat, Ebase, base_darkening, coat_attenuation]
             E_base = (1.0 - M) * ((1.0 - S) * bc + S * ssc) + M * bc * sw
             dark = (1.0 - k_coat) / (1.0 - E_base * k_coat)
             out[offset + PARAM.BASE_MUL + c] = (1.0 + C * c_dark * (dark - 1.0)) * (
                 1.0 + C * (raw[at + INPUT.coat_color + c] - 1.0)
             )
-            out[offset + PARAM.FUZZ_COLOR + c] = raw[at + INPUT.fuzz_color + c]
-        out[offset + PARAM.R_DIFF] = raw[at + INPUT.base_diffuse_roughness]
         out[offset + PARAM.R_TENTH] = pow_tenth(raw[at + INPUT.base_diffuse_roughness])
         avg = E_F_avg(raw[at + INPUT.base_diffuse_roughness])
         for c in range(3):
@@ -330,34 +356,12 @@ def _pack_drive(raw_rows, out_rows, CT, RT):
         out[offset + PARAM.QON_AB], out[offset + PARAM.QON_AB + 1] = qon_AB(
             raw[at + INPUT.base_diffuse_roughness], 0.33
         )
-        out[offset + PARAM.BASE_WEIGHT] = bw
-        out[offset + PARAM.METAL] = M
-        out[offset + PARAM.SPEC_WEIGHT] = sw
-        out[offset + PARAM.ALPHA_S] = mf.alpha_of(r_eff)
-        out[offset + PARAM.R_S] = r_eff
-        out[offset + PARAM.X_S] = x
-        out[offset + PARAM.ETA_S] = fresnel.eta_of_x(x)
-        out[offset + PARAM.TRANS_W] = T
-        out[offset + PARAM.SSS_W] = S
-        out[offset + PARAM.SSS_ANISO] = g
-        out[offset + PARAM.COAT_W] = C
-        out[offset + PARAM.ALPHA_C] = mf.alpha_of(r_c)
-        out[offset + PARAM.R_C] = r_c
-        out[offset + PARAM.X_C] = xc
-        out[offset + PARAM.ETA_C] = fresnel.eta_of_x(xc)
-        out[offset + PARAM.FUZZ_W] = F
-        out[offset + PARAM.FUZZ_R] = raw[at + INPUT.fuzz_roughness]
-        out[offset + PARAM.THIN] = thin
-        _table_axes(out, offset + PARAM.TAB_S, r_eff, x, nCr, nRr, nRx)
-        _table_axes(out, offset + PARAM.TAB_C, r_c, xc, nCr, nRr, nRx)
-        _curve(out, offset + PARAM.CURVE_S, offset + PARAM.TAB_S, RT)
-        _curve(out, offset + PARAM.CURVE_C, offset + PARAM.TAB_C, RT)
+        _pack_layer(out, offset, PARAM.ALPHA_S, PARAM.TAB_S, PARAM.CURVE_S, r_eff, x, nCr, nRr, nRx, RT)
+        _pack_layer(out, offset, PARAM.ALPHA_C, PARAM.TAB_C, PARAM.CURVE_C, r_c, xc, nCr, nRr, nRx, RT)
         _conductor_curve(out, offset + PARAM.E1S, offset + PARAM.TAB_S, CT, opaque(0))
         _conductor_curve(out, offset + PARAM.E5S, offset + PARAM.TAB_S, CT, opaque(1))
         _conductor_curve(out, offset + PARAM.E6S, offset + PARAM.TAB_S, CT, opaque(2))
         _conductor_curve(out, offset + PARAM.E1C, offset + PARAM.TAB_C, CT, opaque(0))
-        for j in range(N_LOBE_INPUT_VALUES):
-            out[offset + _END + j] = raw[at + _RAW_LOBE_INPUTS + j]
         _pack_weights(out, offset)
         # the lobes that can be non-zero
         for k in range(N_LOBES):

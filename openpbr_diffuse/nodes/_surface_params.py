@@ -63,6 +63,7 @@ PARAMS = (
     ("METAL", 1),  # base_metalness
     ("SPEC_COLOR", 3),
     ("SPEC_WEIGHT", 1),
+    # the GGX layers (``_surface_kernels._pack_layer``): alpha, roughness, x, eta in this order
     ("ALPHA_S", 1),  # GGX alpha of the base specular and metal (coat-affected)
     ("R_S", 1),  # its roughness (table coordinate)
     ("X_S", 1),  # |sqrt(F0)| of the modulated index (table coordinate)
@@ -140,6 +141,26 @@ Directions = collections.namedtuple("Directions", ("wi_x", "wi_y", "wi_z", "wo_x
 EvalInputs = collections.namedtuple(
     "EvalInputs", ("dmodel", "multiscatter", "ggx_f", "ggx_cos", "e1_specular", "e1_coat", "e_fuzz")
 )
+
+
+@block
+def ggx_reflection(d, alpha):
+    """(f, wo.h): the GGX reflection at alpha of ``Directions`` d without Fresnel
+    (``microfacet.kernels.reflection``)."""
+    return mf.reflection(d.wi_x, d.wi_y, d.wi_z, d.wo_x, d.wo_y, d.wo_z, alpha)
+
+
+@block
+def ggx_reflection_pdf(d, alpha, vndf):
+    """The pdf of the GGX reflection sampler at alpha (``microfacet.kernels.reflection_pdf``)
+    producing the wi of ``Directions`` d."""
+    return mf.reflection_pdf(d.wi_x, d.wi_y, d.wi_z, d.wo_x, d.wo_y, d.wo_z, alpha, vndf)
+
+
+@block
+def mirrored(d):
+    """``Directions`` d with wi mirrored through the surface (wi.z negated)."""
+    return Directions(d.wi_x, d.wi_y, -d.wi_z, d.wo_x, d.wo_y, d.wo_z)
 
 
 @block

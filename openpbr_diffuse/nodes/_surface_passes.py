@@ -21,7 +21,6 @@ material per row (``par``).
 
 from .._jit import block, helper, opaque, unrolled
 from .._launch import _U
-from ..microfacet import kernels as mf
 from ..microfacet.sheen import sheen_albedo_at
 from ..models.qon import qon_albedo
 from ..sampling.simple import U_MAX
@@ -49,6 +48,8 @@ from ._surface_params import (
     EvalInputs,
     LayerState,
     diffuse_albedo_terms,
+    ggx_reflection,
+    ggx_reflection_pdf,
     layer_albedos,
     layout,
 )
@@ -162,6 +163,14 @@ def fill_pass(f, row, m, v):
         f[at(row, r)] = v
 
 
+@helper
+def clear_rgb_pass(f, m):
+    """ROW.A0..A2 = 0: the RGB accumulators of eval and albedo."""
+    fill_pass(f, ROW.A0, m, 0.0)
+    fill_pass(f, ROW.A1, m, 0.0)
+    fill_pass(f, ROW.A2, m, 0.0)
+
+
 @block
 def state_passes(lobes, active, dmodel, ms, albedos, basis, p, stride, first, m, f):
     """The per-row values of mu_o shared by every lobe: the layer albedos (ROW.E1_SPECULAR, ROW.E_SPECULAR, and ROW.E5_SPECULAR,
@@ -254,6 +263,14 @@ def state_at(f, r):
     )
 
 
+@helper
+def directions_at(f, r):
+    """The ``Directions`` (wi, wo) of row r, from the scratch."""
+    return Directions(
+        f[at(ROW.IX, r)], f[at(ROW.IY, r)], f[at(ROW.IZ, r)], f[at(ROW.OX, r)], f[at(ROW.OY, r)], f[at(ROW.OZ, r)]
+    )
+
+
 @block
 def albedo_of(k, c, p, offset, f, r, ms):
     """E_k in channel c at row r (``lobe_albedo`` on the state rows).  The diffuse albedo uses
@@ -343,15 +360,7 @@ def ggx_pass(active, p, stride, first, m, f):
         return
     for r in range(m):
         offset = par(stride, first, r)
-        g, c = mf.reflection(
-            f[at(ROW.IX, r)],
-            f[at(ROW.IY, r)],
-            f[at(ROW.IZ, r)],
-            f[at(ROW.OX, r)],
-            f[at(ROW.OY, r)],
-            f[at(ROW.OZ, r)],
-            p[offset + PARAM.ALPHA_S],
-        )
+        g, c = ggx_reflection(directions_at(f, r), p[offset + PARAM.ALPHA_S])
         f[at(ROW.GGX_F, r)] = g
         f[at(ROW.GGX_COS, r)] = c
 
@@ -363,16 +372,7 @@ def ggx_pdf_pass(active, vndf, p, stride, first, m, f):
         return
     for r in range(m):
         offset = par(stride, first, r)
-        f[at(ROW.GGX_PDF, r)] = mf.reflection_pdf(
-            f[at(ROW.IX, r)],
-            f[at(ROW.IY, r)],
-            f[at(ROW.IZ, r)],
-            f[at(ROW.OX, r)],
-            f[at(ROW.OY, r)],
-            f[at(ROW.OZ, r)],
-            p[offset + PARAM.ALPHA_S],
-            vndf,
-        )
+        f[at(ROW.GGX_PDF, r)] = ggx_reflection_pdf(directions_at(f, r), p[offset + PARAM.ALPHA_S], vndf)
 
 
 @block
@@ -381,14 +381,7 @@ def eval_lobe_pass(k, dmodel, weighted, ms, p, stride, first, m, f):
     to zeros), at every row of the block."""
     for r in range(m):
         offset = par(stride, first, r)
-        d = Directions(
-            f[at(ROW.IX, r)],
-            f[at(ROW.IY, r)],
-            f[at(ROW.IZ, r)],
-            f[at(ROW.OX, r)],
-            f[at(ROW.OY, r)],
-            f[at(ROW.OZ, r)],
-        )
+        d = directions_at(f, r)
         x = EvalInputs(
             opaque(dmodel),
             ms,
@@ -412,14 +405,7 @@ def pdf_lobe_pass(k, dmodel, track, vndf, p, stride, first, m, f):
     ``track``, ROW.CHOSEN_PDF = pdf_k on the rows that chose lobe k."""
     for r in range(m):
         offset = par(stride, first, r)
-        d = Directions(
-            f[at(ROW.IX, r)],
-            f[at(ROW.IY, r)],
-            f[at(ROW.IZ, r)],
-            f[at(ROW.OX, r)],
-            f[at(ROW.OY, r)],
-            f[at(ROW.OZ, r)],
-        )
+        d = directions_at(f, r)
         pk = lobe_pdf(k, p, offset, d, dmodel, vndf, f[at(ROW.GGX_PDF, r)])
         P = f[at(ROW.PROBABILITY + k, r)]
         f[at(ROW.MIXTURE_PDF, r)] += P * pk if P > 0.0 else 0.0

@@ -20,6 +20,10 @@ layout ``_surface_params.PARAM``):
   its selection score |K E| (by max when ``mx``, else the RGB length), ``constant`` being
   |K e| (or max_c |K[c] e[c]|) of the constant colour e = ``constant_albedo``.
 
+The verbs that several lobes declare alike are made from the lobe's constants by the
+helpers of ``_common`` (``fixed_sampler``, ``sampler_width``, ``on_where_positive``,
+``separable_albedo``, ``base_ggx_pdf``).
+
 A lobe may also declare ``INPUTS``, names of unmodelled nodedef inputs it reads as they
 are: they join the packed row, and the engine sets the module's ``INPUT`` (a namedtuple of
 their offsets) when it is assembled, so the lobe reads ``p[offset + INPUT.<name>]``.

@@ -28,6 +28,15 @@ if TYPE_CHECKING:
 
 
 @block
+def _in_frame(ox: float, oy: float, lx: float, ly: float, z: float) -> tuple[float, float, float, bool]:
+    """A direction (lx, ly, z) of wo's azimuthal frame (``sampling.ltc``) as a sample (x, y,
+    z, ok) of the local frame, z floored at ``Z_MIN``."""
+    Xx, Xy = ltc_frame(ox, oy)
+    x, y = from_frame(Xx, Xy, lx, ly)
+    return x, y, max(z, Z_MIN), True
+
+
+@block
 def eon(
     p: NDArray[np.float64], offset: int, ox: float, oy: float, oz: float, u1: float, u2: float, vndf: bool, width: float
 ) -> tuple[float, float, float, bool]:
@@ -42,10 +51,8 @@ def eon(
 def cosine(
     p: NDArray[np.float64], offset: int, ox: float, oy: float, oz: float, u1: float, u2: float, vndf: bool, width: float
 ) -> tuple[float, float, float, bool]:
-    Xx, Xy = ltc_frame(ox, oy)
     lx, ly, z, _ = cosine_sample_local(u1, u2)
-    x, y = from_frame(Xx, Xy, lx, ly)
-    return x, y, max(z, Z_MIN), True
+    return _in_frame(ox, oy, lx, ly, z)
 
 
 @block
@@ -62,11 +69,8 @@ def sheen(
     p: NDArray[np.float64], offset: int, ox: float, oy: float, oz: float, u1: float, u2: float, vndf: bool, width: float
 ) -> tuple[float, float, float, bool]:
     """The LTC sheen's sampler at fuzz roughness = width."""
-    mu = min(max(oz, 0.0), 1.0)
-    Xx, Xy = ltc_frame(ox, oy)
-    lx, ly, z = sheen_sample(mu, width, u1, u2)
-    x, y = from_frame(Xx, Xy, lx, ly)
-    return x, y, max(z, Z_MIN), True
+    lx, ly, z = sheen_sample(min(max(oz, 0.0), 1.0), width, u1, u2)
+    return _in_frame(ox, oy, lx, ly, z)
 
 
 #: the samplers, by sampler id

@@ -31,7 +31,7 @@ from ...sampling.ltc import ltc_frame, to_frame
 from ...sampling.mis import eon_pdf
 from ...sampling.simple import cosine_pdf
 from .._surface_params import D_EON, D_QON, PARAM, S_COSINE, S_EON, UNDER_SPECULAR
-from ._common import norm_or_max
+from ._common import norm_or_max, sampler_width
 
 if TYPE_CHECKING:
     import numpy as np
@@ -42,6 +42,8 @@ if TYPE_CHECKING:
 NAME = "diffuse"
 LAYER = UNDER_SPECULAR
 READS_DIFFUSE_MODEL = True  # its pass is compiled once per diffuse model
+#: the EON sampler reads r = base_diffuse_roughness
+sample_setup = sampler_width(PARAM.R_DIFF)
 
 
 @block
@@ -107,12 +109,6 @@ def pdf(p: NDArray[np.float64], offset: int, d: Directions, dmodel: int, vndf: b
 @block
 def sampler(dmodel: int) -> int:
     return S_EON if dmodel == D_EON else S_COSINE
-
-
-@block
-def sample_setup(p: NDArray[np.float64], offset: int) -> tuple[float, float]:
-    """(width, side) of the sampler: the EON sampler reads r = base_diffuse_roughness."""
-    return p[offset + PARAM.R_DIFF], 1.0
 
 
 @block

@@ -18,28 +18,25 @@ from ..._jit import block
 from ...microfacet.sheen import sheen_density
 from ...sampling.ltc import ltc_frame, to_frame
 from .._surface_params import ON_TOP, PARAM, S_SHEEN
-from ._common import unit_albedo
+from ._common import fixed_sampler, on_where_positive, sampler_width, separable_albedo
 
 if TYPE_CHECKING:
     import numpy as np
     from numpy.typing import NDArray
 
-    from .._surface_params import Directions, EvalInputs, LayerState
+    from .._surface_params import Directions, EvalInputs
 
 NAME = "fuzz"
 LAYER = ON_TOP
-READS_DIFFUSE_MODEL = False
-constant_albedo = unit_albedo
+constant_albedo, albedo, score = separable_albedo(state="fuzz")
+sampler = fixed_sampler(S_SHEEN)
+is_on = on_where_positive(PARAM.FUZZ_W)
+sample_setup = sampler_width(PARAM.FUZZ_R)
 
 
 @block
 def weight_color(p: NDArray[np.float64], offset: int, c: int) -> float:
     return p[offset + PARAM.FUZZ_W] * p[offset + PARAM.FUZZ_COLOR + c]
-
-
-@block
-def is_on(p: NDArray[np.float64], offset: int) -> bool:
-    return p[offset + PARAM.FUZZ_W] > 0.0
 
 
 @block
@@ -57,25 +54,3 @@ def pdf(p: NDArray[np.float64], offset: int, d: Directions, dmodel: int, vndf: b
     Xx, Xy = ltc_frame(d.wo_x, d.wo_y)
     lx, ly = to_frame(Xx, Xy, d.wi_x, d.wi_y)
     return sheen_density(lx, ly, d.wi_z, d.wo_z, p[offset + PARAM.FUZZ_R])
-
-
-@block
-def sampler(dmodel: int) -> int:
-    return S_SHEEN
-
-
-@block
-def sample_setup(p: NDArray[np.float64], offset: int) -> tuple[float, float]:
-    return p[offset + PARAM.FUZZ_R], 1.0
-
-
-@block
-def albedo(c: int, p: NDArray[np.float64], offset: int, ms: bool, st: LayerState) -> float:
-    return st.fuzz
-
-
-@block
-def score(
-    mx: bool, p: NDArray[np.float64], offset: int, weight_at: int, constant: float, ms: bool, st: LayerState
-) -> float:
-    return st.fuzz * constant

@@ -19,7 +19,7 @@ from ..._jit import block, opaque
 from ...microfacet import fresnel
 from ...microfacet import kernels as mf
 from .._surface_params import PARAM, S_GGX, UNDER_COAT
-from ._common import metal_albedo, norm_or_max, unit_albedo
+from ._common import base_ggx_pdf, fixed_sampler, metal_albedo, norm_or_max, sampler_width, unit_albedo
 
 if TYPE_CHECKING:
     import numpy as np
@@ -29,8 +29,10 @@ if TYPE_CHECKING:
 
 NAME = "metal"
 LAYER = UNDER_COAT
-READS_DIFFUSE_MODEL = False
 constant_albedo = unit_albedo
+pdf = base_ggx_pdf
+sampler = fixed_sampler(S_GGX)
+sample_setup = sampler_width(PARAM.ALPHA_S)
 
 
 @block
@@ -52,21 +54,6 @@ def eval(p: NDArray[np.float64], offset: int, d: Directions, x: EvalInputs) -> t
         m * fresnel.f82(c, F0g, p[offset + PARAM.METAL_A + 1]) * mf.multiscatter(F0g, E1, ms),
         m * fresnel.f82(c, F0b, p[offset + PARAM.METAL_A + 2]) * mf.multiscatter(F0b, E1, ms),
     )
-
-
-@block
-def pdf(p: NDArray[np.float64], offset: int, d: Directions, dmodel: int, vndf: bool, ggx_pdf: float) -> float:
-    return ggx_pdf
-
-
-@block
-def sampler(dmodel: int) -> int:
-    return S_GGX
-
-
-@block
-def sample_setup(p: NDArray[np.float64], offset: int) -> tuple[float, float]:
-    return p[offset + PARAM.ALPHA_S], 1.0
 
 
 @block

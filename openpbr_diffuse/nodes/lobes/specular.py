@@ -20,18 +20,20 @@ from ..._jit import block
 from ...microfacet import fresnel
 from ...microfacet import kernels as mf
 from .._surface_params import PARAM, S_GGX, UNDER_COAT
-from ._common import unit_albedo
+from ._common import base_ggx_pdf, fixed_sampler, sampler_width, separable_albedo
 
 if TYPE_CHECKING:
     import numpy as np
     from numpy.typing import NDArray
 
-    from .._surface_params import Directions, EvalInputs, LayerState
+    from .._surface_params import Directions, EvalInputs
 
 NAME = "specular"
 LAYER = UNDER_COAT
-READS_DIFFUSE_MODEL = False
-constant_albedo = unit_albedo
+constant_albedo, albedo, score = separable_albedo(state="specular")
+pdf = base_ggx_pdf
+sampler = fixed_sampler(S_GGX)
+sample_setup = sampler_width(PARAM.ALPHA_S)
 
 
 @block
@@ -58,30 +60,3 @@ def eval(p: NDArray[np.float64], offset: int, d: Directions, x: EvalInputs) -> t
         * mf.multiscatter(ior_x * ior_x, x.e1_specular, x.multiscatter)
     )
     return v, v, v
-
-
-@block
-def pdf(p: NDArray[np.float64], offset: int, d: Directions, dmodel: int, vndf: bool, ggx_pdf: float) -> float:
-    return ggx_pdf
-
-
-@block
-def sampler(dmodel: int) -> int:
-    return S_GGX
-
-
-@block
-def sample_setup(p: NDArray[np.float64], offset: int) -> tuple[float, float]:
-    return p[offset + PARAM.ALPHA_S], 1.0
-
-
-@block
-def albedo(c: int, p: NDArray[np.float64], offset: int, ms: bool, st: LayerState) -> float:
-    return st.specular
-
-
-@block
-def score(
-    mx: bool, p: NDArray[np.float64], offset: int, weight_at: int, constant: float, ms: bool, st: LayerState
-) -> float:
-    return st.specular * constant

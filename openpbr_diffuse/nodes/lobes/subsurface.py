@@ -20,16 +20,20 @@ from ..._jit import INV_PI, block
 from ...models.qon import qon_terms
 from ...sampling.simple import cosine_pdf
 from .._surface_params import PARAM, S_COSINE, UNDER_SPECULAR
+from ._common import fixed_sampler, sampler_width, separable_albedo
 
 if TYPE_CHECKING:
     import numpy as np
     from numpy.typing import NDArray
 
-    from .._surface_params import Directions, EvalInputs, LayerState
+    from .._surface_params import Directions, EvalInputs
 
 NAME = "subsurface"
 LAYER = UNDER_SPECULAR
-READS_DIFFUSE_MODEL = False
+#: Lambertian albedo subsurface_color, times the QON albedo when thin-walled
+constant_albedo, albedo, score = separable_albedo(color=PARAM.SSS_COLOR, state="thin_reflection")
+sampler = fixed_sampler(S_COSINE)
+sample_setup = sampler_width(-1)
 
 
 @block
@@ -38,11 +42,6 @@ def weight_color(p: NDArray[np.float64], offset: int, c: int) -> float:
     S, g = p[offset + PARAM.SSS_W], p[offset + PARAM.SSS_ANISO]
     thin = p[offset + PARAM.THIN] > 0.0
     return solid * S * 0.5 * p[offset + PARAM.SSS_COLOR + c] * (1.0 - g) if thin else solid * S
-
-
-@block
-def constant_albedo(p: NDArray[np.float64], offset: int, c: int) -> float:
-    return p[offset + PARAM.SSS_COLOR + c]
 
 
 @block
@@ -66,25 +65,3 @@ def eval(p: NDArray[np.float64], offset: int, d: Directions, x: EvalInputs) -> t
 def pdf(p: NDArray[np.float64], offset: int, d: Directions, dmodel: int, vndf: bool, ggx_pdf: float) -> float:
     density = cosine_pdf(d.wi_z)
     return density if d.wi_z > 0.0 else 0.0
-
-
-@block
-def sampler(dmodel: int) -> int:
-    return S_COSINE
-
-
-@block
-def sample_setup(p: NDArray[np.float64], offset: int) -> tuple[float, float]:
-    return 0.0, 1.0
-
-
-@block
-def albedo(c: int, p: NDArray[np.float64], offset: int, ms: bool, st: LayerState) -> float:
-    return p[offset + PARAM.SSS_COLOR + c] * st.thin_reflection
-
-
-@block
-def score(
-    mx: bool, p: NDArray[np.float64], offset: int, weight_at: int, constant: float, ms: bool, st: LayerState
-) -> float:
-    return st.thin_reflection * constant

@@ -17,27 +17,25 @@ from typing import TYPE_CHECKING
 from ..._jit import INV_PI, block
 from ...sampling.simple import cosine_pdf
 from .._surface_params import PARAM, S_COSINE, UNDER_SPECULAR
+from ._common import fixed_sampler, sampler_width, separable_albedo
 
 if TYPE_CHECKING:
     import numpy as np
     from numpy.typing import NDArray
 
-    from .._surface_params import Directions, EvalInputs, LayerState
+    from .._surface_params import Directions, EvalInputs
 
 NAME = "subsurface_transmission"
 LAYER = UNDER_SPECULAR
-READS_DIFFUSE_MODEL = False
+constant_albedo, albedo, score = separable_albedo(color=PARAM.SSS_COLOR)
+sampler = fixed_sampler(S_COSINE)
+sample_setup = sampler_width(-1, side=-1.0)  # below the surface
 
 
 @block
 def weight_color(p: NDArray[np.float64], offset: int, c: int) -> float:
     solid = p[offset + PARAM.BASE_MUL + c] * (1.0 - p[offset + PARAM.METAL]) * (1.0 - p[offset + PARAM.TRANS_W])
     return solid * p[offset + PARAM.SSS_W] * 0.5 * p[offset + PARAM.SSS_COLOR + c] * (1.0 + p[offset + PARAM.SSS_ANISO])
-
-
-@block
-def constant_albedo(p: NDArray[np.float64], offset: int, c: int) -> float:
-    return p[offset + PARAM.SSS_COLOR + c]
 
 
 @block
@@ -58,25 +56,3 @@ def eval(p: NDArray[np.float64], offset: int, d: Directions, x: EvalInputs) -> t
 @block
 def pdf(p: NDArray[np.float64], offset: int, d: Directions, dmodel: int, vndf: bool, ggx_pdf: float) -> float:
     return cosine_pdf(-d.wi_z)
-
-
-@block
-def sampler(dmodel: int) -> int:
-    return S_COSINE
-
-
-@block
-def sample_setup(p: NDArray[np.float64], offset: int) -> tuple[float, float]:
-    return 0.0, -1.0
-
-
-@block
-def albedo(c: int, p: NDArray[np.float64], offset: int, ms: bool, st: LayerState) -> float:
-    return p[offset + PARAM.SSS_COLOR + c]
-
-
-@block
-def score(
-    mx: bool, p: NDArray[np.float64], offset: int, weight_at: int, constant: float, ms: bool, st: LayerState
-) -> float:
-    return constant

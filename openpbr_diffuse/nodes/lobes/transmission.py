@@ -16,28 +16,25 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from ..._jit import block
-from ...microfacet import kernels as mf
-from .._surface_params import PARAM, S_GGX, UNDER_SPECULAR
+from .._surface_params import PARAM, S_GGX, UNDER_SPECULAR, ggx_reflection, ggx_reflection_pdf, mirrored
+from ._common import fixed_sampler, sampler_width, separable_albedo
 
 if TYPE_CHECKING:
     import numpy as np
     from numpy.typing import NDArray
 
-    from .._surface_params import Directions, EvalInputs, LayerState
+    from .._surface_params import Directions, EvalInputs
 
 NAME = "transmission"
 LAYER = UNDER_SPECULAR
-READS_DIFFUSE_MODEL = False
+constant_albedo, albedo, score = separable_albedo(color=PARAM.TRANS_TINT)
+sampler = fixed_sampler(S_GGX)
+sample_setup = sampler_width(PARAM.ALPHA_S, side=-1.0)  # mirrored below the surface
 
 
 @block
 def weight_color(p: NDArray[np.float64], offset: int, c: int) -> float:
     return p[offset + PARAM.BASE_MUL + c] * (1.0 - p[offset + PARAM.METAL]) * p[offset + PARAM.TRANS_W]
-
-
-@block
-def constant_albedo(p: NDArray[np.float64], offset: int, c: int) -> float:
-    return p[offset + PARAM.TRANS_TINT + c]
 
 
 @block
@@ -47,7 +44,7 @@ def is_on(p: NDArray[np.float64], offset: int) -> bool:
 
 @block
 def eval(p: NDArray[np.float64], offset: int, d: Directions, x: EvalInputs) -> tuple[float, float, float]:
-    mt, _ = mf.reflection(d.wi_x, d.wi_y, -d.wi_z, d.wo_x, d.wo_y, d.wo_z, p[offset + PARAM.ALPHA_S])
+    mt, _ = ggx_reflection(mirrored(d), p[offset + PARAM.ALPHA_S])
     mt = mt / x.e1_specular
     tint = offset + PARAM.TRANS_TINT
     return mt * p[tint], mt * p[tint + 1], mt * p[tint + 2]
@@ -55,26 +52,4 @@ def eval(p: NDArray[np.float64], offset: int, d: Directions, x: EvalInputs) -> t
 
 @block
 def pdf(p: NDArray[np.float64], offset: int, d: Directions, dmodel: int, vndf: bool, ggx_pdf: float) -> float:
-    return mf.reflection_pdf(d.wi_x, d.wi_y, -d.wi_z, d.wo_x, d.wo_y, d.wo_z, p[offset + PARAM.ALPHA_S], vndf)
-
-
-@block
-def sampler(dmodel: int) -> int:
-    return S_GGX
-
-
-@block
-def sample_setup(p: NDArray[np.float64], offset: int) -> tuple[float, float]:
-    return p[offset + PARAM.ALPHA_S], -1.0
-
-
-@block
-def albedo(c: int, p: NDArray[np.float64], offset: int, ms: bool, st: LayerState) -> float:
-    return p[offset + PARAM.TRANS_TINT + c]
-
-
-@block
-def score(
-    mx: bool, p: NDArray[np.float64], offset: int, weight_at: int, constant: float, ms: bool, st: LayerState
-) -> float:
-    return constant
+    return ggx_reflection_pdf(mirrored(d), p[offset + PARAM.ALPHA_S], vndf)
