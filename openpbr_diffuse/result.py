@@ -43,6 +43,7 @@ from __future__ import annotations
 import math
 import sys
 from dataclasses import dataclass, field
+from operator import attrgetter
 from typing import Any
 from xml.etree import ElementTree as ET
 
@@ -136,15 +137,9 @@ class Result:
     #: the values' :class:`~openpbr_diffuse.conformance.grade.Grade`; not serialised
     values: Any = field(default=None, repr=False, compare=False)
 
-    @property
-    def finding(self) -> str | None:
-        """The named deviation that explains the failure, or None."""
-        return self.diagnosis
-
-    @property
-    def name(self) -> str:
-        """The quantity's name (a check's title)."""
-        return self.quantity
+    #: aliases: ``finding`` is the named deviation (``diagnosis``), ``name`` a check's title (``quantity``)
+    finding = property(attrgetter("diagnosis"), doc="The named deviation that explains the failure, or None.")
+    name = property(attrgetter("quantity"), doc="The quantity's name (a check's title).")
 
     @property
     def verdict(self) -> str:

@@ -70,6 +70,26 @@ def add_numbers(
     p.add_argument(flag, type=float, nargs="+", metavar=metavar, default=default, help=help)
 
 
+def add_number(
+    p: argparse.ArgumentParser | argparse._ArgumentGroup,
+    flag: str,
+    *,
+    metavar: str,
+    help: str,
+    default: float | None = None,
+) -> None:
+    """Option ``flag`` taking one number (a float; ``default`` when not given).
+
+    Examples
+    --------
+    >>> p = argparse.ArgumentParser()
+    >>> add_number(p, "--roughness", metavar="R", help="r in [0, 1]")
+    >>> p.parse_args(["--roughness", "0.5"]).roughness, p.parse_args([]).roughness
+    (0.5, None)
+    """
+    p.add_argument(flag, type=float, metavar=metavar, default=default, help=help)
+
+
 def add_output(
     p: argparse.ArgumentParser,
     help: str,

@@ -251,8 +251,7 @@ def _grade_file(args: argparse.Namespace) -> tuple[list[dict], dict]:
     from ..conformance.vectors import iter_results
 
     g = grade_chunks(iter_results(args.file), model=args.model, precision=args.precision)
-    values = check_from_grade("values", g)
-    checks = [{"id": "values", "status": values["status"], "detail": values["detail"]}]
+    checks = [check_from_grade("values", g)]
     checks += [c for c in g.properties if c["status"] != "skip"]
     return checks, {"values": (float(g.max_abs_error), g.diagnosis)}
 

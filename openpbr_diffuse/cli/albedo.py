@@ -20,7 +20,7 @@ import numpy as np
 
 from ..models import average_albedo, directional_albedo
 from ..models.registry import COLOR_MODES, MIX_RHO_MS, MODELS, model_info
-from ._options import add_command, add_numbers
+from ._options import add_command, add_number, add_numbers
 
 #: The command's line in ``openpbr-diffuse --help``.
 HELP = "directional / average albedo of a lobe model; EXR LUT export"
@@ -55,9 +55,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("model", metavar="MODEL", help=f"lobe model: {', '.join(MODELS)}")
-    p.add_argument(
+    add_number(
+        p,
         "--roughness",
-        type=float,
         metavar="R",
         help="sigma in radians [0, pi/2] (qon*, full_on, gotanda) or r in [0, 1] (fon, eon*); lambert has none",
     )

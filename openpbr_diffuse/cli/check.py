@@ -77,15 +77,14 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         d = g.to_dict()
         d["file"] = str(args.file)
-    checks = [{"id": "values", **_values_check(g)}] + [c for c in g.properties if c["status"] != "skip"]
+    checks = [_values_check(g)] + [c for c in g.properties if c["status"] != "skip"]
     return graders_cli.finish(args, str(args.file), checks, expected, d, lambda: _print_text(g, args.file))
 
 
 def _values_check(g: Grade) -> dict:
     from ..conformance.tiers import check_from_grade
 
-    c = check_from_grade("values", g)
-    return {"status": c["status"], "detail": c["detail"]}
+    return check_from_grade("values", g)
 
 
 __all__ = ["add_parser", "run"]

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..simulation.api import GEOMETRIES, simulate_albedo, simulate_average_albedo
 from . import simulate_layered
-from ._options import add_command, add_numbers
+from ._options import add_command, add_number, add_numbers
 
 #: The command's line in ``openpbr-diffuse --help``.
 HELP = "Monte Carlo albedo of a V-cavity / Smith Lambertian microsurface"
@@ -32,9 +32,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         choices=list(GEOMETRIES),
         help="vcavity (Oren-Nayar V-grooves) or a Smith microsurface (Heitz et al. 2016)",
     )
-    p.add_argument(
+    add_number(
+        p,
         "--roughness",
-        type=float,
         metavar="S",
         help="sigma in radians [0, pi/2] for vcavity; alpha [0, 2] for smith-*; EON r with --layered",
     )

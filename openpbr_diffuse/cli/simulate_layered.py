@@ -17,6 +17,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ._options import add_number, add_numbers
+
 if TYPE_CHECKING:
     from .main import UsageError
 
@@ -32,22 +34,19 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="simulate a dielectric interface over an absorbing slab over a diffuse base",
     )
     g.add_argument("--interface", choices=("smooth", "ggx"), default="smooth", help="interface (default smooth)")
-    g.add_argument("--ior", type=float, metavar="N", help="relative index of refraction of the layer, [1, 4]")
-    g.add_argument(
+    add_number(g, "--ior", metavar="N", help="relative index of refraction of the layer, [1, 4]")
+    add_number(
+        g,
         "--interface-roughness",
-        type=float,
         default=0.0,
         metavar="A",
         help="GGX width alpha of the interface in [0, 1] (OpenPBR: coat_roughness^2)",
     )
-    g.add_argument(
-        "--absorption", type=float, nargs="+", metavar="A", help="absorption coefficient(s), with --thickness"
-    )
-    g.add_argument("--thickness", type=float, metavar="D", help="slab thickness, with --absorption")
-    g.add_argument(
+    add_numbers(g, "--absorption", metavar="A", help="absorption coefficient(s), with --thickness")
+    add_number(g, "--thickness", metavar="D", help="slab thickness, with --absorption")
+    add_numbers(
+        g,
         "--coat-color",
-        type=float,
-        nargs="+",
         metavar="C",
         help="transmittance of one pass at normal incidence (OpenPBR coat_color), per channel",
     )

@@ -43,47 +43,37 @@ _QUANTITY_LABEL = {
 
 
 def Verdict(  # noqa: N802 -- the constructor of a quantity's verdict, kept under its name
-    quantity: str,
-    status: str,
-    diagnosis: str | None = None,
-    sentence: str = "",
-    max_abs_error: float | None = None,
-    where: str = "",
-    n: int = 0,
-    n_failed: int = 0,
-    detail: str = "",
-    worst: list | None = None,
-    regions: Any = None,
-    checks: list | None = None,
-    warnings: list | None = None,
-    plot: Any = None,
+    quantity: str, status: str, diagnosis: str | None = None, sentence: str = "", **fields: Any
 ) -> Result:
     """One quantity's verdict on the report's first screen: a :class:`~openpbr_diffuse.result.Result`
     of kind "quantity" whose ``status`` is its tier ("conforms", "conforms with warnings", "does
-    not conform") or "could not run"; id ``implementation.<quantity>``, its sub-checks'
-    ids prefixed alike, its regions as [[region, text]] rows.
+    not conform") or "could not run"; id ``implementation.<quantity>``; ``fields``: any other
+    field of the Result (``max_abs_error``, ``where``, ``n``, ``n_failed``, ``detail``,
+    ``worst``, ``regions``, ``checks``, ``warnings``, ``plot``).
 
     >>> v = Verdict("sampler pdf", DOES_NOT_CONFORM, "pdf_not_normalised")
     >>> v.id, v.status, v.verdict, v.finding
     ('implementation.sampler_pdf', 'does not conform', 'fail', 'pdf_not_normalised')
     """
-    return Result(
-        id="implementation." + quantity.replace(" ", "_"),
-        quantity=quantity,
+    r = Result(quantity=quantity, diagnosis=diagnosis, sentence=sentence, **fields)
+    return _as_verdict(r, status, sentence)
+
+
+def _as_verdict(q: Result, tier: str, sentence: str, **changes: Any) -> Result:
+    """``q`` as a verdict of the first screen: kind "quantity", id ``implementation.<quantity>``,
+    its tier and sentence (the diagnosis kept only where it does not conform or warns), its
+    sub-checks' ids prefixed alike, its regions as [[region, text]] rows."""
+    return dataclasses.replace(
+        q,
+        id="implementation." + q.quantity.replace(" ", "_"),
         kind="quantity",
-        tier=status,
-        diagnosis=diagnosis,
+        outcome="",
+        tier=tier,
         sentence=sentence,
-        max_abs_error=max_abs_error,
-        where=where,
-        n=n,
-        n_failed=n_failed,
-        detail=detail,
-        worst=list(worst or ()),
-        regions=_regions_rows(regions),
-        checks=[_implementation_check(c) for c in checks or ()],
-        warnings=list(warnings or ()),
-        plot=plot,
+        diagnosis=None if tier == CONFORMS else q.diagnosis,
+        regions=_regions_rows(q.regions),
+        checks=[_implementation_check(c) for c in q.checks],
+        **changes,
     )
 
 
@@ -286,19 +276,23 @@ def verdict_from_grade(quantity: str, g: dict) -> Result:
         CONFORMS_WITH_WARNINGS if warned else (CONFORMS if passed else DOES_NOT_CONFORM),
         diag,
         sentence,
-        max_abs,
-        _where(worst[0] if worst else None),
-        int(g.get("n_rows", 0) or 0),
-        int(g.get("n_failed_rows", 0) or 0),
-        detail,
-        worst[:10],
-        g.get("regions"),
+        measured=g.get("max_normalised_error"),
+        threshold=1.0,
+        unit="x tolerance",
+        max_abs_error=max_abs,
+        where=_where(worst[0] if worst else None),
+        n=int(g.get("n_rows", 0) or 0),
+        n_failed=int(g.get("n_failed_rows", 0) or 0),
+        detail=detail,
+        worst=worst[:10],
+        regions=g.get("regions"),
         warnings=list(g.get("warnings") or []) if warned else [],
     )
 
 
 def verdict_from_quantity(q: Result) -> Result:
-    """A quantity's verdict (:func:`Verdict`) from a graded quantity (``graders.grading``).
+    """A quantity's verdict (:func:`Verdict`) from a graded quantity (``graders.grading``),
+    its measured value, threshold and sub-checks kept.
 
     The sampler's quantities carry their own one-sentence diagnosis (``q.sentence``, e.g. "pdf
     integrates to 0.9 at grazing mu_o 0.05, roughness 0.5"), sub-checks and per-case breakdown.
@@ -306,42 +300,20 @@ def verdict_from_quantity(q: Result) -> Result:
     if q.grade:
         return verdict_from_grade(q.quantity, q.grade)
     passed = bool(q.passed)
-    if getattr(q, "sentence", None) is not None:
+    max_abs = _finite(q.max_abs_error)
+    if q.sentence is not None:
         failed = [c for c in q.checks if c.get("status") == "fail"]
         warned = passed and any(c.get("status") == "warn" for c in q.checks)
-        return Verdict(
-            q.quantity,
-            CONFORMS_WITH_WARNINGS if warned else (CONFORMS if passed else DOES_NOT_CONFORM),
-            None if passed else q.diagnosis,
-            q.sentence or "",  # not None here
-            _finite(q.max_abs_error),
-            getattr(q, "where", ""),
-            len(q.checks),
-            len(failed),
-            q.detail,
-            [],
-            q.regions,
-            list(q.checks),
-            list(q.warnings),
-            q.plot,
-        )
-    return Verdict(
-        q.quantity,
-        CONFORMS if passed else DOES_NOT_CONFORM,
-        None if passed else q.diagnosis,
-        q.detail
-        if passed
-        else (
-            _deviation_sentence(q.diagnosis)
-            if q.diagnosis in _known()
-            else (q.diagnosis or NO_KNOWN).replace("_", " ") + f" ({q.detail})"
-        ),
-        _finite(q.max_abs_error),
-        q.detail,
-        int(q.n or 0),
-        0 if passed else 1,
-        q.detail,
-    )
+        tier = CONFORMS_WITH_WARNINGS if warned else (CONFORMS if passed else DOES_NOT_CONFORM)
+        return _as_verdict(q, tier, q.sentence, max_abs_error=max_abs, n=len(q.checks), n_failed=len(failed))
+    if passed:
+        sentence = q.detail
+    elif q.diagnosis in _known():
+        sentence = _deviation_sentence(q.diagnosis)
+    else:
+        sentence = (q.diagnosis or NO_KNOWN).replace("_", " ") + f" ({q.detail})"
+    tier = CONFORMS if passed else DOES_NOT_CONFORM
+    return _as_verdict(q, tier, sentence, max_abs_error=max_abs, where=q.detail, n_failed=0 if passed else 1)
 
 
 def _known() -> set:
