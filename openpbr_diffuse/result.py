@@ -137,31 +137,13 @@ class Result:
     #: the values' :class:`~openpbr_diffuse.conformance.grade.Grade`; not serialised
     values: Any = field(default=None, repr=False, compare=False)
 
-    #: aliases: ``finding`` is the named deviation (``diagnosis``), ``name`` a check's title (``quantity``)
-    finding = property(attrgetter("diagnosis"), doc="The named deviation that explains the failure, or None.")
-    name = property(attrgetter("quantity"), doc="The quantity's name (a check's title).")
-
-    @property
-    def verdict(self) -> str:
-        """ "pass", "fail", "warn" or "not run": the grader's own when it gave one, else
-        ``measured`` compared with ``threshold`` (NaN or None never passes)."""
-        if self.not_run:
-            return NOT_RUN
-        if self.outcome:
-            return self.outcome
-        if self.kind == "quantity" and self.tier:
-            return _VERDICT_OF[self.tier]
-        return PASS if _compare(self.measured, self.threshold, self.comparison, self.expected) else FAIL
-
-    @property
-    def passed(self) -> bool:
-        """True when the verdict is "pass" or "warn" ("info": measured, not graded)."""
-        return self.verdict in (PASS, WARN, INFO)
-
-    @property
-    def status(self) -> str:
-        """A check's verdict, or a quantity's tier."""
-        return (self.tier or _TIER_OF[self.verdict]) if self.kind == "quantity" else self.verdict
+    #: Derived from the fields above, read-only (the properties below the class); declared as
+    #: fields (not set by ``__init__``) so that ``dataclasses.asdict`` carries them too.
+    verdict: str = field(init=False, repr=False, compare=False)
+    passed: bool = field(init=False, repr=False, compare=False)
+    status: str = field(init=False, repr=False, compare=False)
+    finding: str | None = field(init=False, repr=False, compare=False)
+    name: str = field(init=False, repr=False, compare=False)
 
     @property
     def effective_tier(self) -> str:
@@ -179,6 +161,38 @@ class Result:
             d["checks"] = [c.to_dict() if isinstance(c, Result) else c for c in self.checks]
             d["warnings"] = list(self.warnings)
         return json_safe(d)
+
+
+def _verdict(r: Result) -> str:
+    """ "pass", "fail", "warn" or "not run": the grader's own when it gave one, else the tier's
+    (a quantity), else ``measured`` compared with ``threshold`` (NaN or None never passes)."""
+    if r.not_run:
+        return NOT_RUN
+    if r.outcome:
+        return r.outcome
+    if r.kind == "quantity" and r.tier:
+        return _VERDICT_OF[r.tier]
+    return PASS if _compare(r.measured, r.threshold, r.comparison, r.expected) else FAIL
+
+
+def _passed(r: Result) -> bool:
+    """A quantity with a tier passes when it conforms outright (a warning tier is not a pass);
+    anything else when its verdict is "pass", "warn" or "info" (measured, not graded)."""
+    if r.kind == "quantity" and r.tier and not r.outcome and not r.not_run:
+        return r.tier == CONFORMS
+    return _verdict(r) in (PASS, WARN, INFO)
+
+
+def _status(r: Result) -> str:
+    """A check's verdict, or a quantity's tier."""
+    return r.effective_tier if r.kind == "quantity" else _verdict(r)
+
+
+Result.verdict = property(_verdict, doc=_verdict.__doc__)  # type: ignore[assignment]
+Result.passed = property(_passed, doc=_passed.__doc__)  # type: ignore[assignment]
+Result.status = property(_status, doc=_status.__doc__)  # type: ignore[assignment]
+Result.finding = property(attrgetter("diagnosis"), doc="The named deviation that explains the failure, or None.")  # type: ignore[assignment]
+Result.name = property(attrgetter("quantity"), doc="The quantity's name (a check's title).")  # type: ignore[assignment]
 
 
 #: The JSON keys of every result, then those of a check and of a quantity (:meth:`Result.to_dict`).

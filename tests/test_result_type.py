@@ -120,3 +120,23 @@ def test_report_and_check_carry_the_same_fields(tmp_path, capsys):
     assert all(CORE <= set(c) for c in d["checks"])
     assert next(c for c in d["checks"] if c["id"].startswith("values"))["finding"] == "rho_ms_extra_rho"
     assert np.isfinite(d["max_normalised_error"])
+
+
+def test_asdict_carries_the_derived_fields():
+    """``dataclasses.asdict`` of a result holds its verdict, pass, status, finding and name
+    beside the stored fields (callers that serialise with asdict see them)."""
+    import dataclasses
+
+    q = QuantityGrade("brdf", False, 0.1, 0.01, "t", "r", diagnosis="white_tint", measured=3.0, threshold=1.0)
+    d = dataclasses.asdict(q)
+    assert (d["passed"], d["verdict"], d["status"], d["finding"], d["name"]) == (
+        False,
+        "fail",
+        "does not conform",
+        "white_tint",
+        "brdf",
+    )
+    assert dataclasses.asdict(Check("x", 0.5, 1.0))["passed"] is True
+    warned = grade(V, he.eon(V, extra_rho_ms=True))
+    warned.tier = "conforms with warnings"
+    assert not warned.passed and warned.verdict == "warn"  # a warning tier is not a pass

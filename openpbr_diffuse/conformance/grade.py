@@ -123,11 +123,6 @@ class Grade(Result):
     #: residual beyond the tolerance -- None when none reduces the error enough
     closest: dict | None = None
 
-    @property
-    def passed(self) -> bool:
-        """Every value within the tolerance (tier "conforms"; a warning tier is not a pass)."""
-        return self.tier == CONFORMS
-
     def to_dict(self) -> dict[str, Any]:
         extra = {"closest": self.closest} if self.closest else {}
         return json_safe(
