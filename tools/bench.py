@@ -43,6 +43,9 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # tools/_machine.py
+from _machine import cpu_model
+
 ROOT = Path(__file__).resolve().parents[1]
 C_SOURCE_CANDIDATES = (ROOT.parent / "shared" / "bench" / "eon_scalar.c", ROOT / "shared" / "bench" / "eon_scalar.c")
 
@@ -620,7 +623,7 @@ def environment():
         "openpbr_diffuse": od.__version__,
         "threads": numba.get_num_threads(),
         "threading_layer": _threading_layer(),
-        "cpu": _cpu_name(),
+        "cpu": cpu_model(),
         "cores": os.cpu_count(),
         "machine": platform.machine(),
     }
@@ -633,16 +636,6 @@ def _threading_layer():
         return numba.threading_layer()
     except ValueError:  # no parallel region has run yet
         return None
-
-
-def _cpu_name():
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor()
 
 
 def run_bench(

@@ -20,13 +20,15 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import resource
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # tools/_machine.py
+from _machine import cpu_model
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -52,16 +54,6 @@ def write_file(path: Path, n_rows: int) -> None:
             m = min(len(body), n_rows - k)
             fh.write("".join(f"r{k + j},{body[j]}\n" for j in range(m)))
             k += m
-
-
-def cpu_name() -> str:
-    try:
-        for ln in Path("/proc/cpuinfo").read_text().splitlines():
-            if ln.startswith("model name"):
-                return ln.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
 
 
 def _load() -> str:
@@ -118,7 +110,7 @@ def bench_glsl(saves: int) -> int:
         json.dumps(
             {
                 "date": time.strftime("%Y-%m-%d"),
-                "cpu": cpu_name(),
+                "cpu": cpu_model(),
                 "cores": os.cpu_count(),
                 "load": _load(),
                 "check_glsl_warm_cpu_s": cpu[1][0],
@@ -161,7 +153,7 @@ def main() -> int:
             json.dumps(
                 {
                     "date": time.strftime("%Y-%m-%d"),
-                    "cpu": cpu_name(),
+                    "cpu": cpu_model(),
                     "cores": os.cpu_count(),
                     "rows": a.rows,
                     "exit": r.returncode,

@@ -11,13 +11,15 @@ from __future__ import annotations
 import argparse
 import math
 import os
-import platform
 import sys
 import tempfile
 import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # tools/_machine.py
+
+from _machine import cpu_model
 
 from openpbr_diffuse.simulation.layered import (
     CHUNK_PATHS,
@@ -32,16 +34,6 @@ CONFIGS = {
         0.8,
     ),
 }
-
-
-def _cpu() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
 
 
 def to_target(surface: LayeredSurface, rho: float, target: float, workers: int) -> dict:
@@ -76,7 +68,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--workers", type=int, default=2)
     args = ap.parse_args(argv)
     print(
-        f"# {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; {_cpu()}; {os.cpu_count()} cores; "
+        f"# {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; {cpu_model()}; {os.cpu_count()} cores; "
         f"workers {args.workers}; target standard error {args.target:g}"
     )
     for name, (s, rho) in CONFIGS.items():

@@ -40,18 +40,11 @@ import threading
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # tools/_machine.py
+from _machine import cpu_model
+
 ROOT = Path(__file__).resolve().parents[1]
 CORPUS = Path(os.environ.get("OPENPBR_DIFFUSE_SHARED") or ROOT.parent / "shared") / "corpus" / "realworld"
-
-
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return "unknown CPU"
 
 
 def _tree_memory_kb(root: int) -> tuple[int, int]:

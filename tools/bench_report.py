@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import platform
 import resource
 import subprocess
 import sys
@@ -24,19 +23,11 @@ import tempfile
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # tools/_machine.py
+from _machine import cpu_model
+
 ROOT = Path(__file__).resolve().parents[1]
 SUBJECTS = ROOT / "tests" / "subjects"
-
-
-def cpu_model() -> str:
-    """The CPU's model name (Linux /proc/cpuinfo), or the platform's processor string."""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
 
 
 def run_once(args: list[str]) -> tuple[float, float, int]:
