@@ -4,11 +4,10 @@ page's stated geometry (sphere pixel -> normal, light from (theta_i, phi)), not 
 
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
-from _system import CHROMIUM, need
+from _browser import opened_page
 
 import openpbr_diffuse as od
 from openpbr_diffuse.export import export_text
@@ -65,26 +64,14 @@ def _frame(n):
 
 @pytest.fixture(scope="module")
 def page_values(tmp_path_factory):
-    from playwright import sync_api
-
-    need("chromium")
     path = write_explorer(tmp_path_factory.mktemp("explore") / "eon.html")
     settings = {"r": 0.7, "rho_r": 0.9, "rho_g": 0.5, "rho_b": 0.1, "theta_o": 50, "theta_i": 60, "phi": 120}
-    errors = []
-    with sync_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS)
-        try:
-            page = browser.new_page()
-            page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-            page.on("pageerror", lambda e: errors.append(str(e)))
-            page.goto(Path(path).resolve().as_uri(), wait_until="load")
-            state = page.evaluate("v => window.explorer.set(v)", settings)
-            size = page.evaluate("window.explorer.size")
-            f = np.array(page.evaluate("window.explorer.readF()"), dtype=np.float64)
-            lobe = np.array(page.evaluate("window.explorer.readLobe()"), dtype=np.float64)
-            shown = page.evaluate("document.getElementById('error').textContent")
-        finally:
-            browser.close()
+    with opened_page(path, flags=FLAGS) as (page, errors):
+        state = page.evaluate("v => window.explorer.set(v)", settings)
+        size = page.evaluate("window.explorer.size")
+        f = np.array(page.evaluate("window.explorer.readF()"), dtype=np.float64)
+        lobe = np.array(page.evaluate("window.explorer.readLobe()"), dtype=np.float64)
+        shown = page.evaluate("document.getElementById('error').textContent")
     return {"settings": settings, "state": state, "size": size, "f": f, "lobe": lobe, "errors": errors, "shown": shown}
 
 

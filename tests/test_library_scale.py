@@ -426,31 +426,19 @@ def test_the_code_fingerprint_leaves_out_only_what_the_work_never_imports():
 
 def test_chromium_filter_hides_rows(serial):
     """Type into the filter in headless Chromium: only the matching rows stay visible."""
-    from _system import need
-    from playwright import sync_api
-    from test_report_page import CHROMIUM, FLAGS
+    from _browser import opened_page
 
-    need("chromium")
     mats = materials_of(serial)
     want = sum("clay_rough" in m["relpath"] for m in mats)
-    errors = []
-    with sync_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS)
-        try:
-            page = browser.new_page(viewport={"width": 1280, "height": 900})
-            page.on("pageerror", lambda e: errors.append(str(e)))
-            page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-            page.goto((serial / "index.html").resolve().as_uri(), wait_until="load")
-            visible = "() => [...document.querySelectorAll('#materials-table tbody tr')].filter(r => !r.hidden).length"
-            before = page.evaluate(visible)
-            page.fill("#materials-filter", "clay_rough")
-            after = page.evaluate(visible)
-            shown = page.inner_text("#materials-shown")
-            page.select_option("#materials-verdict", "fail")
-            failing = page.evaluate(visible)
-            wide = page.evaluate("() => document.documentElement.scrollWidth <= window.innerWidth")
-        finally:
-            browser.close()
+    with opened_page(serial / "index.html", {"width": 1280, "height": 900}) as (page, errors):
+        visible = "() => [...document.querySelectorAll('#materials-table tbody tr')].filter(r => !r.hidden).length"
+        before = page.evaluate(visible)
+        page.fill("#materials-filter", "clay_rough")
+        after = page.evaluate(visible)
+        shown = page.inner_text("#materials-shown")
+        page.select_option("#materials-verdict", "fail")
+        failing = page.evaluate(visible)
+        wide = page.evaluate("() => document.documentElement.scrollWidth <= window.innerWidth")
     assert errors == []
     assert before == len(mats) and 0 < want == after < before
     assert shown == f"{want} of {len(mats)} materials shown"

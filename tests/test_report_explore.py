@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from _system import CHROMIUM, need
+from _browser import opened_page
 from test_explore import FLAGS
 
 import openpbr_diffuse as od
@@ -36,25 +36,13 @@ def _report(tmp_path, name, code, function="f"):
 def _open(page_path):
     """What the explorer shows after the sliders are set: the subject's state, its f and the
     reference's on one sphere, the shown maximum, and the page's errors."""
-    from playwright import sync_api
-
-    need("chromium")
-    errors = []
-    with sync_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS)
-        try:
-            page = browser.new_page()
-            page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-            page.on("pageerror", lambda e: errors.append(str(e)))
-            page.goto(Path(page_path).resolve().as_uri(), wait_until="load")
-            page.evaluate("v => window.explorer.set(v)", SETTINGS)
-            got = page.evaluate("window.explorer.readSubject()")
-            got["shown"] = page.evaluate("document.getElementById('diff-max').textContent")
-            got["error"] = page.evaluate("document.getElementById('subject-error').textContent")
-            got["pwned"] = page.evaluate("window.pwned === undefined ? null : window.pwned")
-            got["size"] = page.evaluate("window.explorer.size")
-        finally:
-            browser.close()
+    with opened_page(page_path, flags=FLAGS) as (page, errors):
+        page.evaluate("v => window.explorer.set(v)", SETTINGS)
+        got = page.evaluate("window.explorer.readSubject()")
+        got["shown"] = page.evaluate("document.getElementById('diff-max').textContent")
+        got["error"] = page.evaluate("document.getElementById('subject-error').textContent")
+        got["pwned"] = page.evaluate("window.pwned === undefined ? null : window.pwned")
+        got["size"] = page.evaluate("window.explorer.size")
     got["errors"] = errors
     return got
 
