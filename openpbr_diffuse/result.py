@@ -155,11 +155,9 @@ class Result:
         role's own (:data:`CHECK_KEYS` for a check, :data:`QUANTITY_KEYS` for a quantity)."""
         own = CHECK_KEYS if self.kind == "check" else QUANTITY_KEYS
         d = {key: getattr(self, _ATTRIBUTE.get(key, key)) for key in (*COMMON_KEYS, *own)}
-        d["worst"] = list(self.worst)
         if self.kind != "check":
             d["sentence"] = self.sentence or ""
             d["checks"] = [c.to_dict() if isinstance(c, Result) else c for c in self.checks]
-            d["warnings"] = list(self.warnings)
         return json_safe(d)
 
 
@@ -210,7 +208,7 @@ QUANTITY_KEYS: tuple[str, ...] = (
 )
 QUANTITY_KEYS += ("n", "n_failed", "excluded", "checks", "warnings", "regions", "grade")
 #: JSON keys read from another attribute
-_ATTRIBUTE = {"tier": "effective_tier", "name": "quantity"}
+_ATTRIBUTE = {"tier": "effective_tier"}
 
 
 def _compare(measured: Any, threshold: Any, comparison: str, expected: float | None) -> bool:

@@ -39,11 +39,17 @@ def _junit(path: str, result: ImageGrade, image: str, force: bool) -> None:
 
     root = ET.Element("testsuites", name="openpbr-diffuse check --image")
     suite = ET.SubElement(root, "testsuite", name=image)
-    linear = sub_check("linear output", "fail" if result.non_linear else "pass")
-    linear.detail = f"non-linear output: {result.non_linear}" if result.non_linear else ""
+    linear = sub_check(
+        "linear output",
+        "fail" if result.non_linear else "pass",
+        detail=f"non-linear output: {result.non_linear}" if result.non_linear else "",
+    )
     g = result.grade
-    brdf = sub_check("brdf", "pass" if result.brdf_passed else "fail")
-    brdf.detail = "" if result.brdf_passed else f"does not conform: {g.diagnosis or ''} {g.diagnosis_detail}"
+    brdf = sub_check(
+        "brdf",
+        "pass" if result.brdf_passed else "fail",
+        detail="" if result.brdf_passed else f"does not conform: {g.diagnosis or ''} {g.diagnosis_detail}",
+    )
     for r in (linear, brdf):
         junit_case(suite, r.to_dict(), "chart")
     text = '<?xml version="1.0" encoding="utf-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"

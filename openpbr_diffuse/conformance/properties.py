@@ -34,6 +34,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..result import sub_check
+
 if TYPE_CHECKING:
     from .vectors import VectorSet
 
@@ -108,8 +110,6 @@ def _dir(mu, phi):
 
 
 def _check(pid, status, detail, measured=None, threshold=None):
-    from ..result import sub_check
-
     return sub_check(pid, status, measured, threshold, detail).to_dict()
 
 

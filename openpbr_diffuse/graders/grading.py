@@ -158,8 +158,8 @@ def quantity_from_grade(quantity: str, g: Grade, excluded: int = 0, tolerance_re
     return QuantityGrade(
         quantity,
         bool(g.passed),
-        float(g.max_abs_error if g.max_abs_error is not None else math.nan),
-        float(g.rms_error if g.rms_error is not None else math.nan),
+        float(g.max_abs_error),
+        float(g.rms_error),
         tol,
         tolerance_reason or g.tolerance_reason,
         g.diagnosis,
