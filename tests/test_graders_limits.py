@@ -7,6 +7,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -267,19 +268,26 @@ def test_a_non_root_run_cannot_fork_past_its_process_limit() -> None:
         "    pids.append(pid)\n"
         "print(*pids)\n"
     )
-    supervised = [
-        *(str(NOBODY_PYTHON), "-I", "-S", str(limits.SUPERVISOR)),
-        *(str(os.getpid()), "20", str(2**30), str(limits.NPROC_EXTRA)),
-        *(str(NOBODY_PYTHON), "-c", program),
-    ]
-    run = subprocess.run(
-        ["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups", *supervised],
-        capture_output=True,
-        text=True,
-        timeout=60,
-        cwd="/",
-        check=False,
-    )
+    # the supervisor (one stdlib-only file) copied where the user nobody can read it: a
+    # checkout in a private folder (``mktemp -d`` is 0700) is not readable by other users
+    with tempfile.TemporaryDirectory(dir="/tmp") as folder:
+        os.chmod(folder, 0o755)
+        supervisor = Path(folder) / limits.SUPERVISOR.name
+        shutil.copyfile(limits.SUPERVISOR, supervisor)
+        supervisor.chmod(0o644)
+        supervised = [
+            *(str(NOBODY_PYTHON), "-I", "-S", str(supervisor)),
+            *(str(os.getpid()), "20", str(2**30), str(limits.NPROC_EXTRA)),
+            *(str(NOBODY_PYTHON), "-c", program),
+        ]
+        run = subprocess.run(
+            ["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups", *supervised],
+            capture_output=True,
+            text=True,
+            timeout=60,
+            cwd="/",
+            check=False,
+        )
     assert run.returncode == 0, run.stderr
     pids = [int(p) for p in run.stdout.split()]
     assert 0 < len(pids) <= limits.NPROC_EXTRA
